@@ -1,0 +1,31 @@
+//! Writing the `.fmu` (a zip archive with forward-slash paths, deflated).
+
+use std::io::Write;
+use std::path::Path;
+
+use zip::write::SimpleFileOptions;
+
+pub fn write_fmu(
+    path: &Path,
+    model_identifier: &str,
+    model_description: &str,
+    library: &Path,
+    documentation: &str,
+) -> Result<(), String> {
+    let binary = std::fs::read(library).map_err(|e| format!("cannot read {}: {e}", library.display()))?;
+    let file = std::fs::File::create(path).map_err(|e| format!("cannot create {}: {e}", path.display()))?;
+    let mut zip = zip::ZipWriter::new(file);
+    let text = SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
+    let executable = text.unix_permissions(0o755);
+    let entries: [(String, &[u8], SimpleFileOptions); 3] = [
+        ("modelDescription.xml".into(), model_description.as_bytes(), text),
+        (format!("binaries/linux64/{model_identifier}.so"), &binary, executable),
+        ("documentation/index.html".into(), documentation.as_bytes(), text),
+    ];
+    for (name, bytes, options) in entries {
+        zip.start_file(name.as_str(), options).map_err(|e| format!("zip {name}: {e}"))?;
+        zip.write_all(bytes).map_err(|e| format!("zip {name}: {e}"))?;
+    }
+    zip.finish().map_err(|e| format!("cannot finish {}: {e}", path.display()))?;
+    Ok(())
+}

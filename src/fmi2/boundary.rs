@@ -1,0 +1,126 @@
+//! The C boundary's safety net, in one place (after rustls-ffi's `ffi_panic_boundary!` and
+//! pointer macros): every exported function runs its body through [`call`] (or
+//! [`no_instance`]), which catches panics, checks the instance pointer, the instance's
+//! poisoning and the state table, and turns everything into an FMI status.
+
+use std::any::Any;
+use std::panic::{AssertUnwindSafe, catch_unwind};
+
+use super::instance::Instance;
+use super::state_machine::Fmi2Function;
+use super::types::*;
+
+/// A panic's message, if it carried one.
+pub fn panic_message(payload: &(dyn Any + Send)) -> String {
+    if let Some(s) = payload.downcast_ref::<&str>() {
+        (*s).to_string()
+    } else if let Some(s) = payload.downcast_ref::<String>() {
+        s.clone()
+    } else {
+        "(no message)".to_string()
+    }
+}
+
+/// Runs an exported function's body on a valid instance.
+///
+/// - `c` NULL or not one of ours: `fmi2Error` (there is no logger to tell).
+/// - instance poisoned by an earlier panic, or `func` not allowed in its state: logged,
+///   `fmi2Error`, nothing changes.
+/// - body panics: the instance is poisoned, the panic is logged, `fmi2Error`.
+pub fn call(c: fmi2Component, func: Fmi2Function, body: impl FnOnce(&mut Instance) -> fmi2Status) -> fmi2Status {
+    let outcome = catch_unwind(AssertUnwindSafe(|| {
+        // SAFETY: `from_handle` checks for NULL and for our magic number; the importer
+        // promises a pointer from fmi2Instantiate that has not been freed.
+        let Some(instance) = (unsafe { Instance::from_handle(c) }) else {
+            return fmi2Error;
+        };
+        if let Err(status) = instance.check_call(func) {
+            return status;
+        }
+        match catch_unwind(AssertUnwindSafe(|| body(&mut *instance))) {
+            Ok(status) => {
+                instance.log_call(func, status);
+                status
+            }
+            Err(payload) => {
+                instance.poison(func, &panic_message(payload.as_ref()));
+                fmi2Error
+            }
+        }
+    }));
+    outcome.unwrap_or(fmi2Error)
+}
+
+/// Runs a body that has no instance (`fmi2Instantiate`, `fmi2FreeInstance`,
+/// `fmi2GetVersion`...), returning `on_panic` if it panics.
+pub fn no_instance<T>(on_panic: T, body: impl FnOnce() -> T) -> T {
+    catch_unwind(AssertUnwindSafe(body)).unwrap_or(on_panic)
+}
+
+/// A slice from a C array: `Some(&[])` for `n == 0` (whatever the pointer), `None` for a NULL
+/// pointer with `n > 0`.
+///
+/// # Safety
+/// A non-NULL `ptr` must point to `n` initialised values that stay valid and unaliased for
+/// the call.
+pub unsafe fn c_slice<'a, T>(ptr: *const T, n: usize) -> Option<&'a [T]> {
+    if n == 0 {
+        Some(&[])
+    } else if ptr.is_null() {
+        None
+    } else {
+        // SAFETY: non-NULL, and the caller guarantees `n` valid elements.
+        Some(unsafe { std::slice::from_raw_parts(ptr, n) })
+    }
+}
+
+/// The mutable counterpart of [`c_slice`].
+///
+/// # Safety
+/// As for [`c_slice`], and the memory must be writable.
+pub unsafe fn c_slice_mut<'a, T>(ptr: *mut T, n: usize) -> Option<&'a mut [T]> {
+    if n == 0 {
+        Some(&mut [])
+    } else if ptr.is_null() {
+        None
+    } else {
+        // SAFETY: non-NULL, and the caller guarantees `n` valid, writable elements.
+        Some(unsafe { std::slice::from_raw_parts_mut(ptr, n) })
+    }
+}
+
+/// `try_slice!(instance, func, ptr, n, "name")`: the slice, or log and return `fmi2Error`.
+macro_rules! try_slice {
+    ($inst:expr, $func:expr, $ptr:expr, $n:expr, $what:expr) => {
+        // SAFETY: the importer passes arrays of `n` elements (FMI 2.0 calling convention).
+        match unsafe { $crate::fmi2::boundary::c_slice($ptr, $n) } {
+            Some(s) => s,
+            None => return $inst.error($func, &format!("argument {} is NULL with {} elements", $what, $n)),
+        }
+    };
+}
+
+/// Mutable counterpart of `try_slice!`.
+macro_rules! try_slice_mut {
+    ($inst:expr, $func:expr, $ptr:expr, $n:expr, $what:expr) => {
+        // SAFETY: the importer passes writable arrays of `n` elements.
+        match unsafe { $crate::fmi2::boundary::c_slice_mut($ptr, $n) } {
+            Some(s) => s,
+            None => return $inst.error($func, &format!("argument {} is NULL with {} elements", $what, $n)),
+        }
+    };
+}
+
+/// `try_out!(instance, func, ptr, "name")`: a `&mut T` from an out-pointer, or log and return
+/// `fmi2Error` if it is NULL.
+macro_rules! try_out {
+    ($inst:expr, $func:expr, $ptr:expr, $what:expr) => {
+        // SAFETY: a non-NULL out-pointer from the importer points to a writable value.
+        match unsafe { $ptr.as_mut() } {
+            Some(r) => r,
+            None => return $inst.error($func, &format!("argument {} is NULL", $what)),
+        }
+    };
+}
+
+pub(crate) use {try_out, try_slice, try_slice_mut};

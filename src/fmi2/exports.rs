@@ -1,0 +1,679 @@
+//! The exported FMI 2.0 functions: a thin layer that turns C arguments into Rust values and
+//! calls [`Instance`] methods through the boundary ([`boundary::call`]), which catches
+//! panics and enforces the state table. Signatures follow `fmi2FunctionTypes.h` exactly.
+//!
+//! # Safety (all functions)
+//! The importer must follow the FMI 2.0 calling conventions: `c` is NULL or an instance from
+//! `fmi2Instantiate` not yet freed; array arguments point to at least `n` elements (or are
+//! NULL when `n == 0`); strings are NUL-terminated. NULL where a value is required is
+//! detected and answered with `fmi2Error`.
+
+use std::ffi::{CStr, CString, c_char};
+
+use super::boundary::{self, call, no_instance, try_out, try_slice, try_slice_mut};
+use super::instance::{FmuStateHandle, Instance};
+use super::logger::{Logger, log_without_instance};
+use super::state_machine::{Fmi2Function as F, InterfaceType};
+use super::types::*;
+use crate::models::ModelKind;
+
+/// # Safety
+/// `p` must be NULL or a NUL-terminated string.
+unsafe fn c_str(p: fmi2String) -> Option<String> {
+    if p.is_null() {
+        None
+    } else {
+        // SAFETY: non-NULL and NUL-terminated per the contract.
+        Some(unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned())
+    }
+}
+
+#[unsafe(no_mangle)]
+pub extern "C" fn fmi2GetTypesPlatform() -> *const c_char {
+    c"default".as_ptr()
+}
+
+#[unsafe(no_mangle)]
+pub extern "C" fn fmi2GetVersion() -> *const c_char {
+    c"2.0".as_ptr()
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2SetDebugLogging(
+    c: fmi2Component,
+    logging_on: fmi2Boolean,
+    n_categories: usize,
+    categories: *const fmi2String,
+) -> fmi2Status {
+    call(c, F::SetDebugLogging, |inst| {
+        let list = try_slice!(inst, F::SetDebugLogging, categories, n_categories, "categories");
+        // SAFETY: each entry is NULL or a NUL-terminated string.
+        let names: Vec<Option<String>> = list.iter().map(|&p| unsafe { c_str(p) }).collect();
+        inst.set_debug_logging(F::SetDebugLogging, logging_on != fmi2False, &names)
+    })
+}
+
+/// # Safety
+/// See the module documentation. `functions` must be NULL or point to a valid
+/// `fmi2CallbackFunctions`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2Instantiate(
+    instance_name: fmi2String,
+    fmu_type: fmi2Type,
+    fmu_guid: fmi2String,
+    fmu_resource_location: fmi2String,
+    functions: *const fmi2CallbackFunctions,
+    visible: fmi2Boolean,
+    logging_on: fmi2Boolean,
+) -> fmi2Component {
+    let _ = (fmu_resource_location, visible);
+    no_instance(std::ptr::null_mut(), || {
+        // SAFETY: NULL or a valid struct, per the contract; copied, not kept.
+        let functions = unsafe { functions.as_ref() }.copied();
+        // SAFETY: NULL or NUL-terminated strings.
+        let name = unsafe { c_str(instance_name) }.unwrap_or_default();
+        let fail = |message: &str| {
+            log_without_instance(functions.as_ref(), &name, fmi2Error, &format!("fmi2Instantiate: {message}"));
+            std::ptr::null_mut()
+        };
+        let Some(f) = functions else {
+            return std::ptr::null_mut();
+        };
+        if name.is_empty() {
+            return fail("instanceName is NULL or empty");
+        }
+        // SAFETY: as above.
+        let Some(guid) = (unsafe { c_str(fmu_guid) }) else {
+            return fail("fmuGUID is NULL");
+        };
+        let Some(kind) = ModelKind::from_guid(&guid) else {
+            let known: Vec<String> = ModelKind::ALL
+                .iter()
+                .map(|k| {
+                    format!(
+                        "{} {}",
+                        k.info().model_identifier,
+                        crate::models::model_description::instantiation_token(*k)
+                    )
+                })
+                .collect();
+            return fail(&format!(
+                "GUID {guid} does not belong to this binary (it implements {}); the modelDescription.xml and the \
+                 binary come from different builds",
+                known.join(", ")
+            ));
+        };
+        let interface = match fmu_type {
+            fmi2CoSimulation => InterfaceType::CoSimulation,
+            fmi2ModelExchange => {
+                return fail("fmuType fmi2ModelExchange: this FMU implements Co-Simulation only");
+            }
+            other => return fail(&format!("invalid fmuType {other}")),
+        };
+        let Ok(cname) = CString::new(name.clone()) else {
+            return fail("instanceName contains NUL");
+        };
+        let logger = Logger::new(f.logger, f.componentEnvironment, cname, logging_on != fmi2False);
+        Instance::new(kind, interface, logger).into_handle()
+    })
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
+    no_instance((), || {
+        // SAFETY: NULL, or an instance from fmi2Instantiate not yet freed (magic checked).
+        if let Some(inst) = unsafe { Instance::from_handle(c) } {
+            inst.log_call(F::FreeInstance, fmi2OK);
+            // SAFETY: checked above to be one of our live instances.
+            unsafe { Instance::free(c) };
+        }
+    })
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2SetupExperiment(
+    c: fmi2Component,
+    tolerance_defined: fmi2Boolean,
+    tolerance: fmi2Real,
+    start_time: fmi2Real,
+    stop_time_defined: fmi2Boolean,
+    stop_time: fmi2Real,
+) -> fmi2Status {
+    call(c, F::SetupExperiment, |inst| {
+        inst.setup_experiment(
+            F::SetupExperiment,
+            (tolerance_defined != fmi2False).then_some(tolerance),
+            start_time,
+            (stop_time_defined != fmi2False).then_some(stop_time),
+        )
+    })
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2Status {
+    call(c, F::EnterInitializationMode, |inst| inst.enter_initialization_mode())
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status {
+    call(c, F::ExitInitializationMode, |inst| inst.exit_initialization_mode(F::ExitInitializationMode))
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
+    call(c, F::Terminate, |inst| inst.terminate())
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
+    call(c, F::Reset, |inst| inst.reset())
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetReal(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2Real,
+) -> fmi2Status {
+    call(c, F::GetReal, |inst| {
+        let vrs = try_slice!(inst, F::GetReal, vr, nvr, "vr");
+        let values = try_slice_mut!(inst, F::GetReal, value, nvr, "value");
+        inst.get_real(F::GetReal, vrs, values)
+    })
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetInteger(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2Integer,
+) -> fmi2Status {
+    call(c, F::GetInteger, |inst| {
+        let vrs = try_slice!(inst, F::GetInteger, vr, nvr, "vr");
+        let values = try_slice_mut!(inst, F::GetInteger, value, nvr, "value");
+        inst.get_integer(F::GetInteger, vrs, values)
+    })
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetBoolean(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2Boolean,
+) -> fmi2Status {
+    call(c, F::GetBoolean, |inst| {
+        let vrs = try_slice!(inst, F::GetBoolean, vr, nvr, "vr");
+        let _ = try_slice_mut!(inst, F::GetBoolean, value, nvr, "value");
+        inst.no_variables_of_type(F::GetBoolean, vrs, "Boolean")
+    })
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetString(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2String,
+) -> fmi2Status {
+    call(c, F::GetString, |inst| {
+        let vrs = try_slice!(inst, F::GetString, vr, nvr, "vr");
+        let _ = try_slice_mut!(inst, F::GetString, value, nvr, "value");
+        inst.no_variables_of_type(F::GetString, vrs, "String")
+    })
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2SetReal(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const fmi2Real,
+) -> fmi2Status {
+    call(c, F::SetReal, |inst| {
+        let vrs = try_slice!(inst, F::SetReal, vr, nvr, "vr");
+        let values = try_slice!(inst, F::SetReal, value, nvr, "value");
+        inst.set_real(F::SetReal, vrs, values)
+    })
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2SetInteger(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const fmi2Integer,
+) -> fmi2Status {
+    call(c, F::SetInteger, |inst| {
+        let vrs = try_slice!(inst, F::SetInteger, vr, nvr, "vr");
+        let values = try_slice!(inst, F::SetInteger, value, nvr, "value");
+        inst.set_integer(F::SetInteger, vrs, values)
+    })
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2SetBoolean(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const fmi2Boolean,
+) -> fmi2Status {
+    call(c, F::SetBoolean, |inst| {
+        let vrs = try_slice!(inst, F::SetBoolean, vr, nvr, "vr");
+        let _ = try_slice!(inst, F::SetBoolean, value, nvr, "value");
+        inst.no_variables_of_type(F::SetBoolean, vrs, "Boolean")
+    })
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2SetString(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const fmi2String,
+) -> fmi2Status {
+    call(c, F::SetString, |inst| {
+        let vrs = try_slice!(inst, F::SetString, vr, nvr, "vr");
+        let _ = try_slice!(inst, F::SetString, value, nvr, "value");
+        inst.no_variables_of_type(F::SetString, vrs, "String")
+    })
+}
+
+/// # Safety
+/// See the module documentation. `*state` must be NULL or a state from this library.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
+    call(c, F::GetFMUstate, |inst| {
+        let slot = try_out!(inst, F::GetFMUstate, state, "FMUstate");
+        let bytes = inst.serialize();
+        if slot.is_null() {
+            *slot = Instance::new_state_handle(bytes).into_handle();
+            return fmi2OK;
+        }
+        // SAFETY: non-NULL *state must be one of our handles (magic checked).
+        match unsafe { FmuStateHandle::from_handle(*slot) } {
+            Some(h) => {
+                h.replace_bytes(bytes);
+                fmi2OK
+            }
+            None => inst.error(F::GetFMUstate, "*FMUstate is neither NULL nor a state of this FMU"),
+        }
+    })
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, state: fmi2FMUstate) -> fmi2Status {
+    call(c, F::SetFMUstate, |inst| {
+        // SAFETY: NULL or one of our handles (magic checked).
+        let Some(h) = (unsafe { FmuStateHandle::from_handle(state) }) else {
+            return inst.error(F::SetFMUstate, "FMUstate is NULL or not a state of this FMU");
+        };
+        match inst.restore(h.bytes()) {
+            Ok(()) => fmi2OK,
+            Err(e) => inst.error(F::SetFMUstate, &format!("state refused: {e}")),
+        }
+    })
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2FreeFMUstate(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
+    call(c, F::FreeFMUstate, |inst| {
+        let slot = try_out!(inst, F::FreeFMUstate, state, "FMUstate");
+        if slot.is_null() {
+            return fmi2OK;
+        }
+        // SAFETY: non-NULL *state must be one of our handles (magic checked).
+        if unsafe { FmuStateHandle::from_handle(*slot) }.is_none() {
+            return inst.error(F::FreeFMUstate, "*FMUstate is not a state of this FMU");
+        }
+        // SAFETY: checked to be one of our live handles.
+        unsafe { FmuStateHandle::free(*slot) };
+        *slot = std::ptr::null_mut();
+        fmi2OK
+    })
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
+    c: fmi2Component,
+    state: fmi2FMUstate,
+    size: *mut usize,
+) -> fmi2Status {
+    call(c, F::SerializedFMUstateSize, |inst| {
+        let out = try_out!(inst, F::SerializedFMUstateSize, size, "size");
+        // SAFETY: NULL or one of our handles (magic checked).
+        let Some(h) = (unsafe { FmuStateHandle::from_handle(state) }) else {
+            return inst.error(F::SerializedFMUstateSize, "FMUstate is NULL or not a state of this FMU");
+        };
+        *out = h.bytes().len();
+        fmi2OK
+    })
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2SerializeFMUstate(
+    c: fmi2Component,
+    state: fmi2FMUstate,
+    serialized: *mut fmi2Byte,
+    size: usize,
+) -> fmi2Status {
+    call(c, F::SerializeFMUstate, |inst| {
+        // SAFETY: NULL or one of our handles (magic checked).
+        let Some(h) = (unsafe { FmuStateHandle::from_handle(state) }) else {
+            return inst.error(F::SerializeFMUstate, "FMUstate is NULL or not a state of this FMU");
+        };
+        let needed = h.bytes().len();
+        if size < needed {
+            return inst.error(
+                F::SerializeFMUstate,
+                &format!("buffer of {size} bytes is too small, the state needs {needed}"),
+            );
+        }
+        let out = try_slice_mut!(inst, F::SerializeFMUstate, serialized as *mut u8, needed, "serializedState");
+        out.copy_from_slice(h.bytes());
+        fmi2OK
+    })
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
+    c: fmi2Component,
+    serialized: *const fmi2Byte,
+    size: usize,
+    state: *mut fmi2FMUstate,
+) -> fmi2Status {
+    call(c, F::DeSerializeFMUstate, |inst| {
+        let bytes = try_slice!(inst, F::DeSerializeFMUstate, serialized as *const u8, size, "serializedState");
+        let slot = try_out!(inst, F::DeSerializeFMUstate, state, "FMUstate");
+        if let Err(e) = inst.validate_state_bytes(bytes) {
+            return inst.error(F::DeSerializeFMUstate, &format!("serialized state refused: {e}"));
+        }
+        if slot.is_null() {
+            *slot = Instance::new_state_handle(bytes.to_vec()).into_handle();
+            return fmi2OK;
+        }
+        // SAFETY: non-NULL *state must be one of our handles (magic checked).
+        match unsafe { FmuStateHandle::from_handle(*slot) } {
+            Some(h) => {
+                h.replace_bytes(bytes.to_vec());
+                fmi2OK
+            }
+            None => inst.error(F::DeSerializeFMUstate, "*FMUstate is neither NULL nor a state of this FMU"),
+        }
+    })
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
+    c: fmi2Component,
+    _unknown: *const fmi2ValueReference,
+    _n_unknown: usize,
+    _known: *const fmi2ValueReference,
+    _n_known: usize,
+    _dv_known: *const fmi2Real,
+    _dv_unknown: *mut fmi2Real,
+) -> fmi2Status {
+    call(c, F::GetDirectionalDerivative, |inst| {
+        inst.error(F::GetDirectionalDerivative, "not supported (providesDirectionalDerivative=\"false\")")
+    })
+}
+
+// ----- Co-Simulation ----------------------------------------------------------------------
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    order: *const fmi2Integer,
+    value: *const fmi2Real,
+) -> fmi2Status {
+    call(c, F::SetRealInputDerivatives, |inst| {
+        let vrs = try_slice!(inst, F::SetRealInputDerivatives, vr, nvr, "vr");
+        let orders = try_slice!(inst, F::SetRealInputDerivatives, order, nvr, "order");
+        let values = try_slice!(inst, F::SetRealInputDerivatives, value, nvr, "value");
+        inst.set_real_input_derivatives(F::SetRealInputDerivatives, vrs, orders, values)
+    })
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    order: *const fmi2Integer,
+    value: *mut fmi2Real,
+) -> fmi2Status {
+    call(c, F::GetRealOutputDerivatives, |inst| {
+        let vrs = try_slice!(inst, F::GetRealOutputDerivatives, vr, nvr, "vr");
+        let orders = try_slice!(inst, F::GetRealOutputDerivatives, order, nvr, "order");
+        let values = try_slice_mut!(inst, F::GetRealOutputDerivatives, value, nvr, "value");
+        inst.get_real_output_derivatives(F::GetRealOutputDerivatives, vrs, orders, values)
+    })
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2DoStep(
+    c: fmi2Component,
+    current_communication_point: fmi2Real,
+    communication_step_size: fmi2Real,
+    _no_set_fmu_state_prior_to_current_point: fmi2Boolean,
+) -> fmi2Status {
+    call(c, F::DoStep, |inst| inst.do_step(F::DoStep, current_communication_point, communication_step_size))
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
+    // Only allowed in stepInProgress, which this synchronous FMU never enters: the state
+    // table refuses it.
+    call(c, F::CancelStep, |inst| inst.error(F::CancelStep, "no asynchronous step to cancel"))
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetStatus(c: fmi2Component, kind: fmi2StatusKind, value: *mut fmi2Status) -> fmi2Status {
+    call(c, F::GetStatus, |inst| {
+        let _ = try_out!(inst, F::GetStatus, value, "value");
+        inst.status_not_available(F::GetStatus, kind)
+    })
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetRealStatus(c: fmi2Component, kind: fmi2StatusKind, value: *mut fmi2Real) -> fmi2Status {
+    call(c, F::GetRealStatus, |inst| {
+        let out = try_out!(inst, F::GetRealStatus, value, "value");
+        inst.get_real_status(F::GetRealStatus, kind, out)
+    })
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetIntegerStatus(
+    c: fmi2Component,
+    kind: fmi2StatusKind,
+    value: *mut fmi2Integer,
+) -> fmi2Status {
+    call(c, F::GetIntegerStatus, |inst| {
+        let _ = try_out!(inst, F::GetIntegerStatus, value, "value");
+        inst.status_not_available(F::GetIntegerStatus, kind)
+    })
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetBooleanStatus(
+    c: fmi2Component,
+    kind: fmi2StatusKind,
+    value: *mut fmi2Boolean,
+) -> fmi2Status {
+    call(c, F::GetBooleanStatus, |inst| {
+        let out = try_out!(inst, F::GetBooleanStatus, value, "value");
+        inst.get_boolean_status(F::GetBooleanStatus, kind, out)
+    })
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetStringStatus(
+    c: fmi2Component,
+    kind: fmi2StatusKind,
+    value: *mut fmi2String,
+) -> fmi2Status {
+    call(c, F::GetStringStatus, |inst| {
+        let _ = try_out!(inst, F::GetStringStatus, value, "value");
+        inst.status_not_available(F::GetStringStatus, kind)
+    })
+}
+
+// ----- Model Exchange (present so that the binary has the complete API; a Co-Simulation
+// instance refuses them through the state table) --------------------------------------------
+
+macro_rules! model_exchange_only {
+    ($c:expr, $f:expr) => {
+        call($c, $f, |inst| inst.error($f, "Model Exchange is not implemented by this FMU"))
+    };
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2EnterEventMode(c: fmi2Component) -> fmi2Status {
+    model_exchange_only!(c, F::EnterEventMode)
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2NewDiscreteStates(c: fmi2Component, _event_info: *mut fmi2EventInfo) -> fmi2Status {
+    model_exchange_only!(c, F::NewDiscreteStates)
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2EnterContinuousTimeMode(c: fmi2Component) -> fmi2Status {
+    model_exchange_only!(c, F::EnterContinuousTimeMode)
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2CompletedIntegratorStep(
+    c: fmi2Component,
+    _no_set_fmu_state_prior: fmi2Boolean,
+    _enter_event_mode: *mut fmi2Boolean,
+    _terminate_simulation: *mut fmi2Boolean,
+) -> fmi2Status {
+    model_exchange_only!(c, F::CompletedIntegratorStep)
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2SetTime(c: fmi2Component, _time: fmi2Real) -> fmi2Status {
+    model_exchange_only!(c, F::SetTime)
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2SetContinuousStates(c: fmi2Component, _x: *const fmi2Real, _nx: usize) -> fmi2Status {
+    model_exchange_only!(c, F::SetContinuousStates)
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetDerivatives(c: fmi2Component, _derivatives: *mut fmi2Real, _nx: usize) -> fmi2Status {
+    model_exchange_only!(c, F::GetDerivatives)
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetEventIndicators(
+    c: fmi2Component,
+    _indicators: *mut fmi2Real,
+    _ni: usize,
+) -> fmi2Status {
+    model_exchange_only!(c, F::GetEventIndicators)
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetContinuousStates(c: fmi2Component, _x: *mut fmi2Real, _nx: usize) -> fmi2Status {
+    model_exchange_only!(c, F::GetContinuousStates)
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetNominalsOfContinuousStates(
+    c: fmi2Component,
+    _x_nominal: *mut fmi2Real,
+    _nx: usize,
+) -> fmi2Status {
+    model_exchange_only!(c, F::GetNominalsOfContinuousStates)
+}
+
+#[allow(unused_imports)]
+use boundary::c_slice as _;

@@ -1,0 +1,212 @@
+//! Dormand-Prince 5(4) (Hairer, Nørsett, Wanner, Solving ODEs I, II.5), with the PI step-size
+//! control of Hairer's DOPRI5 code. Propagates the 5th-order solution (local extrapolation).
+
+use super::{IntegrationError, IntegratorStats, OdeSystem, SolverSettings};
+
+const C2: f64 = 1.0 / 5.0;
+const C3: f64 = 3.0 / 10.0;
+const C4: f64 = 4.0 / 5.0;
+const C5: f64 = 8.0 / 9.0;
+const A21: f64 = 1.0 / 5.0;
+const A31: f64 = 3.0 / 40.0;
+const A32: f64 = 9.0 / 40.0;
+const A41: f64 = 44.0 / 45.0;
+const A42: f64 = -56.0 / 15.0;
+const A43: f64 = 32.0 / 9.0;
+const A51: f64 = 19372.0 / 6561.0;
+const A52: f64 = -25360.0 / 2187.0;
+const A53: f64 = 64448.0 / 6561.0;
+const A54: f64 = -212.0 / 729.0;
+const A61: f64 = 9017.0 / 3168.0;
+const A62: f64 = -355.0 / 33.0;
+const A63: f64 = 46732.0 / 5247.0;
+const A64: f64 = 49.0 / 176.0;
+const A65: f64 = -5103.0 / 18656.0;
+const A71: f64 = 35.0 / 384.0;
+const A73: f64 = 500.0 / 1113.0;
+const A74: f64 = 125.0 / 192.0;
+const A75: f64 = -2187.0 / 6784.0;
+const A76: f64 = 11.0 / 84.0;
+// Error estimate: 5th-order weights minus the embedded 4th-order ones.
+const E1: f64 = 71.0 / 57600.0;
+const E3: f64 = -71.0 / 16695.0;
+const E4: f64 = 71.0 / 1920.0;
+const E5: f64 = -17253.0 / 339200.0;
+const E6: f64 = 22.0 / 525.0;
+const E7: f64 = -1.0 / 40.0;
+
+const SAFETY: f64 = 0.9;
+/// Step may shrink at most by 1/5 and grow at most by 10 per step.
+const FAC_SHRINK_LIMIT: f64 = 5.0;
+const FAC_GROW_LIMIT: f64 = 0.1;
+const BETA: f64 = 0.04;
+const EXPO1: f64 = 0.2 - BETA * 0.75;
+
+/// What the adaptive method carries from one call to the next.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Dopri5Memory {
+    /// Proposed next step; 0 = not yet known (an initial step is estimated).
+    pub h_next: f64,
+    /// Previous accepted error ratio for the PI controller.
+    pub err_old: f64,
+}
+
+impl Default for Dopri5Memory {
+    fn default() -> Self {
+        Dopri5Memory { h_next: 0.0, err_old: 1e-4 }
+    }
+}
+
+#[inline(always)]
+fn scaled_rms<const N: usize>(v: &[f64; N], y0: &[f64; N], y1: &[f64; N], s: &SolverSettings) -> f64 {
+    let mut sum = 0.0;
+    for i in 0..N {
+        let sc = s.abs_tol + s.rel_tol * y0[i].abs().max(y1[i].abs());
+        let q = v[i] / sc;
+        sum += q * q;
+    }
+    (sum / N as f64).sqrt()
+}
+
+/// Hairer's initial step estimate.
+fn initial_step<S: OdeSystem<N>, const N: usize>(
+    system: &S,
+    s: &SolverSettings,
+    stats: &mut IntegratorStats,
+    t0: f64,
+    y0: &[f64; N],
+    f0: &[f64; N],
+    h_max: f64,
+) -> f64 {
+    let d0 = scaled_rms(y0, y0, y0, s);
+    let d1 = scaled_rms(f0, y0, y0, s);
+    let mut h0 = if d0 < 1e-10 || d1 < 1e-10 { 1e-6 } else { 0.01 * d0 / d1 };
+    h0 = h0.min(h_max);
+    let mut y1 = [0.0; N];
+    for i in 0..N {
+        y1[i] = y0[i] + h0 * f0[i];
+    }
+    let mut f1 = [0.0; N];
+    system.derivative(t0 + h0, &y1, &mut f1);
+    stats.rhs_evaluations += 1;
+    let mut df = [0.0; N];
+    for i in 0..N {
+        df[i] = f1[i] - f0[i];
+    }
+    let d2 = scaled_rms(&df, y0, y0, s) / h0;
+    let dm = d1.max(d2);
+    let h1 = if dm <= 1e-15 { (h0 * 1e-3).max(1e-6) } else { (0.01 / dm).powf(0.2) };
+    (100.0 * h0).min(h1).min(h_max)
+}
+
+pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
+    system: &S,
+    s: &SolverSettings,
+    memory: &mut Dopri5Memory,
+    stats: &mut IntegratorStats,
+    t0: f64,
+    y: &mut [f64; N],
+    t1: f64,
+) -> Result<(), IntegrationError<S::Fault>> {
+    let span = t1 - t0;
+    let h_max = if s.max_step > 0.0 { s.max_step.min(span) } else { span };
+    let fsal = !system.modifies_state_after_step();
+
+    let mut k1 = [0.0; N];
+    system.derivative(t0, y, &mut k1);
+    stats.rhs_evaluations += 1;
+    let mut h =
+        if memory.h_next > 0.0 { memory.h_next.min(h_max) } else { initial_step(system, s, stats, t0, y, &k1, h_max) };
+
+    let (mut k2, mut k3, mut k4, mut k5, mut k6, mut k7) = ([0.0; N], [0.0; N], [0.0; N], [0.0; N], [0.0; N], [0.0; N]);
+    let mut stage = [0.0; N];
+    let mut y_new = [0.0; N];
+    let mut err_vec = [0.0; N];
+    let mut t = t0;
+    let mut rejected_last = false;
+    let mut steps: u64 = 0;
+
+    loop {
+        if steps >= s.max_steps_per_call {
+            return Err(IntegrationError::TooManySteps { t, steps });
+        }
+        // Land exactly on t1: stretch or shorten the last step (Hairer's 1.01 rule).
+        let h_unclamped = h;
+        let last = t + 1.01 * h >= t1;
+        if last {
+            h = t1 - t;
+        }
+        if h <= 16.0 * f64::EPSILON * t.abs().max(span) {
+            return Err(IntegrationError::StepSizeUnderflow { t, h });
+        }
+
+        for i in 0..N {
+            stage[i] = y[i] + h * A21 * k1[i];
+        }
+        system.derivative(t + C2 * h, &stage, &mut k2);
+        for i in 0..N {
+            stage[i] = y[i] + h * (A31 * k1[i] + A32 * k2[i]);
+        }
+        system.derivative(t + C3 * h, &stage, &mut k3);
+        for i in 0..N {
+            stage[i] = y[i] + h * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i]);
+        }
+        system.derivative(t + C4 * h, &stage, &mut k4);
+        for i in 0..N {
+            stage[i] = y[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i]);
+        }
+        system.derivative(t + C5 * h, &stage, &mut k5);
+        for i in 0..N {
+            stage[i] = y[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i] + A65 * k5[i]);
+        }
+        let t_new = if last { t1 } else { t + h };
+        system.derivative(t_new, &stage, &mut k6);
+        for i in 0..N {
+            y_new[i] = y[i] + h * (A71 * k1[i] + A73 * k3[i] + A74 * k4[i] + A75 * k5[i] + A76 * k6[i]);
+        }
+        system.derivative(t_new, &y_new, &mut k7);
+        stats.rhs_evaluations += 6;
+        for i in 0..N {
+            err_vec[i] = h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i]);
+        }
+        let mut err = scaled_rms(&err_vec, y, &y_new, s);
+        if !err.is_finite() {
+            err = 1e10; // a non-finite trial (e.g. a stage through a singularity): shrink hard
+        }
+        steps += 1;
+
+        let fac11 = err.powf(EXPO1);
+        if err <= 1.0 {
+            // Accept.
+            let fac = (fac11 / memory.err_old.powf(BETA) / SAFETY).clamp(FAC_GROW_LIMIT, FAC_SHRINK_LIMIT);
+            let mut h_new = h / fac;
+            if rejected_last {
+                h_new = h_new.min(h);
+            }
+            memory.err_old = err.max(1e-4);
+            stats.accepted_steps += 1;
+            *y = y_new;
+            system.after_step(y);
+            system.check(t_new, y).map_err(|fault| IntegrationError::Fault { t: t_new, fault })?;
+            t = t_new;
+            if last {
+                // Keep the step the controller wanted before the landing clamp, so that a
+                // short final piece does not throttle the next call.
+                memory.h_next = if rejected_last { h_new } else { h_new.max(h_unclamped) };
+                return Ok(());
+            }
+            h = h_new.min(h_max);
+            rejected_last = false;
+            if fsal {
+                k1 = k7;
+            } else {
+                system.derivative(t, y, &mut k1);
+                stats.rhs_evaluations += 1;
+            }
+        } else {
+            stats.rejected_steps += 1;
+            h /= (fac11 / SAFETY).min(FAC_SHRINK_LIMIT);
+            rejected_last = true;
+        }
+    }
+}

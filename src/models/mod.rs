@@ -1,0 +1,176 @@
+//! The FMU models in safe Rust: what each variable means, how parameters become a
+//! simulation, what a co-simulation step does. The FMI boundary ([`crate::fmi2`]) handles
+//! pointers, call sequences and logging and calls into these.
+//!
+//! | module | what it holds |
+//! |---|---|
+//! | [`variables`] | variable groups, value references, access metadata |
+//! | [`units`] | unit definitions |
+//! | [`model_description`] | `modelDescription.xml` and the instantiation token from the tables |
+//! | [`snapshot`] | the byte format of serialized FMU states |
+//! | [`platform`] | the `StewartPlatform` model |
+//!
+//! One binary serves every model: `fmi2Instantiate` picks the model by the GUID the importer
+//! passes (each FMU's `modelDescription.xml` carries its own).
+
+pub mod model_description;
+pub mod platform;
+pub mod snapshot;
+pub mod units;
+pub mod variables;
+
+use snapshot::{ByteReader, ByteWriter, SnapshotError};
+use variables::{EnumerationType, UnitDefinition, VariableGroup, VariableRef};
+
+/// `<DefaultExperiment>`.
+#[derive(Clone, Copy, Debug)]
+pub struct DefaultExperiment {
+    pub start_time: f64,
+    pub stop_time: f64,
+    pub step_size: f64,
+}
+
+/// Static facts about a model: identity, variables, types, units.
+pub struct ModelInfo {
+    pub model_name: &'static str,
+    pub model_identifier: &'static str,
+    pub description: &'static str,
+    pub groups: &'static [VariableGroup],
+    pub enumerations: &'static [EnumerationType],
+    pub units: &'static [UnitDefinition],
+    pub default_experiment: DefaultExperiment,
+    /// Extra HTML for `documentation/index.html` (conventions, references).
+    pub documentation: &'static str,
+}
+
+/// Why a co-simulation step could not be completed. The model is left as it was before the
+/// step (rolled back).
+#[derive(Clone, Debug, PartialEq)]
+pub struct StepError {
+    /// What happened, when and to which leg.
+    pub message: String,
+}
+
+/// What the FMI layer needs from a model. Value references are already resolved to
+/// [`VariableRef`]s of the right type and access rules are already checked.
+pub trait FmuModel {
+    fn info(&self) -> &'static ModelInfo;
+    /// Any Real variable's current value (outputs computed from the current state, or in
+    /// Initialization Mode from the current parameters).
+    fn get_real(&mut self, var: VariableRef) -> f64;
+    /// Stores a finite Real value of a parameter or input; may refuse a value outside the
+    /// variable's domain.
+    fn set_real(&mut self, var: VariableRef, value: f64) -> Result<(), String>;
+    fn get_integer(&mut self, var: VariableRef) -> i32;
+    fn set_integer(&mut self, var: VariableRef, value: i32) -> Result<(), String>;
+    /// Validates the parameters and builds the simulation at `start_time`. `tolerance` is
+    /// the importer's `fmi2SetupExperiment` tolerance, if defined. Returns a summary for the
+    /// log.
+    fn exit_initialization(&mut self, start_time: f64, tolerance: Option<f64>) -> Result<String, String>;
+    /// Advances from the communication point `t` to exactly `t + h`.
+    fn do_step(&mut self, t: f64, h: f64) -> Result<(), StepError>;
+    /// First derivative of a Real input for the next step (`fmi2SetRealInputDerivatives`).
+    fn set_input_derivative(&mut self, var: VariableRef, value: f64);
+    /// First time derivative of a Real output (`fmi2GetRealOutputDerivatives`).
+    fn output_derivative(&mut self, var: VariableRef) -> f64;
+    /// Appends everything that determines the model's future to `w`.
+    fn save(&self, w: &mut ByteWriter);
+    /// Reads what [`FmuModel::save`] wrote into a fresh model.
+    fn restore(r: &mut ByteReader) -> Result<Self, SnapshotError>
+    where
+        Self: Sized;
+}
+
+/// Every model this binary implements.
+pub enum AnyModel {
+    Platform(Box<platform::PlatformModel>),
+}
+
+/// The models, for instantiation by GUID and for packaging.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ModelKind {
+    Platform,
+}
+
+impl ModelKind {
+    pub const ALL: [ModelKind; 1] = [ModelKind::Platform];
+
+    pub fn info(self) -> &'static ModelInfo {
+        match self {
+            ModelKind::Platform => &platform::INFO,
+        }
+    }
+
+    pub fn code(self) -> u8 {
+        match self {
+            ModelKind::Platform => 1,
+        }
+    }
+
+    /// A model with its start values.
+    pub fn instantiate(self) -> AnyModel {
+        match self {
+            ModelKind::Platform => AnyModel::Platform(Box::default()),
+        }
+    }
+
+    /// The model whose instantiation token (GUID) this is.
+    pub fn from_guid(guid: &str) -> Option<ModelKind> {
+        Self::ALL.iter().copied().find(|k| model_description::instantiation_token(*k) == guid)
+    }
+}
+
+macro_rules! dispatch {
+    ($self:expr, $m:ident => $e:expr) => {
+        match $self {
+            AnyModel::Platform($m) => $e,
+        }
+    };
+}
+
+impl AnyModel {
+    pub fn kind(&self) -> ModelKind {
+        match self {
+            AnyModel::Platform(_) => ModelKind::Platform,
+        }
+    }
+
+    pub fn restore(kind: ModelKind, r: &mut ByteReader) -> Result<AnyModel, SnapshotError> {
+        Ok(match kind {
+            ModelKind::Platform => AnyModel::Platform(Box::new(platform::PlatformModel::restore(r)?)),
+        })
+    }
+}
+
+impl AnyModel {
+    pub fn info(&self) -> &'static ModelInfo {
+        dispatch!(self, m => m.info())
+    }
+    pub fn get_real(&mut self, var: VariableRef) -> f64 {
+        dispatch!(self, m => m.get_real(var))
+    }
+    pub fn set_real(&mut self, var: VariableRef, value: f64) -> Result<(), String> {
+        dispatch!(self, m => m.set_real(var, value))
+    }
+    pub fn get_integer(&mut self, var: VariableRef) -> i32 {
+        dispatch!(self, m => m.get_integer(var))
+    }
+    pub fn set_integer(&mut self, var: VariableRef, value: i32) -> Result<(), String> {
+        dispatch!(self, m => m.set_integer(var, value))
+    }
+    pub fn exit_initialization(&mut self, start_time: f64, tolerance: Option<f64>) -> Result<String, String> {
+        dispatch!(self, m => m.exit_initialization(start_time, tolerance))
+    }
+    pub fn do_step(&mut self, t: f64, h: f64) -> Result<(), StepError> {
+        dispatch!(self, m => m.do_step(t, h))
+    }
+    pub fn set_input_derivative(&mut self, var: VariableRef, value: f64) {
+        dispatch!(self, m => m.set_input_derivative(var, value))
+    }
+    pub fn output_derivative(&mut self, var: VariableRef) -> f64 {
+        dispatch!(self, m => m.output_derivative(var))
+    }
+    pub fn save(&self, w: &mut ByteWriter) {
+        dispatch!(self, m => m.save(w))
+    }
+}

@@ -1,0 +1,450 @@
+//! The `StewartPlatform` model: the stand's parameters and initial pose as FMI parameters,
+//! the six leg forces as inputs, the pose, legs and energy as outputs (SPEC §3).
+
+pub mod variables;
+
+use nalgebra::Vector3;
+
+use super::snapshot::{ByteReader, ByteWriter, SnapshotError};
+use super::variables::VariableRef;
+use super::{DefaultExperiment, FmuModel, ModelInfo, StepError};
+use crate::integration::dopri5::Dopri5Memory;
+use crate::integration::{Integrator, IntegratorStats, Method, SolverSettings};
+use crate::physics::body_state::{BodyState, STATE_DIM};
+use crate::physics::configuration::ConfigurationGuard;
+use crate::physics::forces::HeldForces;
+use crate::physics::kinematics::rotation_from_angles;
+use crate::physics::special_form::SpecialForm;
+use crate::physics::stand::{LEG_COUNT, PAPER_EQUILIBRIUM_LEG_FORCE, Stand};
+use crate::simulation::{PlatformOutputs, PlatformSimulation, Stabilisation};
+use variables::group;
+
+pub static INFO: ModelInfo = ModelInfo {
+    model_name: "StewartPlatform",
+    model_identifier: "StewartPlatform",
+    description: "Loaded Stewart platform (hexapod): rigid-body dynamics in the special form of Zegzhda, Petrova and \
+                  Yushkov (2020), six axial leg forces in, pose and leg lengths out",
+    groups: variables::GROUPS,
+    enumerations: variables::ENUMERATIONS,
+    units: super::units::UNITS,
+    default_experiment: DefaultExperiment { start_time: 0.0, stop_time: 3.0, step_size: 1e-2 },
+    documentation: include_str!("documentation.html"),
+};
+
+/// Everything set through parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlatformParameters {
+    pub stand: Stand,
+    pub r0: Vector3<f64>,
+    pub angles0: Vector3<f64>,
+    pub v0: Vector3<f64>,
+    pub w0: Vector3<f64>,
+    pub settings: SolverSettings,
+    pub stabilisation: Stabilisation,
+}
+
+impl Default for PlatformParameters {
+    /// The default stand at rest in its neutral pose (SPEC §2-3).
+    fn default() -> Self {
+        PlatformParameters {
+            stand: Stand::truck_cabin(),
+            r0: Stand::truck_cabin_neutral_position(),
+            angles0: Vector3::zeros(),
+            v0: Vector3::zeros(),
+            w0: Vector3::zeros(),
+            settings: SolverSettings::default(),
+            stabilisation: Stabilisation::Projection,
+        }
+    }
+}
+
+impl PlatformParameters {
+    pub fn initial_state(&self) -> BodyState {
+        BodyState::from_pose(self.r0, self.v0, &rotation_from_angles(&self.angles0), &self.w0)
+    }
+
+    fn validate_settings(&self) -> Result<(), String> {
+        let s = &self.settings;
+        if !(s.rel_tol > 0.0 && s.rel_tol < 1.0) {
+            return Err(format!("parameter solver.relTol: must be in (0, 1), got {}", s.rel_tol));
+        }
+        if s.rel_tol < 1e-15 {
+            return Err(format!("parameter solver.relTol: {} is below double precision (minimum 1e-15)", s.rel_tol));
+        }
+        if !(s.abs_tol >= 0.0) {
+            return Err(format!("parameter solver.absTol: must be >= 0, got {}", s.abs_tol));
+        }
+        if !(s.max_step >= 0.0) {
+            return Err(format!("parameter solver.maxStep: must be >= 0 s (0 = no limit), got {}", s.max_step));
+        }
+        if !(s.fixed_step >= 0.0) {
+            return Err(format!(
+                "parameter solver.fixedStep: must be >= 0 s (0 = one step per communication step), got {}",
+                s.fixed_step
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Default leg force input: the paper's equilibrium force `0.2005 M g` of the default stand.
+pub fn default_leg_force() -> f64 {
+    let s = Stand::truck_cabin();
+    PAPER_EQUILIBRIUM_LEG_FORCE * s.mass * s.gravity
+}
+
+/// The platform FMU model.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlatformModel {
+    pub parameters: PlatformParameters,
+    /// Leg forces `F[k]`, N.
+    pub forces: [f64; LEG_COUNT],
+    /// Their time derivatives for the next step, N/s (cleared after each step).
+    pub force_rates: [f64; LEG_COUNT],
+    /// Present after `fmi2ExitInitializationMode`.
+    pub simulation: Option<PlatformSimulation>,
+    /// Outputs of the current state, computed on the first read after a change.
+    outputs: Option<PlatformOutputs>,
+}
+
+impl Default for PlatformModel {
+    fn default() -> Self {
+        PlatformModel {
+            parameters: PlatformParameters::default(),
+            forces: [default_leg_force(); LEG_COUNT],
+            force_rates: [0.0; LEG_COUNT],
+            simulation: None,
+            outputs: None,
+        }
+    }
+}
+
+impl PlatformModel {
+    fn outputs(&mut self) -> PlatformOutputs {
+        if let Some(o) = self.outputs {
+            return o;
+        }
+        let o = match &self.simulation {
+            Some(sim) => PlatformOutputs::compute(sim.stand(), &sim.body_state()),
+            None => PlatformOutputs::compute(&self.parameters.stand, &self.parameters.initial_state()),
+        };
+        self.outputs = Some(o);
+        o
+    }
+
+    fn held_forces(&self, t0: f64) -> HeldForces {
+        HeldForces { value: self.forces, slope: self.force_rates, t0 }
+    }
+
+    fn parameter_slot(&mut self, var: VariableRef) -> Option<&mut f64> {
+        let p = &mut self.parameters;
+        let i = var.index;
+        Some(match var.group {
+            group::M => &mut p.stand.mass,
+            group::J => p.stand.inertia.get_mut(i)?,
+            group::G => &mut p.stand.gravity,
+            group::B => p.stand.base_joints.get_mut(i / 3)?.get_mut(i % 3)?,
+            group::A => p.stand.platform_joints.get_mut(i / 3)?.get_mut(i % 3)?,
+            group::R0 => p.r0.get_mut(i)?,
+            group::ANGLES0 => p.angles0.get_mut(i)?,
+            group::V0 => p.v0.get_mut(i)?,
+            group::W0 => p.w0.get_mut(i)?,
+            group::REL_TOL => &mut p.settings.rel_tol,
+            group::ABS_TOL => &mut p.settings.abs_tol,
+            group::MAX_STEP => &mut p.settings.max_step,
+            group::FIXED_STEP => &mut p.settings.fixed_step,
+            group::F => self.forces.get_mut(i)?,
+            _ => return None,
+        })
+    }
+
+    fn output_value(o: &PlatformOutputs, var: VariableRef) -> f64 {
+        let i = var.index;
+        let pick3 = |v: &Vector3<f64>| v.get(i).copied().unwrap_or(0.0);
+        let pick6 = |v: &[f64; LEG_COUNT]| v.get(i).copied().unwrap_or(0.0);
+        match var.group {
+            group::R => pick3(&o.r),
+            group::V => pick3(&o.v),
+            // R[a,b], row-major index a*3+b.
+            group::ROT => o.rotation.get((i / 3, i % 3)).copied().unwrap_or(0.0),
+            group::ANGLES => pick3(&o.angles),
+            group::W => pick3(&o.w),
+            group::L => pick6(&o.l),
+            group::LDOT => pick6(&o.ldot),
+            group::E => o.energy,
+            group::CONSTRAINT_ERROR => o.constraint_error,
+            _ => 0.0,
+        }
+    }
+}
+
+impl FmuModel for PlatformModel {
+    fn info(&self) -> &'static ModelInfo {
+        &INFO
+    }
+
+    fn get_real(&mut self, var: VariableRef) -> f64 {
+        if var.group == group::TIME {
+            return self.simulation.as_ref().map_or(0.0, |s| s.time);
+        }
+        if let Some(slot) = self.parameter_slot(var) {
+            return *slot;
+        }
+        let o = self.outputs();
+        Self::output_value(&o, var)
+    }
+
+    fn set_real(&mut self, var: VariableRef, value: f64) -> Result<(), String> {
+        let slot = self.parameter_slot(var).ok_or("not a settable Real variable")?;
+        *slot = value;
+        if self.simulation.is_none() {
+            // In Initialization Mode outputs follow the parameters.
+            self.outputs = None;
+        }
+        Ok(())
+    }
+
+    fn get_integer(&mut self, var: VariableRef) -> i32 {
+        match var.group {
+            group::METHOD => self.parameters.settings.method.code(),
+            group::STABILISATION => self.parameters.stabilisation.code(),
+            _ => 0,
+        }
+    }
+
+    fn set_integer(&mut self, var: VariableRef, value: i32) -> Result<(), String> {
+        match var.group {
+            group::METHOD => {
+                self.parameters.settings.method = Method::from_code(value).ok_or_else(|| {
+                    format!("{value} is not an IntegrationMethod (1 = DormandPrince45, 2 = RungeKutta4)")
+                })?;
+            }
+            group::STABILISATION => {
+                self.parameters.stabilisation = Stabilisation::from_code(value)
+                    .ok_or_else(|| format!("{value} is not a ConstraintStabilisation (1 = none, 2 = projection)"))?;
+            }
+            _ => return Err("not a settable Integer variable".into()),
+        }
+        Ok(())
+    }
+
+    fn exit_initialization(&mut self, start_time: f64, tolerance: Option<f64>) -> Result<String, String> {
+        let mut p = self.parameters.clone();
+        if let Some(tol) = tolerance {
+            p.settings.rel_tol = tol;
+        }
+        p.validate_settings()?;
+        let sim = PlatformSimulation::new(p.stand.clone(), p.initial_state(), p.settings, p.stabilisation, start_time)
+            .map_err(|e| e.to_string())?;
+        let legs = PlatformOutputs::compute(sim.stand(), &sim.body_state()).l;
+        let summary = format!(
+            "initialised at t = {start_time}: M = {} kg, J = {:?} kg.m2, g = {} m/s2, leg lengths {:?} m, \
+             method {:?}, relTol {:e}{}, stabilisation {:?}",
+            p.stand.mass,
+            p.stand.inertia,
+            p.stand.gravity,
+            legs,
+            p.settings.method,
+            p.settings.rel_tol,
+            if tolerance.is_some() { " (from fmi2SetupExperiment)" } else { "" },
+            p.stabilisation
+        );
+        self.simulation = Some(sim);
+        self.outputs = None;
+        Ok(summary)
+    }
+
+    fn do_step(&mut self, t: f64, h: f64) -> Result<(), StepError> {
+        let law = self.held_forces(t);
+        let Some(sim) = self.simulation.as_mut() else {
+            return Err(StepError { message: "the model is not initialised".into() });
+        };
+        let t_end = t + h;
+        let result = if t_end > sim.time { sim.advance(&law, t_end) } else { Ok(()) };
+        self.force_rates = [0.0; LEG_COUNT];
+        match result {
+            Ok(()) => {
+                self.outputs = None;
+                Ok(())
+            }
+            Err(failure) => Err(StepError {
+                message: format!("step from t = {t} to {t_end} rolled back: {failure}; leg forces {:?} N", self.forces),
+            }),
+        }
+    }
+
+    fn set_input_derivative(&mut self, var: VariableRef, value: f64) {
+        if var.group == group::F {
+            if let Some(slot) = self.force_rates.get_mut(var.index) {
+                *slot = value;
+            }
+        }
+    }
+
+    fn output_derivative(&mut self, var: VariableRef) -> f64 {
+        let Some(sim) = &self.simulation else {
+            return 0.0;
+        };
+        let law = HeldForces { value: self.forces, slope: [0.0; LEG_COUNT], t0: sim.time };
+        let dy = sim.derivative(&law);
+        let d = PlatformOutputs::time_derivatives(sim.stand(), &sim.body_state(), &dy);
+        Self::output_value(&d, var)
+    }
+
+    fn save(&self, w: &mut ByteWriter) {
+        let p = &self.parameters;
+        save_stand(w, &p.stand);
+        for v in [&p.r0, &p.angles0, &p.v0, &p.w0] {
+            w.f64s(v.as_slice());
+        }
+        save_settings(w, &p.settings);
+        w.i32(p.stabilisation.code());
+        w.f64s(&self.forces);
+        w.f64s(&self.force_rates);
+        match &self.simulation {
+            None => w.bool(false),
+            Some(sim) => {
+                w.bool(true);
+                // The stand and stabilisation equal the parameters'; the guard, integrator,
+                // time and state are the simulation's own.
+                save_stand(w, sim.stand());
+                w.i32(sim.stabilisation.code());
+                save_settings(w, &sim.integrator.settings);
+                w.f64(sim.integrator.dopri5.h_next);
+                w.f64(sim.integrator.dopri5.err_old);
+                let st = &sim.integrator.stats;
+                for n in [st.accepted_steps, st.rejected_steps, st.rhs_evaluations] {
+                    w.u64(n);
+                }
+                let g = &sim.guard;
+                w.f64s(&[g.min_leg_length, g.base_plane, g.side, g.reference_determinant]);
+                w.f64(sim.time);
+                w.f64s(&sim.state);
+            }
+        }
+    }
+
+    fn restore(r: &mut ByteReader) -> Result<Self, SnapshotError> {
+        let stand = read_stand(r)?;
+        let r0 = Vector3::from(r.finite_array::<3>("r0")?);
+        let angles0 = Vector3::from(r.finite_array::<3>("angles0")?);
+        let v0 = Vector3::from(r.finite_array::<3>("v0")?);
+        let w0 = Vector3::from(r.finite_array::<3>("w0")?);
+        let settings = read_settings(r)?;
+        let stabilisation = read_stabilisation(r)?;
+        let forces = r.finite_array::<LEG_COUNT>("F")?;
+        let force_rates = r.finite_array::<LEG_COUNT>("der(F)")?;
+        let simulation = if r.bool()? {
+            let sim_stand = read_stand(r)?;
+            let sim_stabilisation = read_stabilisation(r)?;
+            let sim_settings = read_settings(r)?;
+            let dopri5 = Dopri5Memory { h_next: r.finite("h_next")?, err_old: r.finite("err_old")? };
+            let stats =
+                IntegratorStats { accepted_steps: r.u64()?, rejected_steps: r.u64()?, rhs_evaluations: r.u64()? };
+            let [min_leg_length, base_plane, side, reference_determinant] = r.finite_array::<4>("guard")?;
+            let guard = ConfigurationGuard { min_leg_length, base_plane, side, reference_determinant };
+            let time = r.finite("time")?;
+            let state = r.finite_array::<STATE_DIM>("state")?;
+            Some(PlatformSimulation {
+                form: SpecialForm::new(sim_stand),
+                guard,
+                stabilisation: sim_stabilisation,
+                integrator: Integrator { settings: sim_settings, dopri5, stats },
+                time,
+                state,
+            })
+        } else {
+            None
+        };
+        Ok(PlatformModel {
+            parameters: PlatformParameters { stand, r0, angles0, v0, w0, settings, stabilisation },
+            forces,
+            force_rates,
+            simulation,
+            outputs: None,
+        })
+    }
+}
+
+fn save_stand(w: &mut ByteWriter, s: &Stand) {
+    w.f64(s.mass);
+    w.f64s(&s.inertia);
+    w.f64(s.gravity);
+    for p in s.base_joints.iter().chain(s.platform_joints.iter()) {
+        w.f64s(p.as_slice());
+    }
+}
+
+fn read_stand(r: &mut ByteReader) -> Result<Stand, SnapshotError> {
+    let mass = r.finite("M")?;
+    let inertia = r.finite_array::<3>("J")?;
+    let gravity = r.finite("g")?;
+    let mut joints = [Vector3::zeros(); 2 * LEG_COUNT];
+    for j in joints.iter_mut() {
+        *j = Vector3::from(r.finite_array::<3>("joint")?);
+    }
+    let mut base_joints = [Vector3::zeros(); LEG_COUNT];
+    let mut platform_joints = [Vector3::zeros(); LEG_COUNT];
+    base_joints.copy_from_slice(&joints[..LEG_COUNT]);
+    platform_joints.copy_from_slice(&joints[LEG_COUNT..]);
+    Ok(Stand { mass, inertia, gravity, base_joints, platform_joints })
+}
+
+fn save_settings(w: &mut ByteWriter, s: &SolverSettings) {
+    w.i32(s.method.code());
+    w.f64s(&[s.rel_tol, s.abs_tol, s.max_step, s.fixed_step]);
+    w.u64(s.max_steps_per_call);
+}
+
+fn read_settings(r: &mut ByteReader) -> Result<SolverSettings, SnapshotError> {
+    let code = r.i32()?;
+    let method = Method::from_code(code).ok_or_else(|| SnapshotError(format!("invalid integration method {code}")))?;
+    let [rel_tol, abs_tol, max_step, fixed_step] = r.finite_array::<4>("solver settings")?;
+    Ok(SolverSettings { method, rel_tol, abs_tol, max_step, fixed_step, max_steps_per_call: r.u64()? })
+}
+
+fn read_stabilisation(r: &mut ByteReader) -> Result<Stabilisation, SnapshotError> {
+    let code = r.i32()?;
+    Stabilisation::from_code(code).ok_or_else(|| SnapshotError(format!("invalid stabilisation {code}")))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn group_indices_match_the_table() {
+        let names = [
+            (group::TIME, "time"),
+            (group::F, "F"),
+            (group::M, "M"),
+            (group::J, "J"),
+            (group::G, "g"),
+            (group::B, "B"),
+            (group::A, "A"),
+            (group::R0, "r0"),
+            (group::ANGLES0, "angles0"),
+            (group::V0, "v0"),
+            (group::W0, "w0"),
+            (group::METHOD, "solver.method"),
+            (group::REL_TOL, "solver.relTol"),
+            (group::ABS_TOL, "solver.absTol"),
+            (group::MAX_STEP, "solver.maxStep"),
+            (group::FIXED_STEP, "solver.fixedStep"),
+            (group::STABILISATION, "solver.stabilisation"),
+            (group::R, "r"),
+            (group::V, "v"),
+            (group::ROT, "R"),
+            (group::ANGLES, "angles"),
+            (group::W, "w"),
+            (group::L, "l"),
+            (group::LDOT, "ldot"),
+            (group::E, "E"),
+            (group::CONSTRAINT_ERROR, "constraintError"),
+        ];
+        assert_eq!(names.len(), variables::GROUPS.len());
+        for (i, name) in names {
+            assert_eq!(variables::GROUPS[i].name, name);
+        }
+    }
+}

@@ -1,0 +1,23 @@
+//! The units the models use, with their SI base-unit exponents
+//! `(kg, m, s, A, K, mol, cd, rad)` for `<UnitDefinitions>`.
+
+use super::variables::UnitDefinition;
+
+const DEG_PER_RAD: f64 = 57.29577951308232;
+
+pub static UNITS: &[UnitDefinition] = &[
+    UnitDefinition { name: "1", base: [0, 0, 0, 0, 0, 0, 0, 0], display_units: &[] },
+    UnitDefinition { name: "s", base: [0, 0, 1, 0, 0, 0, 0, 0], display_units: &[] },
+    UnitDefinition { name: "m", base: [0, 1, 0, 0, 0, 0, 0, 0], display_units: &[("mm", 1000.0)] },
+    UnitDefinition { name: "m/s", base: [0, 1, -1, 0, 0, 0, 0, 0], display_units: &[] },
+    UnitDefinition { name: "m/s2", base: [0, 1, -2, 0, 0, 0, 0, 0], display_units: &[] },
+    UnitDefinition { name: "kg", base: [1, 0, 0, 0, 0, 0, 0, 0], display_units: &[] },
+    UnitDefinition { name: "kg.m2", base: [1, 2, 0, 0, 0, 0, 0, 0], display_units: &[] },
+    UnitDefinition { name: "N", base: [1, 1, -2, 0, 0, 0, 0, 0], display_units: &[("kN", 1e-3)] },
+    UnitDefinition { name: "N/m", base: [1, 0, -2, 0, 0, 0, 0, 0], display_units: &[] },
+    UnitDefinition { name: "N.s/m", base: [1, 0, -1, 0, 0, 0, 0, 0], display_units: &[] },
+    UnitDefinition { name: "J", base: [1, 2, -2, 0, 0, 0, 0, 0], display_units: &[] },
+    UnitDefinition { name: "rad", base: [0, 0, 0, 0, 0, 0, 0, 1], display_units: &[("deg", DEG_PER_RAD)] },
+    UnitDefinition { name: "rad/s", base: [0, 0, -1, 0, 0, 0, 0, 1], display_units: &[("deg/s", DEG_PER_RAD)] },
+    UnitDefinition { name: "rad/s2", base: [0, 0, -2, 0, 0, 0, 0, 1], display_units: &[("deg/s2", DEG_PER_RAD)] },
+];

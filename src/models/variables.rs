@@ -1,0 +1,247 @@
+//! Describing an FMU's variables once, in Rust, from which come the value-reference lookup,
+//! the access rules, the model description XML and the HTML documentation.
+//!
+//! Arrays are declared as groups (`F` with shape `[6]`, `B` with shape `[6, 3]`); their
+//! elements get consecutive value references in row-major order and FMI structured names
+//! (`F[1]`, `B[2,3]`, 1-based).
+
+/// FMI 2 causality.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Causality {
+    Parameter,
+    Input,
+    Output,
+    Local,
+    Independent,
+}
+
+impl Causality {
+    pub fn xml(self) -> &'static str {
+        match self {
+            Causality::Parameter => "parameter",
+            Causality::Input => "input",
+            Causality::Output => "output",
+            Causality::Local => "local",
+            Causality::Independent => "independent",
+        }
+    }
+}
+
+/// FMI 2 variability.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Variability {
+    Constant,
+    Fixed,
+    Tunable,
+    Discrete,
+    Continuous,
+}
+
+impl Variability {
+    pub fn xml(self) -> &'static str {
+        match self {
+            Variability::Constant => "constant",
+            Variability::Fixed => "fixed",
+            Variability::Tunable => "tunable",
+            Variability::Discrete => "discrete",
+            Variability::Continuous => "continuous",
+        }
+    }
+}
+
+/// FMI 2 `initial` attribute (`None` = attribute omitted, as for inputs and the independent
+/// variable).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Initial {
+    Exact,
+    Approx,
+    Calculated,
+}
+
+impl Initial {
+    pub fn xml(self) -> &'static str {
+        match self {
+            Initial::Exact => "exact",
+            Initial::Approx => "approx",
+            Initial::Calculated => "calculated",
+        }
+    }
+}
+
+/// An enumeration type (`<TypeDefinitions>`), items numbered from 1.
+#[derive(Debug)]
+pub struct EnumerationType {
+    pub name: &'static str,
+    pub description: &'static str,
+    /// `(item name, description)`; item `i` (0-based) has value `i + 1`.
+    pub items: &'static [(&'static str, &'static str)],
+}
+
+/// Type of a variable.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VariableType {
+    Real,
+    Integer,
+    Boolean,
+    Enumeration(&'static str),
+}
+
+impl VariableType {
+    /// Whether `fmi2GetReal`/`fmi2SetReal` (true) or the Integer functions apply.
+    pub fn is_real(self) -> bool {
+        self == VariableType::Real
+    }
+    pub fn is_integer_like(self) -> bool {
+        matches!(self, VariableType::Integer | VariableType::Enumeration(_))
+    }
+}
+
+/// A dependency of an unknown (in `<ModelStructure>`) on a group of knowns.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Dependency {
+    /// Every element of the named group.
+    All(&'static str),
+    /// The element of the named group with the same index (e.g. `r[2]` on `r0[2]`).
+    SameIndex(&'static str),
+}
+
+/// A scalar variable or an array of them.
+#[derive(Debug)]
+pub struct VariableGroup {
+    /// Base name: `F`, `B`, `solver.relTol`.
+    pub name: &'static str,
+    /// Array shape; empty for a scalar.
+    pub shape: &'static [usize],
+    /// Value reference of the first element.
+    pub first_vr: u32,
+    pub var_type: VariableType,
+    pub causality: Causality,
+    pub variability: Variability,
+    pub initial: Option<Initial>,
+    /// Unit (must be in the model's unit table), or None for none.
+    pub unit: Option<&'static str>,
+    pub display_unit: Option<&'static str>,
+    pub description: &'static str,
+    /// For outputs: direct dependencies on inputs in `<Outputs>` (empty: none).
+    pub output_dependencies: &'static [Dependency],
+    /// For initial unknowns: what the value depends on in Initialization Mode.
+    pub initial_dependencies: &'static [Dependency],
+}
+
+impl VariableGroup {
+    pub fn len(&self) -> usize {
+        self.shape.iter().product()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Structured name of element `index` (row-major, 0-based).
+    pub fn element_name(&self, index: usize) -> String {
+        match self.shape {
+            [] => self.name.to_string(),
+            [_] => format!("{}[{}]", self.name, index + 1),
+            [_, cols] => format!("{}[{},{}]", self.name, index / cols + 1, index % cols + 1),
+            _ => format!("{}[{}]", self.name, index + 1),
+        }
+    }
+
+    pub fn vr(&self, index: usize) -> u32 {
+        self.first_vr + index as u32
+    }
+
+    /// Whether this variable is an initial unknown (listed in `<InitialUnknowns>`): an
+    /// output with `initial` approx or calculated (no calculated parameters or ME states here).
+    pub fn is_initial_unknown(&self) -> bool {
+        self.causality == Causality::Output && matches!(self.initial, Some(Initial::Approx | Initial::Calculated))
+    }
+
+    /// Whether a start value is written (and must be burned in): exact/approx or inputs.
+    pub fn has_start(&self) -> bool {
+        self.causality == Causality::Input || matches!(self.initial, Some(Initial::Exact | Initial::Approx))
+    }
+}
+
+/// A unit: name and SI base-unit exponents `(kg, m, s, A, K, mol, cd, rad)`, with an
+/// optional display unit `(name, factor)`.
+#[derive(Debug)]
+pub struct UnitDefinition {
+    pub name: &'static str,
+    pub base: [i8; 8],
+    pub display_units: &'static [(&'static str, f64)],
+}
+
+/// Where the value of a variable comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct VariableRef {
+    pub group: usize,
+    pub index: usize,
+}
+
+/// All variables of a model, with an O(1) lookup by value reference.
+#[derive(Debug)]
+pub struct VariableTable {
+    pub groups: &'static [VariableGroup],
+    by_vr: Vec<Option<VariableRef>>,
+}
+
+impl VariableTable {
+    pub fn new(groups: &'static [VariableGroup]) -> Self {
+        let max_vr = groups.iter().map(|g| g.first_vr as usize + g.len()).max().unwrap_or(0);
+        let mut by_vr = vec![None; max_vr];
+        for (gi, g) in groups.iter().enumerate() {
+            for i in 0..g.len() {
+                if let Some(slot) = by_vr.get_mut(g.vr(i) as usize) {
+                    *slot = Some(VariableRef { group: gi, index: i });
+                }
+            }
+        }
+        VariableTable { groups, by_vr }
+    }
+
+    #[inline]
+    pub fn lookup(&self, vr: u32) -> Option<(&'static VariableGroup, VariableRef)> {
+        let r = (*self.by_vr.get(vr as usize)?)?;
+        Some((self.groups.get(r.group)?, r))
+    }
+
+    pub fn group(&self, name: &str) -> Option<(usize, &'static VariableGroup)> {
+        self.groups.iter().enumerate().find(|(_, g)| g.name == name)
+    }
+
+    /// Every element in declaration order with its 1-based index in `<ModelVariables>`.
+    pub fn elements(&self) -> impl Iterator<Item = (usize, &'static VariableGroup, usize)> + '_ {
+        self.groups.iter().flat_map(|g| (0..g.len()).map(move |i| (g, i))).enumerate().map(|(n, (g, i))| (n + 1, g, i))
+    }
+
+    /// 1-based `<ModelVariables>` index of an element.
+    pub fn model_index(&self, group_name: &str, index: usize) -> Option<usize> {
+        let mut n = 0;
+        for g in self.groups {
+            if g.name == group_name {
+                return if index < g.len() { Some(n + index + 1) } else { None };
+            }
+            n += g.len();
+        }
+        None
+    }
+
+    /// `<ModelStructure>` dependency indices of element `index` of `group`.
+    pub fn dependency_indices(&self, deps: &[Dependency], index: usize) -> Vec<usize> {
+        let mut out = vec![];
+        for d in deps {
+            match *d {
+                Dependency::All(name) => {
+                    if let Some((_, g)) = self.group(name) {
+                        out.extend((0..g.len()).filter_map(|i| self.model_index(name, i)));
+                    }
+                }
+                Dependency::SameIndex(name) => out.extend(self.model_index(name, index)),
+            }
+        }
+        out.sort_unstable();
+        out.dedup();
+        out
+    }
+}

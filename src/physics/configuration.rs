@@ -1,0 +1,119 @@
+//! Which configurations the motion may pass through: legs of nonzero length, platform joints
+//! on the side of the base plane where they started, a finite state, a non-singular leg
+//! arrangement. Checked on the initial pose (as parameter errors) and after every internal
+//! integration step (as faults that stop the step).
+
+use super::body_state::BodyState;
+use super::direct_problem::{ForceMomentMatrix, SINGULAR_CONDITION_NUMBER};
+use super::error::{ParameterError, PhysicsFault};
+use super::legs::LegGeometry;
+use super::stand::{COINCIDENCE_TOLERANCE, LEG_COUNT, Stand};
+
+/// The limits a stand's motion must respect, fixed when the simulation starts.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ConfigurationGuard {
+    /// Shortest admissible leg, m.
+    pub min_leg_length: f64,
+    /// Height of the base plane: the mean height of the base joints, m.
+    pub base_plane: f64,
+    /// +1 if the platform joints started above the base plane, -1 if below (a suspended
+    /// platform).
+    pub side: f64,
+    /// Determinant of the force/moment matrix in the initial pose; a cheap first test for
+    /// singularity (`|det| / |det0|` small triggers the condition-number check).
+    pub reference_determinant: f64,
+}
+
+/// Ratio `|det M| / |det M0|` below which the condition number is computed.
+const DETERMINANT_ALARM: f64 = 1e-3;
+
+impl ConfigurationGuard {
+    /// Checks the initial pose and fixes the limits for the motion that starts there.
+    pub fn for_initial_state(stand: &Stand, state: &BodyState) -> Result<Self, ParameterError> {
+        if !state.is_finite() {
+            return Err(ParameterError::new("r0", "the initial state is not finite"));
+        }
+        let legs = LegGeometry::new(stand, state);
+        let min_leg_length = COINCIDENCE_TOLERANCE * stand.characteristic_length().max(f64::MIN_POSITIVE);
+        for k in 0..LEG_COUNT {
+            if legs.length[k] <= min_leg_length {
+                return Err(ParameterError::new(
+                    "r0",
+                    format!(
+                        "leg {} has zero length in the initial pose (platform joint A[{}] coincides with base joint B[{}])",
+                        k + 1,
+                        k + 1,
+                        k + 1
+                    ),
+                ));
+            }
+        }
+        let base_plane = stand.base_joints.iter().map(|b| b.z).sum::<f64>() / LEG_COUNT as f64;
+        let heights: Vec<f64> = (0..LEG_COUNT).map(|k| state.r.z + legs.arm[k].z - base_plane).collect();
+        let side = if heights[0] > 0.0 { 1.0 } else { -1.0 };
+        if let Some(k) = heights.iter().position(|&h| h * side <= 0.0) {
+            return Err(ParameterError::new(
+                "r0",
+                format!(
+                    "in the initial pose platform joint A[{}] is on or across the base plane (height {:e} m, \
+                     while A[1] is at {:e} m)",
+                    k + 1,
+                    heights[k],
+                    heights[0]
+                ),
+            ));
+        }
+        let matrix = ForceMomentMatrix::new(stand, &legs);
+        let condition_number = matrix.condition_number();
+        if !(condition_number < SINGULAR_CONDITION_NUMBER) {
+            return Err(ParameterError::new(
+                "r0",
+                format!(
+                    "the initial pose is a singular leg configuration: the 6x6 force/moment matrix has condition \
+                     number {condition_number:e} (limit {SINGULAR_CONDITION_NUMBER:e}); the legs cannot hold the platform"
+                ),
+            ));
+        }
+        Ok(ConfigurationGuard {
+            min_leg_length,
+            base_plane,
+            side,
+            reference_determinant: matrix.matrix.determinant().abs(),
+        })
+    }
+
+    /// Cheap checks for every internal step: finite state, legs not collapsed, platform
+    /// joints on their side of the base plane.
+    #[inline]
+    pub fn check(&self, state: &BodyState, legs: &LegGeometry) -> Result<(), PhysicsFault> {
+        if !state.is_finite() {
+            return Err(PhysicsFault::NonFiniteState);
+        }
+        for k in 0..LEG_COUNT {
+            if !(legs.length[k] > self.min_leg_length) {
+                return Err(PhysicsFault::LegCollapsed { leg: k + 1, length: legs.length[k] });
+            }
+            let height = state.r.z + legs.arm[k].z - self.base_plane;
+            if !(height * self.side > 0.0) {
+                return Err(PhysicsFault::JointBelowBase { leg: k + 1, height });
+            }
+        }
+        Ok(())
+    }
+
+    /// Singularity check (once per communication step): a determinant test, and the
+    /// condition number only when the determinant has shrunk.
+    pub fn check_singularity(&self, stand: &Stand, legs: &LegGeometry) -> Result<(), PhysicsFault> {
+        let matrix = ForceMomentMatrix::new(stand, legs);
+        let det = matrix.matrix.determinant().abs();
+        if det >= DETERMINANT_ALARM * self.reference_determinant {
+            return Ok(());
+        }
+        let condition_number = matrix.condition_number();
+        if condition_number < SINGULAR_CONDITION_NUMBER {
+            Ok(())
+        } else {
+            Err(PhysicsFault::SingularConfiguration { condition_number })
+        }
+    }
+}

@@ -1,0 +1,175 @@
+//! The direct problem (paper section 3, eqs. 2.2-2.7): the leg forces that produce a
+//! prescribed motion.
+//!
+//! The resultant `F = M (r'' + g ez)` follows from the centre-of-mass theorem, the moment
+//! about the centre of mass from Euler's equations `L = R (J w' + w x J w)` (equivalent to
+//! the paper's eq. 2.4). The six `u_k` then solve the 6x6 linear system of force and moment
+//! balance with the current leg directions:
+//!
+//! ```text
+//! sum_k u_k n_k = F,   sum_k u_k (R A_k) x n_k = L.
+//! ```
+
+use nalgebra::{Matrix6, Vector3, Vector6};
+
+use super::body_state::BodyState;
+use super::kinematics::PoseTrajectoryPoint;
+use super::legs::LegGeometry;
+use super::stand::{LEG_COUNT, Stand};
+
+/// Condition number (of the dimensionless force/moment matrix) above which a configuration is
+/// treated as singular. A well-designed hexapod has condition numbers of order 1-100; above
+/// 1e8 the leg forces for an ordinary load exceed it by eight orders of magnitude and lose
+/// half of the double-precision digits.
+pub const SINGULAR_CONDITION_NUMBER: f64 = 1e8;
+
+/// Why the direct problem has no trustworthy answer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum DirectProblemError {
+    /// The leg directions do not span force and moment space.
+    Singular { condition_number: f64 },
+    /// A leg has zero length, so its direction is undefined.
+    LegCollapsed { leg: usize },
+}
+
+impl std::fmt::Display for DirectProblemError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            DirectProblemError::Singular { condition_number } => write!(
+                f,
+                "singular leg configuration: the force/moment matrix has condition number {condition_number:e} \
+                 (limit {SINGULAR_CONDITION_NUMBER:e})"
+            ),
+            DirectProblemError::LegCollapsed { leg } => write!(f, "leg {leg} has zero length"),
+        }
+    }
+}
+
+impl std::error::Error for DirectProblemError {}
+
+/// The 6x6 matrix mapping leg forces `u` to the wrench `[F; L / ell]`, with the moment rows
+/// divided by the stand's characteristic length `ell` so that the matrix is dimensionless and
+/// its condition number means something.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ForceMomentMatrix {
+    pub matrix: Matrix6<f64>,
+    pub moment_scale: f64,
+}
+
+impl ForceMomentMatrix {
+    pub fn new(stand: &Stand, legs: &LegGeometry) -> Self {
+        let ell = stand.characteristic_length().max(f64::MIN_POSITIVE);
+        let mut matrix = Matrix6::zeros();
+        for k in 0..LEG_COUNT {
+            let n = legs.direction[k];
+            let m = legs.arm[k].cross(&n) / ell;
+            matrix.fixed_view_mut::<3, 1>(0, k).copy_from(&n);
+            matrix.fixed_view_mut::<3, 1>(3, k).copy_from(&m);
+        }
+        ForceMomentMatrix { matrix, moment_scale: ell }
+    }
+
+    /// 2-norm condition number `sigma_max / sigma_min` (infinite when singular).
+    pub fn condition_number(&self) -> f64 {
+        let sv = self.matrix.singular_values();
+        let max = sv.max();
+        let min = sv.min();
+        if min > 0.0 { max / min } else { f64::INFINITY }
+    }
+
+    /// Leg forces producing the resultant `force` and moment `moment` (about the centre of mass).
+    pub fn solve(&self, force: &Vector3<f64>, moment: &Vector3<f64>) -> Result<[f64; LEG_COUNT], DirectProblemError> {
+        let condition_number = self.condition_number();
+        if !(condition_number < SINGULAR_CONDITION_NUMBER) {
+            return Err(DirectProblemError::Singular { condition_number });
+        }
+        let rhs = Vector6::new(
+            force.x,
+            force.y,
+            force.z,
+            moment.x / self.moment_scale,
+            moment.y / self.moment_scale,
+            moment.z / self.moment_scale,
+        );
+        let u = self.matrix.full_piv_lu().solve(&rhs).ok_or(DirectProblemError::Singular { condition_number })?;
+        Ok([u[0], u[1], u[2], u[3], u[4], u[5]])
+    }
+}
+
+/// The resultant force and moment about the centre of mass (inertial components) that the
+/// legs must supply for the prescribed motion.
+pub fn required_wrench(stand: &Stand, point: &PoseTrajectoryPoint) -> (Vector3<f64>, Vector3<f64>) {
+    let force = (point.a + Vector3::new(0.0, 0.0, stand.gravity)) * stand.mass;
+    let j = Vector3::from(stand.inertia);
+    let jw = j.component_mul(&point.w);
+    let moment_body = j.component_mul(&point.w_dot) + point.w.cross(&jw);
+    (force, point.rotation * moment_body)
+}
+
+/// Everything the direct problem gives for one instant of a programme motion.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DirectProblemSolution {
+    /// Leg forces `u_k`, N.
+    pub forces: [f64; LEG_COUNT],
+    /// Programme leg lengths `l_k`, m.
+    pub lengths: [f64; LEG_COUNT],
+    /// Programme leg length rates, m/s.
+    pub rates: [f64; LEG_COUNT],
+    /// Condition number of the force/moment matrix at this pose.
+    pub condition_number: f64,
+}
+
+/// Solves the direct problem for one instant of a programme motion.
+pub fn solve_direct_problem(
+    stand: &Stand,
+    point: &PoseTrajectoryPoint,
+) -> Result<DirectProblemSolution, DirectProblemError> {
+    let state = BodyState::from_pose(point.r, point.v, &point.rotation, &point.w);
+    let legs = LegGeometry::new(stand, &state);
+    if let Some(k) = legs.length.iter().position(|&l| l <= 0.0) {
+        return Err(DirectProblemError::LegCollapsed { leg: k + 1 });
+    }
+    let matrix = ForceMomentMatrix::new(stand, &legs);
+    let (force, moment) = required_wrench(stand, point);
+    let forces = matrix.solve(&force, &moment)?;
+    Ok(DirectProblemSolution {
+        forces,
+        lengths: legs.length,
+        rates: legs.length_rates(stand, &state),
+        condition_number: matrix.condition_number(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::physics::stand::PAPER_EQUILIBRIUM_LEG_FORCE;
+    use nalgebra::Matrix3;
+
+    #[test]
+    fn neutral_pose_of_the_default_stand_needs_the_papers_equilibrium_force_in_every_leg() {
+        let stand = Stand::truck_cabin();
+        let point = PoseTrajectoryPoint::at_rest(Stand::truck_cabin_neutral_position(), Matrix3::identity());
+        let sol = solve_direct_problem(&stand, &point).unwrap();
+        let mg = stand.mass * stand.gravity;
+        for u in sol.forces {
+            assert!((u / mg - PAPER_EQUILIBRIUM_LEG_FORCE).abs() < 1e-13, "{}", u / mg);
+        }
+        assert!(sol.condition_number > 1.0 && sol.condition_number < 100.0, "{}", sol.condition_number);
+    }
+
+    #[test]
+    fn planar_platform_over_its_base_is_singular() {
+        // Platform joints directly above the base joints, all legs vertical: no horizontal
+        // force is possible.
+        let mut stand = Stand::truck_cabin();
+        stand.platform_joints = stand.base_joints.map(|b| Vector3::new(b.x, b.y, -0.5));
+        let point = PoseTrajectoryPoint::at_rest(Vector3::new(0.0, 0.0, 2.0), Matrix3::identity());
+        match solve_direct_problem(&stand, &point) {
+            Err(DirectProblemError::Singular { condition_number }) => {
+                assert!(condition_number >= SINGULAR_CONDITION_NUMBER)
+            }
+            other => panic!("expected a singular configuration, got {other:?}"),
+        }
+    }
+}

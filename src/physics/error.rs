@@ -1,0 +1,64 @@
+//! Errors of the physics core. Each says what is wrong in the words of the model, and names
+//! the FMI parameter or the leg concerned, so that the FMI layer can pass it on verbatim.
+
+use std::fmt;
+
+/// A parameter set that does not describe a physical stand or a usable initial pose.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ParameterError {
+    /// The FMI variable name of the offending parameter, e.g. `J[3]` or `r0[3]`.
+    pub parameter: String,
+    /// What is wrong with it.
+    pub message: String,
+}
+
+impl ParameterError {
+    pub fn new(parameter: impl Into<String>, message: impl Into<String>) -> Self {
+        ParameterError { parameter: parameter.into(), message: message.into() }
+    }
+}
+
+impl fmt::Display for ParameterError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "parameter {}: {}", self.parameter, self.message)
+    }
+}
+
+impl std::error::Error for ParameterError {}
+
+/// A configuration the motion cannot continue through. Leg numbers are 1-based, as in the
+/// FMI variable names.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PhysicsFault {
+    /// A leg's length fell below the coincidence tolerance: its force direction is undefined.
+    LegCollapsed { leg: usize, length: f64 },
+    /// A platform joint reached or crossed the base plane `z = 0`.
+    JointBelowBase { leg: usize, height: f64 },
+    /// The state is no longer finite (the motion diverged).
+    NonFiniteState,
+    /// The legs' force/moment matrix became singular: the six legs no longer determine the
+    /// platform's pose (a singular configuration of the mechanism).
+    SingularConfiguration { condition_number: f64 },
+}
+
+impl fmt::Display for PhysicsFault {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            PhysicsFault::LegCollapsed { leg, length } => {
+                write!(f, "leg {leg} collapsed to length {length:e} (its force direction is undefined)")
+            }
+            PhysicsFault::JointBelowBase { leg, height } => {
+                write!(f, "platform joint A[{leg}] passed through the base plane (z = {height:e})")
+            }
+            PhysicsFault::NonFiniteState => {
+                write!(f, "the state is no longer finite (the motion diverged)")
+            }
+            PhysicsFault::SingularConfiguration { condition_number } => write!(
+                f,
+                "the legs reached a singular configuration (force/moment matrix condition number {condition_number:e})"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for PhysicsFault {}

@@ -1,0 +1,102 @@
+//! The special form of the rigid-body equations (paper eqs. 1.4-1.6, SPEC §1):
+//!
+//! ```text
+//! M r''  = sum_k F_k - M g ez
+//! e1'' = -|e1'|² e1 - 2 I2/(I1+I2) (e1'.e2') e2 - 2 I3/(I3+I1) (e3'.e1') e3 + L3/(I1+I2) e2 - L2/(I3+I1) e3
+//! e2'' = -|e2'|² e2 - 2 I3/(I2+I3) (e2'.e3') e3 - 2 I1/(I1+I2) (e1'.e2') e1 + L1/(I2+I3) e3 - L3/(I1+I2) e1
+//! e3'' = -|e3'|² e3 - 2 I1/(I3+I1) (e3'.e1') e1 - 2 I2/(I2+I3) (e2'.e3') e2 + L2/(I3+I1) e1 - L1/(I2+I3) e2
+//! ```
+//!
+//! with `L_a = L . e_a` the moment about the centre of mass projected on the body axes. Note
+//! `I1 + I2 = J3`, `I2 + I3 = J1`, `I3 + I1 = J2`.
+
+use nalgebra::Vector3;
+
+use super::body_state::{BodyState, STATE_DIM, StateVector, layout};
+use super::forces::LegForceLaw;
+use super::legs::LegGeometry;
+use super::stand::Stand;
+
+/// The stand-dependent coefficients of the special form, computed once per parameter set so
+/// that a right-hand-side evaluation does no divisions by inertias.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpecialForm {
+    pub stand: Stand,
+    inverse_mass: f64,
+    /// `1/(I2+I3) = 1/J1`, `1/(I3+I1) = 1/J2`, `1/(I1+I2) = 1/J3`.
+    inverse_pair: [f64; 3],
+    /// `2 I2/(I1+I2)`, `2 I1/(I1+I2)`: coupling of `e1'.e2'` into `e1''` and `e2''`.
+    c12: (f64, f64),
+    /// `2 I3/(I2+I3)`, `2 I2/(I2+I3)`: coupling of `e2'.e3'` into `e2''` and `e3''`.
+    c23: (f64, f64),
+    /// `2 I1/(I3+I1)`, `2 I3/(I3+I1)`: coupling of `e3'.e1'` into `e3''` and `e1''`.
+    c31: (f64, f64),
+}
+
+impl SpecialForm {
+    /// Precomputes the coefficients. The stand should have passed [`Stand::validate`];
+    /// otherwise the coefficients may be infinite.
+    pub fn new(stand: Stand) -> Self {
+        let [i1, i2, i3] = stand.second_moments();
+        SpecialForm {
+            inverse_mass: 1.0 / stand.mass,
+            inverse_pair: [1.0 / (i2 + i3), 1.0 / (i3 + i1), 1.0 / (i1 + i2)],
+            c12: (2.0 * i2 / (i1 + i2), 2.0 * i1 / (i1 + i2)),
+            c23: (2.0 * i3 / (i2 + i3), 2.0 * i2 / (i2 + i3)),
+            c31: (2.0 * i1 / (i3 + i1), 2.0 * i3 / (i3 + i1)),
+            stand,
+        }
+    }
+
+    /// Second derivatives `(r'', [e1'', e2'', e3''])` for the resultant leg force `force` and
+    /// leg moment `moment` about the centre of mass (both inertial components).
+    #[inline(always)]
+    pub fn accelerations(
+        &self,
+        state: &BodyState,
+        force: &Vector3<f64>,
+        moment: &Vector3<f64>,
+    ) -> (Vector3<f64>, [Vector3<f64>; 3]) {
+        let mut a = force * self.inverse_mass;
+        a.z -= self.stand.gravity;
+
+        let [e1, e2, e3] = &state.e;
+        let [d1, d2, d3] = &state.e_dot;
+        let (l1, l2, l3) = (moment.dot(e1), moment.dot(e2), moment.dot(e3));
+        let [inv23, inv31, inv12] = self.inverse_pair;
+        let (p12, p23, p31) = (d1.dot(d2), d2.dot(d3), d3.dot(d1));
+
+        let e1_dd = e1 * (-d1.norm_squared()) - e2 * (self.c12.0 * p12) - e3 * (self.c31.1 * p31) + e2 * (l3 * inv12)
+            - e3 * (l2 * inv31);
+        let e2_dd = e2 * (-d2.norm_squared()) - e3 * (self.c23.0 * p23) - e1 * (self.c12.1 * p12) + e3 * (l1 * inv23)
+            - e1 * (l3 * inv12);
+        let e3_dd = e3 * (-d3.norm_squared()) - e1 * (self.c31.0 * p31) - e2 * (self.c23.1 * p23) + e1 * (l2 * inv31)
+            - e2 * (l1 * inv23);
+        (a, [e1_dd, e2_dd, e3_dd])
+    }
+
+    /// The full first-order right-hand side `dy/dt` for leg forces given by `law` at time `t`.
+    /// Returns the leg forces used, for callers that want them.
+    #[inline(always)]
+    pub fn derivative<L: LegForceLaw + ?Sized>(
+        &self,
+        t: f64,
+        y: &StateVector,
+        law: &L,
+        dy: &mut StateVector,
+    ) -> [f64; 6] {
+        let state = BodyState::from_vector(y);
+        let legs = LegGeometry::new(&self.stand, &state);
+        let u = law.leg_forces(t, &state, &legs);
+        let (force, moment) = legs.resultant(&u);
+        let (a, e_dd) = self.accelerations(&state, &force, &moment);
+        dy[layout::R..layout::R + 3].copy_from_slice(&y[layout::V..layout::V + 3]);
+        dy[layout::V..layout::V + 3].copy_from_slice(a.as_slice());
+        dy[layout::E..layout::E + 9].copy_from_slice(&y[layout::E_DOT..layout::E_DOT + 9]);
+        for (i, e) in e_dd.iter().enumerate() {
+            dy[layout::E_DOT + 3 * i..layout::E_DOT + 3 * i + 3].copy_from_slice(e.as_slice());
+        }
+        debug_assert_eq!(dy.len(), STATE_DIM);
+        u
+    }
+}

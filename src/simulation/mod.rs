@@ -1,0 +1,14 @@
+//! A simulated stand: the physics core driven by an integrator, with constraint
+//! stabilisation, admissibility checks and roll-back of failed steps. This is what the FMU
+//! steps, and what the Rust tests and benches use directly.
+//!
+//! | module | what it holds |
+//! |---|---|
+//! | [`platform`] | [`PlatformSimulation`]: state, time, integrator; `advance` with roll-back |
+//! | [`outputs`] | the FMU outputs derived from a state, and their time derivatives |
+
+pub mod outputs;
+pub mod platform;
+
+pub use outputs::PlatformOutputs;
+pub use platform::{PlatformDynamics, PlatformSimulation, Stabilisation, StepFailure};

@@ -1,0 +1,40 @@
+//! Shared helpers of the Rust integration tests.
+#![allow(dead_code)]
+
+pub mod newton_euler;
+
+use nalgebra::{Matrix3, Vector3};
+use stewart_fmu::integration::SolverSettings;
+use stewart_fmu::physics::body_state::BodyState;
+use stewart_fmu::physics::kinematics::rotation_from_angles;
+use stewart_fmu::physics::stand::Stand;
+use stewart_fmu::simulation::{PlatformSimulation, Stabilisation};
+
+/// The default stand's neutral pose at rest.
+pub fn neutral_state() -> BodyState {
+    BodyState::from_pose(
+        Stand::truck_cabin_neutral_position(),
+        Vector3::zeros(),
+        &Matrix3::identity(),
+        &Vector3::zeros(),
+    )
+}
+
+/// A pose offset from neutral by `dr`, rotated by 1-2-3 `angles`, moving with `v` and `w`.
+pub fn pose(dr: Vector3<f64>, angles: Vector3<f64>, v: Vector3<f64>, w: Vector3<f64>) -> BodyState {
+    BodyState::from_pose(Stand::truck_cabin_neutral_position() + dr, v, &rotation_from_angles(&angles), &w)
+}
+
+pub fn simulation(
+    stand: Stand,
+    initial: BodyState,
+    settings: SolverSettings,
+    stab: Stabilisation,
+) -> PlatformSimulation {
+    PlatformSimulation::new(stand, initial, settings, stab, 0.0).expect("valid stand and initial state")
+}
+
+/// Largest absolute entry difference of two matrices.
+pub fn max_abs_diff(a: &Matrix3<f64>, b: &Matrix3<f64>) -> f64 {
+    (a - b).abs().max()
+}
