@@ -27,10 +27,14 @@ pub fn panic_message(payload: &(dyn Any + Send)) -> String {
 /// - instance poisoned by an earlier panic, or `func` not allowed in its state: logged,
 ///   `fmi2Error`, nothing changes.
 /// - body panics: the instance is poisoned, the panic is logged, `fmi2Error`.
-pub fn call(c: fmi2Component, func: Fmi2Function, body: impl FnOnce(&mut Instance) -> fmi2Status) -> fmi2Status {
+///
+/// # Safety
+/// `c` must be NULL or a pointer from `fmi2Instantiate` that has not been freed (the FMI
+/// calling convention); the magic number catches most foreign pointers but not all.
+pub unsafe fn call(c: fmi2Component, func: Fmi2Function, body: impl FnOnce(&mut Instance) -> fmi2Status) -> fmi2Status {
     let outcome = catch_unwind(AssertUnwindSafe(|| {
-        // SAFETY: `from_handle` checks for NULL and for our magic number; the importer
-        // promises a pointer from fmi2Instantiate that has not been freed.
+        // SAFETY: `from_handle` checks for NULL and for our magic number; the caller
+        // guarantees a pointer from fmi2Instantiate that has not been freed.
         let Some(instance) = (unsafe { Instance::from_handle(c) }) else {
             return fmi2Error;
         };
@@ -49,6 +53,11 @@ pub fn call(c: fmi2Component, func: Fmi2Function, body: impl FnOnce(&mut Instanc
         }
     }));
     outcome.unwrap_or(fmi2Error)
+}
+
+/// Fixes the signature of an export's body closure (for type inference in `boundary!`).
+pub fn instance_body<F: FnOnce(&mut Instance) -> fmi2Status>(body: F) -> F {
+    body
 }
 
 /// Runs a body that has no instance (`fmi2Instantiate`, `fmi2FreeInstance`,
@@ -123,4 +132,17 @@ macro_rules! try_out {
     };
 }
 
-pub(crate) use {try_out, try_slice, try_slice_mut};
+/// `boundary!(c, Fmi2Function::X, |inst| body)`: the panic boundary of an exported function
+/// that takes an instance (see [`call`]).
+macro_rules! boundary {
+    ($c:expr, $func:expr, $body:expr) => {{
+        // The body is built outside the unsafe block, so its own unsafe operations keep
+        // their own blocks and SAFETY comments.
+        let body = $crate::fmi2::boundary::instance_body($body);
+        // SAFETY: `$c` is the importer's instance pointer, NULL or from fmi2Instantiate and not
+        // freed, under the FMI 2.0 calling convention the exports document.
+        unsafe { $crate::fmi2::boundary::call($c, $func, body) }
+    }};
+}
+
+pub(crate) use {boundary, try_out, try_slice, try_slice_mut};

@@ -10,7 +10,7 @@
 
 use std::ffi::{CStr, CString, c_char};
 
-use super::boundary::{self, call, no_instance, try_out, try_slice, try_slice_mut};
+use super::boundary::{self, boundary, no_instance, try_out, try_slice, try_slice_mut};
 use super::instance::{FmuStateHandle, Instance};
 use super::logger::{Logger, log_without_instance};
 use super::state_machine::{Fmi2Function as F, InterfaceType};
@@ -47,7 +47,7 @@ pub unsafe extern "C" fn fmi2SetDebugLogging(
     n_categories: usize,
     categories: *const fmi2String,
 ) -> fmi2Status {
-    call(c, F::SetDebugLogging, |inst| {
+    boundary!(c, F::SetDebugLogging, |inst| {
         let list = try_slice!(inst, F::SetDebugLogging, categories, n_categories, "categories");
         // SAFETY: each entry is NULL or a NUL-terminated string.
         let names: Vec<Option<String>> = list.iter().map(|&p| unsafe { c_str(p) }).collect();
@@ -145,7 +145,7 @@ pub unsafe extern "C" fn fmi2SetupExperiment(
     stop_time_defined: fmi2Boolean,
     stop_time: fmi2Real,
 ) -> fmi2Status {
-    call(c, F::SetupExperiment, |inst| {
+    boundary!(c, F::SetupExperiment, |inst| {
         inst.setup_experiment(
             F::SetupExperiment,
             (tolerance_defined != fmi2False).then_some(tolerance),
@@ -159,28 +159,28 @@ pub unsafe extern "C" fn fmi2SetupExperiment(
 /// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2Status {
-    call(c, F::EnterInitializationMode, |inst| inst.enter_initialization_mode())
+    boundary!(c, F::EnterInitializationMode, |inst| inst.enter_initialization_mode())
 }
 
 /// # Safety
 /// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status {
-    call(c, F::ExitInitializationMode, |inst| inst.exit_initialization_mode(F::ExitInitializationMode))
+    boundary!(c, F::ExitInitializationMode, |inst| inst.exit_initialization_mode(F::ExitInitializationMode))
 }
 
 /// # Safety
 /// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
-    call(c, F::Terminate, |inst| inst.terminate())
+    boundary!(c, F::Terminate, |inst| inst.terminate())
 }
 
 /// # Safety
 /// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
-    call(c, F::Reset, |inst| inst.reset())
+    boundary!(c, F::Reset, |inst| inst.reset())
 }
 
 /// # Safety
@@ -192,7 +192,7 @@ pub unsafe extern "C" fn fmi2GetReal(
     nvr: usize,
     value: *mut fmi2Real,
 ) -> fmi2Status {
-    call(c, F::GetReal, |inst| {
+    boundary!(c, F::GetReal, |inst| {
         let vrs = try_slice!(inst, F::GetReal, vr, nvr, "vr");
         let values = try_slice_mut!(inst, F::GetReal, value, nvr, "value");
         inst.get_real(F::GetReal, vrs, values)
@@ -208,7 +208,7 @@ pub unsafe extern "C" fn fmi2GetInteger(
     nvr: usize,
     value: *mut fmi2Integer,
 ) -> fmi2Status {
-    call(c, F::GetInteger, |inst| {
+    boundary!(c, F::GetInteger, |inst| {
         let vrs = try_slice!(inst, F::GetInteger, vr, nvr, "vr");
         let values = try_slice_mut!(inst, F::GetInteger, value, nvr, "value");
         inst.get_integer(F::GetInteger, vrs, values)
@@ -224,7 +224,7 @@ pub unsafe extern "C" fn fmi2GetBoolean(
     nvr: usize,
     value: *mut fmi2Boolean,
 ) -> fmi2Status {
-    call(c, F::GetBoolean, |inst| {
+    boundary!(c, F::GetBoolean, |inst| {
         let vrs = try_slice!(inst, F::GetBoolean, vr, nvr, "vr");
         let _ = try_slice_mut!(inst, F::GetBoolean, value, nvr, "value");
         inst.no_variables_of_type(F::GetBoolean, vrs, "Boolean")
@@ -240,7 +240,7 @@ pub unsafe extern "C" fn fmi2GetString(
     nvr: usize,
     value: *mut fmi2String,
 ) -> fmi2Status {
-    call(c, F::GetString, |inst| {
+    boundary!(c, F::GetString, |inst| {
         let vrs = try_slice!(inst, F::GetString, vr, nvr, "vr");
         let _ = try_slice_mut!(inst, F::GetString, value, nvr, "value");
         inst.no_variables_of_type(F::GetString, vrs, "String")
@@ -256,7 +256,7 @@ pub unsafe extern "C" fn fmi2SetReal(
     nvr: usize,
     value: *const fmi2Real,
 ) -> fmi2Status {
-    call(c, F::SetReal, |inst| {
+    boundary!(c, F::SetReal, |inst| {
         let vrs = try_slice!(inst, F::SetReal, vr, nvr, "vr");
         let values = try_slice!(inst, F::SetReal, value, nvr, "value");
         inst.set_real(F::SetReal, vrs, values)
@@ -272,7 +272,7 @@ pub unsafe extern "C" fn fmi2SetInteger(
     nvr: usize,
     value: *const fmi2Integer,
 ) -> fmi2Status {
-    call(c, F::SetInteger, |inst| {
+    boundary!(c, F::SetInteger, |inst| {
         let vrs = try_slice!(inst, F::SetInteger, vr, nvr, "vr");
         let values = try_slice!(inst, F::SetInteger, value, nvr, "value");
         inst.set_integer(F::SetInteger, vrs, values)
@@ -288,7 +288,7 @@ pub unsafe extern "C" fn fmi2SetBoolean(
     nvr: usize,
     value: *const fmi2Boolean,
 ) -> fmi2Status {
-    call(c, F::SetBoolean, |inst| {
+    boundary!(c, F::SetBoolean, |inst| {
         let vrs = try_slice!(inst, F::SetBoolean, vr, nvr, "vr");
         let _ = try_slice!(inst, F::SetBoolean, value, nvr, "value");
         inst.no_variables_of_type(F::SetBoolean, vrs, "Boolean")
@@ -304,7 +304,7 @@ pub unsafe extern "C" fn fmi2SetString(
     nvr: usize,
     value: *const fmi2String,
 ) -> fmi2Status {
-    call(c, F::SetString, |inst| {
+    boundary!(c, F::SetString, |inst| {
         let vrs = try_slice!(inst, F::SetString, vr, nvr, "vr");
         let _ = try_slice!(inst, F::SetString, value, nvr, "value");
         inst.no_variables_of_type(F::SetString, vrs, "String")
@@ -315,7 +315,7 @@ pub unsafe extern "C" fn fmi2SetString(
 /// See the module documentation. `*state` must be NULL or a state from this library.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
-    call(c, F::GetFMUstate, |inst| {
+    boundary!(c, F::GetFMUstate, |inst| {
         let slot = try_out!(inst, F::GetFMUstate, state, "FMUstate");
         let bytes = inst.serialize();
         if slot.is_null() {
@@ -337,7 +337,7 @@ pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, state: *mut fmi2FMUst
 /// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, state: fmi2FMUstate) -> fmi2Status {
-    call(c, F::SetFMUstate, |inst| {
+    boundary!(c, F::SetFMUstate, |inst| {
         // SAFETY: NULL or one of our handles (magic checked).
         let Some(h) = (unsafe { FmuStateHandle::from_handle(state) }) else {
             return inst.error(F::SetFMUstate, "FMUstate is NULL or not a state of this FMU");
@@ -353,7 +353,7 @@ pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, state: fmi2FMUstate) 
 /// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2FreeFMUstate(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
-    call(c, F::FreeFMUstate, |inst| {
+    boundary!(c, F::FreeFMUstate, |inst| {
         let slot = try_out!(inst, F::FreeFMUstate, state, "FMUstate");
         if slot.is_null() {
             return fmi2OK;
@@ -377,7 +377,7 @@ pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
     state: fmi2FMUstate,
     size: *mut usize,
 ) -> fmi2Status {
-    call(c, F::SerializedFMUstateSize, |inst| {
+    boundary!(c, F::SerializedFMUstateSize, |inst| {
         let out = try_out!(inst, F::SerializedFMUstateSize, size, "size");
         // SAFETY: NULL or one of our handles (magic checked).
         let Some(h) = (unsafe { FmuStateHandle::from_handle(state) }) else {
@@ -397,7 +397,7 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
     serialized: *mut fmi2Byte,
     size: usize,
 ) -> fmi2Status {
-    call(c, F::SerializeFMUstate, |inst| {
+    boundary!(c, F::SerializeFMUstate, |inst| {
         // SAFETY: NULL or one of our handles (magic checked).
         let Some(h) = (unsafe { FmuStateHandle::from_handle(state) }) else {
             return inst.error(F::SerializeFMUstate, "FMUstate is NULL or not a state of this FMU");
@@ -424,7 +424,7 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
     size: usize,
     state: *mut fmi2FMUstate,
 ) -> fmi2Status {
-    call(c, F::DeSerializeFMUstate, |inst| {
+    boundary!(c, F::DeSerializeFMUstate, |inst| {
         let bytes = try_slice!(inst, F::DeSerializeFMUstate, serialized as *const u8, size, "serializedState");
         let slot = try_out!(inst, F::DeSerializeFMUstate, state, "FMUstate");
         if let Err(e) = inst.validate_state_bytes(bytes) {
@@ -457,7 +457,7 @@ pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
     _dv_known: *const fmi2Real,
     _dv_unknown: *mut fmi2Real,
 ) -> fmi2Status {
-    call(c, F::GetDirectionalDerivative, |inst| {
+    boundary!(c, F::GetDirectionalDerivative, |inst| {
         inst.error(F::GetDirectionalDerivative, "not supported (providesDirectionalDerivative=\"false\")")
     })
 }
@@ -474,7 +474,7 @@ pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
     order: *const fmi2Integer,
     value: *const fmi2Real,
 ) -> fmi2Status {
-    call(c, F::SetRealInputDerivatives, |inst| {
+    boundary!(c, F::SetRealInputDerivatives, |inst| {
         let vrs = try_slice!(inst, F::SetRealInputDerivatives, vr, nvr, "vr");
         let orders = try_slice!(inst, F::SetRealInputDerivatives, order, nvr, "order");
         let values = try_slice!(inst, F::SetRealInputDerivatives, value, nvr, "value");
@@ -492,7 +492,7 @@ pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
     order: *const fmi2Integer,
     value: *mut fmi2Real,
 ) -> fmi2Status {
-    call(c, F::GetRealOutputDerivatives, |inst| {
+    boundary!(c, F::GetRealOutputDerivatives, |inst| {
         let vrs = try_slice!(inst, F::GetRealOutputDerivatives, vr, nvr, "vr");
         let orders = try_slice!(inst, F::GetRealOutputDerivatives, order, nvr, "order");
         let values = try_slice_mut!(inst, F::GetRealOutputDerivatives, value, nvr, "value");
@@ -509,7 +509,7 @@ pub unsafe extern "C" fn fmi2DoStep(
     communication_step_size: fmi2Real,
     _no_set_fmu_state_prior_to_current_point: fmi2Boolean,
 ) -> fmi2Status {
-    call(c, F::DoStep, |inst| inst.do_step(F::DoStep, current_communication_point, communication_step_size))
+    boundary!(c, F::DoStep, |inst| inst.do_step(F::DoStep, current_communication_point, communication_step_size))
 }
 
 /// # Safety
@@ -518,14 +518,14 @@ pub unsafe extern "C" fn fmi2DoStep(
 pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
     // Only allowed in stepInProgress, which this synchronous FMU never enters: the state
     // table refuses it.
-    call(c, F::CancelStep, |inst| inst.error(F::CancelStep, "no asynchronous step to cancel"))
+    boundary!(c, F::CancelStep, |inst| inst.error(F::CancelStep, "no asynchronous step to cancel"))
 }
 
 /// # Safety
 /// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetStatus(c: fmi2Component, kind: fmi2StatusKind, value: *mut fmi2Status) -> fmi2Status {
-    call(c, F::GetStatus, |inst| {
+    boundary!(c, F::GetStatus, |inst| {
         let _ = try_out!(inst, F::GetStatus, value, "value");
         inst.status_not_available(F::GetStatus, kind)
     })
@@ -535,7 +535,7 @@ pub unsafe extern "C" fn fmi2GetStatus(c: fmi2Component, kind: fmi2StatusKind, v
 /// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetRealStatus(c: fmi2Component, kind: fmi2StatusKind, value: *mut fmi2Real) -> fmi2Status {
-    call(c, F::GetRealStatus, |inst| {
+    boundary!(c, F::GetRealStatus, |inst| {
         let out = try_out!(inst, F::GetRealStatus, value, "value");
         inst.get_real_status(F::GetRealStatus, kind, out)
     })
@@ -549,7 +549,7 @@ pub unsafe extern "C" fn fmi2GetIntegerStatus(
     kind: fmi2StatusKind,
     value: *mut fmi2Integer,
 ) -> fmi2Status {
-    call(c, F::GetIntegerStatus, |inst| {
+    boundary!(c, F::GetIntegerStatus, |inst| {
         let _ = try_out!(inst, F::GetIntegerStatus, value, "value");
         inst.status_not_available(F::GetIntegerStatus, kind)
     })
@@ -563,7 +563,7 @@ pub unsafe extern "C" fn fmi2GetBooleanStatus(
     kind: fmi2StatusKind,
     value: *mut fmi2Boolean,
 ) -> fmi2Status {
-    call(c, F::GetBooleanStatus, |inst| {
+    boundary!(c, F::GetBooleanStatus, |inst| {
         let out = try_out!(inst, F::GetBooleanStatus, value, "value");
         inst.get_boolean_status(F::GetBooleanStatus, kind, out)
     })
@@ -577,7 +577,7 @@ pub unsafe extern "C" fn fmi2GetStringStatus(
     kind: fmi2StatusKind,
     value: *mut fmi2String,
 ) -> fmi2Status {
-    call(c, F::GetStringStatus, |inst| {
+    boundary!(c, F::GetStringStatus, |inst| {
         let _ = try_out!(inst, F::GetStringStatus, value, "value");
         inst.status_not_available(F::GetStringStatus, kind)
     })
@@ -588,7 +588,7 @@ pub unsafe extern "C" fn fmi2GetStringStatus(
 
 macro_rules! model_exchange_only {
     ($c:expr, $f:expr) => {
-        call($c, $f, |inst| inst.error($f, "Model Exchange is not implemented by this FMU"))
+        boundary!($c, $f, |inst| inst.error($f, "Model Exchange is not implemented by this FMU"))
     };
 }
 

@@ -319,16 +319,15 @@ impl Instance {
         if !start_time.is_finite() {
             return self.error(func, &format!("startTime must be finite, got {start_time}"));
         }
-        if let Some(tol) = tolerance {
-            if !(tol > 0.0 && tol < 1.0) {
-                return self.error(func, &format!("tolerance must be in (0, 1), got {tol}"));
-            }
+        if let Some(tol) = tolerance
+            && !(tol > 0.0 && tol < 1.0)
+        {
+            return self.error(func, &format!("tolerance must be in (0, 1), got {tol}"));
         }
-        if let Some(stop) = stop_time {
-            if !stop.is_finite() || stop < start_time {
-                return self
-                    .error(func, &format!("stopTime {stop} must be finite and not before startTime {start_time}"));
-            }
+        if let Some(stop) = stop_time
+            && (!stop.is_finite() || stop < start_time)
+        {
+            return self.error(func, &format!("stopTime {stop} must be finite and not before startTime {start_time}"));
         }
         self.tolerance = tolerance;
         self.start_time = start_time;
@@ -504,13 +503,11 @@ impl Instance {
             );
         }
         let t_end = tc + h;
-        if let Some(stop) = self.stop_time {
-            if t_end > stop + COMMUNICATION_POINT_TOLERANCE * stop.abs().max(1.0) {
-                return self.error(
-                    func,
-                    &format!("step to t = {t_end} goes past the stopTime {stop} set in fmi2SetupExperiment"),
-                );
-            }
+        if let Some(stop) = self.stop_time
+            && t_end > stop + COMMUNICATION_POINT_TOLERANCE * stop.abs().max(1.0)
+        {
+            return self
+                .error(func, &format!("step to t = {t_end} goes past the stopTime {stop} set in fmi2SetupExperiment"));
         }
         match self.model.do_step(tc, h) {
             Ok(()) => {

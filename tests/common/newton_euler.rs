@@ -36,6 +36,7 @@ pub struct NewtonEuler<'a> {
 
 impl NewtonEuler<'_> {
     /// Leg lengths and rates computed from this formulation's own kinematics.
+    #[allow(clippy::type_complexity)]
     pub fn legs(&self, s: &NeState) -> ([f64; 6], [f64; 6], [Vector3<f64>; 6], [Vector3<f64>; 6]) {
         let rot = s.rotation();
         let omega = rot * s.w;

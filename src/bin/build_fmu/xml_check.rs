@@ -143,10 +143,10 @@ pub fn check(xml: &str) -> Result<Summary, String> {
                         .collect::<Result<_, _>>()?,
                     None => return Err(format!("Unknown {index}: dependencies must be explicit")),
                 };
-                if let Some(kinds) = get("dependenciesKind") {
-                    if kinds.split_whitespace().count() != deps.len() {
-                        return Err(format!("Unknown {index}: dependenciesKind and dependencies differ in length"));
-                    }
+                if let Some(kinds) = get("dependenciesKind")
+                    && kinds.split_whitespace().count() != deps.len()
+                {
+                    return Err(format!("Unknown {index}: dependenciesKind and dependencies differ in length"));
                 }
                 match section.as_str() {
                     "Outputs" => outputs.push((index, deps)),
@@ -186,10 +186,10 @@ pub fn check(xml: &str) -> Result<Summary, String> {
                 return Err(format!("{}: unit {u} is not defined in UnitDefinitions", v.name));
             }
         }
-        if let Some(t) = &v.declared_type {
-            if !types.contains(t) {
-                return Err(format!("{}: declaredType {t} is not defined", v.name));
-            }
+        if let Some(t) = &v.declared_type
+            && !types.contains(t)
+        {
+            return Err(format!("{}: declaredType {t} is not defined", v.name));
         }
         let needs_start = v.causality == "input" || matches!(v.initial.as_deref(), Some("exact" | "approx"));
         let forbids_start = v.causality == "independent" || v.initial.as_deref() == Some("calculated");

@@ -274,10 +274,10 @@ impl FmuModel for PlatformModel {
     }
 
     fn set_input_derivative(&mut self, var: VariableRef, value: f64) {
-        if var.group == group::F {
-            if let Some(slot) = self.force_rates.get_mut(var.index) {
-                *slot = value;
-            }
+        if var.group == group::F
+            && let Some(slot) = self.force_rates.get_mut(var.index)
+        {
+            *slot = value;
         }
     }
 

@@ -1,0 +1,14 @@
+#!/usr/bin/env bash
+# The main job: build and package the FMU, then run the paper's experiments through it with
+# FMPy, writing CSV data and PNG plots to output/ (or the folder given as the first argument).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+OUT="${1:-output}"
+
+if [ ! -x .venv/bin/python ]; then
+    python3 -m venv .venv
+fi
+.venv/bin/python -m pip install --quiet --disable-pip-version-check -r tests/requirements.txt
+
+cargo run --release --bin build-fmu
+.venv/bin/python examples/paper_experiments.py "$OUT"

@@ -1,0 +1,133 @@
+"""Helpers shared by the Python tests and the demonstration: where the packaged FMU is, the
+paper's non-dimensional stand computed from SPEC §2 (independently of the Rust code), and a
+thin driver around fmpy's FMU2Slave."""
+
+import math
+import os
+import shutil
+from pathlib import Path
+
+import numpy as np
+from fmpy import extract, read_model_description
+from fmpy.fmi2 import FMU2Slave, fmi2OK
+
+ROOT = Path(__file__).resolve().parents[2]
+PLATFORM_FMU = Path(os.environ.get("STEWART_PLATFORM_FMU", ROOT / "target" / "fmu" / "StewartPlatform.fmu"))
+
+# SPEC §2: the truck-cabin stand.
+R_B, R_P, H_C = 1.5, 1.0, 0.5
+BASE_AZIMUTHS = [-10, 10, 110, 130, 230, 250]
+PLATFORM_AZIMUTHS = [-50, 50, 70, 170, 190, 290]
+MASS, INERTIA, GRAVITY = 3000.0, (1500.0, 1500.0, 2200.0), 9.81
+NEUTRAL_Z = 1.9589244164161732
+EQUILIBRIUM_FORCE = 0.2005  # units of M g
+
+
+def stand_parameters(nondimensional=True):
+    """FMI parameter values of the default stand, in the paper's units (R_b, M, M g,
+    sqrt(R_b/g)) or in SI."""
+    length = R_B if nondimensional else 1.0
+    mass = MASS if nondimensional else 1.0
+    p = {
+        "M": MASS / mass,
+        "g": 1.0 if nondimensional else GRAVITY,
+        "r0[1]": 0.0,
+        "r0[2]": 0.0,
+        "r0[3]": NEUTRAL_Z / length,
+    }
+    for a, j in enumerate(INERTIA):
+        p[f"J[{a + 1}]"] = j / (mass * length * length)
+    for k in range(6):
+        pb, pp = math.radians(BASE_AZIMUTHS[k]), math.radians(PLATFORM_AZIMUTHS[k])
+        for i, x in enumerate((R_B * math.cos(pb), R_B * math.sin(pb), 0.0)):
+            p[f"B[{k + 1},{i + 1}]"] = x / length
+        for i, x in enumerate((R_P * math.cos(pp), R_P * math.sin(pp), -H_C)):
+            p[f"A[{k + 1},{i + 1}]"] = x / length
+    return p
+
+
+def neutral_leg_geometry(nondimensional=True):
+    """Horizontal leg projection d and platform joint plane height H0 of the neutral pose."""
+    length = R_B if nondimensional else 1.0
+    pb, pp = math.radians(BASE_AZIMUTHS[0]), math.radians(PLATFORM_AZIMUTHS[0])
+    dx = R_P * math.cos(pp) - R_B * math.cos(pb)
+    dy = R_P * math.sin(pp) - R_B * math.sin(pb)
+    return math.hypot(dx, dy) / length, (NEUTRAL_Z - H_C) / length
+
+
+def heave_programme(t, z0, a=0.2, omega=1.0, tc=2.0):
+    """The paper's heave law (5.1) z = z0 + a sin(omega t)(1 - exp(-t/tc))^2 with its first
+    and second derivatives (written out independently of the Rust code)."""
+    e = math.exp(-t / tc)
+    g, g1, g2 = (1 - e) ** 2, 2 * (e - e * e) / tc, 2 * (2 * e * e - e) / tc**2
+    s, c = math.sin(omega * t), math.cos(omega * t)
+    return (z0 + a * s * g, a * (omega * c * g + s * g1), a * (-omega * omega * s * g + 2 * omega * c * g1 + s * g2))
+
+
+def heave_forces(t, z0=NEUTRAL_Z / R_B):
+    """Direct problem for the pure heave of the symmetric default stand (non-dimensional):
+    the six leg forces are equal, u = (z'' + g) / (6 n_z), n_z = H / l. Returns (u, du/dt, l, ldot)."""
+    d, _ = neutral_leg_geometry()
+    joint_offset = H_C / R_B
+
+    def at(tt):
+        z, zd, zdd = heave_programme(tt, z0)
+        h = z - joint_offset
+        l = math.hypot(d, h)
+        return (zdd + 1.0) / (6.0 * h / l), l, h * zd / l
+
+    u, l, ldot = at(t)
+    eps = 1e-6
+    du = (at(t + eps)[0] - at(t - eps)[0]) / (2 * eps)
+    return u, du, l, ldot
+
+
+class Platform:
+    """One FMU2Slave instance of StewartPlatform with name-based access."""
+
+    _extracted = {}
+
+    def __init__(self, fmu=PLATFORM_FMU, parameters=None, integers=None, start_time=0.0, stop_time=None,
+                 tolerance=None, name="platform", logger=None):
+        fmu = str(fmu)
+        self.md = read_model_description(fmu)
+        if fmu not in Platform._extracted:
+            Platform._extracted[fmu] = extract(fmu)
+        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
+        kwargs = {"fmiCallLogger": None}
+        self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=Platform._extracted[fmu],
+                               modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
+        self.slave.instantiate(loggingOn=False, callbacks=logger)
+        self.slave.setupExperiment(tolerance=tolerance, startTime=start_time, stopTime=stop_time)
+        self.slave.enterInitializationMode()
+        if parameters:
+            self.set(parameters)
+        if integers:
+            names = list(integers)
+            self.slave.setInteger([self.vr[n] for n in names], [int(integers[n]) for n in names])
+        self.slave.exitInitializationMode()
+        self.time = start_time
+
+    def set(self, values):
+        names = list(values)
+        self.slave.setReal([self.vr[n] for n in names], [float(values[n]) for n in names])
+
+    def set_forces(self, forces, rates=None):
+        self.slave.setReal([self.vr[f"F[{k + 1}]"] for k in range(6)], [float(f) for f in forces])
+        if rates is not None:
+            self.slave.setRealInputDerivatives([self.vr[f"F[{k + 1}]"] for k in range(6)], [1] * 6,
+                                               [float(r) for r in rates])
+
+    def get(self, *names):
+        return self.slave.getReal([self.vr[n] for n in names])
+
+    def vector(self, base, n):
+        return np.array(self.get(*[f"{base}[{i + 1}]" for i in range(n)]))
+
+    def step(self, h):
+        self.slave.doStep(currentCommunicationPoint=self.time, communicationStepSize=h)
+        self.time += h
+
+    def free(self):
+        self.slave.terminate()
+        self.slave.freeInstance()
