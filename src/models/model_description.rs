@@ -161,9 +161,13 @@ fn render(kind: ModelKind, guid: &str) -> String {
         };
         let unit = g.unit.map(|u| format!(r#" unit="{}""#, xml_escape(u))).unwrap_or_default();
         let display = g.display_unit.map(|u| format!(r#" displayUnit="{}""#, xml_escape(u))).unwrap_or_default();
+        let range = g
+            .range
+            .map(|(lo, hi)| format!(r#" min="{}" max="{}""#, format_real(lo), format_real(hi)))
+            .unwrap_or_default();
         let element = match g.var_type {
-            VariableType::Real => format!("<Real{unit}{display}{start}/>"),
-            VariableType::Integer => format!("<Integer{start}/>"),
+            VariableType::Real => format!("<Real{unit}{display}{range}{start}/>"),
+            VariableType::Integer => format!("<Integer{range}{start}/>"),
             VariableType::Boolean => format!("<Boolean{start}/>"),
             VariableType::Enumeration(t) => {
                 format!(r#"<Enumeration declaredType="{}"{start}/>"#, xml_escape(t))

@@ -126,6 +126,8 @@ pub struct VariableGroup {
     pub output_dependencies: &'static [Dependency],
     /// For initial unknowns: what the value depends on in Initialization Mode.
     pub initial_dependencies: &'static [Dependency],
+    /// `min` and `max` attributes (Real and Integer), if any.
+    pub range: Option<(f64, f64)>,
 }
 
 impl VariableGroup {

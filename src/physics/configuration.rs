@@ -19,9 +19,13 @@ pub struct ConfigurationGuard {
     /// +1 if the platform joints started above the base plane, -1 if below (a suspended
     /// platform).
     pub side: f64,
-    /// Determinant of the force/moment matrix in the initial pose; a cheap first test for
-    /// singularity (`|det| / |det0|` small triggers the condition-number check).
+    /// Determinant of the force/moment matrix in the initial pose (signed). A sign change
+    /// means the motion passed through a singular configuration; a small `|det| / |det0|`
+    /// triggers the condition-number check.
     pub reference_determinant: f64,
+    /// Whether [`ConfigurationGuard::check_singularity`] is applied. Always on in the FMU;
+    /// tests of a free body far from its (unloaded) legs switch it off.
+    pub detect_singularities: bool,
 }
 
 /// Ratio `|det M| / |det M0|` below which the condition number is computed.
@@ -78,7 +82,8 @@ impl ConfigurationGuard {
             min_leg_length,
             base_plane,
             side,
-            reference_determinant: matrix.matrix.determinant().abs(),
+            reference_determinant: matrix.matrix.determinant(),
+            detect_singularities: true,
         })
     }
 
@@ -101,12 +106,19 @@ impl ConfigurationGuard {
         Ok(())
     }
 
-    /// Singularity check (once per communication step): a determinant test, and the
-    /// condition number only when the determinant has shrunk.
+    /// Singularity check (once per communication step, a 6x6 determinant): a sign change of
+    /// the determinant since the initial pose means the legs passed through a singular
+    /// configuration during the step; a shrunken determinant triggers the condition number.
     pub fn check_singularity(&self, stand: &Stand, legs: &LegGeometry) -> Result<(), PhysicsFault> {
+        if !self.detect_singularities {
+            return Ok(());
+        }
         let matrix = ForceMomentMatrix::new(stand, legs);
-        let det = matrix.matrix.determinant().abs();
-        if det >= DETERMINANT_ALARM * self.reference_determinant {
+        let det = matrix.matrix.determinant();
+        if det * self.reference_determinant <= 0.0 {
+            return Err(PhysicsFault::PassedSingularConfiguration);
+        }
+        if det.abs() >= DETERMINANT_ALARM * self.reference_determinant.abs() {
             return Ok(());
         }
         let condition_number = matrix.condition_number();

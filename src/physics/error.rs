@@ -39,6 +39,9 @@ pub enum PhysicsFault {
     /// The legs' force/moment matrix became singular: the six legs no longer determine the
     /// platform's pose (a singular configuration of the mechanism).
     SingularConfiguration { condition_number: f64 },
+    /// The motion passed through a singular configuration between two checks (the
+    /// force/moment matrix's determinant changed sign).
+    PassedSingularConfiguration,
 }
 
 impl fmt::Display for PhysicsFault {
@@ -56,6 +59,10 @@ impl fmt::Display for PhysicsFault {
             PhysicsFault::SingularConfiguration { condition_number } => write!(
                 f,
                 "the legs reached a singular configuration (force/moment matrix condition number {condition_number:e})"
+            ),
+            PhysicsFault::PassedSingularConfiguration => write!(
+                f,
+                "the legs passed through a singular configuration (the force/moment matrix's determinant changed sign)"
             ),
         }
     }

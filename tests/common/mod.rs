@@ -1,6 +1,7 @@
 //! Shared helpers of the Rust integration tests.
 #![allow(dead_code)]
 
+pub mod fmi_host;
 pub mod newton_euler;
 
 use nalgebra::{Matrix3, Vector3};

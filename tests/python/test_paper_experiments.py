@@ -23,16 +23,19 @@ def test_1_equilibrium_is_held_then_lost():
     pl = Platform(parameters=P)
     pl.set_forces([EQUILIBRIUM_FORCE] * 6)
     r0 = pl.vector("r", 3)
-    held_until, final = None, 0.0
-    while pl.time < 25.0 - 1e-9:
-        pl.step(0.01)
-        final = pose_deviation(pl, r0)
-        if held_until is None and final > 1e-9:
-            held_until = pl.time
+    held_until, final, ended = None, 0.0, "ran to t = 25"
+    try:
+        while pl.time < 25.0 - 1e-9:
+            pl.step(0.01)
+            final = pose_deviation(pl, r0)
+            if held_until is None and final > 1e-9:
+                held_until = pl.time
+    except FMICallException:
+        ended = f"the platform tipped over: step discarded at t = {pl.time:.2f}"
     pl.free()
-    print(f"experiment 1: pose held to 1e-9 until t = {held_until:.2f}; deviation at t = 25: {final:.2e}")
+    print(f"experiment 1: pose held to 1e-9 until t = {held_until:.2f}; deviation {final:.2e}; {ended}")
     assert held_until >= 4.0
-    assert final > 1e-6  # the instability shows
+    assert final > 1e-3  # the instability shows
 
 
 def test_2_parasitic_oscillations_depart_upward():

@@ -25,7 +25,7 @@ pub static INFO: ModelInfo = ModelInfo {
     description: "Loaded Stewart platform (hexapod): rigid-body dynamics in the special form of Zegzhda, Petrova and \
                   Yushkov (2020), six axial leg forces in, pose and leg lengths out",
     groups: variables::GROUPS,
-    enumerations: variables::ENUMERATIONS,
+    enumerations: &[],
     units: super::units::UNITS,
     default_experiment: DefaultExperiment { start_time: 0.0, stop_time: 3.0, step_size: 1e-2 },
     documentation: include_str!("documentation.html"),
@@ -215,13 +215,12 @@ impl FmuModel for PlatformModel {
     fn set_integer(&mut self, var: VariableRef, value: i32) -> Result<(), String> {
         match var.group {
             group::METHOD => {
-                self.parameters.settings.method = Method::from_code(value).ok_or_else(|| {
-                    format!("{value} is not an IntegrationMethod (1 = DormandPrince45, 2 = RungeKutta4)")
-                })?;
+                self.parameters.settings.method = Method::from_code(value)
+                    .ok_or_else(|| format!("{value} is not a method (1 = Dormand-Prince 5(4), 2 = Runge-Kutta 4)"))?;
             }
             group::STABILISATION => {
                 self.parameters.stabilisation = Stabilisation::from_code(value)
-                    .ok_or_else(|| format!("{value} is not a ConstraintStabilisation (1 = none, 2 = projection)"))?;
+                    .ok_or_else(|| format!("{value} is not a stabilisation (1 = none, 2 = projection)"))?;
             }
             _ => return Err("not a settable Integer variable".into()),
         }
@@ -318,6 +317,7 @@ impl FmuModel for PlatformModel {
                 }
                 let g = &sim.guard;
                 w.f64s(&[g.min_leg_length, g.base_plane, g.side, g.reference_determinant]);
+                w.bool(g.detect_singularities);
                 w.f64(sim.time);
                 w.f64s(&sim.state);
             }
@@ -342,7 +342,9 @@ impl FmuModel for PlatformModel {
             let stats =
                 IntegratorStats { accepted_steps: r.u64()?, rejected_steps: r.u64()?, rhs_evaluations: r.u64()? };
             let [min_leg_length, base_plane, side, reference_determinant] = r.finite_array::<4>("guard")?;
-            let guard = ConfigurationGuard { min_leg_length, base_plane, side, reference_determinant };
+            let detect_singularities = r.bool()?;
+            let guard =
+                ConfigurationGuard { min_leg_length, base_plane, side, reference_determinant, detect_singularities };
             let time = r.finite("time")?;
             let state = r.finite_array::<STATE_DIM>("state")?;
             Some(PlatformSimulation {

@@ -5,8 +5,8 @@ use crate::models::variables::Causality::*;
 use crate::models::variables::Dependency::{All, SameIndex};
 use crate::models::variables::Initial::{Calculated, Exact};
 use crate::models::variables::Variability::{Continuous, Fixed};
-use crate::models::variables::VariableType::{Enumeration, Real};
-use crate::models::variables::{Dependency, EnumerationType, VariableGroup};
+use crate::models::variables::VariableType::{Integer, Real};
+use crate::models::variables::{Dependency, VariableGroup};
 
 /// Indices into [`GROUPS`], matched on by the model.
 pub mod group {
@@ -38,34 +38,6 @@ pub mod group {
     pub const CONSTRAINT_ERROR: usize = 25;
 }
 
-pub static ENUMERATIONS: &[EnumerationType] = &[
-    EnumerationType {
-        name: "IntegrationMethod",
-        description: "Integrator of the special-form equations",
-        items: &[
-            (
-                "DormandPrince45",
-                "Adaptive Dormand-Prince 5(4) with error control (solver.relTol, solver.absTol, solver.maxStep)",
-            ),
-            (
-                "RungeKutta4",
-                "Classical Runge-Kutta 4 with a fixed internal step (solver.fixedStep): fixed cost per step, for real time",
-            ),
-        ],
-    },
-    EnumerationType {
-        name: "ConstraintStabilisation",
-        description: "How the constraints e_a.e_b = delta_ab are kept",
-        items: &[
-            ("none", "No stabilisation: the constraint residual drifts with the integration error (for demonstration)"),
-            (
-                "projection",
-                "Project onto the constraint manifold (orthonormal frame, rigid-rotation velocities) after every internal step",
-            ),
-        ],
-    },
-];
-
 const GEOMETRY: &[Dependency] = &[All("A"), All("B"), All("r0"), All("angles0")];
 const NONE: &[Dependency] = &[];
 
@@ -84,6 +56,7 @@ macro_rules! param {
             description: $desc,
             output_dependencies: NONE,
             initial_dependencies: NONE,
+            range: None,
         }
     };
 }
@@ -103,6 +76,7 @@ macro_rules! output {
             description: $desc,
             output_dependencies: NONE,
             initial_dependencies: $init,
+            range: None,
         }
     };
 }
@@ -121,6 +95,7 @@ pub static GROUPS: &[VariableGroup] = &[
         description: "Simulation time",
         output_dependencies: NONE,
         initial_dependencies: NONE,
+        range: None,
     },
     VariableGroup {
         name: "F",
@@ -137,6 +112,7 @@ pub static GROUPS: &[VariableGroup] = &[
                       fmi2SetRealInputDerivatives gave its derivative",
         output_dependencies: NONE,
         initial_dependencies: NONE,
+        range: None,
     },
     param!("M", &[], 10, Some("kg"), None, "Mass of the loaded platform (platform plus payload)"),
     param!(
@@ -165,15 +141,18 @@ pub static GROUPS: &[VariableGroup] = &[
         name: "solver.method",
         shape: &[],
         first_vr: 80,
-        var_type: Enumeration("IntegrationMethod"),
+        var_type: Integer,
         causality: Parameter,
         variability: Fixed,
         initial: Some(Exact),
         unit: None,
         display_unit: None,
-        description: "Integrator: DormandPrince45 (adaptive, default) or RungeKutta4 (fixed step)",
+        description: "Integrator: 1 = Dormand-Prince 5(4), adaptive with error control (solver.relTol, solver.absTol, \
+                      solver.maxStep); 2 = classical Runge-Kutta 4 with a fixed step (solver.fixedStep), a fixed cost \
+                      per communication step for real time",
         output_dependencies: NONE,
         initial_dependencies: NONE,
+        range: Some((1.0, 2.0)),
     },
     param!(
         "solver.relTol",
@@ -214,15 +193,18 @@ pub static GROUPS: &[VariableGroup] = &[
         name: "solver.stabilisation",
         shape: &[],
         first_vr: 85,
-        var_type: Enumeration("ConstraintStabilisation"),
+        var_type: Integer,
         causality: Parameter,
         variability: Fixed,
         initial: Some(Exact),
         unit: None,
         display_unit: None,
-        description: "Constraint stabilisation: projection after every internal step (default) or none",
+        description: "Constraint stabilisation: 2 = project onto the constraints e_a.e_b = delta_ab (orthonormal frame, \
+                      rigid-rotation velocities) after every internal step; 1 = none, the residual drifts (for \
+                      demonstration)",
         output_dependencies: NONE,
         initial_dependencies: NONE,
+        range: Some((1.0, 2.0)),
     },
     output!("r", &[3], 100, Some("m"), None, "Centre of mass S, inertial frame", &[SameIndex("r0")]),
     output!("v", &[3], 103, Some("m/s"), None, "Velocity of the centre of mass", &[SameIndex("v0")]),

@@ -1,0 +1,138 @@
+/* A minimal FMI 2.0 Co-Simulation host in C for the leak check under valgrind:
+ * loads the FMU binary with dlopen, runs many instantiate/step/free cycles (including the
+ * error, discard and FMU-state paths), reloads the library now and then, and reports.
+ *
+ *   leak_host <path/to/StewartPlatform.so> <GUID> [cycles]
+ */
+#include <dlfcn.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef void *fmi2Component;
+typedef void *fmi2FMUstate;
+typedef unsigned int fmi2ValueReference;
+typedef int fmi2Status;
+typedef int fmi2Boolean;
+typedef const char *fmi2String;
+typedef void (*fmi2CallbackLogger)(void *, fmi2String, fmi2Status, fmi2String, fmi2String, ...);
+typedef struct {
+    fmi2CallbackLogger logger;
+    void *(*allocateMemory)(size_t, size_t);
+    void (*freeMemory)(void *);
+    void (*stepFinished)(void *, fmi2Status);
+    void *componentEnvironment;
+} fmi2CallbackFunctions;
+
+static unsigned long messages = 0;
+
+static void logger(void *env, fmi2String name, fmi2Status status, fmi2String category, fmi2String message, ...) {
+    char buffer[4096];
+    va_list args;
+    va_start(args, message);
+    vsnprintf(buffer, sizeof buffer, message, args); /* what FMPy and FMI Library do */
+    va_end(args);
+    (void)env; (void)name; (void)status; (void)category;
+    messages++;
+}
+
+#define LOAD(name) name##_t name = (name##_t)dlsym(lib, #name); if (!name) { fprintf(stderr, "missing %s\n", #name); return 2; }
+
+typedef fmi2Component (*fmi2Instantiate_t)(fmi2String, int, fmi2String, fmi2String, const fmi2CallbackFunctions *, fmi2Boolean, fmi2Boolean);
+typedef void (*fmi2FreeInstance_t)(fmi2Component);
+typedef fmi2Status (*fmi2SetupExperiment_t)(fmi2Component, fmi2Boolean, double, double, fmi2Boolean, double);
+typedef fmi2Status (*fmi2EnterInitializationMode_t)(fmi2Component);
+typedef fmi2Status (*fmi2ExitInitializationMode_t)(fmi2Component);
+typedef fmi2Status (*fmi2Terminate_t)(fmi2Component);
+typedef fmi2Status (*fmi2Reset_t)(fmi2Component);
+typedef fmi2Status (*fmi2SetReal_t)(fmi2Component, const fmi2ValueReference *, size_t, const double *);
+typedef fmi2Status (*fmi2GetReal_t)(fmi2Component, const fmi2ValueReference *, size_t, double *);
+typedef fmi2Status (*fmi2DoStep_t)(fmi2Component, double, double, fmi2Boolean);
+typedef fmi2Status (*fmi2GetFMUstate_t)(fmi2Component, fmi2FMUstate *);
+typedef fmi2Status (*fmi2SetFMUstate_t)(fmi2Component, fmi2FMUstate);
+typedef fmi2Status (*fmi2FreeFMUstate_t)(fmi2Component, fmi2FMUstate *);
+typedef fmi2Status (*fmi2SerializedFMUstateSize_t)(fmi2Component, fmi2FMUstate, size_t *);
+typedef fmi2Status (*fmi2SerializeFMUstate_t)(fmi2Component, fmi2FMUstate, char *, size_t);
+typedef fmi2Status (*fmi2DeSerializeFMUstate_t)(fmi2Component, const char *, size_t, fmi2FMUstate *);
+typedef fmi2Status (*fmi2SetDebugLogging_t)(fmi2Component, fmi2Boolean, size_t, const fmi2String *);
+
+int main(int argc, char **argv) {
+    if (argc < 3) {
+        fprintf(stderr, "usage: %s library guid [cycles]\n", argv[0]);
+        return 2;
+    }
+    int cycles = argc > 3 ? atoi(argv[3]) : 1000;
+    fmi2CallbackFunctions callbacks = {logger, NULL, NULL, NULL, NULL};
+    const fmi2ValueReference forces[6] = {1, 2, 3, 4, 5, 6};
+    const fmi2ValueReference mass = 10;
+    const fmi2ValueReference outputs[4] = {102, 115, 121, 133}; /* r[3], angles[1], l[1], E */
+    double values[6], out[4];
+    long ok = 0, discard = 0, error = 0, states = 0, reloads = 0;
+    void *lib = NULL;
+
+    for (int cycle = 0; cycle < cycles; cycle++) {
+        if (cycle % 100 == 0) { /* load/unload cycles */
+            if (lib) { dlclose(lib); reloads++; }
+            lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
+            if (!lib) { fprintf(stderr, "dlopen: %s\n", dlerror()); return 2; }
+        }
+        LOAD(fmi2Instantiate) LOAD(fmi2FreeInstance) LOAD(fmi2SetupExperiment) LOAD(fmi2EnterInitializationMode)
+        LOAD(fmi2ExitInitializationMode) LOAD(fmi2Terminate) LOAD(fmi2Reset) LOAD(fmi2SetReal) LOAD(fmi2GetReal)
+        LOAD(fmi2DoStep) LOAD(fmi2GetFMUstate) LOAD(fmi2SetFMUstate) LOAD(fmi2FreeFMUstate)
+        LOAD(fmi2SerializedFMUstateSize) LOAD(fmi2SerializeFMUstate) LOAD(fmi2DeSerializeFMUstate)
+        LOAD(fmi2SetDebugLogging)
+
+        char name[32];
+        snprintf(name, sizeof name, "leak%d", cycle);
+        fmi2Component c = fmi2Instantiate(name, 1, argv[2], "file:///tmp", &callbacks, 0, cycle % 7 == 0);
+        if (!c) { fprintf(stderr, "instantiate failed\n"); return 1; }
+        fmi2SetDebugLogging(c, cycle % 7 == 0, 0, NULL);
+        fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0);
+        fmi2EnterInitializationMode(c);
+        if (cycle % 10 == 3) { /* the error path: a bad mass, then reset */
+            double m = -1.0;
+            fmi2SetReal(c, &mass, 1, &m);
+            if (fmi2ExitInitializationMode(c) == 3) error++;
+            fmi2Reset(c);
+            fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0);
+            fmi2EnterInitializationMode(c);
+        }
+        fmi2ExitInitializationMode(c);
+        double t = 0.0;
+        for (int i = 0; i < 10; i++) {
+            int pull = cycle % 10 == 5 && i == 5; /* pull the platform through the base */
+            for (int k = 0; k < 6; k++) values[k] = pull ? -1.0e6 : 5900.715 + k;
+            fmi2SetReal(c, forces, 6, values);
+            double h = pull ? 0.5 : 1e-3;
+            fmi2Status s = fmi2DoStep(c, t, h, 1);
+            if (s == 0) { ok++; t += h; }
+            else if (s == 2) { discard++; break; } /* the discard path */
+            fmi2GetReal(c, outputs, 4, out);
+        }
+        /* FMU state: get, serialize, deserialize, set, free. */
+        fmi2FMUstate st = NULL, back = NULL;
+        if (fmi2GetFMUstate(c, &st) == 0) {
+            size_t size = 0;
+            fmi2SerializedFMUstateSize(c, st, &size);
+            char *bytes = malloc(size);
+            fmi2SerializeFMUstate(c, st, bytes, size);
+            if (cycle % 10 == 7) bytes[size / 2] ^= 1; /* a corrupted copy is refused */
+            if (fmi2DeSerializeFMUstate(c, bytes, size, &back) == 0) {
+                fmi2SetFMUstate(c, back);
+                fmi2FreeFMUstate(c, &back);
+                states++;
+            }
+            fmi2GetFMUstate(c, &st); /* reuse of an existing state */
+            fmi2FreeFMUstate(c, &st);
+            free(bytes);
+        }
+        fmi2Terminate(c);
+        fmi2FreeInstance(c);
+        fmi2FreeInstance(NULL);
+    }
+    dlclose(lib);
+    printf("cycles %d: steps ok %ld, discarded %ld, refused parameter sets %ld, state round trips %ld, reloads %ld, "
+           "log messages %lu\n", cycles, ok, discard, error, states, reloads, messages);
+    return 0;
+}

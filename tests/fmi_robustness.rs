@@ -1,0 +1,320 @@
+//! Bad arguments, bad parameters and physics that cannot go on, through the exported
+//! functions: each is answered with the right status and a message that says what is wrong,
+//! and leaves the instance as it was.
+
+#![allow(clippy::type_complexity)] // the case tables read best inline
+
+mod common;
+
+use common::fmi_host::Host;
+use stewart_fmu::fmi2::exports::*;
+use stewart_fmu::fmi2::types::*;
+
+fn unchanged_after(h: &mut Host, call: impl FnOnce(&mut Host) -> fmi2Status) -> (fmi2Status, String) {
+    let before = h.state_bytes();
+    h.clear_log();
+    let status = call(h);
+    assert_eq!(h.state_bytes(), before, "the call changed the instance");
+    (status, h.last_message())
+}
+
+#[test]
+fn bad_arguments_are_refused_and_change_nothing() {
+    let mut h = Host::platform("args");
+    assert_eq!(h.initialise(&[]), fmi2OK);
+    assert_eq!(h.step(0.1), fmi2OK);
+    let vr_f1 = h.vr("F[1]");
+    let vr_m = h.vr("M");
+    let vr_method = h.vr("solver.method");
+    type Case = (&'static str, Box<dyn FnOnce(&mut Host) -> fmi2Status>, &'static str);
+    let cases: Vec<Case> = vec![
+        (
+            "NULL vr array",
+            Box::new(|h: &mut Host| unsafe { fmi2GetReal(h.c, std::ptr::null(), 2, [0.0f64; 4].as_mut_ptr()) }),
+            "argument vr is NULL",
+        ),
+        (
+            "NULL value array",
+            Box::new(move |h: &mut Host| unsafe { fmi2SetReal(h.c, &vr_f1, 1, std::ptr::null()) }),
+            "argument value is NULL",
+        ),
+        (
+            "unknown value reference",
+            Box::new(|h: &mut Host| unsafe { fmi2GetReal(h.c, &9999, 1, [0.0f64; 4].as_mut_ptr()) }),
+            "value reference 9999 is not a Real",
+        ),
+        (
+            "Integer value reference to fmi2GetReal",
+            Box::new(move |h: &mut Host| unsafe { fmi2GetReal(h.c, &vr_method, 1, [0.0f64; 4].as_mut_ptr()) }),
+            "not a Real variable",
+        ),
+        (
+            "Real value reference to fmi2GetInteger",
+            Box::new(move |h: &mut Host| unsafe { fmi2GetInteger(h.c, &vr_m, 1, [0i32; 4].as_mut_ptr()) }),
+            "not a Integer variable",
+        ),
+        (
+            "fixed parameter after initialisation",
+            Box::new(move |h: &mut Host| unsafe { fmi2SetReal(h.c, &vr_m, 1, &1000.0) }),
+            "M (fixed parameter) may not be set in state stepComplete",
+        ),
+        (
+            "NaN input",
+            Box::new(move |h: &mut Host| unsafe { fmi2SetReal(h.c, &vr_f1, 1, &f64::NAN) }),
+            "F[1] = NaN refused",
+        ),
+        (
+            "+inf input",
+            Box::new(move |h: &mut Host| unsafe { fmi2SetReal(h.c, &vr_f1, 1, &f64::INFINITY) }),
+            "F[1] = inf refused",
+        ),
+        (
+            "Boolean value reference",
+            Box::new(|h: &mut Host| unsafe { fmi2GetBoolean(h.c, &1, 1, [0i32; 4].as_mut_ptr()) }),
+            "has no Boolean variables",
+        ),
+        (
+            "zero step",
+            Box::new(|h: &mut Host| unsafe { fmi2DoStep(h.c, 0.1, 0.0, 1) }),
+            "communicationStepSize must be finite and > 0, got 0",
+        ),
+        ("negative step", Box::new(|h: &mut Host| unsafe { fmi2DoStep(h.c, 0.1, -0.01, 1) }), "got -0.01"),
+        ("NaN step", Box::new(|h: &mut Host| unsafe { fmi2DoStep(h.c, 0.1, f64::NAN, 1) }), "got NaN"),
+        ("infinite step", Box::new(|h: &mut Host| unsafe { fmi2DoStep(h.c, 0.1, f64::INFINITY, 1) }), "got inf"),
+        (
+            "wrong communication point",
+            Box::new(|h: &mut Host| unsafe { fmi2DoStep(h.c, 0.3, 0.01, 1) }),
+            "currentCommunicationPoint 0.3 does not match the FMU's time 0.1",
+        ),
+        (
+            "NaN communication point",
+            Box::new(|h: &mut Host| unsafe { fmi2DoStep(h.c, f64::NAN, 0.01, 1) }),
+            "currentCommunicationPoint must be finite",
+        ),
+        (
+            "input derivative of order 2",
+            Box::new(move |h: &mut Host| unsafe { fmi2SetRealInputDerivatives(h.c, &vr_f1, 1, &2, &1.0) }),
+            "order 2",
+        ),
+        (
+            "output derivative of order 2",
+            Box::new(|h: &mut Host| unsafe {
+                fmi2GetRealOutputDerivatives(h.c, &100, 1, &2, [0.0f64; 4].as_mut_ptr())
+            }),
+            "maxOutputDerivativeOrder = 1",
+        ),
+        (
+            "derivative of a parameter",
+            Box::new(move |h: &mut Host| unsafe { fmi2SetRealInputDerivatives(h.c, &vr_m, 1, &1, &1.0) }),
+            "M is not an input",
+        ),
+        (
+            "NULL out-pointer",
+            Box::new(|h: &mut Host| unsafe { fmi2GetRealStatus(h.c, fmi2LastSuccessfulTime, std::ptr::null_mut()) }),
+            "argument value is NULL",
+        ),
+        (
+            "unknown log category",
+            Box::new(|h: &mut Host| unsafe { fmi2SetDebugLogging(h.c, 1, 1, [c"logNothing".as_ptr()].as_ptr()) }),
+            "unknown log category \"logNothing\"",
+        ),
+        (
+            "NULL FMU state",
+            Box::new(|h: &mut Host| unsafe { fmi2SetFMUstate(h.c, std::ptr::null_mut()) }),
+            "FMUstate is NULL",
+        ),
+    ];
+    for (name, call, fragment) in cases {
+        let (status, message) = unchanged_after(&mut h, call);
+        println!("{name:>40} -> {} : {message}", status_name(status));
+        assert_eq!(status, fmi2Error, "{name}");
+        assert!(message.contains(fragment), "{name}: message {message:?} lacks {fragment:?}");
+    }
+    // The instance still works after all that.
+    assert_eq!(h.step(0.1), fmi2OK);
+    // Round-off in the communication point, as accumulating masters produce, is tolerated.
+    let t = h.time + 1e-15;
+    assert_eq!(unsafe { fmi2DoStep(h.c, t, 0.1, 1) }, fmi2OK);
+}
+
+#[test]
+fn non_finite_parameters_and_bad_enumerations_are_refused_when_set() {
+    let mut h = Host::platform("set");
+    h.setup(None);
+    h.enter();
+    let vr_method = h.vr("solver.method");
+    for (name, value) in [("M", f64::NAN), ("J[2]", f64::INFINITY), ("B[3,1]", f64::NEG_INFINITY), ("r0[3]", f64::NAN)]
+    {
+        let (status, message) = unchanged_after(&mut h, |h| h.set(name, value));
+        assert_eq!(status, fmi2Error);
+        assert!(message.contains(name) && message.contains("must be finite"), "{message}");
+    }
+    let (status, message) = unchanged_after(&mut h, |h| unsafe { fmi2SetInteger(h.c, &vr_method, 1, &7) });
+    assert_eq!(status, fmi2Error);
+    assert!(message.contains("7 is not a method"), "{message}");
+    assert_eq!(h.exit(), fmi2OK);
+}
+
+#[test]
+fn stepping_past_the_stop_time_is_an_error() {
+    let mut h = Host::platform("stop");
+    h.setup(Some(0.05));
+    h.enter();
+    assert_eq!(h.exit(), fmi2OK);
+    assert_eq!(h.step(0.05), fmi2OK);
+    let (status, message) = unchanged_after(&mut h, |h| h.step(0.01));
+    assert_eq!(status, fmi2Error);
+    assert!(message.contains("past the stopTime 0.05"), "{message}");
+}
+
+/// SPEC / issue: each invalid parameter and the message fragment that must name it.
+#[test]
+fn bad_parameter_sets_are_refused_at_exit_initialization_mode() {
+    let b1 = [1.5 * (-10f64).to_radians().cos(), 1.5 * (-10f64).to_radians().sin(), 0.0];
+    let a1 = [(-50f64).to_radians().cos(), (-50f64).to_radians().sin(), -0.5];
+    let table: Vec<(&str, Vec<(&str, f64)>, &str)> = vec![
+        ("zero mass", vec![("M", 0.0)], "parameter M: mass must be positive"),
+        ("negative mass", vec![("M", -3000.0)], "parameter M: mass must be positive"),
+        ("zero moment of inertia", vec![("J[1]", 0.0)], "parameter J[1]: moment of inertia must be positive"),
+        ("negative moment of inertia", vec![("J[2]", -1.0)], "parameter J[2]: moment of inertia must be positive"),
+        (
+            "triangle inequality",
+            vec![("J[3]", 3100.0)],
+            "parameter J[3]: moments of inertia violate the triangle inequality",
+        ),
+        (
+            "triangle inequality, other axis",
+            vec![("J[1]", 3700.0)],
+            "parameter J[1]: moments of inertia violate the triangle inequality",
+        ),
+        ("negative gravity", vec![("g", -9.81)], "parameter g: gravity must be >= 0"),
+        (
+            "coincident base joints",
+            vec![("B[2,1]", b1[0]), ("B[2,2]", b1[1]), ("B[2,3]", b1[2])],
+            "joints B[1] and B[2] coincide",
+        ),
+        (
+            "coincident platform joints",
+            vec![("A[4,1]", a1[0]), ("A[4,2]", a1[1]), ("A[4,3]", a1[2])],
+            "joints A[1] and A[4] coincide",
+        ),
+        (
+            "zero-length leg",
+            vec![("r0[1]", b1[0] - a1[0]), ("r0[2]", b1[1] - a1[1]), ("r0[3]", b1[2] - a1[2])],
+            "leg 1 has zero length",
+        ),
+        (
+            "singular initial pose (yaw 90 degrees)",
+            vec![("angles0[3]", std::f64::consts::FRAC_PI_2)],
+            "singular leg configuration",
+        ),
+        ("platform joints on the base plane", vec![("r0[3]", 0.5)], "on or across the base plane"),
+        (
+            "platform joints across the base plane",
+            vec![("r0[3]", 0.6), ("angles0[1]", 0.5)],
+            "on or across the base plane",
+        ),
+        ("zero relative tolerance", vec![("solver.relTol", 0.0)], "parameter solver.relTol: must be in (0, 1)"),
+        ("tolerance below precision", vec![("solver.relTol", 1e-17)], "below double precision"),
+        ("negative absolute tolerance", vec![("solver.absTol", -1e-9)], "parameter solver.absTol"),
+        ("negative maximum step", vec![("solver.maxStep", -0.1)], "parameter solver.maxStep"),
+        ("negative RK4 step", vec![("solver.fixedStep", -1e-3)], "parameter solver.fixedStep"),
+    ];
+    for (name, values, fragment) in table {
+        let mut h = Host::platform("params");
+        h.setup(None);
+        h.enter();
+        for (n, v) in &values {
+            assert_eq!(h.set(n, *v), fmi2OK, "{name}: set {n}");
+        }
+        h.clear_log();
+        let status = h.exit();
+        let message = h.last_message();
+        println!("{name:>40} -> {} : {message}", status_name(status));
+        assert_eq!(status, fmi2Error, "{name}");
+        assert!(message.contains(fragment), "{name}: {message:?} lacks {fragment:?}");
+        // The error state: only the allowed calls work; reset brings the start values back.
+        assert_eq!(h.step(0.01), fmi2Error);
+        assert_eq!(unsafe { fmi2Reset(h.c) }, fmi2OK);
+        assert_eq!(h.initialise(&[]), fmi2OK);
+    }
+    // The singular pose reports its condition number.
+    let mut h = Host::platform("cond");
+    h.setup(None);
+    h.enter();
+    h.set("angles0[3]", std::f64::consts::FRAC_PI_2);
+    h.exit();
+    assert!(h.last_message().contains("condition number"), "{}", h.last_message());
+}
+
+/// Physics that cannot go on: the step is rolled back, fmi2Discard, the status functions
+/// answer, outputs stay finite and equal to those before the step.
+#[test]
+fn impossible_motions_are_discarded_with_roll_back() {
+    let cases: Vec<(&str, Vec<(&str, f64)>, [f64; 6], f64, &str)> = vec![
+        ("platform pulled through the base", vec![], [-1.0e6; 6], 1.0, "passed through the base plane"),
+        (
+            "platform pushed into a singular yaw",
+            vec![("g", 0.0), ("angles0[3]", 1.35), ("w0[3]", 1.0)],
+            [0.0; 6],
+            0.5,
+            "singular configuration",
+        ),
+        ("forces beyond any scale", vec![], [1e300, -1e300, 1e300, -1e300, 1e300, -1e300], 0.1, "rolled back"),
+    ];
+    for (name, params, forces, h_step, fragment) in cases {
+        let mut h = Host::platform("discard");
+        assert_eq!(h.initialise(&params), fmi2OK, "{name}");
+        assert_eq!(h.step(0.01), fmi2OK);
+        let before = h.all_reals();
+        h.set_forces(forces);
+        h.clear_log();
+        let status = h.step(h_step);
+        let message = h.last_message();
+        println!("{name:>36} -> {} : {message}", status_name(status));
+        assert_eq!(status, fmi2Discard, "{name}");
+        assert!(message.contains(fragment) && message.contains("rolled back"), "{name}: {message}");
+        let mut last = f64::NAN;
+        let mut terminated = 0;
+        unsafe {
+            assert_eq!(fmi2GetRealStatus(h.c, fmi2LastSuccessfulTime, &mut last), fmi2OK);
+            assert_eq!(fmi2GetBooleanStatus(h.c, fmi2Terminated, &mut terminated), fmi2OK);
+        }
+        assert_eq!(last, 0.01, "{name}: last successful time");
+        assert_eq!(terminated, fmi2True);
+        // Outputs (and everything else) as before the step, apart from the new force inputs.
+        let after = h.all_reals();
+        let f_vrs: Vec<u32> = (1..=6).collect();
+        let real_vrs: Vec<u32> =
+            h.table.elements().filter(|(_, g, _)| g.var_type.is_real()).map(|(_, g, i)| g.vr(i)).collect();
+        for ((vr, a), b) in real_vrs.iter().zip(&after).zip(&before) {
+            if !f_vrs.contains(vr) {
+                assert_eq!(a, b, "{name}: value reference {vr} changed");
+                assert!(f64::from_bits(*a).is_finite());
+            }
+        }
+        assert_eq!(unsafe { fmi2Terminate(h.c) }, fmi2OK);
+    }
+}
+
+/// An instance stays usable after refusing a state that is not its own or is damaged.
+#[test]
+fn foreign_state_handles_and_bytes_are_refused() {
+    let mut h = Host::platform("state");
+    assert_eq!(h.initialise(&[]), fmi2OK);
+    let mut bytes = h.state_bytes();
+    let before = h.state_bytes();
+    for i in [0usize, 9, 13, 40, bytes.len() / 2, bytes.len() - 1] {
+        bytes[i] ^= 0x20;
+        assert_eq!(h.restore_bytes(&bytes), fmi2Error, "flipped byte {i}");
+        bytes[i] ^= 0x20;
+    }
+    assert_eq!(h.restore_bytes(&bytes[..bytes.len() - 3]), fmi2Error);
+    assert_eq!(h.state_bytes(), before);
+    assert_eq!(h.restore_bytes(&bytes), fmi2OK);
+    // A handle that is not ours.
+    let mut fake = [0u64; 4];
+    assert_eq!(unsafe { fmi2SetFMUstate(h.c, fake.as_mut_ptr() as fmi2FMUstate) }, fmi2Error);
+    let mut fake_ptr = fake.as_mut_ptr() as fmi2FMUstate;
+    assert_eq!(unsafe { fmi2FreeFMUstate(h.c, &mut fake_ptr) }, fmi2Error);
+}
