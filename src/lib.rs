@@ -9,13 +9,15 @@
 //! 1. [`physics`]: pure mechanics (stand, special form, direct problem, kinematics).
 //! 2. [`integration`]: generic ODE integrators (Dormand-Prince 5(4), RK4).
 //! 3. [`simulation`]: a stand in motion (integration + constraint projection + roll-back).
-//! 4. [`models`]: the FMU models (variables, parameters, co-simulation steps), safe Rust.
-//! 5. [`fmi2`]: the FMI 2.0 C boundary (`extern "C"` functions, state machine, logging).
+//! 4. [`control`]: the paper's programme-following feedback law (pure).
+//! 5. [`models`]: the FMU models (variables, parameters, co-simulation steps), safe Rust.
+//! 6. [`fmi2`]: the FMI 2.0 C boundary (`extern "C"` functions, state machine, logging).
 //!
 //! See `ARCHITECTURE.md` for the map of the repository.
 
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used, clippy::panic))]
 
+pub mod control;
 pub mod fmi2;
 pub mod integration;
 pub mod models;

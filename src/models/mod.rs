@@ -9,10 +9,12 @@
 //! | [`model_description`] | `modelDescription.xml` and the instantiation token from the tables |
 //! | [`snapshot`] | the byte format of serialized FMU states |
 //! | [`platform`] | the `StewartPlatform` model |
+//! | [`controller`] | the `StewartController` model (programme, direct problem, feedback) |
 //!
 //! One binary serves every model: `fmi2Instantiate` picks the model by the GUID the importer
 //! passes (each FMU's `modelDescription.xml` carries its own).
 
+pub mod controller;
 pub mod model_description;
 pub mod platform;
 pub mod snapshot;
@@ -84,26 +86,30 @@ pub trait FmuModel {
 /// Every model this binary implements.
 pub enum AnyModel {
     Platform(Box<platform::PlatformModel>),
+    Controller(Box<controller::ControllerModel>),
 }
 
 /// The models, for instantiation by GUID and for packaging.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ModelKind {
     Platform,
+    Controller,
 }
 
 impl ModelKind {
-    pub const ALL: [ModelKind; 1] = [ModelKind::Platform];
+    pub const ALL: [ModelKind; 2] = [ModelKind::Platform, ModelKind::Controller];
 
     pub fn info(self) -> &'static ModelInfo {
         match self {
             ModelKind::Platform => &platform::INFO,
+            ModelKind::Controller => &controller::INFO,
         }
     }
 
     pub fn code(self) -> u8 {
         match self {
             ModelKind::Platform => 1,
+            ModelKind::Controller => 2,
         }
     }
 
@@ -111,6 +117,7 @@ impl ModelKind {
     pub fn instantiate(self) -> AnyModel {
         match self {
             ModelKind::Platform => AnyModel::Platform(Box::default()),
+            ModelKind::Controller => AnyModel::Controller(Box::default()),
         }
     }
 
@@ -124,6 +131,7 @@ macro_rules! dispatch {
     ($self:expr, $m:ident => $e:expr) => {
         match $self {
             AnyModel::Platform($m) => $e,
+            AnyModel::Controller($m) => $e,
         }
     };
 }
@@ -132,12 +140,14 @@ impl AnyModel {
     pub fn kind(&self) -> ModelKind {
         match self {
             AnyModel::Platform(_) => ModelKind::Platform,
+            AnyModel::Controller(_) => ModelKind::Controller,
         }
     }
 
     pub fn restore(kind: ModelKind, r: &mut ByteReader) -> Result<AnyModel, SnapshotError> {
         Ok(match kind {
             ModelKind::Platform => AnyModel::Platform(Box::new(platform::PlatformModel::restore(r)?)),
+            ModelKind::Controller => AnyModel::Controller(Box::new(controller::ControllerModel::restore(r)?)),
         })
     }
 }

@@ -247,3 +247,95 @@ impl VariableTable {
         out
     }
 }
+
+/// Constructors for the variable tables (usable in `static` items).
+impl VariableGroup {
+    /// A fixed Real parameter (`initial="exact"`).
+    pub const fn parameter(
+        name: &'static str,
+        shape: &'static [usize],
+        first_vr: u32,
+        unit: Option<&'static str>,
+        description: &'static str,
+    ) -> Self {
+        VariableGroup {
+            name,
+            shape,
+            first_vr,
+            var_type: VariableType::Real,
+            causality: Causality::Parameter,
+            variability: Variability::Fixed,
+            initial: Some(Initial::Exact),
+            unit,
+            display_unit: None,
+            description,
+            output_dependencies: &[],
+            initial_dependencies: &[],
+            range: None,
+        }
+    }
+
+    /// A continuous Real input.
+    pub const fn input(
+        name: &'static str,
+        shape: &'static [usize],
+        first_vr: u32,
+        unit: Option<&'static str>,
+        description: &'static str,
+    ) -> Self {
+        VariableGroup {
+            causality: Causality::Input,
+            variability: Variability::Continuous,
+            initial: None,
+            ..Self::parameter(name, shape, first_vr, unit, description)
+        }
+    }
+
+    /// A continuous Real output, calculated; `initial_dependencies` are the knowns it
+    /// depends on in Initialization Mode.
+    pub const fn output(
+        name: &'static str,
+        shape: &'static [usize],
+        first_vr: u32,
+        unit: Option<&'static str>,
+        description: &'static str,
+        initial_dependencies: &'static [Dependency],
+    ) -> Self {
+        VariableGroup {
+            causality: Causality::Output,
+            variability: Variability::Continuous,
+            initial: Some(Initial::Calculated),
+            initial_dependencies,
+            ..Self::parameter(name, shape, first_vr, unit, description)
+        }
+    }
+
+    /// The independent variable `time` (no start value).
+    pub const fn time(first_vr: u32) -> Self {
+        VariableGroup {
+            causality: Causality::Independent,
+            variability: Variability::Continuous,
+            initial: None,
+            ..Self::parameter("time", &[], first_vr, Some("s"), "Simulation time")
+        }
+    }
+
+    pub const fn display(self, display_unit: &'static str) -> Self {
+        VariableGroup { display_unit: Some(display_unit), ..self }
+    }
+
+    /// An Integer parameter with a range instead of a Real one.
+    pub const fn integer(self, min: i32, max: i32) -> Self {
+        VariableGroup { var_type: VariableType::Integer, unit: None, range: Some((min as f64, max as f64)), ..self }
+    }
+
+    /// A parameter that may be changed between steps.
+    pub const fn tunable(self) -> Self {
+        VariableGroup { variability: Variability::Tunable, ..self }
+    }
+
+    /// Direct dependencies of an output on inputs (`<Outputs>`).
+    pub const fn depends_on(self, output_dependencies: &'static [Dependency]) -> Self {
+        VariableGroup { output_dependencies, ..self }
+    }
+}

@@ -9,10 +9,13 @@
 //!    ModelStructure indices valid and complete, units defined;
 //! 4. load the built library with `dlopen` and check that it accepts the XML's GUID (and
 //!    refuses another), and that it exports every FMI 2.0 function;
-//! 5. zip `modelDescription.xml`, `binaries/linux64/<id>.so` and `documentation/index.html`.
+//! 5. zip `modelDescription.xml`, `binaries/linux64/<id>.so` and `documentation/index.html`;
+//! 6. check `modelDescription/StewartSystem.ssd` (the closed loop) against the models and zip
+//!    it with both FMUs into `target/fmu/StewartSystem.ssp`.
 
 mod binary_check;
 mod package;
+mod ssd_check;
 mod xml_check;
 
 use std::path::{Path, PathBuf};
@@ -60,6 +63,15 @@ fn run() -> Result<(), String> {
     for kind in ModelKind::ALL {
         build_one(kind, &root, &library, &out_dir, update)?;
     }
+
+    let ssd_path = root.join("modelDescription").join("StewartSystem.ssd");
+    let ssd = std::fs::read_to_string(&ssd_path).map_err(|e| format!("cannot read {}: {e}", ssd_path.display()))?;
+    let sources = ssd_check::check(&ssd).map_err(|e| format!("{}: {e}", ssd_path.display()))?;
+    let fmus: Vec<PathBuf> = sources.iter().map(|s| out_dir.join(s)).collect();
+    let fmu_refs: Vec<&Path> = fmus.iter().map(|p| p.as_path()).collect();
+    let ssp = out_dir.join("StewartSystem.ssp");
+    package::write_ssp(&ssp, &ssd, &fmu_refs)?;
+    println!("build-fmu: StewartSystem ({} components) -> {}", fmus.len(), ssp.display());
     Ok(())
 }
 

@@ -29,3 +29,22 @@ pub fn write_fmu(
     zip.finish().map_err(|e| format!("cannot finish {}: {e}", path.display()))?;
     Ok(())
 }
+
+/// Writes an SSP archive: `SystemStructure.ssd` and the FMUs under `resources/`.
+pub fn write_ssp(path: &Path, ssd: &str, fmus: &[&Path]) -> Result<(), String> {
+    let file = std::fs::File::create(path).map_err(|e| format!("cannot create {}: {e}", path.display()))?;
+    let mut zip = zip::ZipWriter::new(file);
+    let options = SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
+    zip.start_file("SystemStructure.ssd", options).map_err(|e| format!("zip: {e}"))?;
+    zip.write_all(ssd.as_bytes()).map_err(|e| format!("zip: {e}"))?;
+    for fmu in fmus {
+        let name = fmu.file_name().and_then(|n| n.to_str()).ok_or("bad FMU file name")?;
+        let bytes = std::fs::read(fmu).map_err(|e| format!("cannot read {}: {e}", fmu.display()))?;
+        // Already compressed: store.
+        let stored = SimpleFileOptions::default().compression_method(zip::CompressionMethod::Stored);
+        zip.start_file(format!("resources/{name}"), stored).map_err(|e| format!("zip: {e}"))?;
+        zip.write_all(&bytes).map_err(|e| format!("zip: {e}"))?;
+    }
+    zip.finish().map_err(|e| format!("cannot finish {}: {e}", path.display()))?;
+    Ok(())
+}

@@ -1,0 +1,194 @@
+//! The `StewartController` variables. Stand parameters carry the same names as the
+//! platform's, so one parameter set describes both.
+
+use crate::models::variables::Dependency::{All, SameIndex};
+use crate::models::variables::VariableGroup as V;
+
+/// Indices into [`GROUPS`], matched on by the model.
+pub mod group {
+    pub const TIME: usize = 0;
+    pub const L: usize = 1;
+    pub const LDOT: usize = 2;
+    pub const POSE_R: usize = 3;
+    pub const POSE_V: usize = 4;
+    pub const POSE_A: usize = 5;
+    pub const POSE_ANGLES: usize = 6;
+    pub const POSE_ANGLE_RATES: usize = 7;
+    pub const POSE_ANGLE_ACCELERATIONS: usize = 8;
+    pub const M: usize = 9;
+    pub const J: usize = 10;
+    pub const G_GRAVITY: usize = 11;
+    pub const B: usize = 12;
+    pub const A: usize = 13;
+    pub const GAIN: usize = 14;
+    pub const DAMPING: usize = 15;
+    pub const FEEDFORWARD: usize = 16;
+    pub const PROGRAMME: usize = 17;
+    pub const HEAVE_CENTRE: usize = 18;
+    pub const HEAVE_AMPLITUDE: usize = 19;
+    pub const HEAVE_FREQUENCY: usize = 20;
+    pub const HEAVE_TIME_CONSTANT: usize = 21;
+    pub const SINE_OFFSET: usize = 22;
+    pub const SINE_ANGLE_OFFSET: usize = 23;
+    pub const SINE_AMPLITUDE: usize = 24;
+    pub const SINE_ANGLE_AMPLITUDE: usize = 25;
+    pub const SINE_FREQUENCY: usize = 26;
+    pub const SINE_PHASE: usize = 27;
+    pub const SINE_TIME_CONSTANT: usize = 28;
+    pub const DISTURBANCE_AMPLITUDE: usize = 29;
+    pub const DISTURBANCE_FREQUENCY: usize = 30;
+    pub const DISTURBANCE_TIME_CONSTANT: usize = 31;
+    pub const F: usize = 32;
+    pub const FP: usize = 33;
+    pub const LP: usize = 34;
+    pub const LDOTP: usize = 35;
+    pub const RP: usize = 36;
+    pub const ANGLESP: usize = 37;
+}
+
+const POSE_INPUTS: &[crate::models::variables::Dependency] = &[
+    All("pose.r"),
+    All("pose.v"),
+    All("pose.a"),
+    All("pose.angles"),
+    All("pose.angleRates"),
+    All("pose.angleAccelerations"),
+];
+const FORCE_DEPENDENCIES: &[crate::models::variables::Dependency] = &[
+    SameIndex("l"),
+    SameIndex("ldot"),
+    All("pose.r"),
+    All("pose.v"),
+    All("pose.a"),
+    All("pose.angles"),
+    All("pose.angleRates"),
+    All("pose.angleAccelerations"),
+];
+const LENGTH_DEPENDENCIES: &[crate::models::variables::Dependency] =
+    &[All("pose.r"), All("pose.v"), All("pose.angles"), All("pose.angleRates")];
+/// In Initialization Mode the outputs depend on (almost) every known; listing them all is
+/// the honest answer.
+const ALL_KNOWNS: &[crate::models::variables::Dependency] = &[
+    All("l"),
+    All("ldot"),
+    All("pose.r"),
+    All("pose.v"),
+    All("pose.a"),
+    All("pose.angles"),
+    All("pose.angleRates"),
+    All("pose.angleAccelerations"),
+    All("M"),
+    All("J"),
+    All("g"),
+    All("B"),
+    All("A"),
+    All("G"),
+    All("D"),
+    All("feedforward"),
+    All("programme"),
+    All("heave.centre"),
+    All("heave.amplitude"),
+    All("heave.frequency"),
+    All("heave.timeConstant"),
+    All("sine.offset"),
+    All("sine.angleOffset"),
+    All("sine.amplitude"),
+    All("sine.angleAmplitude"),
+    All("sine.frequency"),
+    All("sine.phase"),
+    All("sine.timeConstant"),
+    All("disturbance.amplitude"),
+    All("disturbance.frequency"),
+    All("disturbance.timeConstant"),
+];
+
+pub static GROUPS: &[V] = &[
+    V::time(0),
+    V::input("l", &[6], 1, Some("m"), "Measured leg length l_k (from the platform's output l)"),
+    V::input("ldot", &[6], 7, Some("m/s"), "Measured leg length rate (from the platform's output ldot)"),
+    V::input("pose.r", &[3], 13, Some("m"), "Programme 3 (external): centre of mass"),
+    V::input("pose.v", &[3], 16, Some("m/s"), "Programme 3 (external): velocity of the centre of mass"),
+    V::input("pose.a", &[3], 19, Some("m/s2"), "Programme 3 (external): acceleration of the centre of mass"),
+    V::input("pose.angles", &[3], 22, Some("rad"), "Programme 3 (external): roll, pitch, yaw (1-2-3)").display("deg"),
+    V::input("pose.angleRates", &[3], 25, Some("rad/s"), "Programme 3 (external): rates of roll, pitch, yaw"),
+    V::input(
+        "pose.angleAccelerations",
+        &[3],
+        28,
+        Some("rad/s2"),
+        "Programme 3 (external): second derivatives of roll, pitch, yaw",
+    ),
+    V::parameter("M", &[], 40, Some("kg"), "Mass of the loaded platform"),
+    V::parameter("J", &[3], 41, Some("kg.m2"), "Principal central moments of inertia"),
+    V::parameter("g", &[], 44, Some("m/s2"), "Gravitational acceleration, along -z"),
+    V::parameter("B", &[6, 3], 50, Some("m"), "Base joint B_k, inertial frame"),
+    V::parameter("A", &[6, 3], 70, Some("m"), "Platform joint A_k, body frame from the centre of mass"),
+    V::parameter("G", &[], 90, Some("N/m"), "Feedback gain on the leg-length error l^p - l (tunable)").tunable(),
+    V::parameter("D", &[], 91, Some("N.s/m"), "Feedback gain on the leg-rate error ldot^p - ldot (tunable)").tunable(),
+    V::parameter(
+        "feedforward",
+        &[],
+        92,
+        None,
+        "1 = apply the programme forces F^p of the direct problem plus feedback; 0 = feedback only (F^p = 0)",
+    )
+    .integer(0, 1),
+    V::parameter(
+        "programme",
+        &[],
+        93,
+        None,
+        "Programme motion: 1 = the paper's heave z = z0 + a sin(Omega t)(1 - exp(-t/T))^2 above heave.centre; \
+         2 = a sinusoid with soft start in each of the six degrees of freedom (sine.*); 3 = the pose and its \
+         derivatives from the inputs pose.*",
+    )
+    .integer(1, 3),
+    V::parameter("heave.centre", &[3], 94, Some("m"), "Programme 1: centre of mass about which the platform heaves"),
+    V::parameter("heave.amplitude", &[], 97, Some("m"), "Programme 1: heave amplitude a"),
+    V::parameter("heave.frequency", &[], 98, Some("rad/s"), "Programme 1: heave circular frequency Omega"),
+    V::parameter("heave.timeConstant", &[], 99, Some("s"), "Programme 1: soft-start time constant T"),
+    V::parameter("sine.offset", &[3], 100, Some("m"), "Programme 2: mean centre of mass x, y, z"),
+    V::parameter("sine.angleOffset", &[3], 103, Some("rad"), "Programme 2: mean roll, pitch, yaw").display("deg"),
+    V::parameter("sine.amplitude", &[3], 106, Some("m"), "Programme 2: amplitudes of x, y, z"),
+    V::parameter("sine.angleAmplitude", &[3], 109, Some("rad"), "Programme 2: amplitudes of roll, pitch, yaw")
+        .display("deg"),
+    V::parameter(
+        "sine.frequency",
+        &[6],
+        112,
+        Some("rad/s"),
+        "Programme 2: circular frequencies of x, y, z, roll, pitch, yaw",
+    ),
+    V::parameter("sine.phase", &[6], 118, Some("rad"), "Programme 2: phases of x, y, z, roll, pitch, yaw"),
+    V::parameter("sine.timeConstant", &[], 124, Some("s"), "Programme 2: soft-start time constant"),
+    V::parameter(
+        "disturbance.amplitude",
+        &[],
+        125,
+        Some("N"),
+        "Force disturbance added to every leg, amplitude sin(frequency t)(1 - exp(-t/timeConstant)): the \
+         paper's perturbation is 0.0001 M g (tunable)",
+    )
+    .tunable(),
+    V::parameter("disturbance.frequency", &[], 126, Some("rad/s"), "Circular frequency of the disturbance"),
+    V::parameter("disturbance.timeConstant", &[], 127, Some("s"), "Soft-start time constant of the disturbance"),
+    V::output(
+        "F",
+        &[6],
+        150,
+        Some("N"),
+        "Leg force command F_k = F^p_k + G (l^p_k - l_k) + D (ldot^p_k - ldot_k) + disturbance (to the platform's F)",
+        ALL_KNOWNS,
+    )
+    .depends_on(FORCE_DEPENDENCIES),
+    V::output("Fp", &[6], 156, Some("N"), "Programme leg forces F^p from the direct problem", ALL_KNOWNS)
+        .depends_on(POSE_INPUTS),
+    V::output("lp", &[6], 162, Some("m"), "Programme leg lengths l^p (inverse kinematics)", ALL_KNOWNS)
+        .depends_on(LENGTH_DEPENDENCIES),
+    V::output("ldotp", &[6], 168, Some("m/s"), "Programme leg length rates", ALL_KNOWNS)
+        .depends_on(LENGTH_DEPENDENCIES),
+    V::output("rp", &[3], 174, Some("m"), "Programme centre of mass", ALL_KNOWNS).depends_on(&[All("pose.r")]),
+    V::output("anglesp", &[3], 177, Some("rad"), "Programme roll, pitch, yaw", ALL_KNOWNS)
+        .display("deg")
+        .depends_on(&[All("pose.angles")]),
+];

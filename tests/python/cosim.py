@@ -1,0 +1,106 @@
+"""A Python co-simulation master over two FMU2Slave instances, StewartController and
+StewartPlatform: controller.F -> platform.F, platform.l -> controller.l, platform.ldot ->
+controller.ldot, at a fixed communication step.
+
+Two coupling schemes:
+- "gauss-seidel" (the default): at each communication point the platform's measured legs go
+  to the controller, whose forces at that point go to the platform, then both step. The
+  controller has direct feed-through, so the platform sees forces from its own current
+  legs (the sampled-data loop a real controller implements).
+- "jacobi": FMPy's SSP algorithm, replicated exactly (fmpy/ssp/simulation.py): connections
+  start at 0.0; each step every component gets its inputs from the connections, steps, and
+  writes its outputs; then the connections are copied. The measurement reaches the platform
+  one communication step later.
+"""
+
+from pathlib import Path
+
+import numpy as np
+from fmpy import extract, read_model_description
+from fmpy.fmi2 import FMU2Slave
+
+from stewart import PLATFORM_FMU, ROOT
+
+CONTROLLER_FMU = Path(PLATFORM_FMU).parent / "StewartController.fmu"
+SYSTEM_SSP = Path(PLATFORM_FMU).parent / "StewartSystem.ssp"
+LEGS = range(1, 7)
+_extracted = {}
+
+
+class Component:
+    def __init__(self, fmu, name, reals=None, integers=None, start_time=0.0):
+        fmu = str(fmu)
+        self.md = read_model_description(fmu)
+        if fmu not in _extracted:
+            _extracted[fmu] = extract(fmu)
+        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
+        self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=_extracted[fmu],
+                             modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
+        self.fmu.instantiate()
+        self.fmu.setupExperiment(startTime=start_time)
+        if reals:
+            names = [n for n in reals if n in self.vr]
+            self.fmu.setReal([self.vr[n] for n in names], [float(reals[n]) for n in names])
+        if integers:
+            names = [n for n in integers if n in self.vr]
+            self.fmu.setInteger([self.vr[n] for n in names], [int(integers[n]) for n in names])
+        self.fmu.enterInitializationMode()
+        self.fmu.exitInitializationMode()
+
+    def get(self, names):
+        return np.array(self.fmu.getReal([self.vr[n] for n in names]))
+
+    def set(self, names, values):
+        self.fmu.setReal([self.vr[n] for n in names], [float(v) for v in values])
+
+    def free(self):
+        self.fmu.terminate()
+        self.fmu.freeInstance()
+
+
+L = [f"l[{k}]" for k in LEGS]
+LDOT = [f"ldot[{k}]" for k in LEGS]
+F = [f"F[{k}]" for k in LEGS]
+LP = [f"lp[{k}]" for k in LEGS]
+
+
+def closed_loop(t_end, h, scheme="gauss-seidel", platform_reals=None, controller_reals=None, controller_integers=None,
+                record=("r[3]",)):
+    """Runs the coupled system; returns (times, recorded platform outputs, max |l - l^p| per
+    step, status) with status "ok" or the exception text if a step failed."""
+    platform = Component(PLATFORM_FMU, "platform", reals=platform_reals)
+    controller = Component(CONTROLLER_FMU, "controller", reals=controller_reals, integers=controller_integers)
+    times, rows, errors, status = [], [], [], "ok"
+    n = int(round(t_end / h))
+    time = 0.0
+    connection_f = np.zeros(6)
+    connection_l = np.zeros(6)
+    connection_ldot = np.zeros(6)
+    try:
+        for _ in range(n):
+            if scheme == "gauss-seidel":
+                controller.set(L + LDOT, np.concatenate([platform.get(L), platform.get(LDOT)]))
+                platform.set(F, controller.get(F))
+                platform.fmu.doStep(currentCommunicationPoint=time, communicationStepSize=h)
+                controller.fmu.doStep(currentCommunicationPoint=time, communicationStepSize=h)
+                time += h
+            elif scheme == "jacobi":
+                # fmpy.ssp.simulation: platform first (the SSD's element order), then controller.
+                platform.set(F, connection_f)
+                platform.fmu.doStep(currentCommunicationPoint=time, communicationStepSize=h)
+                out_l, out_ldot = platform.get(L), platform.get(LDOT)
+                controller.set(L + LDOT, np.concatenate([connection_l, connection_ldot]))
+                controller.fmu.doStep(currentCommunicationPoint=time, communicationStepSize=h)
+                out_f = controller.get(F)
+                connection_f, connection_l, connection_ldot = out_f, out_l, out_ldot
+                time += h
+            else:
+                raise ValueError(scheme)
+            times.append(time)
+            rows.append(platform.get(list(record)))
+            errors.append(np.max(np.abs(platform.get(L) - controller.get(LP))))
+    except Exception as e:  # a discarded step ends the run
+        status = str(e)
+    platform.free()
+    controller.free()
+    return np.array(times), np.array(rows), np.array(errors), status
