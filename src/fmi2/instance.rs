@@ -35,6 +35,29 @@ const STATE_FORMAT_VERSION: u32 = 1;
 /// (FMPy's SSP loop) drift from the FMU's `t + h` by a few ulps per step.
 pub const COMMUNICATION_POINT_TOLERANCE: f64 = 1e-9;
 
+/// The FMI base type a get/set function works on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BaseType {
+    Real,
+    Integer,
+}
+
+impl BaseType {
+    fn matches(self, t: VariableType) -> bool {
+        match self {
+            BaseType::Real => t.is_real(),
+            BaseType::Integer => t.is_integer_like(),
+        }
+    }
+
+    fn name(self) -> &'static str {
+        match self {
+            BaseType::Real => "Real",
+            BaseType::Integer => "Integer",
+        }
+    }
+}
+
 /// An FMU state (`fmi2FMUstate`): the serialized bytes of an instance.
 pub struct FmuStateHandle {
     magic: u64,
@@ -228,28 +251,22 @@ impl Instance {
         &self,
         func: Fmi2Function,
         vr: u32,
-        want: &str,
+        want: BaseType,
     ) -> Result<(&'static VariableGroup, VariableRef), fmi2Status> {
-        let found = self.table.lookup(vr);
-        let ok = match (found, want) {
-            (Some((g, _)), "Real") => g.var_type.is_real(),
-            (Some((g, _)), "Integer") => g.var_type.is_integer_like(),
-            (Some((g, _)), "Boolean") => g.var_type == VariableType::Boolean,
-            _ => false,
-        };
-        match found {
-            Some(f) if ok => Ok(f),
+        match self.table.lookup(vr) {
+            Some((g, r)) if want.matches(g.var_type) => Ok((g, r)),
             Some((g, r)) => Err(self.error(
                 func,
                 &format!(
-                    "value reference {vr} is {} of type {:?}, not a {want} variable",
+                    "value reference {vr} is {} of type {:?}, not a {} variable",
                     g.element_name(r.index),
-                    g.var_type
+                    g.var_type,
+                    want.name()
                 ),
             )),
             None => Err(self.error(
                 func,
-                &format!("value reference {vr} is not a {want} variable of {}", self.kind.info().model_name),
+                &format!("value reference {vr} is not a {} variable of {}", want.name(), self.kind.info().model_name),
             )),
         }
     }
@@ -383,29 +400,28 @@ impl Instance {
     // ----- get/set ------------------------------------------------------------------------
 
     pub fn get_real(&mut self, func: Fmi2Function, vrs: &[u32], values: &mut [f64]) -> fmi2Status {
-        let mut refs = Vec::with_capacity(vrs.len());
+        // Two passes, no allocation: validate every reference, then read (all or nothing).
         for &vr in vrs {
-            match self.lookup(func, vr, "Real") {
-                Ok((_, r)) => refs.push(r),
-                Err(s) => return s,
+            if let Err(s) = self.lookup(func, vr, BaseType::Real) {
+                return s;
             }
         }
-        for (i, r) in refs.into_iter().enumerate() {
+        for (value, &vr) in values.iter_mut().zip(vrs) {
+            let Some((g, r)) = self.table.lookup(vr) else { return fmi2Error };
             let x = self.model.get_real(r);
             if x.is_nan() {
-                let g = &self.table.groups[r.group];
                 return self
                     .error(func, &format!("{} is not a number with the current parameters", g.element_name(r.index)));
             }
-            values[i] = x;
+            *value = x;
         }
         fmi2OK
     }
 
     pub fn set_real(&mut self, func: Fmi2Function, vrs: &[u32], values: &[f64]) -> fmi2Status {
-        let mut refs = Vec::with_capacity(vrs.len());
+        // Two passes, no allocation: validate every reference and value, then store.
         for (&vr, &x) in vrs.iter().zip(values) {
-            let (g, r) = match self.lookup(func, vr, "Real") {
+            let (g, r) = match self.lookup(func, vr, BaseType::Real) {
                 Ok(f) => f,
                 Err(s) => return s,
             };
@@ -415,9 +431,9 @@ impl Instance {
             if !x.is_finite() {
                 return self.error(func, &format!("{} = {x} refused: values must be finite", g.element_name(r.index)));
             }
-            refs.push(r);
         }
-        for (r, &x) in refs.into_iter().zip(values) {
+        for (&vr, &x) in vrs.iter().zip(values) {
+            let Some((_, r)) = self.table.lookup(vr) else { return fmi2Error };
             if let Err(m) = self.model.set_real(r, x) {
                 return self.error(func, &m);
             }
@@ -428,7 +444,7 @@ impl Instance {
     pub fn get_integer(&mut self, func: Fmi2Function, vrs: &[u32], values: &mut [i32]) -> fmi2Status {
         let mut refs = Vec::with_capacity(vrs.len());
         for &vr in vrs {
-            match self.lookup(func, vr, "Integer") {
+            match self.lookup(func, vr, BaseType::Integer) {
                 Ok((_, r)) => refs.push(r),
                 Err(s) => return s,
             }
@@ -442,7 +458,7 @@ impl Instance {
     pub fn set_integer(&mut self, func: Fmi2Function, vrs: &[u32], values: &[i32]) -> fmi2Status {
         let mut refs = Vec::with_capacity(vrs.len());
         for &vr in vrs {
-            let (g, r) = match self.lookup(func, vr, "Integer") {
+            let (g, r) = match self.lookup(func, vr, BaseType::Integer) {
                 Ok(f) => f,
                 Err(s) => return s,
             };
@@ -534,7 +550,7 @@ impl Instance {
     ) -> fmi2Status {
         let mut refs = Vec::with_capacity(vrs.len());
         for ((&vr, &order), &x) in vrs.iter().zip(orders).zip(values) {
-            let (g, r) = match self.lookup(func, vr, "Real") {
+            let (g, r) = match self.lookup(func, vr, BaseType::Real) {
                 Ok(f) => f,
                 Err(s) => return s,
             };
@@ -570,7 +586,7 @@ impl Instance {
     ) -> fmi2Status {
         let mut refs = Vec::with_capacity(vrs.len());
         for (&vr, &order) in vrs.iter().zip(orders) {
-            let (g, r) = match self.lookup(func, vr, "Real") {
+            let (g, r) = match self.lookup(func, vr, BaseType::Real) {
                 Ok(f) => f,
                 Err(s) => return s,
             };

@@ -10,6 +10,7 @@
 //! | [`snapshot`] | the byte format of serialized FMU states |
 //! | [`platform`] | the `StewartPlatform` model |
 //! | [`controller`] | the `StewartController` model (programme, direct problem, feedback) |
+//! | [`trivial`] | `TrivialPlatform`, the benchmarks' no-physics floor |
 //!
 //! One binary serves every model: `fmi2Instantiate` picks the model by the GUID the importer
 //! passes (each FMU's `modelDescription.xml` carries its own).
@@ -18,6 +19,7 @@ pub mod controller;
 pub mod model_description;
 pub mod platform;
 pub mod snapshot;
+pub mod trivial;
 pub mod units;
 pub mod variables;
 
@@ -87,6 +89,7 @@ pub trait FmuModel {
 pub enum AnyModel {
     Platform(Box<platform::PlatformModel>),
     Controller(Box<controller::ControllerModel>),
+    Trivial(Box<trivial::TrivialModel>),
 }
 
 /// The models, for instantiation by GUID and for packaging.
@@ -94,15 +97,22 @@ pub enum AnyModel {
 pub enum ModelKind {
     Platform,
     Controller,
+    Trivial,
 }
 
 impl ModelKind {
-    pub const ALL: [ModelKind; 2] = [ModelKind::Platform, ModelKind::Controller];
+    pub const ALL: [ModelKind; 3] = [ModelKind::Platform, ModelKind::Controller, ModelKind::Trivial];
+
+    /// Packaged for the benchmarks only (`target/fmu/bench/`), not a product FMU.
+    pub fn is_benchmark_floor(self) -> bool {
+        self == ModelKind::Trivial
+    }
 
     pub fn info(self) -> &'static ModelInfo {
         match self {
             ModelKind::Platform => &platform::INFO,
             ModelKind::Controller => &controller::INFO,
+            ModelKind::Trivial => &trivial::INFO,
         }
     }
 
@@ -110,6 +120,7 @@ impl ModelKind {
         match self {
             ModelKind::Platform => 1,
             ModelKind::Controller => 2,
+            ModelKind::Trivial => 3,
         }
     }
 
@@ -118,6 +129,7 @@ impl ModelKind {
         match self {
             ModelKind::Platform => AnyModel::Platform(Box::default()),
             ModelKind::Controller => AnyModel::Controller(Box::default()),
+            ModelKind::Trivial => AnyModel::Trivial(Box::default()),
         }
     }
 
@@ -132,6 +144,7 @@ macro_rules! dispatch {
         match $self {
             AnyModel::Platform($m) => $e,
             AnyModel::Controller($m) => $e,
+            AnyModel::Trivial($m) => $e,
         }
     };
 }
@@ -141,6 +154,7 @@ impl AnyModel {
         match self {
             AnyModel::Platform(_) => ModelKind::Platform,
             AnyModel::Controller(_) => ModelKind::Controller,
+            AnyModel::Trivial(_) => ModelKind::Trivial,
         }
     }
 
@@ -148,6 +162,7 @@ impl AnyModel {
         Ok(match kind {
             ModelKind::Platform => AnyModel::Platform(Box::new(platform::PlatformModel::restore(r)?)),
             ModelKind::Controller => AnyModel::Controller(Box::new(controller::ControllerModel::restore(r)?)),
+            ModelKind::Trivial => AnyModel::Trivial(Box::new(trivial::TrivialModel::restore(r)?)),
         })
     }
 }

@@ -137,7 +137,8 @@ impl BodyState {
     }
 
     pub fn is_finite(&self) -> bool {
-        self.to_vector().iter().all(|x| x.is_finite())
+        let finite3 = |v: &Vector3<f64>| v.x.is_finite() && v.y.is_finite() && v.z.is_finite();
+        finite3(&self.r) && finite3(&self.v) && self.e.iter().all(finite3) && self.e_dot.iter().all(finite3)
     }
 }
 

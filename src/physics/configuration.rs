@@ -4,7 +4,7 @@
 //! integration step (as faults that stop the step).
 
 use super::body_state::BodyState;
-use super::direct_problem::{ForceMomentMatrix, SINGULAR_CONDITION_NUMBER};
+use super::direct_problem::{ForceMomentMatrix, SINGULAR_CONDITION_NUMBER, force_moment_determinant};
 use super::error::{ParameterError, PhysicsFault};
 use super::legs::LegGeometry;
 use super::stand::{COINCIDENCE_TOLERANCE, LEG_COUNT, Stand};
@@ -23,6 +23,8 @@ pub struct ConfigurationGuard {
     /// means the motion passed through a singular configuration; a small `|det| / |det0|`
     /// triggers the condition-number check.
     pub reference_determinant: f64,
+    /// The stand's characteristic length (scales the moment rows of the force/moment matrix).
+    pub characteristic_length: f64,
     /// Whether [`ConfigurationGuard::check_singularity`] is applied. Always on in the FMU;
     /// tests of a free body far from its (unloaded) legs switch it off.
     pub detect_singularities: bool,
@@ -82,23 +84,27 @@ impl ConfigurationGuard {
             min_leg_length,
             base_plane,
             side,
-            reference_determinant: matrix.matrix.determinant(),
+            reference_determinant: matrix.determinant(),
+            characteristic_length: matrix.moment_scale,
             detect_singularities: true,
         })
     }
 
     /// Cheap checks for every internal step: finite state, legs not collapsed, platform
-    /// joints on their side of the base plane.
+    /// joints on their side of the base plane. Squared lengths, no square roots on the way.
     #[inline]
-    pub fn check(&self, state: &BodyState, legs: &LegGeometry) -> Result<(), PhysicsFault> {
+    pub fn check(&self, stand: &Stand, state: &BodyState) -> Result<(), PhysicsFault> {
         if !state.is_finite() {
             return Err(PhysicsFault::NonFiniteState);
         }
+        let min_squared = self.min_leg_length * self.min_leg_length;
         for k in 0..LEG_COUNT {
-            if !(legs.length[k] > self.min_leg_length) {
-                return Err(PhysicsFault::LegCollapsed { leg: k + 1, length: legs.length[k] });
+            let arm = state.body_vector(&stand.platform_joints[k]);
+            let length_squared = (state.r + arm - stand.base_joints[k]).norm_squared();
+            if !(length_squared > min_squared) {
+                return Err(PhysicsFault::LegCollapsed { leg: k + 1, length: length_squared.sqrt() });
             }
-            let height = state.r.z + legs.arm[k].z - self.base_plane;
+            let height = state.r.z + arm.z - self.base_plane;
             if !(height * self.side > 0.0) {
                 return Err(PhysicsFault::JointBelowBase { leg: k + 1, height });
             }
@@ -113,15 +119,14 @@ impl ConfigurationGuard {
         if !self.detect_singularities {
             return Ok(());
         }
-        let matrix = ForceMomentMatrix::new(stand, legs);
-        let det = matrix.matrix.determinant();
+        let det = force_moment_determinant(legs, self.characteristic_length);
         if det * self.reference_determinant <= 0.0 {
             return Err(PhysicsFault::PassedSingularConfiguration);
         }
         if det.abs() >= DETERMINANT_ALARM * self.reference_determinant.abs() {
             return Ok(());
         }
-        let condition_number = matrix.condition_number();
+        let condition_number = ForceMomentMatrix::new(stand, legs).condition_number();
         if condition_number < SINGULAR_CONDITION_NUMBER {
             Ok(())
         } else {

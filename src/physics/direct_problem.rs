@@ -69,6 +69,17 @@ impl ForceMomentMatrix {
         ForceMomentMatrix { matrix, moment_scale: ell }
     }
 
+    /// Determinant (see [`determinant6`]).
+    pub fn determinant(&self) -> f64 {
+        let mut a = [[0.0f64; 6]; 6];
+        for (i, row) in a.iter_mut().enumerate() {
+            for (j, x) in row.iter_mut().enumerate() {
+                *x = self.matrix[(i, j)];
+            }
+        }
+        determinant6(a)
+    }
+
     /// 2-norm condition number `sigma_max / sigma_min` (infinite when singular).
     pub fn condition_number(&self) -> f64 {
         let sv = self.matrix.singular_values();
@@ -93,6 +104,68 @@ impl ForceMomentMatrix {
         );
         let u = self.matrix.full_piv_lu().solve(&rhs).ok_or(DirectProblemError::Singular { condition_number })?;
         Ok([u[0], u[1], u[2], u[3], u[4], u[5]])
+    }
+}
+
+/// Determinant of the dimensionless force/moment matrix straight from the leg geometry
+/// (columns `[n_k; (R A_k) x n_k / ell]`), without building a nalgebra matrix: the
+/// once-per-step singularity check of the FMU.
+pub fn force_moment_determinant(legs: &LegGeometry, ell: f64) -> f64 {
+    let mut a = [[0.0f64; 6]; 6];
+    let inv_ell = 1.0 / ell;
+    for k in 0..LEG_COUNT {
+        let n = legs.direction[k];
+        let m = legs.arm[k].cross(&n) * inv_ell;
+        a[0][k] = n.x;
+        a[1][k] = n.y;
+        a[2][k] = n.z;
+        a[3][k] = m.x;
+        a[4][k] = m.y;
+        a[5][k] = m.z;
+    }
+    determinant6(a)
+}
+
+/// Determinant of a 6x6 matrix (rows) by Gaussian elimination with partial pivoting. Each
+/// elimination stage is a separate instance of [`eliminate`] with its column as a constant,
+/// so every loop has constant bounds and unrolls without bounds checks.
+pub fn determinant6(mut a: [[f64; 6]; 6]) -> f64 {
+    let mut det = 1.0;
+    eliminate::<0>(&mut a, &mut det);
+    eliminate::<1>(&mut a, &mut det);
+    eliminate::<2>(&mut a, &mut det);
+    eliminate::<3>(&mut a, &mut det);
+    eliminate::<4>(&mut a, &mut det);
+    eliminate::<5>(&mut a, &mut det);
+    det
+}
+
+#[inline(always)]
+fn eliminate<const COL: usize>(a: &mut [[f64; 6]; 6], det: &mut f64) {
+    let mut pivot = COL;
+    let mut best = a[COL][COL].abs();
+    for row in COL + 1..6 {
+        let x = a[row][COL].abs();
+        if x > best {
+            best = x;
+            pivot = row;
+        }
+    }
+    if pivot != COL {
+        a.swap(pivot, COL);
+        *det = -*det;
+    }
+    let p = a[COL][COL];
+    *det *= p;
+    if p == 0.0 {
+        return;
+    }
+    let inv = 1.0 / p;
+    for row in COL + 1..6 {
+        let factor = a[row][COL] * inv;
+        for k in COL + 1..6 {
+            a[row][k] -= factor * a[COL][k];
+        }
     }
 }
 
@@ -156,6 +229,18 @@ mod tests {
             assert!((u / mg - PAPER_EQUILIBRIUM_LEG_FORCE).abs() < 1e-13, "{}", u / mg);
         }
         assert!(sol.condition_number > 1.0 && sol.condition_number < 100.0, "{}", sol.condition_number);
+    }
+
+    #[test]
+    fn determinant_matches_the_lu_one() {
+        let stand = Stand::truck_cabin();
+        let rot = crate::physics::kinematics::rotation_from_angles(&Vector3::new(0.1, -0.2, 0.7));
+        let state = BodyState::from_pose(Vector3::new(0.05, 0.02, 1.9), Vector3::zeros(), &rot, &Vector3::zeros());
+        let m = ForceMomentMatrix::new(&stand, &LegGeometry::new(&stand, &state));
+        let (ours, lu) = (m.determinant(), m.matrix.determinant());
+        assert!((ours - lu).abs() < 1e-13 * lu.abs(), "{ours} vs {lu}");
+        let direct = force_moment_determinant(&LegGeometry::new(&stand, &state), stand.characteristic_length());
+        assert!((direct - lu).abs() < 1e-13 * lu.abs(), "{direct} vs {lu}");
     }
 
     #[test]

@@ -9,6 +9,18 @@ use super::stand::LEG_COUNT;
 /// Axial leg forces as a function of time and state.
 pub trait LegForceLaw {
     fn leg_forces(&self, t: f64, state: &BodyState, legs: &LegGeometry) -> [f64; LEG_COUNT];
+
+    /// Whether the forces depend on the state. If not, the right-hand side skips building
+    /// the [`LegGeometry`] (the fast path of every co-simulation step, whose forces are
+    /// inputs) and calls [`LegForceLaw::leg_forces_at`].
+    fn depends_on_state(&self) -> bool {
+        true
+    }
+
+    /// The forces of a law that does not depend on the state.
+    fn leg_forces_at(&self, _t: f64) -> [f64; LEG_COUNT] {
+        [0.0; LEG_COUNT]
+    }
 }
 
 /// Forces held over a communication step as a first-order polynomial in time:
@@ -31,6 +43,15 @@ impl HeldForces {
 impl LegForceLaw for HeldForces {
     #[inline(always)]
     fn leg_forces(&self, t: f64, _state: &BodyState, _legs: &LegGeometry) -> [f64; LEG_COUNT] {
+        self.leg_forces_at(t)
+    }
+
+    fn depends_on_state(&self) -> bool {
+        false
+    }
+
+    #[inline(always)]
+    fn leg_forces_at(&self, t: f64) -> [f64; LEG_COUNT] {
         let dt = t - self.t0;
         let mut u = self.value;
         for k in 0..LEG_COUNT {

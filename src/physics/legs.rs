@@ -12,8 +12,6 @@ use super::stand::{LEG_COUNT, Stand};
 pub struct LegGeometry {
     /// Arms `R A_k` from the centre of mass to platform joint k, inertial components, m.
     pub arm: [Vector3<f64>; LEG_COUNT],
-    /// Leg vectors `a_k - B_k` with `a_k = r + R A_k`, m.
-    pub leg: [Vector3<f64>; LEG_COUNT],
     /// Leg lengths `l_k`, m.
     pub length: [f64; LEG_COUNT],
     /// Unit leg directions `n_k = (a_k - B_k) / l_k` (zero for a collapsed leg, never NaN).
@@ -24,16 +22,16 @@ impl LegGeometry {
     #[inline(always)]
     pub fn new(stand: &Stand, state: &BodyState) -> Self {
         let mut arm = [Vector3::zeros(); LEG_COUNT];
-        let mut leg = [Vector3::zeros(); LEG_COUNT];
         let mut length = [0.0; LEG_COUNT];
         let mut direction = [Vector3::zeros(); LEG_COUNT];
         for k in 0..LEG_COUNT {
             arm[k] = state.body_vector(&stand.platform_joints[k]);
-            leg[k] = state.r + arm[k] - stand.base_joints[k];
-            length[k] = leg[k].norm();
-            direction[k] = if length[k] > 0.0 { leg[k] / length[k] } else { Vector3::zeros() };
+            let leg = state.r + arm[k] - stand.base_joints[k];
+            length[k] = leg.norm();
+            // One division, three multiplications.
+            direction[k] = if length[k] > 0.0 { leg * (1.0 / length[k]) } else { Vector3::zeros() };
         }
-        LegGeometry { arm, leg, length, direction }
+        LegGeometry { arm, length, direction }
     }
 
     /// Leg length rates `dl_k/dt = n_k . (v + d(R A_k)/dt)`, m/s.

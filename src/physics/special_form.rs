@@ -75,6 +75,25 @@ impl SpecialForm {
         (a, [e1_dd, e2_dd, e3_dd])
     }
 
+    /// Resultant force and moment of given leg forces in one pass over the legs, without
+    /// keeping the geometry (the same sums as [`LegGeometry::resultant`]).
+    #[inline(always)]
+    fn resultant_of(&self, state: &BodyState, u: &[f64; 6]) -> (Vector3<f64>, Vector3<f64>) {
+        let mut force = Vector3::zeros();
+        let mut moment = Vector3::zeros();
+        for k in 0..6 {
+            let arm = state.body_vector(&self.stand.platform_joints[k]);
+            let leg = state.r + arm - self.stand.base_joints[k];
+            let length_squared = leg.norm_squared();
+            if length_squared > 0.0 {
+                let f = leg * (u[k] / length_squared.sqrt());
+                force += f;
+                moment += arm.cross(&f);
+            }
+        }
+        (force, moment)
+    }
+
     /// The full first-order right-hand side `dy/dt` for leg forces given by `law` at time `t`.
     /// Returns the leg forces used, for callers that want them.
     #[inline(always)]
@@ -86,9 +105,16 @@ impl SpecialForm {
         dy: &mut StateVector,
     ) -> [f64; 6] {
         let state = BodyState::from_vector(y);
-        let legs = LegGeometry::new(&self.stand, &state);
-        let u = law.leg_forces(t, &state, &legs);
-        let (force, moment) = legs.resultant(&u);
+        let (u, force, moment) = if law.depends_on_state() {
+            let legs = LegGeometry::new(&self.stand, &state);
+            let u = law.leg_forces(t, &state, &legs);
+            let (force, moment) = legs.resultant(&u);
+            (u, force, moment)
+        } else {
+            let u = law.leg_forces_at(t);
+            let (force, moment) = self.resultant_of(&state, &u);
+            (u, force, moment)
+        };
         let (a, e_dd) = self.accelerations(&state, &force, &moment);
         dy[layout::R..layout::R + 3].copy_from_slice(&y[layout::V..layout::V + 3]);
         dy[layout::V..layout::V + 3].copy_from_slice(a.as_slice());

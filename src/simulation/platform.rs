@@ -67,9 +67,7 @@ impl<L: LegForceLaw + ?Sized> OdeSystem<STATE_DIM> for PlatformDynamics<'_, L> {
 
     #[inline]
     fn check(&self, _t: f64, y: &StateVector) -> Result<(), PhysicsFault> {
-        let state = BodyState::from_vector(y);
-        let legs = LegGeometry::new(&self.form.stand, &state);
-        self.guard.check(&state, &legs)
+        self.guard.check(&self.form.stand, &BodyState::from_vector(y))
     }
 }
 

@@ -97,7 +97,9 @@ fn build_one(kind: ModelKind, root: &Path, library: &Path, out_dir: &Path, updat
         return Err(format!("{}: guid {} differs from the binary's {guid}", source.display(), summary.guid));
     }
     binary_check::check(library, &summary.guid).map_err(|e| format!("{}: {e}", library.display()))?;
-    let fmu = out_dir.join(format!("{id}.fmu"));
+    let fmu_dir = if kind.is_benchmark_floor() { out_dir.join("bench") } else { out_dir.to_path_buf() };
+    std::fs::create_dir_all(&fmu_dir).map_err(|e| format!("cannot create {}: {e}", fmu_dir.display()))?;
+    let fmu = fmu_dir.join(format!("{id}.fmu"));
     package::write_fmu(&fmu, id, &committed, library, &documentation_html(kind))?;
     println!(
         "build-fmu: {} ({} variables, {} outputs, {} initial unknowns, GUID {guid}) -> {}",

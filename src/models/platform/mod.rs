@@ -120,16 +120,13 @@ impl Default for PlatformModel {
 }
 
 impl PlatformModel {
-    fn outputs(&mut self) -> PlatformOutputs {
-        if let Some(o) = self.outputs {
-            return o;
-        }
-        let o = match &self.simulation {
+    /// The outputs of the current state, computed on the first read after a change.
+    fn outputs(&mut self) -> &PlatformOutputs {
+        let (simulation, parameters) = (&self.simulation, &self.parameters);
+        self.outputs.get_or_insert_with(|| match simulation {
             Some(sim) => PlatformOutputs::compute(sim.stand(), &sim.body_state()),
-            None => PlatformOutputs::compute(&self.parameters.stand, &self.parameters.initial_state()),
-        };
-        self.outputs = Some(o);
-        o
+            None => PlatformOutputs::compute(&parameters.stand, &parameters.initial_state()),
+        })
     }
 
     fn held_forces(&self, t0: f64) -> HeldForces {
@@ -187,11 +184,10 @@ impl FmuModel for PlatformModel {
         if var.group == group::TIME {
             return self.simulation.as_ref().map_or(0.0, |s| s.time);
         }
-        if let Some(slot) = self.parameter_slot(var) {
-            return *slot;
+        if var.group >= group::R {
+            return Self::output_value(self.outputs(), var);
         }
-        let o = self.outputs();
-        Self::output_value(&o, var)
+        self.parameter_slot(var).map_or(f64::NAN, |slot| *slot)
     }
 
     fn set_real(&mut self, var: VariableRef, value: f64) -> Result<(), String> {
@@ -316,7 +312,7 @@ impl FmuModel for PlatformModel {
                     w.u64(n);
                 }
                 let g = &sim.guard;
-                w.f64s(&[g.min_leg_length, g.base_plane, g.side, g.reference_determinant]);
+                w.f64s(&[g.min_leg_length, g.base_plane, g.side, g.reference_determinant, g.characteristic_length]);
                 w.bool(g.detect_singularities);
                 w.f64(sim.time);
                 w.f64s(&sim.state);
@@ -341,10 +337,17 @@ impl FmuModel for PlatformModel {
             let dopri5 = Dopri5Memory { h_next: r.finite("h_next")?, err_old: r.finite("err_old")? };
             let stats =
                 IntegratorStats { accepted_steps: r.u64()?, rejected_steps: r.u64()?, rhs_evaluations: r.u64()? };
-            let [min_leg_length, base_plane, side, reference_determinant] = r.finite_array::<4>("guard")?;
+            let [min_leg_length, base_plane, side, reference_determinant, characteristic_length] =
+                r.finite_array::<5>("guard")?;
             let detect_singularities = r.bool()?;
-            let guard =
-                ConfigurationGuard { min_leg_length, base_plane, side, reference_determinant, detect_singularities };
+            let guard = ConfigurationGuard {
+                min_leg_length,
+                base_plane,
+                side,
+                reference_determinant,
+                characteristic_length,
+                detect_singularities,
+            };
             let time = r.finite("time")?;
             let state = r.finite_array::<STATE_DIM>("state")?;
             Some(PlatformSimulation {
