@@ -107,8 +107,12 @@ pub unsafe extern "C" fn fmi2Instantiate(
         };
         let interface = match fmu_type {
             fmi2CoSimulation => InterfaceType::CoSimulation,
+            fmi2ModelExchange if kind.info().model_exchange => InterfaceType::ModelExchange,
             fmi2ModelExchange => {
-                return fail("fmuType fmi2ModelExchange: this FMU implements Co-Simulation only");
+                return fail(&format!(
+                    "fmuType fmi2ModelExchange: {} implements Co-Simulation only",
+                    kind.info().model_identifier
+                ));
             }
             other => return fail(&format!("invalid fmuType {other}")),
         };
@@ -450,15 +454,19 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
     c: fmi2Component,
-    _unknown: *const fmi2ValueReference,
-    _n_unknown: usize,
-    _known: *const fmi2ValueReference,
-    _n_known: usize,
-    _dv_known: *const fmi2Real,
-    _dv_unknown: *mut fmi2Real,
+    unknown: *const fmi2ValueReference,
+    n_unknown: usize,
+    known: *const fmi2ValueReference,
+    n_known: usize,
+    dv_known: *const fmi2Real,
+    dv_unknown: *mut fmi2Real,
 ) -> fmi2Status {
     boundary!(c, F::GetDirectionalDerivative, |inst| {
-        inst.error(F::GetDirectionalDerivative, "not supported (providesDirectionalDerivative=\"false\")")
+        let unknowns = try_slice!(inst, F::GetDirectionalDerivative, unknown, n_unknown, "vUnknown_ref");
+        let knowns = try_slice!(inst, F::GetDirectionalDerivative, known, n_known, "vKnown_ref");
+        let seeds = try_slice!(inst, F::GetDirectionalDerivative, dv_known, n_known, "dvKnown");
+        let out = try_slice_mut!(inst, F::GetDirectionalDerivative, dv_unknown, n_unknown, "dvUnknown");
+        inst.get_directional_derivative(F::GetDirectionalDerivative, unknowns, knowns, seeds, out)
     })
 }
 
@@ -583,34 +591,30 @@ pub unsafe extern "C" fn fmi2GetStringStatus(
     })
 }
 
-// ----- Model Exchange (present so that the binary has the complete API; a Co-Simulation
-// instance refuses them through the state table) --------------------------------------------
-
-macro_rules! model_exchange_only {
-    ($c:expr, $f:expr) => {
-        boundary!($c, $f, |inst| inst.error($f, "Model Exchange is not implemented by this FMU"))
-    };
-}
+// ----- Model Exchange -------------------------------------------------------------------------
 
 /// # Safety
 /// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2EnterEventMode(c: fmi2Component) -> fmi2Status {
-    model_exchange_only!(c, F::EnterEventMode)
+    boundary!(c, F::EnterEventMode, |inst| inst.enter_event_mode())
 }
 
 /// # Safety
 /// See the module documentation.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2NewDiscreteStates(c: fmi2Component, _event_info: *mut fmi2EventInfo) -> fmi2Status {
-    model_exchange_only!(c, F::NewDiscreteStates)
+pub unsafe extern "C" fn fmi2NewDiscreteStates(c: fmi2Component, event_info: *mut fmi2EventInfo) -> fmi2Status {
+    boundary!(c, F::NewDiscreteStates, |inst| {
+        let info = try_out!(inst, F::NewDiscreteStates, event_info, "fmi2EventInfo");
+        inst.new_discrete_states(info)
+    })
 }
 
 /// # Safety
 /// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2EnterContinuousTimeMode(c: fmi2Component) -> fmi2Status {
-    model_exchange_only!(c, F::EnterContinuousTimeMode)
+    boundary!(c, F::EnterContinuousTimeMode, |inst| inst.enter_continuous_time_mode())
 }
 
 /// # Safety
@@ -619,49 +623,58 @@ pub unsafe extern "C" fn fmi2EnterContinuousTimeMode(c: fmi2Component) -> fmi2St
 pub unsafe extern "C" fn fmi2CompletedIntegratorStep(
     c: fmi2Component,
     _no_set_fmu_state_prior: fmi2Boolean,
-    _enter_event_mode: *mut fmi2Boolean,
-    _terminate_simulation: *mut fmi2Boolean,
+    enter_event_mode: *mut fmi2Boolean,
+    terminate_simulation: *mut fmi2Boolean,
 ) -> fmi2Status {
-    model_exchange_only!(c, F::CompletedIntegratorStep)
+    boundary!(c, F::CompletedIntegratorStep, |inst| {
+        let enter = try_out!(inst, F::CompletedIntegratorStep, enter_event_mode, "enterEventMode");
+        let terminate = try_out!(inst, F::CompletedIntegratorStep, terminate_simulation, "terminateSimulation");
+        inst.completed_integrator_step(enter, terminate)
+    })
 }
 
 /// # Safety
 /// See the module documentation.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2SetTime(c: fmi2Component, _time: fmi2Real) -> fmi2Status {
-    model_exchange_only!(c, F::SetTime)
+pub unsafe extern "C" fn fmi2SetTime(c: fmi2Component, time: fmi2Real) -> fmi2Status {
+    boundary!(c, F::SetTime, |inst| inst.set_time(F::SetTime, time))
 }
 
 /// # Safety
 /// See the module documentation.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2SetContinuousStates(c: fmi2Component, _x: *const fmi2Real, _nx: usize) -> fmi2Status {
-    model_exchange_only!(c, F::SetContinuousStates)
+pub unsafe extern "C" fn fmi2SetContinuousStates(c: fmi2Component, x: *const fmi2Real, nx: usize) -> fmi2Status {
+    boundary!(c, F::SetContinuousStates, |inst| {
+        let states = try_slice!(inst, F::SetContinuousStates, x, nx, "x");
+        inst.set_continuous_states(F::SetContinuousStates, states)
+    })
 }
 
 /// # Safety
 /// See the module documentation.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetDerivatives(c: fmi2Component, _derivatives: *mut fmi2Real, _nx: usize) -> fmi2Status {
-    model_exchange_only!(c, F::GetDerivatives)
+pub unsafe extern "C" fn fmi2GetDerivatives(c: fmi2Component, derivatives: *mut fmi2Real, nx: usize) -> fmi2Status {
+    boundary!(c, F::GetDerivatives, |inst| {
+        let dx = try_slice_mut!(inst, F::GetDerivatives, derivatives, nx, "derivatives");
+        inst.get_derivatives(F::GetDerivatives, dx)
+    })
 }
 
 /// # Safety
 /// See the module documentation.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetEventIndicators(
-    c: fmi2Component,
-    _indicators: *mut fmi2Real,
-    _ni: usize,
-) -> fmi2Status {
-    model_exchange_only!(c, F::GetEventIndicators)
+pub unsafe extern "C" fn fmi2GetEventIndicators(c: fmi2Component, _indicators: *mut fmi2Real, ni: usize) -> fmi2Status {
+    boundary!(c, F::GetEventIndicators, |inst| inst.get_event_indicators(F::GetEventIndicators, ni))
 }
 
 /// # Safety
 /// See the module documentation.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetContinuousStates(c: fmi2Component, _x: *mut fmi2Real, _nx: usize) -> fmi2Status {
-    model_exchange_only!(c, F::GetContinuousStates)
+pub unsafe extern "C" fn fmi2GetContinuousStates(c: fmi2Component, x: *mut fmi2Real, nx: usize) -> fmi2Status {
+    boundary!(c, F::GetContinuousStates, |inst| {
+        let states = try_slice_mut!(inst, F::GetContinuousStates, x, nx, "x");
+        inst.get_continuous_states(F::GetContinuousStates, states)
+    })
 }
 
 /// # Safety
@@ -669,10 +682,13 @@ pub unsafe extern "C" fn fmi2GetContinuousStates(c: fmi2Component, _x: *mut fmi2
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetNominalsOfContinuousStates(
     c: fmi2Component,
-    _x_nominal: *mut fmi2Real,
-    _nx: usize,
+    x_nominal: *mut fmi2Real,
+    nx: usize,
 ) -> fmi2Status {
-    model_exchange_only!(c, F::GetNominalsOfContinuousStates)
+    boundary!(c, F::GetNominalsOfContinuousStates, |inst| {
+        let nominals = try_slice_mut!(inst, F::GetNominalsOfContinuousStates, x_nominal, nx, "x_nominal");
+        inst.get_nominals(F::GetNominalsOfContinuousStates, nominals)
+    })
 }
 
 #[allow(unused_imports)]

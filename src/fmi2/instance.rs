@@ -362,7 +362,8 @@ impl Instance {
     }
 
     pub fn exit_initialization_mode(&mut self, func: Fmi2Function) -> fmi2Status {
-        match self.model.exit_initialization(self.start_time, self.tolerance) {
+        let model_exchange = self.interface == InterfaceType::ModelExchange;
+        match self.model.exit_initialization(self.start_time, self.tolerance, model_exchange) {
             Ok(summary) => {
                 self.logger.log(fmi2OK, LogCategory::Events, &summary);
                 self.state = match self.interface {
@@ -638,6 +639,154 @@ impl Instance {
             ),
         );
         fmi2Discard
+    }
+
+    // ----- directional derivatives --------------------------------------------------------
+
+    pub fn get_directional_derivative(
+        &mut self,
+        func: Fmi2Function,
+        unknowns: &[u32],
+        knowns: &[u32],
+        seeds: &[f64],
+        out: &mut [f64],
+    ) -> fmi2Status {
+        if !self.kind.info().directional_derivatives {
+            return self.error(func, "not supported by this model (providesDirectionalDerivative=\"false\")");
+        }
+        let mut u_refs = [VariableRef { group: 0, index: 0 }; 64];
+        let mut k_refs = [VariableRef { group: 0, index: 0 }; 64];
+        if unknowns.len() > u_refs.len() || knowns.len() > k_refs.len() {
+            return self.error(func, "at most 64 unknowns and 64 knowns per call");
+        }
+        for (slot, &vr) in u_refs.iter_mut().zip(unknowns) {
+            match self.lookup(func, vr, BaseType::Real) {
+                Ok((_, r)) => *slot = r,
+                Err(s) => return s,
+            }
+        }
+        for ((slot, &vr), &seed) in k_refs.iter_mut().zip(knowns).zip(seeds) {
+            match self.lookup(func, vr, BaseType::Real) {
+                Ok((_, r)) => *slot = r,
+                Err(s) => return s,
+            }
+            if !seed.is_finite() {
+                return self.error(func, &format!("seed {seed} for value reference {vr} is not finite"));
+            }
+        }
+        match self.model.directional_derivative(&u_refs[..unknowns.len()], &k_refs[..knowns.len()], seeds, out) {
+            Ok(()) => fmi2OK,
+            Err(m) => self.error(func, &m),
+        }
+    }
+
+    // ----- Model Exchange -------------------------------------------------------------------
+
+    fn state_count(&self) -> usize {
+        self.kind.info().states.len()
+    }
+
+    fn check_state_count(&self, func: Fmi2Function, n: usize) -> Result<(), fmi2Status> {
+        if n == self.state_count() {
+            Ok(())
+        } else {
+            Err(self.error(func, &format!("nx = {n}, but the model has {} continuous states", self.state_count())))
+        }
+    }
+
+    pub fn set_time(&mut self, func: Fmi2Function, t: f64) -> fmi2Status {
+        if !t.is_finite() {
+            return self.error(func, &format!("time must be finite, got {t}"));
+        }
+        self.time = t;
+        self.model.set_time(t);
+        fmi2OK
+    }
+
+    pub fn set_continuous_states(&mut self, func: Fmi2Function, x: &[f64]) -> fmi2Status {
+        if let Err(s) = self.check_state_count(func, x.len()) {
+            return s;
+        }
+        if let Some(i) = x.iter().position(|v| !v.is_finite()) {
+            return self.error(func, &format!("state {i} = {} refused: states must be finite", x[i]));
+        }
+        self.model.set_continuous_states(x);
+        fmi2OK
+    }
+
+    pub fn get_continuous_states(&mut self, func: Fmi2Function, x: &mut [f64]) -> fmi2Status {
+        if let Err(s) = self.check_state_count(func, x.len()) {
+            return s;
+        }
+        self.model.continuous_states(x);
+        fmi2OK
+    }
+
+    pub fn get_derivatives(&mut self, func: Fmi2Function, dx: &mut [f64]) -> fmi2Status {
+        if let Err(s) = self.check_state_count(func, dx.len()) {
+            return s;
+        }
+        self.model.derivatives(dx);
+        if let Some(i) = dx.iter().position(|v| !v.is_finite()) {
+            return self.error(
+                func,
+                &format!("derivative {i} is not finite at t = {}: the state is not admissible", self.time),
+            );
+        }
+        fmi2OK
+    }
+
+    pub fn get_nominals(&mut self, func: Fmi2Function, x: &mut [f64]) -> fmi2Status {
+        if let Err(s) = self.check_state_count(func, x.len()) {
+            return s;
+        }
+        // Positions in m, velocities in m/s, unit vectors and their rates: all of order one.
+        x.fill(1.0);
+        fmi2OK
+    }
+
+    pub fn get_event_indicators(&mut self, func: Fmi2Function, n: usize) -> fmi2Status {
+        if n == 0 { fmi2OK } else { self.error(func, &format!("ni = {n}, but the model has no event indicators")) }
+    }
+
+    pub fn enter_event_mode(&mut self) -> fmi2Status {
+        self.state = ModelState::EventMode;
+        fmi2OK
+    }
+
+    pub fn enter_continuous_time_mode(&mut self) -> fmi2Status {
+        self.state = ModelState::ContinuousTimeMode;
+        fmi2OK
+    }
+
+    pub fn new_discrete_states(&mut self, info: &mut fmi2EventInfo) -> fmi2Status {
+        // No discrete states, no time events.
+        *info = fmi2EventInfo::default();
+        fmi2OK
+    }
+
+    pub fn completed_integrator_step(
+        &mut self,
+        enter_event_mode: &mut fmi2Boolean,
+        terminate: &mut fmi2Boolean,
+    ) -> fmi2Status {
+        *enter_event_mode = fmi2False;
+        match self.model.completed_integrator_step() {
+            Ok(()) => {
+                *terminate = fmi2False;
+                fmi2OK
+            }
+            Err(e) => {
+                *terminate = fmi2True;
+                self.terminated = true;
+                self.logger.log(
+                    fmi2Warning,
+                    LogCategory::Discard,
+                    &format!("fmi2CompletedIntegratorStep: {}", e.message),
+                );
+                fmi2OK
+            }
+        }
     }
 
     // ----- FMU state ----------------------------------------------------------------------

@@ -45,6 +45,13 @@ pub struct ModelInfo {
     pub default_experiment: DefaultExperiment,
     /// Extra HTML for `documentation/index.html` (conventions, references).
     pub documentation: &'static str,
+    /// The continuous states in the order of the state vector (Model Exchange): `(group
+    /// name, element index)`; `<Derivatives>` is written in this order.
+    pub states: &'static [(&'static str, usize)],
+    /// Whether the binary implements Model Exchange for this model.
+    pub model_exchange: bool,
+    /// Whether `fmi2GetDirectionalDerivative` is implemented.
+    pub directional_derivatives: bool,
 }
 
 /// Why a co-simulation step could not be completed. The model is left as it was before the
@@ -70,13 +77,42 @@ pub trait FmuModel {
     /// Validates the parameters and builds the simulation at `start_time`. `tolerance` is
     /// the importer's `fmi2SetupExperiment` tolerance, if defined. Returns a summary for the
     /// log.
-    fn exit_initialization(&mut self, start_time: f64, tolerance: Option<f64>) -> Result<String, String>;
+    fn exit_initialization(
+        &mut self,
+        start_time: f64,
+        tolerance: Option<f64>,
+        model_exchange: bool,
+    ) -> Result<String, String>;
     /// Advances from the communication point `t` to exactly `t + h`.
     fn do_step(&mut self, t: f64, h: f64) -> Result<(), StepError>;
     /// First derivative of a Real input for the next step (`fmi2SetRealInputDerivatives`).
     fn set_input_derivative(&mut self, var: VariableRef, value: f64);
     /// First time derivative of a Real output (`fmi2GetRealOutputDerivatives`).
     fn output_derivative(&mut self, var: VariableRef) -> f64;
+    /// Model Exchange: sets the time of the continuous states.
+    fn set_time(&mut self, _t: f64) {}
+    /// Model Exchange: the continuous states, in the order of `ModelInfo::states`.
+    fn continuous_states(&self, _x: &mut [f64]) {}
+    /// Model Exchange: replaces the continuous states (finite values, right length).
+    fn set_continuous_states(&mut self, _x: &[f64]) {}
+    /// Model Exchange: the state derivatives at the current time, states and inputs.
+    fn derivatives(&mut self, _dx: &mut [f64]) {}
+    /// Model Exchange: after an accepted integrator step, whether the state is still one the
+    /// motion can continue from.
+    fn completed_integrator_step(&mut self) -> Result<(), StepError> {
+        Ok(())
+    }
+    /// `dv_unknown = J dv_known` for the Jacobian of `unknowns` (outputs, states,
+    /// derivatives) with respect to `knowns` (inputs, states).
+    fn directional_derivative(
+        &mut self,
+        _unknowns: &[VariableRef],
+        _knowns: &[VariableRef],
+        _seeds: &[f64],
+        _out: &mut [f64],
+    ) -> Result<(), String> {
+        Err("directional derivatives are not provided by this model".into())
+    }
     /// Appends everything that determines the model's future to `w`.
     fn save(&self, w: &mut ByteWriter);
     /// Reads what [`FmuModel::save`] wrote into a fresh model.
@@ -183,8 +219,37 @@ impl AnyModel {
     pub fn set_integer(&mut self, var: VariableRef, value: i32) -> Result<(), String> {
         dispatch!(self, m => m.set_integer(var, value))
     }
-    pub fn exit_initialization(&mut self, start_time: f64, tolerance: Option<f64>) -> Result<String, String> {
-        dispatch!(self, m => m.exit_initialization(start_time, tolerance))
+    pub fn exit_initialization(
+        &mut self,
+        start_time: f64,
+        tolerance: Option<f64>,
+        model_exchange: bool,
+    ) -> Result<String, String> {
+        dispatch!(self, m => m.exit_initialization(start_time, tolerance, model_exchange))
+    }
+    pub fn set_time(&mut self, t: f64) {
+        dispatch!(self, m => m.set_time(t))
+    }
+    pub fn continuous_states(&self, x: &mut [f64]) {
+        dispatch!(self, m => m.continuous_states(x))
+    }
+    pub fn set_continuous_states(&mut self, x: &[f64]) {
+        dispatch!(self, m => m.set_continuous_states(x))
+    }
+    pub fn derivatives(&mut self, dx: &mut [f64]) {
+        dispatch!(self, m => m.derivatives(dx))
+    }
+    pub fn completed_integrator_step(&mut self) -> Result<(), StepError> {
+        dispatch!(self, m => m.completed_integrator_step())
+    }
+    pub fn directional_derivative(
+        &mut self,
+        unknowns: &[VariableRef],
+        knowns: &[VariableRef],
+        seeds: &[f64],
+        out: &mut [f64],
+    ) -> Result<(), String> {
+        dispatch!(self, m => m.directional_derivative(unknowns, knowns, seeds, out))
     }
     pub fn do_step(&mut self, t: f64, h: f64) -> Result<(), StepError> {
         dispatch!(self, m => m.do_step(t, h))

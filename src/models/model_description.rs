@@ -72,9 +72,17 @@ fn render(kind: ModelKind, guid: &str) -> String {
         env!("CARGO_PKG_VERSION"),
         env!("CARGO_PKG_VERSION"),
     );
+    let directional = info.directional_derivatives;
+    if info.model_exchange {
+        let _ = writeln!(
+            x,
+            r#"  <ModelExchange modelIdentifier="{}" needsExecutionTool="false" completedIntegratorStepNotNeeded="false" canBeInstantiatedOnlyOncePerProcess="false" canNotUseMemoryManagementFunctions="true" canGetAndSetFMUstate="true" canSerializeFMUstate="true" providesDirectionalDerivative="{directional}"/>"#,
+            info.model_identifier
+        );
+    }
     let _ = writeln!(
         x,
-        r#"  <CoSimulation modelIdentifier="{}" needsExecutionTool="false" canHandleVariableCommunicationStepSize="true" canInterpolateInputs="true" maxOutputDerivativeOrder="1" canRunAsynchronuously="false" canBeInstantiatedOnlyOncePerProcess="false" canNotUseMemoryManagementFunctions="true" canGetAndSetFMUstate="true" canSerializeFMUstate="true" providesDirectionalDerivative="false"/>"#,
+        r#"  <CoSimulation modelIdentifier="{}" needsExecutionTool="false" canHandleVariableCommunicationStepSize="true" canInterpolateInputs="true" maxOutputDerivativeOrder="1" canRunAsynchronuously="false" canBeInstantiatedOnlyOncePerProcess="false" canNotUseMemoryManagementFunctions="true" canGetAndSetFMUstate="true" canSerializeFMUstate="true" providesDirectionalDerivative="{directional}"/>"#,
         info.model_identifier
     );
 
@@ -165,8 +173,13 @@ fn render(kind: ModelKind, guid: &str) -> String {
             .range
             .map(|(lo, hi)| format!(r#" min="{}" max="{}""#, format_real(lo), format_real(hi)))
             .unwrap_or_default();
+        let derivative = g
+            .derivative_of
+            .and_then(|of| table.model_index(of, i))
+            .map(|k| format!(r#" derivative="{k}""#))
+            .unwrap_or_default();
         let element = match g.var_type {
-            VariableType::Real => format!("<Real{unit}{display}{range}{start}/>"),
+            VariableType::Real => format!("<Real{unit}{display}{range}{derivative}{start}/>"),
             VariableType::Integer => format!("<Integer{range}{start}/>"),
             VariableType::Boolean => format!("<Boolean{start}/>"),
             VariableType::Enumeration(t) => {
@@ -185,6 +198,19 @@ fn render(kind: ModelKind, guid: &str) -> String {
         let _ = writeln!(x, r#"      <Unknown index="{n}" dependencies="{}"/>"#, join(&deps));
     }
     let _ = writeln!(x, "    </Outputs>");
+    if !info.states.is_empty() {
+        let _ = writeln!(x, "    <Derivatives>");
+        for (state_group, element) in info.states {
+            let derivative = info.groups.iter().find(|g| g.derivative_of == Some(*state_group));
+            if let Some(g) = derivative
+                && let Some(n) = table.model_index(g.name, *element)
+            {
+                let deps = table.dependency_indices(g.derivative_dependencies, *element);
+                let _ = writeln!(x, r#"      <Unknown index="{n}" dependencies="{}"/>"#, join(&deps));
+            }
+        }
+        let _ = writeln!(x, "    </Derivatives>");
+    }
     let _ = writeln!(x, "    <InitialUnknowns>");
     for (n, g, i) in table.elements().filter(|(_, g, _)| g.is_initial_unknown()) {
         let deps = table.dependency_indices(g.initial_dependencies, i);

@@ -17,6 +17,9 @@ pub static INFO: ModelInfo = ModelInfo {
     units: super::units::UNITS,
     default_experiment: DefaultExperiment { start_time: 0.0, stop_time: 3.0, step_size: 1e-2 },
     documentation: "<p>Benchmark floor for the performance comparison: no physics.</p>",
+    states: super::platform::variables::STATES,
+    model_exchange: false,
+    directional_derivatives: false,
 };
 
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -34,7 +37,7 @@ impl FmuModel for TrivialModel {
         if var.group == group::TIME {
             return self.time;
         }
-        if var.group >= group::R {
+        if group::is_output_or_derivative(var.group) {
             return self.storage.forces[var.index % 6];
         }
         self.storage.get_real(var)
@@ -48,7 +51,12 @@ impl FmuModel for TrivialModel {
     fn set_integer(&mut self, var: VariableRef, value: i32) -> Result<(), String> {
         self.storage.set_integer(var, value)
     }
-    fn exit_initialization(&mut self, start_time: f64, _tolerance: Option<f64>) -> Result<String, String> {
+    fn exit_initialization(
+        &mut self,
+        start_time: f64,
+        _tolerance: Option<f64>,
+        _model_exchange: bool,
+    ) -> Result<String, String> {
         self.time = start_time;
         Ok("trivial model: no physics".into())
     }

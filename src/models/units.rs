@@ -8,6 +8,8 @@ const DEG_PER_RAD: f64 = 57.29577951308232;
 pub static UNITS: &[UnitDefinition] = &[
     UnitDefinition { name: "1", base: [0, 0, 0, 0, 0, 0, 0, 0], display_units: &[] },
     UnitDefinition { name: "s", base: [0, 0, 1, 0, 0, 0, 0, 0], display_units: &[] },
+    UnitDefinition { name: "1/s", base: [0, 0, -1, 0, 0, 0, 0, 0], display_units: &[] },
+    UnitDefinition { name: "1/s2", base: [0, 0, -2, 0, 0, 0, 0, 0], display_units: &[] },
     UnitDefinition { name: "m", base: [0, 1, 0, 0, 0, 0, 0, 0], display_units: &[("mm", 1000.0)] },
     UnitDefinition { name: "m/s", base: [0, 1, -1, 0, 0, 0, 0, 0], display_units: &[] },
     UnitDefinition { name: "m/s2", base: [0, 1, -2, 0, 0, 0, 0, 0], display_units: &[] },

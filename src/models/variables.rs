@@ -128,6 +128,14 @@ pub struct VariableGroup {
     pub initial_dependencies: &'static [Dependency],
     /// `min` and `max` attributes (Real and Integer), if any.
     pub range: Option<(f64, f64)>,
+    /// For a derivative variable: the name (table key) of the state group whose elements
+    /// these are the time derivatives of, element by element (the `derivative` attribute).
+    pub derivative_of: Option<&'static str>,
+    /// For `<Derivatives>`: the knowns (states, inputs) the derivative depends on.
+    pub derivative_dependencies: &'static [Dependency],
+    /// FMI name of a derivative group's elements: `(base, order)` gives `der(base[i])` or
+    /// `der(base[i],order)`; the group's `name` is then only a key in the table.
+    pub display_base: Option<(&'static str, u8)>,
 }
 
 impl VariableGroup {
@@ -141,11 +149,17 @@ impl VariableGroup {
 
     /// Structured name of element `index` (row-major, 0-based).
     pub fn element_name(&self, index: usize) -> String {
-        match self.shape {
-            [] => self.name.to_string(),
-            [_] => format!("{}[{}]", self.name, index + 1),
-            [_, cols] => format!("{}[{},{}]", self.name, index / cols + 1, index % cols + 1),
-            _ => format!("{}[{}]", self.name, index + 1),
+        let base = self.display_base.map_or(self.name, |(b, _)| b);
+        let plain = match self.shape {
+            [] => base.to_string(),
+            [_] => format!("{base}[{}]", index + 1),
+            [_, cols] => format!("{base}[{},{}]", index / cols + 1, index % cols + 1),
+            _ => format!("{base}[{}]", index + 1),
+        };
+        match self.display_base {
+            Some((_, 1)) => format!("der({plain})"),
+            Some((_, order)) => format!("der({plain},{order})"),
+            None => plain,
         }
     }
 
@@ -156,7 +170,8 @@ impl VariableGroup {
     /// Whether this variable is an initial unknown (listed in `<InitialUnknowns>`): an
     /// output with `initial` approx or calculated (no calculated parameters or ME states here).
     pub fn is_initial_unknown(&self) -> bool {
-        self.causality == Causality::Output && matches!(self.initial, Some(Initial::Approx | Initial::Calculated))
+        matches!(self.causality, Causality::Output | Causality::Local)
+            && matches!(self.initial, Some(Initial::Approx | Initial::Calculated))
     }
 
     /// Whether a start value is written (and must be burned in): exact/approx or inputs.
@@ -272,6 +287,9 @@ impl VariableGroup {
             output_dependencies: &[],
             initial_dependencies: &[],
             range: None,
+            derivative_of: None,
+            derivative_dependencies: &[],
+            display_base: None,
         }
     }
 
@@ -332,6 +350,44 @@ impl VariableGroup {
     /// A parameter that may be changed between steps.
     pub const fn tunable(self) -> Self {
         VariableGroup { variability: Variability::Tunable, ..self }
+    }
+
+    /// A calculated local variable (a Model Exchange state or derivative that is not an
+    /// output).
+    pub const fn local(
+        name: &'static str,
+        shape: &'static [usize],
+        first_vr: u32,
+        unit: Option<&'static str>,
+        description: &'static str,
+        initial_dependencies: &'static [Dependency],
+    ) -> Self {
+        VariableGroup {
+            causality: Causality::Local,
+            ..Self::output(name, shape, first_vr, unit, description, initial_dependencies)
+        }
+    }
+
+    /// Marks the group as the time derivative (order `order` of `base`) of the state group
+    /// `of`, depending on `dependencies` in `<Derivatives>`.
+    pub const fn derivative(
+        self,
+        of: &'static str,
+        base: &'static str,
+        order: u8,
+        dependencies: &'static [Dependency],
+    ) -> Self {
+        VariableGroup {
+            derivative_of: Some(of),
+            display_base: Some((base, order)),
+            derivative_dependencies: dependencies,
+            ..self
+        }
+    }
+
+    /// Marks a plainly named group (e.g. `v`) as the derivative of the state group `of`.
+    pub const fn derivative_named(self, of: &'static str, dependencies: &'static [Dependency]) -> Self {
+        VariableGroup { derivative_of: Some(of), derivative_dependencies: dependencies, ..self }
     }
 
     /// Direct dependencies of an output on inputs (`<Outputs>`).

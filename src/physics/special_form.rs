@@ -31,6 +31,11 @@ pub struct SpecialForm {
     c23: (f64, f64),
     /// `2 I1/(I3+I1)`, `2 I3/(I3+I1)`: coupling of `e3'.e1'` into `e3''` and `e1''`.
     c31: (f64, f64),
+    /// Baumgarte stabilisation rate `alpha` (1/s): `e_a'' -= 1/2 sum_b K_ab e_b` with
+    /// `K = 2 alpha dC/dt + alpha² C`, `C_ab = e_a.e_b - delta_ab`, so that the constraint
+    /// residual obeys `C'' + 2 alpha C' + alpha² C = 0` near the manifold (critically damped
+    /// decay). 0 = off (the default: the co-simulation projects instead).
+    pub baumgarte_rate: f64,
 }
 
 impl SpecialForm {
@@ -44,8 +49,15 @@ impl SpecialForm {
             c12: (2.0 * i2 / (i1 + i2), 2.0 * i1 / (i1 + i2)),
             c23: (2.0 * i3 / (i2 + i3), 2.0 * i2 / (i2 + i3)),
             c31: (2.0 * i1 / (i3 + i1), 2.0 * i3 / (i3 + i1)),
+            baumgarte_rate: 0.0,
             stand,
         }
+    }
+
+    /// The same form with Baumgarte stabilisation at `rate` (1/s; 0 = off).
+    pub fn with_baumgarte_rate(mut self, rate: f64) -> Self {
+        self.baumgarte_rate = rate;
+        self
     }
 
     /// Second derivatives `(r'', [e1'', e2'', e3''])` for the resultant leg force `force` and
@@ -72,7 +84,112 @@ impl SpecialForm {
             - e1 * (l3 * inv12);
         let e3_dd = e3 * (-d3.norm_squared()) - e1 * (self.c31.0 * p31) - e2 * (self.c23.1 * p23) + e1 * (l2 * inv31)
             - e2 * (l1 * inv23);
-        (a, [e1_dd, e2_dd, e3_dd])
+        let mut e_dd = [e1_dd, e2_dd, e3_dd];
+        if self.baumgarte_rate > 0.0 {
+            let k = self.baumgarte_matrix(state);
+            for (a, e_dd_a) in e_dd.iter_mut().enumerate() {
+                for b in 0..3 {
+                    *e_dd_a -= state.e[b] * (0.5 * k[a][b]);
+                }
+            }
+        }
+        (a, e_dd)
+    }
+
+    /// `K_ab = 2 alpha (e_a'.e_b + e_a.e_b') + alpha² (e_a.e_b - delta_ab)`.
+    fn baumgarte_matrix(&self, state: &BodyState) -> [[f64; 3]; 3] {
+        let alpha = self.baumgarte_rate;
+        let mut k = [[0.0; 3]; 3];
+        for a in 0..3 {
+            for b in 0..3 {
+                let c = state.e[a].dot(&state.e[b]) - if a == b { 1.0 } else { 0.0 };
+                let c_dot = state.e_dot[a].dot(&state.e[b]) + state.e[a].dot(&state.e_dot[b]);
+                k[a][b] = 2.0 * alpha * c_dot + alpha * alpha * c;
+            }
+        }
+        k
+    }
+
+    /// Directional derivative (Jacobian-vector product) of the right-hand side for leg
+    /// forces `u` held constant: the change `df` of `dy/dt` for a change `dy` of the state and
+    /// `du` of the forces. Exact (the chain rule written out, term by term with
+    /// [`SpecialForm::accelerations`]), for `fmi2GetDirectionalDerivative` and linearisation.
+    pub fn derivative_tangent(&self, y: &StateVector, u: &[f64; 6], dy: &StateVector, du: &[f64; 6]) -> StateVector {
+        let s = BodyState::from_vector(y);
+        let ds = BodyState::from_vector(dy);
+        let stand = &self.stand;
+        // Leg forces and their resultant, with tangents.
+        let (mut force, mut moment) = (Vector3::zeros(), Vector3::zeros());
+        let (mut dforce, mut dmoment) = (Vector3::zeros(), Vector3::zeros());
+        for k in 0..6 {
+            let p = &stand.platform_joints[k];
+            let arm = s.body_vector(p);
+            let darm = ds.body_vector(p);
+            let q = s.r + arm - stand.base_joints[k];
+            let dq = ds.r + darm;
+            let l = q.norm();
+            if l <= 0.0 {
+                continue;
+            }
+            let n = q / l;
+            let dn = (dq - n * n.dot(&dq)) / l;
+            let f = n * u[k];
+            let df = n * du[k] + dn * u[k];
+            force += f;
+            dforce += df;
+            moment += arm.cross(&f);
+            dmoment += darm.cross(&f) + arm.cross(&df);
+        }
+        let da = dforce * self.inverse_mass;
+        let [e1, e2, e3] = &s.e;
+        let [d1, d2, d3] = &s.e_dot;
+        let [de1, de2, de3] = &ds.e;
+        let [dd1, dd2, dd3] = &ds.e_dot;
+        let (l1, l2, l3) = (moment.dot(e1), moment.dot(e2), moment.dot(e3));
+        let (dl1, dl2, dl3) =
+            (dmoment.dot(e1) + moment.dot(de1), dmoment.dot(e2) + moment.dot(de2), dmoment.dot(e3) + moment.dot(de3));
+        let [inv23, inv31, inv12] = self.inverse_pair;
+        let (p12, p23, p31) = (d1.dot(d2), d2.dot(d3), d3.dot(d1));
+        let (dp12, dp23, dp31) = (dd1.dot(d2) + d1.dot(dd2), dd2.dot(d3) + d2.dot(dd3), dd3.dot(d1) + d3.dot(dd1));
+        let (n1, n2, n3) = (d1.norm_squared(), d2.norm_squared(), d3.norm_squared());
+        let (dn1, dn2, dn3) = (2.0 * d1.dot(dd1), 2.0 * d2.dot(dd2), 2.0 * d3.dot(dd3));
+        // d(c x) = dc x + c dx for every term of the special form.
+        let de1_dd =
+            -(e1 * dn1 + de1 * n1) - (e2 * dp12 + de2 * p12) * self.c12.0 - (e3 * dp31 + de3 * p31) * self.c31.1
+                + (e2 * dl3 + de2 * l3) * inv12
+                - (e3 * dl2 + de3 * l2) * inv31;
+        let de2_dd =
+            -(e2 * dn2 + de2 * n2) - (e3 * dp23 + de3 * p23) * self.c23.0 - (e1 * dp12 + de1 * p12) * self.c12.1
+                + (e3 * dl1 + de3 * l1) * inv23
+                - (e1 * dl3 + de1 * l3) * inv12;
+        let de3_dd =
+            -(e3 * dn3 + de3 * n3) - (e1 * dp31 + de1 * p31) * self.c31.0 - (e2 * dp23 + de2 * p23) * self.c23.1
+                + (e1 * dl2 + de1 * l2) * inv31
+                - (e2 * dl1 + de2 * l1) * inv23;
+        let mut de_dd = [de1_dd, de2_dd, de3_dd];
+        if self.baumgarte_rate > 0.0 {
+            let alpha = self.baumgarte_rate;
+            let k = self.baumgarte_matrix(&s);
+            for a in 0..3 {
+                for b in 0..3 {
+                    let dc = ds.e[a].dot(&s.e[b]) + s.e[a].dot(&ds.e[b]);
+                    let dc_dot = ds.e_dot[a].dot(&s.e[b])
+                        + s.e_dot[a].dot(&ds.e[b])
+                        + ds.e[a].dot(&s.e_dot[b])
+                        + s.e[a].dot(&ds.e_dot[b]);
+                    let dk = 2.0 * alpha * dc_dot + alpha * alpha * dc;
+                    de_dd[a] -= (s.e[b] * dk + ds.e[b] * k[a][b]) * 0.5;
+                }
+            }
+        }
+        let mut out = [0.0; STATE_DIM];
+        out[layout::R..layout::R + 3].copy_from_slice(&dy[layout::V..layout::V + 3]);
+        out[layout::V..layout::V + 3].copy_from_slice(da.as_slice());
+        out[layout::E..layout::E + 9].copy_from_slice(&dy[layout::E_DOT..layout::E_DOT + 9]);
+        for (i, v) in de_dd.iter().enumerate() {
+            out[layout::E_DOT + 3 * i..layout::E_DOT + 3 * i + 3].copy_from_slice(v.as_slice());
+        }
+        out
     }
 
     /// Resultant force and moment of given leg forces in one pass over the legs, without

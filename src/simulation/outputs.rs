@@ -94,3 +94,75 @@ impl PlatformOutputs {
         }
     }
 }
+
+impl PlatformOutputs {
+    /// Directional derivative of the outputs: their change for a change `ds` of the state
+    /// (exact chain rule; for `fmi2GetDirectionalDerivative` and linearisation). The entry for
+    /// `constraint_error` is the change of the largest residual `|e_a.e_b - delta_ab|`.
+    pub fn tangent(stand: &Stand, s: &BodyState, ds: &BodyState) -> Self {
+        let out = Self::compute(stand, s);
+        let rot = s.rotation();
+        let drot = Matrix3::from_columns(&ds.e);
+        // angles: pitch = asin(R02), roll = atan2(-R12, R22), yaw = atan2(-R01, R00).
+        let datan2 = |y: f64, x: f64, dy: f64, dx: f64| {
+            let d = x * x + y * y;
+            if d > 0.0 { (x * dy - y * dx) / d } else { 0.0 }
+        };
+        let r02 = rot[(0, 2)];
+        let dpitch = if r02.abs() < 1.0 { drot[(0, 2)] / (1.0 - r02 * r02).sqrt() } else { 0.0 };
+        let droll = datan2(-rot[(1, 2)], rot[(2, 2)], -drot[(1, 2)], drot[(2, 2)]);
+        let dyaw = datan2(-rot[(0, 1)], rot[(0, 0)], -drot[(0, 1)], drot[(0, 0)]);
+        let [e1, e2, e3] = &s.e;
+        let [d1, d2, d3] = &s.e_dot;
+        let [de1, de2, de3] = &ds.e;
+        let [dd1, dd2, dd3] = &ds.e_dot;
+        let dw = Vector3::new(
+            0.5 * (dd2.dot(e3) + d2.dot(de3) - dd3.dot(e2) - d3.dot(de2)),
+            0.5 * (dd3.dot(e1) + d3.dot(de1) - dd1.dot(e3) - d1.dot(de3)),
+            0.5 * (dd1.dot(e2) + d1.dot(de2) - dd2.dot(e1) - d2.dot(de1)),
+        );
+        let mut dl = [0.0; LEG_COUNT];
+        let mut dldot = [0.0; LEG_COUNT];
+        for k in 0..LEG_COUNT {
+            let p = &stand.platform_joints[k];
+            let q = s.r + s.body_vector(p) - stand.base_joints[k];
+            let dq = ds.r + ds.body_vector(p);
+            let l = q.norm();
+            if l <= 0.0 {
+                continue;
+            }
+            let n = q / l;
+            let dn = (dq - n * n.dot(&dq)) / l;
+            let sv = s.v + s.body_vector_rate(p);
+            let dsv = ds.v + ds.body_vector_rate(p);
+            dl[k] = n.dot(&dq);
+            dldot[k] = dn.dot(&sv) + n.dot(&dsv);
+        }
+        let j = Vector3::from(stand.inertia);
+        let denergy =
+            stand.mass * s.v.dot(&ds.v) + out.w.dot(&j.component_mul(&dw)) + stand.mass * stand.gravity * ds.r.z;
+        // The largest residual and its change.
+        let (mut worst, mut dworst) = (-1.0, 0.0);
+        for a in 0..3 {
+            for b in a..3 {
+                let c = s.e[a].dot(&s.e[b]) - if a == b { 1.0 } else { 0.0 };
+                if c.abs() > worst {
+                    worst = c.abs();
+                    let dc = ds.e[a].dot(&s.e[b]) + s.e[a].dot(&ds.e[b]);
+                    dworst = if c < 0.0 { -dc } else { dc };
+                }
+            }
+        }
+        PlatformOutputs {
+            r: ds.r,
+            v: ds.v,
+            rotation: drot,
+            angles: Vector3::new(droll, dpitch, dyaw),
+            w: dw,
+            l: dl,
+            ldot: dldot,
+            energy: denergy,
+            constraint_error: dworst,
+        }
+    }
+}

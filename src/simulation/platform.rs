@@ -18,6 +18,9 @@ pub enum Stabilisation {
     /// Project the state onto the constraint manifold and its tangent space after every
     /// internal step (the default).
     Projection,
+    /// Baumgarte terms in the derivatives (`SpecialForm::baumgarte_rate`), no projection:
+    /// what Model Exchange uses, where the host's integrator owns the state.
+    Baumgarte,
 }
 
 impl Stabilisation {
@@ -26,6 +29,7 @@ impl Stabilisation {
         match self {
             Stabilisation::None => 1,
             Stabilisation::Projection => 2,
+            Stabilisation::Baumgarte => 3,
         }
     }
 
@@ -33,6 +37,7 @@ impl Stabilisation {
         match code {
             1 => Some(Stabilisation::None),
             2 => Some(Stabilisation::Projection),
+            3 => Some(Stabilisation::Baumgarte),
             _ => None,
         }
     }

@@ -26,6 +26,8 @@ struct Variable {
     display_unit: Option<String>,
     declared_type: Option<String>,
     has_start: bool,
+    /// 1-based index of the state this variable is the derivative of.
+    derivative: Option<usize>,
 }
 
 fn attributes(e: &BytesStart) -> Result<HashMap<String, String>, String> {
@@ -56,6 +58,7 @@ pub fn check(xml: &str) -> Result<Summary, String> {
     let mut section = String::new();
     let mut outputs: Vec<(usize, Vec<usize>)> = vec![];
     let mut initial_unknowns: Vec<(usize, Vec<usize>)> = vec![];
+    let mut derivatives: Vec<(usize, Vec<usize>)> = vec![];
     let mut depth = 0usize;
     let mut saw_cosimulation = false;
     loop {
@@ -128,6 +131,10 @@ pub fn check(xml: &str) -> Result<Summary, String> {
                     v.display_unit = get("displayUnit");
                     v.declared_type = get("declaredType");
                     v.has_start = attrs.contains_key("start");
+                    v.derivative = match get("derivative") {
+                        Some(d) => Some(d.parse().map_err(|_| format!("bad derivative attribute {d}"))?),
+                        None => None,
+                    };
                 }
             }
             "Outputs" | "InitialUnknowns" | "Derivatives" => {
@@ -151,6 +158,7 @@ pub fn check(xml: &str) -> Result<Summary, String> {
                 match section.as_str() {
                     "Outputs" => outputs.push((index, deps)),
                     "InitialUnknowns" => initial_unknowns.push((index, deps)),
+                    "Derivatives" => derivatives.push((index, deps)),
                     _ => {}
                 }
             }
@@ -214,18 +222,38 @@ pub fn check(xml: &str) -> Result<Summary, String> {
             "ModelStructure/Outputs lists {listed_outputs:?}, expected every output {expected_outputs:?}"
         ));
     }
-    for (i, deps) in &outputs {
+    // States: the variables some derivative refers to.
+    let mut states = BTreeSet::new();
+    for v in &variables {
+        if let Some(s) = v.derivative {
+            index_of(s)?;
+            states.insert(s);
+        }
+    }
+    let derivative_indices: BTreeSet<usize> = (1..=n).filter(|&i| variables[i - 1].derivative.is_some()).collect();
+    let listed_derivatives: BTreeSet<usize> = derivatives.iter().map(|d| d.0).collect();
+    if listed_derivatives != derivative_indices {
+        return Err(format!(
+            "ModelStructure/Derivatives lists {listed_derivatives:?}, expected {derivative_indices:?}"
+        ));
+    }
+    for (i, deps) in outputs.iter().chain(derivatives.iter()) {
         for d in deps {
             let v = index_of(*d)?;
-            if v.causality != "input" {
-                return Err(format!("output {} depends on {}, which is not an input", index_of(*i)?.name, v.name));
+            if v.causality != "input" && !states.contains(d) {
+                return Err(format!(
+                    "{} depends on {}, which is neither an input nor a state",
+                    index_of(*i)?.name,
+                    v.name
+                ));
             }
         }
     }
+    let calculated = |i: usize| matches!(variables[i - 1].initial.as_deref(), Some("approx" | "calculated"));
     let expected_initial: BTreeSet<usize> = (1..=n)
         .filter(|&i| {
-            variables[i - 1].causality == "output"
-                && matches!(variables[i - 1].initial.as_deref(), Some("approx" | "calculated"))
+            calculated(i)
+                && (variables[i - 1].causality == "output" || states.contains(&i) || derivative_indices.contains(&i))
         })
         .collect();
     let listed_initial: BTreeSet<usize> = initial_unknowns.iter().map(|o| o.0).collect();

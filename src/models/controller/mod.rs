@@ -30,6 +30,9 @@ pub static INFO: ModelInfo = ModelInfo {
     units: super::units::UNITS,
     default_experiment: DefaultExperiment { start_time: 0.0, stop_time: 3.0, step_size: 1e-3 },
     documentation: include_str!("documentation.html"),
+    states: &[],
+    model_exchange: false,
+    directional_derivatives: false,
 };
 
 /// Default feedback gain, N/m: with the default stand and a 1 ms communication step it keeps
@@ -301,7 +304,12 @@ impl FmuModel for ControllerModel {
         Ok(())
     }
 
-    fn exit_initialization(&mut self, start_time: f64, _tolerance: Option<f64>) -> Result<String, String> {
+    fn exit_initialization(
+        &mut self,
+        start_time: f64,
+        _tolerance: Option<f64>,
+        _model_exchange: bool,
+    ) -> Result<String, String> {
         let before = self.time;
         self.time = start_time;
         self.outputs = None;

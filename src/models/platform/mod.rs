@@ -10,7 +10,7 @@ use super::variables::VariableRef;
 use super::{DefaultExperiment, FmuModel, ModelInfo, StepError};
 use crate::integration::dopri5::Dopri5Memory;
 use crate::integration::{Integrator, IntegratorStats, Method, SolverSettings};
-use crate::physics::body_state::{BodyState, STATE_DIM};
+use crate::physics::body_state::{BodyState, STATE_DIM, StateVector, layout};
 use crate::physics::configuration::ConfigurationGuard;
 use crate::physics::forces::HeldForces;
 use crate::physics::kinematics::rotation_from_angles;
@@ -29,6 +29,9 @@ pub static INFO: ModelInfo = ModelInfo {
     units: super::units::UNITS,
     default_experiment: DefaultExperiment { start_time: 0.0, stop_time: 3.0, step_size: 1e-2 },
     documentation: include_str!("documentation.html"),
+    states: variables::STATES,
+    model_exchange: true,
+    directional_derivatives: true,
 };
 
 /// Everything set through parameters.
@@ -41,6 +44,8 @@ pub struct PlatformParameters {
     pub w0: Vector3<f64>,
     pub settings: SolverSettings,
     pub stabilisation: Stabilisation,
+    /// Baumgarte rate (1/s) for Model Exchange and `Stabilisation::Baumgarte`.
+    pub baumgarte_rate: f64,
 }
 
 impl Default for PlatformParameters {
@@ -54,6 +59,7 @@ impl Default for PlatformParameters {
             w0: Vector3::zeros(),
             settings: SolverSettings::default(),
             stabilisation: Stabilisation::Projection,
+            baumgarte_rate: DEFAULT_BAUMGARTE_RATE,
         }
     }
 }
@@ -83,9 +89,17 @@ impl PlatformParameters {
                 s.fixed_step
             ));
         }
+        if !(self.baumgarte_rate >= 0.0) {
+            return Err(format!("parameter solver.baumgarteRate: must be >= 0 1/s, got {}", self.baumgarte_rate));
+        }
         Ok(())
     }
 }
+
+/// Default Baumgarte rate, 1/s: the constraint residual decays with a 0.1 s time constant,
+/// faster than the stand's own motion (sqrt(R_b/g) = 0.39 s) and slow enough not to make the
+/// equations stiff for an explicit integrator at millisecond steps.
+pub const DEFAULT_BAUMGARTE_RATE: f64 = 10.0;
 
 /// Default leg force input: the paper's equilibrium force `0.2005 M g` of the default stand.
 pub fn default_leg_force() -> f64 {
@@ -150,8 +164,34 @@ impl PlatformModel {
             group::ABS_TOL => &mut p.settings.abs_tol,
             group::MAX_STEP => &mut p.settings.max_step,
             group::FIXED_STEP => &mut p.settings.fixed_step,
+            group::BAUMGARTE_RATE => &mut p.baumgarte_rate,
             group::F => self.forces.get_mut(i)?,
             _ => return None,
+        })
+    }
+
+    /// Runs `f` with the special form and the state the model is at: the simulation's, or
+    /// before initialisation the one the parameters describe.
+    fn with_current<R>(&self, f: impl FnOnce(&SpecialForm, &StateVector, f64) -> R) -> R {
+        match &self.simulation {
+            Some(sim) => f(&sim.form, &sim.state, sim.time),
+            None => {
+                f(&SpecialForm::new(self.parameters.stand.clone()), &self.parameters.initial_state().to_vector(), 0.0)
+            }
+        }
+    }
+
+    /// `der(v)`, `der(R)`, `der(R,2)`: the derivative variables of Model Exchange.
+    fn derivative_value(&self, var: VariableRef) -> f64 {
+        let forces = self.forces;
+        self.with_current(|form, y, t| {
+            let mut dy = [0.0; STATE_DIM];
+            form.derivative(t, y, &HeldForces::constant(forces), &mut dy);
+            match var.group {
+                group::DER_V => dy.get(layout::V + var.index).copied().unwrap_or(f64::NAN),
+                group::DER_R => y.get(rotation_state_index(layout::E_DOT, var.index)).copied().unwrap_or(f64::NAN),
+                _ => dy.get(rotation_state_index(layout::E_DOT, var.index)).copied().unwrap_or(f64::NAN),
+            }
         })
     }
 
@@ -184,10 +224,11 @@ impl FmuModel for PlatformModel {
         if var.group == group::TIME {
             return self.simulation.as_ref().map_or(0.0, |s| s.time);
         }
-        if var.group >= group::R {
-            return Self::output_value(self.outputs(), var);
+        match var.group {
+            group::DER_V | group::DER_R | group::DER2_R => self.derivative_value(var),
+            g if group::is_output_or_derivative(g) => Self::output_value(self.outputs(), var),
+            _ => self.parameter_slot(var).map_or(f64::NAN, |slot| *slot),
         }
-        self.parameter_slot(var).map_or(f64::NAN, |slot| *slot)
     }
 
     fn set_real(&mut self, var: VariableRef, value: f64) -> Result<(), String> {
@@ -215,22 +256,37 @@ impl FmuModel for PlatformModel {
                     .ok_or_else(|| format!("{value} is not a method (1 = Dormand-Prince 5(4), 2 = Runge-Kutta 4)"))?;
             }
             group::STABILISATION => {
-                self.parameters.stabilisation = Stabilisation::from_code(value)
-                    .ok_or_else(|| format!("{value} is not a stabilisation (1 = none, 2 = projection)"))?;
+                self.parameters.stabilisation = Stabilisation::from_code(value).ok_or_else(|| {
+                    format!("{value} is not a stabilisation (1 = none, 2 = projection, 3 = Baumgarte)")
+                })?;
             }
             _ => return Err("not a settable Integer variable".into()),
         }
         Ok(())
     }
 
-    fn exit_initialization(&mut self, start_time: f64, tolerance: Option<f64>) -> Result<String, String> {
+    fn exit_initialization(
+        &mut self,
+        start_time: f64,
+        tolerance: Option<f64>,
+        model_exchange: bool,
+    ) -> Result<String, String> {
         let mut p = self.parameters.clone();
         if let Some(tol) = tolerance {
             p.settings.rel_tol = tol;
         }
         p.validate_settings()?;
-        let sim = PlatformSimulation::new(p.stand.clone(), p.initial_state(), p.settings, p.stabilisation, start_time)
-            .map_err(|e| e.to_string())?;
+        let mut sim =
+            PlatformSimulation::new(p.stand.clone(), p.initial_state(), p.settings, p.stabilisation, start_time)
+                .map_err(|e| e.to_string())?;
+        // Model Exchange cannot project (the host's integrator owns the state): Baumgarte
+        // terms keep the constraints unless stabilisation is off.
+        let baumgarte = if model_exchange {
+            p.stabilisation != Stabilisation::None
+        } else {
+            p.stabilisation == Stabilisation::Baumgarte
+        };
+        sim.form.baumgarte_rate = if baumgarte { p.baumgarte_rate } else { 0.0 };
         let legs = PlatformOutputs::compute(sim.stand(), &sim.body_state()).l;
         let summary = format!(
             "initialised at t = {start_time}: M = {} kg, J = {:?} kg.m2, g = {} m/s2, leg lengths {:?} m, \
@@ -242,7 +298,11 @@ impl FmuModel for PlatformModel {
             p.settings.method,
             p.settings.rel_tol,
             if tolerance.is_some() { " (from fmi2SetupExperiment)" } else { "" },
-            p.stabilisation
+            if sim.form.baumgarte_rate > 0.0 {
+                format!("Baumgarte {} 1/s", sim.form.baumgarte_rate)
+            } else {
+                format!("{:?}", p.stabilisation)
+            }
         );
         self.simulation = Some(sim);
         self.outputs = None;
@@ -286,6 +346,95 @@ impl FmuModel for PlatformModel {
         Self::output_value(&d, var)
     }
 
+    fn set_time(&mut self, t: f64) {
+        if let Some(sim) = self.simulation.as_mut() {
+            sim.time = t;
+        }
+    }
+
+    fn continuous_states(&self, x: &mut [f64]) {
+        if let Some(sim) = &self.simulation {
+            for (xi, yi) in x.iter_mut().zip(sim.state.iter()) {
+                *xi = *yi;
+            }
+        }
+    }
+
+    fn set_continuous_states(&mut self, x: &[f64]) {
+        if let Some(sim) = self.simulation.as_mut() {
+            for (yi, xi) in sim.state.iter_mut().zip(x) {
+                *yi = *xi;
+            }
+            self.outputs = None;
+        }
+    }
+
+    fn derivatives(&mut self, dx: &mut [f64]) {
+        let forces = self.forces;
+        let Some(sim) = &self.simulation else { return };
+        let mut dy = [0.0; STATE_DIM];
+        sim.form.derivative(sim.time, &sim.state, &HeldForces::constant(forces), &mut dy);
+        for (d, v) in dx.iter_mut().zip(dy) {
+            *d = v;
+        }
+    }
+
+    fn completed_integrator_step(&mut self) -> Result<(), StepError> {
+        let Some(sim) = &self.simulation else { return Ok(()) };
+        let state = BodyState::from_vector(&sim.state);
+        let fault = sim.guard.check(sim.stand(), &state).and_then(|()| {
+            let legs = crate::physics::legs::LegGeometry::new(sim.stand(), &state);
+            sim.guard.check_singularity(sim.stand(), &legs)
+        });
+        fault.map_err(|f| StepError { message: format!("at t = {}: {f}; the simulation cannot go on", sim.time) })
+    }
+
+    fn directional_derivative(
+        &mut self,
+        unknowns: &[VariableRef],
+        knowns: &[VariableRef],
+        seeds: &[f64],
+        out: &mut [f64],
+    ) -> Result<(), String> {
+        let mut dy = [0.0; STATE_DIM];
+        let mut du = [0.0; LEG_COUNT];
+        for (k, &seed) in knowns.iter().zip(seeds) {
+            match seed_of(*k) {
+                Some(Seed::State(i)) => dy[i] += seed,
+                Some(Seed::Force(i)) => du[i] += seed,
+                None => {
+                    return Err(format!(
+                        "known {} is neither a state nor an input (derivatives are with respect to r, v, R, der(R) and F)",
+                        variables::GROUPS.get(k.group).map_or(String::new(), |g| g.element_name(k.index))
+                    ));
+                }
+            }
+        }
+        let forces = self.forces;
+        let stand = self.parameters.stand.clone();
+        let (df, doutputs) = self.with_current(|form, y, _t| {
+            let df = form.derivative_tangent(y, &forces, &dy, &du);
+            let o = PlatformOutputs::tangent(&form.stand, &BodyState::from_vector(y), &BodyState::from_vector(&dy));
+            (df, o)
+        });
+        let _ = stand;
+        for (value, u) in out.iter_mut().zip(unknowns) {
+            *value = match u.group {
+                group::DER_V => df[layout::V + u.index],
+                group::DER_R => dy[rotation_state_index(layout::E_DOT, u.index)],
+                group::DER2_R => df[rotation_state_index(layout::E_DOT, u.index)],
+                g if group::is_output_or_derivative(g) => Self::output_value(&doutputs, *u),
+                _ => {
+                    return Err(format!(
+                        "unknown {} is not an output, state or derivative",
+                        variables::GROUPS.get(u.group).map_or(String::new(), |g| g.element_name(u.index))
+                    ));
+                }
+            };
+        }
+        Ok(())
+    }
+
     fn save(&self, w: &mut ByteWriter) {
         let p = &self.parameters;
         save_stand(w, &p.stand);
@@ -294,6 +443,7 @@ impl FmuModel for PlatformModel {
         }
         save_settings(w, &p.settings);
         w.i32(p.stabilisation.code());
+        w.f64(p.baumgarte_rate);
         w.f64s(&self.forces);
         w.f64s(&self.force_rates);
         match &self.simulation {
@@ -304,6 +454,7 @@ impl FmuModel for PlatformModel {
                 // time and state are the simulation's own.
                 save_stand(w, sim.stand());
                 w.i32(sim.stabilisation.code());
+                w.f64(sim.form.baumgarte_rate);
                 save_settings(w, &sim.integrator.settings);
                 w.f64(sim.integrator.dopri5.h_next);
                 w.f64(sim.integrator.dopri5.err_old);
@@ -328,11 +479,13 @@ impl FmuModel for PlatformModel {
         let w0 = Vector3::from(r.finite_array::<3>("w0")?);
         let settings = read_settings(r)?;
         let stabilisation = read_stabilisation(r)?;
+        let baumgarte_rate = r.finite("solver.baumgarteRate")?;
         let forces = r.finite_array::<LEG_COUNT>("F")?;
         let force_rates = r.finite_array::<LEG_COUNT>("der(F)")?;
         let simulation = if r.bool()? {
             let sim_stand = read_stand(r)?;
             let sim_stabilisation = read_stabilisation(r)?;
+            let sim_baumgarte = r.finite("Baumgarte rate")?;
             let sim_settings = read_settings(r)?;
             let dopri5 = Dopri5Memory { h_next: r.finite("h_next")?, err_old: r.finite("err_old")? };
             let stats =
@@ -351,7 +504,7 @@ impl FmuModel for PlatformModel {
             let time = r.finite("time")?;
             let state = r.finite_array::<STATE_DIM>("state")?;
             Some(PlatformSimulation {
-                form: SpecialForm::new(sim_stand),
+                form: SpecialForm::new(sim_stand).with_baumgarte_rate(sim_baumgarte),
                 guard,
                 stabilisation: sim_stabilisation,
                 integrator: Integrator { settings: sim_settings, dopri5, stats },
@@ -362,13 +515,36 @@ impl FmuModel for PlatformModel {
             None
         };
         Ok(PlatformModel {
-            parameters: PlatformParameters { stand, r0, angles0, v0, w0, settings, stabilisation },
+            parameters: PlatformParameters { stand, r0, angles0, v0, w0, settings, stabilisation, baumgarte_rate },
             forces,
             force_rates,
             simulation,
             outputs: None,
         })
     }
+}
+
+/// State-vector index of element `index` of the rotation matrix `R` (row-major `R[a,b]`,
+/// column `b` is `e_b`) or of `der(R)`, counted from `first`.
+fn rotation_state_index(first: usize, index: usize) -> usize {
+    first + 3 * (index % 3) + index / 3
+}
+
+/// Where a known of a directional derivative sits: a state component or a leg force.
+enum Seed {
+    State(usize),
+    Force(usize),
+}
+
+fn seed_of(var: VariableRef) -> Option<Seed> {
+    Some(match var.group {
+        group::R => Seed::State(layout::R + var.index),
+        group::V => Seed::State(layout::V + var.index),
+        group::ROT => Seed::State(rotation_state_index(layout::E, var.index)),
+        group::DER_R => Seed::State(rotation_state_index(layout::E_DOT, var.index)),
+        group::F => Seed::Force(var.index),
+        _ => return None,
+    })
 }
 
 fn save_stand(w: &mut ByteWriter, s: &Stand) {
@@ -446,6 +622,10 @@ mod tests {
             (group::LDOT, "ldot"),
             (group::E, "E"),
             (group::CONSTRAINT_ERROR, "constraintError"),
+            (group::BAUMGARTE_RATE, "solver.baumgarteRate"),
+            (group::DER_V, "der(v)"),
+            (group::DER_R, "der(R)"),
+            (group::DER2_R, "der2(R)"),
         ];
         assert_eq!(names.len(), variables::GROUPS.len());
         for (i, name) in names {

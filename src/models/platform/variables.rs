@@ -32,7 +32,66 @@ pub mod group {
     pub const LDOT: usize = 23;
     pub const E: usize = 24;
     pub const CONSTRAINT_ERROR: usize = 25;
+    pub const BAUMGARTE_RATE: usize = 26;
+    pub const DER_V: usize = 27;
+    pub const DER_R: usize = 28;
+    pub const DER2_R: usize = 29;
+
+    /// Groups computed from the state (outputs and Model Exchange derivatives).
+    pub fn is_output_or_derivative(group: usize) -> bool {
+        (R..=CONSTRAINT_ERROR).contains(&group) || (DER_V..=DER2_R).contains(&group)
+    }
 }
+
+/// The 24 continuous states in the order of the special form's state vector
+/// `r, v, e1, e2, e3, e1', e2', e3'`: `e_b` is column `b` of `R` (elements `R[1,b], R[2,b],
+/// R[3,b]`, flat row-major indices `b-1, b+2, b+5`) and `e_b'` the same elements of `der(R)`.
+pub static STATES: &[(&str, usize)] = &[
+    ("r", 0),
+    ("r", 1),
+    ("r", 2),
+    ("v", 0),
+    ("v", 1),
+    ("v", 2),
+    ("R", 0),
+    ("R", 3),
+    ("R", 6),
+    ("R", 1),
+    ("R", 4),
+    ("R", 7),
+    ("R", 2),
+    ("R", 5),
+    ("R", 8),
+    ("der(R)", 0),
+    ("der(R)", 3),
+    ("der(R)", 6),
+    ("der(R)", 1),
+    ("der(R)", 4),
+    ("der(R)", 7),
+    ("der(R)", 2),
+    ("der(R)", 5),
+    ("der(R)", 8),
+];
+
+const POSE_STATES: &[crate::models::variables::Dependency] = &[All("r"), All("R")];
+const ALL_STATES: &[crate::models::variables::Dependency] = &[All("r"), All("v"), All("R"), All("der(R)")];
+const ACCELERATION_KNOWNS: &[crate::models::variables::Dependency] = &[All("r"), All("R"), All("F")];
+const ANGULAR_ACCELERATION_KNOWNS: &[crate::models::variables::Dependency] =
+    &[All("r"), All("R"), All("der(R)"), All("F")];
+const ALL_PARAMETERS: &[crate::models::variables::Dependency] = &[
+    All("F"),
+    All("M"),
+    All("J"),
+    All("g"),
+    All("B"),
+    All("A"),
+    All("r0"),
+    All("angles0"),
+    All("v0"),
+    All("w0"),
+    All("solver.stabilisation"),
+    All("solver.baumgarteRate"),
+];
 
 pub static GROUPS: &[V] = &[
     V::time(0),
@@ -114,11 +173,14 @@ pub static GROUPS: &[V] = &[
         85,
         None,
         "Constraint stabilisation: 2 = project onto the constraints e_a.e_b = delta_ab (orthonormal frame, \
-         rigid-rotation velocities) after every internal step; 1 = none, the residual drifts (for demonstration)",
+         rigid-rotation velocities) after every internal step; 3 = Baumgarte terms in the derivatives \
+         (solver.baumgarteRate), no projection; 1 = none, the residual drifts (for demonstration). Model Exchange \
+         always uses Baumgarte terms unless this is 1",
     )
-    .integer(1, 2),
+    .integer(1, 3),
     V::output("r", &[3], 100, Some("m"), "Centre of mass S, inertial frame", &[SameIndex("r0")]),
-    V::output("v", &[3], 103, Some("m/s"), "Velocity of the centre of mass", &[SameIndex("v0")]),
+    V::output("v", &[3], 103, Some("m/s"), "Velocity of the centre of mass", &[SameIndex("v0")])
+        .derivative_named("r", &[SameIndex("v")]),
     V::output(
         "R",
         &[3, 3],
@@ -128,8 +190,10 @@ pub static GROUPS: &[V] = &[
         &[All("angles0")],
     ),
     V::output("angles", &[3], 115, Some("rad"), "Roll, pitch, yaw (1-2-3 sequence, R = Rx Ry Rz)", &[All("angles0")])
-        .display("deg"),
-    V::output("w", &[3], 118, Some("rad/s"), "Angular velocity, body components", &[SameIndex("w0")]),
+        .display("deg")
+        .depends_on(&[All("R")]),
+    V::output("w", &[3], 118, Some("rad/s"), "Angular velocity, body components", &[SameIndex("w0")])
+        .depends_on(&[All("R"), All("der(R)")]),
     V::output(
         "l",
         &[6],
@@ -137,7 +201,8 @@ pub static GROUPS: &[V] = &[
         Some("m"),
         "Leg length l_k = |a_k - B_k|",
         &[All("A"), All("B"), All("r0"), All("angles0")],
-    ),
+    )
+    .depends_on(POSE_STATES),
     V::output(
         "ldot",
         &[6],
@@ -145,7 +210,8 @@ pub static GROUPS: &[V] = &[
         Some("m/s"),
         "Leg length rate dl_k/dt",
         &[All("A"), All("B"), All("r0"), All("angles0"), All("v0"), All("w0")],
-    ),
+    )
+    .depends_on(ALL_STATES),
     V::output(
         "E",
         &[],
@@ -153,7 +219,8 @@ pub static GROUPS: &[V] = &[
         Some("J"),
         "Kinetic plus gravitational potential energy M v^2/2 + w.J w/2 + M g z",
         &[All("M"), All("J"), All("g"), All("r0"), All("v0"), All("w0")],
-    ),
+    )
+    .depends_on(ALL_STATES),
     V::output(
         "constraintError",
         &[],
@@ -161,5 +228,41 @@ pub static GROUPS: &[V] = &[
         Some("1"),
         "Constraint residual max over a, b of |e_a.e_b - delta_ab|",
         &[All("angles0")],
+    )
+    .depends_on(&[All("R")]),
+    V::parameter(
+        "solver.baumgarteRate",
+        &[],
+        86,
+        Some("1/s"),
+        "Rate alpha of the Baumgarte stabilisation (constraint residual decays like exp(-alpha t)): used by \
+         Model Exchange, and by Co-Simulation with solver.stabilisation = 3",
     ),
+    V::local(
+        "der(v)",
+        &[3],
+        140,
+        Some("m/s2"),
+        "Acceleration of the centre of mass (Model Exchange derivative of v)",
+        ALL_PARAMETERS,
+    )
+    .derivative("v", "v", 1, ACCELERATION_KNOWNS),
+    V::local(
+        "der(R)",
+        &[3, 3],
+        143,
+        Some("1/s"),
+        "Time derivative of the rotation matrix: column b is de_b/dt (Model Exchange state)",
+        &[All("angles0"), All("w0")],
+    )
+    .derivative("R", "R", 1, &[SameIndex("der(R)")]),
+    V::local(
+        "der2(R)",
+        &[3, 3],
+        152,
+        Some("1/s2"),
+        "Second time derivative of the rotation matrix (the special form's e_b'', Model Exchange derivative of der(R))",
+        ALL_PARAMETERS,
+    )
+    .derivative("der(R)", "R", 2, ANGULAR_ACCELERATION_KNOWNS),
 ];

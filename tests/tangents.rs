@@ -1,0 +1,109 @@
+//! The exact directional derivatives (right-hand side with and without Baumgarte terms, and
+//! the outputs) against central finite differences at random states, on and off the
+//! constraint manifold: relative error <= 1e-6.
+
+use nalgebra::Vector3;
+use stewart_fmu::physics::body_state::{BodyState, StateVector};
+use stewart_fmu::physics::forces::HeldForces;
+use stewart_fmu::physics::kinematics::rotation_from_angles;
+use stewart_fmu::physics::special_form::SpecialForm;
+use stewart_fmu::physics::stand::Stand;
+use stewart_fmu::simulation::PlatformOutputs;
+
+struct Rng(u64);
+impl Rng {
+    fn uniform(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    }
+    fn vec(&mut self, scale: f64) -> Vector3<f64> {
+        Vector3::new(self.uniform(), self.uniform(), self.uniform()) * scale
+    }
+}
+
+fn random_case(rng: &mut Rng, off_manifold: bool) -> (StateVector, [f64; 6], StateVector, [f64; 6]) {
+    let rot = rotation_from_angles(&rng.vec(0.3));
+    let s =
+        BodyState::from_pose(Stand::truck_cabin_neutral_position() + rng.vec(0.05), rng.vec(0.3), &rot, &rng.vec(0.8));
+    let mut y = s.to_vector();
+    if off_manifold {
+        for x in y.iter_mut().skip(6) {
+            *x += 1e-3 * rng.uniform();
+        }
+    }
+    let u: [f64; 6] = std::array::from_fn(|_| 5900.0 * (1.0 + 0.2 * rng.uniform()));
+    let dy: StateVector = std::array::from_fn(|_| rng.uniform());
+    let du: [f64; 6] = std::array::from_fn(|_| 1000.0 * rng.uniform());
+    (y, u, dy, du)
+}
+
+fn relative_error(exact: &[f64], fd: &[f64]) -> f64 {
+    let scale = exact.iter().chain(fd).map(|x| x.abs()).fold(0.0, f64::max).max(1e-12);
+    exact.iter().zip(fd).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max) / scale
+}
+
+#[test]
+fn right_hand_side_tangent_matches_central_differences() {
+    let mut rng = Rng(0x1234_5678_9abc_def1);
+    let mut worst: f64 = 0.0;
+    for case in 0..40 {
+        let mut form = SpecialForm::new(Stand::truck_cabin());
+        form.baumgarte_rate = if case % 2 == 0 { 0.0 } else { 10.0 };
+        let (y, u, dy, du) = random_case(&mut rng, case % 4 >= 2);
+        let exact = form.derivative_tangent(&y, &u, &dy, &du);
+        let h = 1e-6;
+        let eval = |sign: f64| {
+            let yy: StateVector = std::array::from_fn(|i| y[i] + sign * h * dy[i]);
+            let uu: [f64; 6] = std::array::from_fn(|k| u[k] + sign * h * du[k]);
+            let mut f = [0.0; 24];
+            form.derivative(0.0, &yy, &HeldForces::constant(uu), &mut f);
+            f
+        };
+        let (fp, fm) = (eval(1.0), eval(-1.0));
+        let fd: Vec<f64> = (0..24).map(|i| (fp[i] - fm[i]) / (2.0 * h)).collect();
+        let e = relative_error(&exact, &fd);
+        worst = worst.max(e);
+        assert!(e <= 1e-6, "case {case}: relative error {e:e}");
+    }
+    println!("right-hand side: max relative error of the exact tangent vs central differences: {worst:.1e}");
+}
+
+#[test]
+fn output_tangent_matches_central_differences() {
+    let mut rng = Rng(0x0fed_cba9_8765_4321);
+    let stand = Stand::truck_cabin();
+    let flatten = |o: &PlatformOutputs| -> Vec<f64> {
+        let mut v = vec![];
+        v.extend(o.r.iter());
+        v.extend(o.v.iter());
+        v.extend(o.rotation.iter());
+        v.extend(o.angles.iter());
+        v.extend(o.w.iter());
+        v.extend(o.l.iter());
+        v.extend(o.ldot.iter());
+        v.push(o.energy / 1e4);
+        v
+    };
+    let mut worst: f64 = 0.0;
+    for case in 0..40 {
+        let (y, _, dy, _) = random_case(&mut rng, false);
+        let s = BodyState::from_vector(&y);
+        let ds = BodyState::from_vector(&dy);
+        let mut exact = flatten(&PlatformOutputs::tangent(&stand, &s, &ds));
+        let last = exact.len() - 1;
+        exact[last] = PlatformOutputs::tangent(&stand, &s, &ds).energy / 1e4;
+        let h = 1e-6;
+        let at = |sign: f64| {
+            let yy: StateVector = std::array::from_fn(|i| y[i] + sign * h * dy[i]);
+            flatten(&PlatformOutputs::compute(&stand, &BodyState::from_vector(&yy)))
+        };
+        let (p, m) = (at(1.0), at(-1.0));
+        let fd: Vec<f64> = p.iter().zip(&m).map(|(a, b)| (a - b) / (2.0 * h)).collect();
+        let e = relative_error(&exact, &fd);
+        worst = worst.max(e);
+        assert!(e <= 1e-6, "case {case}: relative error {e:e}");
+    }
+    println!("outputs: max relative error of the exact tangent vs central differences: {worst:.1e}");
+}
