@@ -12,3 +12,4 @@ fi
 
 cargo run --release --bin build-fmu
 .venv/bin/python examples/paper_experiments.py "$OUT"
+.venv/bin/python examples/linearise.py --output "$OUT"

@@ -4,6 +4,8 @@ from pathlib import Path
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+# The linearisation command (examples/linearise.py) is also a library for the tests.
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "examples"))
 
 from stewart import PLATFORM_FMU  # noqa: E402
 
