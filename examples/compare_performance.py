@@ -127,8 +127,8 @@ def native(method, fixed_step=None, rel_tol=None):
         cmd += ["--fixed-step", repr(fixed_step)]
     if rel_tol:
         cmd += ["--rel-tol", repr(rel_tol)]
-    runs = [json.loads(subprocess.run(cmd, capture_output=True, text=True, check=True).stdout) for _ in range(REPEATS)]
-    return float(np.median([r["us_per_step_median"] for r in runs])), np.array(runs[0]["r"]), runs[0]["max_rss_kib"]
+    run = json.loads(subprocess.run(cmd, capture_output=True, text=True, check=True).stdout)
+    return run["us_per_step_median"], np.array(run["r"]), run["max_rss_kib"]
 
 
 # ----- FMPy loops ---------------------------------------------------------------------------
@@ -139,7 +139,7 @@ def fmpy_loop(fmu, feedback=True):
     legs: the same work per step."""
     costs = []
     final = None
-    for _ in range(REPEATS):
+    for _ in range(1):
         pl = Platform(fmu=fmu)
         legs = (pl.vector("l", 6), pl.vector("ldot", 6)) if feedback else ([L0] * 6, [0.0] * 6)
         vr_f = [pl.vr[f"F[{k}]"] for k in range(1, 7)]
@@ -166,7 +166,7 @@ def fmpy_simulate(fmu, forces):
     signals = np.array([(ti,) + tuple(f) for ti, f in zip(t, forces)],
                        dtype=[("time", float)] + [(f"F[{k}]", float) for k in range(1, 7)])
     costs = []
-    for _ in range(REPEATS):
+    for _ in range(1):
         start = time.perf_counter()
         simulate_fmu(str(fmu), stop_time=T_END - H, output_interval=H, input=signals)
         costs.append((time.perf_counter() - start) / (STEPS - 1) * 1e6)
@@ -238,7 +238,7 @@ def mujoco_run(integrator, ref_positions, dt=H):
     model = mujoco.MjModel.from_xml_string(mjcf(integrator, dt))
     substeps = int(round(H / dt))
     costs, path_error, gap, final = [], 0.0, 0.0, None
-    for rep in range(REPEATS):
+    for rep in range(1):
         data = mujoco.MjData(model)
         mujoco.mj_forward(model, data)
         t, step_time, path_error, gap = 0.0, 0.0, 0.0, 0.0
@@ -287,27 +287,47 @@ def main():
         rows.append({"name": name, "us_per_step": cost_us, "us_per_simulated_s": cost_us / H, "error_at_3s_m": err,
                      "note": note})
 
-    work_precision = {"ours RK4": [], "ours DOPRI5": [], "MuJoCo": []}
+    # Every measurement is repeated REPEATS times, interleaved (one round of everything, then
+    # the next), so that a slow moment of this shared machine hits all of them alike; the
+    # table shows medians.
+    jobs = []
     for fixed in (1e-3, 5e-4, 2.5e-4):
-        cost, final, rss = native("rk4", fixed_step=fixed)
-        add(f"ours, native, RK4 step {fixed * 1e3:g} ms", cost, final, f"peak RSS {rss} KiB")
-        work_precision["ours RK4"].append((cost / H, rows[-1]["error_at_3s_m"]))
+        jobs.append((f"ours, native, RK4 step {fixed * 1e3:g} ms", "ours RK4", lambda fixed=fixed: native("rk4", fixed_step=fixed)))
     for tol in (1e-4, 1e-6, 1e-8, 1e-10, 1e-12):
-        cost, final, rss = native("dopri5", rel_tol=tol)
-        add(f"ours, native, DOPRI5 relTol {tol:g}", cost, final)
-        work_precision["ours DOPRI5"].append((cost / H, rows[-1]["error_at_3s_m"]))
+        jobs.append((f"ours, native, DOPRI5 relTol {tol:g}", "ours DOPRI5", lambda tol=tol: native("dopri5", rel_tol=tol)))
     for integrator in ("RK4", "Euler"):
-        cost, final, path, gap = mujoco_run(integrator, ref_positions)
-        add(f"MuJoCo {integrator}, 1 ms", cost, final, f"path error {path:.1e} m, constraint gap {gap * 1e3:.2f} mm")
-        work_precision["MuJoCo"].append((cost / H, rows[-1]["error_at_3s_m"], integrator))
-    loop_ours, final = fmpy_loop(PLATFORM_FMU)
-    add("ours, FMU2Slave loop (default DOPRI5)", loop_ours, final)
-    loop_trivial, _ = fmpy_loop(TRIVIAL_FMU, feedback=False)
-    add("trivial FMU, FMU2Slave loop", loop_trivial, None, "host floor")
-    sim_ours = fmpy_simulate(PLATFORM_FMU, ref_forces)
-    add("ours, fmpy.simulate_fmu (default DOPRI5)", sim_ours, None, "replays the reference forces")
-    sim_trivial = fmpy_simulate(TRIVIAL_FMU, ref_forces)
-    add("trivial FMU, fmpy.simulate_fmu", sim_trivial, None, "host floor")
+        jobs.append((f"MuJoCo {integrator}, 1 ms", "MuJoCo", lambda integrator=integrator: mujoco_run(integrator, ref_positions)))
+    jobs.append(("ours, FMU2Slave loop (default DOPRI5)", None, lambda: fmpy_loop(PLATFORM_FMU)))
+    jobs.append(("trivial FMU, FMU2Slave loop", None, lambda: fmpy_loop(TRIVIAL_FMU, feedback=False)))
+    jobs.append(("ours, fmpy.simulate_fmu (default DOPRI5)", None, lambda: (fmpy_simulate(PLATFORM_FMU, ref_forces), None)))
+    jobs.append(("trivial FMU, fmpy.simulate_fmu", None, lambda: (fmpy_simulate(TRIVIAL_FMU, ref_forces), None)))
+    results = {name: [] for name, _, _ in jobs}
+    for _ in range(REPEATS):
+        for name, _, job in jobs:
+            results[name].append(job())
+    notes = {
+        "trivial FMU, FMU2Slave loop": "host floor",
+        "trivial FMU, fmpy.simulate_fmu": "host floor",
+        "ours, fmpy.simulate_fmu (default DOPRI5)": "replays the reference forces",
+    }
+    work_precision = {"ours RK4": [], "ours DOPRI5": [], "MuJoCo": []}
+    for name, curve, _ in jobs:
+        runs = results[name]
+        cost = float(np.median([r[0] for r in runs]))
+        first = runs[0]
+        final = first[1] if len(first) > 1 and not name.startswith("trivial") else None
+        note = notes.get(name, "")
+        if name.startswith("MuJoCo"):
+            note = f"path error {first[2]:.1e} m, constraint gap {first[3] * 1e3:.2f} mm"
+        add(name, cost, final, note)
+        if curve == "MuJoCo":
+            work_precision[curve].append((cost / H, rows[-1]["error_at_3s_m"], name.split()[1].rstrip(",")))
+        elif curve:
+            work_precision[curve].append((cost / H, rows[-1]["error_at_3s_m"]))
+    loop_ours = rows[[r["name"] for r in rows].index("ours, FMU2Slave loop (default DOPRI5)")]["us_per_step"]
+    loop_trivial = rows[[r["name"] for r in rows].index("trivial FMU, FMU2Slave loop")]["us_per_step"]
+    sim_ours = rows[[r["name"] for r in rows].index("ours, fmpy.simulate_fmu (default DOPRI5)")]["us_per_step"]
+    sim_trivial = rows[[r["name"] for r in rows].index("trivial FMU, fmpy.simulate_fmu")]["us_per_step"]
 
     mujoco_rk4 = next(r for r in rows if r["name"].startswith("MuJoCo RK4"))
     ours_rk4 = rows[0]
