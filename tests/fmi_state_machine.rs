@@ -279,3 +279,56 @@ fn after_an_error_only_the_allowed_calls_work_and_reset_restores_the_start_value
     assert_eq!(h.get("M"), 3000.0);
     assert_eq!(h.step(0.01), fmi2OK, "{:?}", h.messages());
 }
+
+/// Model Exchange: the life cycle through the exported functions, and the ME table's
+/// refusals (no fmi2DoStep, no state changes outside continuous-time mode).
+#[test]
+fn model_exchange_life_cycle_and_refusals() {
+    use stewart_fmu::models::ModelKind;
+    use stewart_fmu::models::model_description::instantiation_token;
+    let sink = std::sync::Mutex::new(vec![]);
+    let cb = common::fmi_host::callbacks(&sink);
+    let guid = std::ffi::CString::new(instantiation_token(ModelKind::Platform)).unwrap();
+    unsafe {
+        let c = fmi2Instantiate(c"me".as_ptr(), fmi2ModelExchange, guid.as_ptr(), std::ptr::null(), &cb, 0, 0);
+        assert!(!c.is_null());
+        let mut x = [0.0; 24];
+        let mut dx = [0.0; 24];
+        assert_eq!(fmi2GetDerivatives(c, dx.as_mut_ptr(), 24), fmi2Error); // instantiated: not yet
+        assert_eq!(fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0), fmi2OK);
+        assert_eq!(fmi2EnterInitializationMode(c), fmi2OK);
+        assert_eq!(fmi2ExitInitializationMode(c), fmi2OK);
+        let mut info = fmi2EventInfo::default();
+        assert_eq!(fmi2NewDiscreteStates(c, &mut info), fmi2OK);
+        assert_eq!(info.newDiscreteStatesNeeded, 0);
+        assert_eq!(fmi2SetContinuousStates(c, x.as_ptr(), 24), fmi2Error); // event mode: refused
+        assert_eq!(fmi2EnterContinuousTimeMode(c), fmi2OK);
+        assert_eq!(fmi2GetContinuousStates(c, x.as_mut_ptr(), 24), fmi2OK);
+        assert!((x[2] - 1.9589244164161732).abs() < 1e-15 && x[6] == 1.0);
+        assert_eq!(fmi2GetContinuousStates(c, x.as_mut_ptr(), 23), fmi2Error); // wrong nx
+        assert_eq!(fmi2SetTime(c, 0.01), fmi2OK);
+        assert_eq!(fmi2GetDerivatives(c, dx.as_mut_ptr(), 24), fmi2OK);
+        assert!(dx.iter().all(|d| d.abs() < 1e-9), "equilibrium: {dx:?}");
+        x[2] += 1e-3;
+        assert_eq!(fmi2SetContinuousStates(c, x.as_ptr(), 24), fmi2OK);
+        assert_eq!(fmi2GetDerivatives(c, dx.as_mut_ptr(), 24), fmi2OK);
+        assert!(dx[2] == 0.0 && dx[5] > 0.0, "raised platform accelerates upward");
+        let mut nan_x = x;
+        nan_x[0] = f64::NAN;
+        assert_eq!(fmi2SetContinuousStates(c, nan_x.as_ptr(), 24), fmi2Error);
+        let (mut enter, mut terminate) = (1, 1);
+        assert_eq!(fmi2CompletedIntegratorStep(c, 1, &mut enter, &mut terminate), fmi2OK);
+        assert_eq!((enter, terminate), (0, 0));
+        assert_eq!(fmi2DoStep(c, 0.0, 0.01, 1), fmi2Error); // no Co-Simulation on an ME instance
+        assert_eq!(fmi2EnterEventMode(c), fmi2OK);
+        assert_eq!(fmi2Terminate(c), fmi2OK);
+        fmi2FreeInstance(c);
+        // The controller has no Model Exchange.
+        let guid = std::ffi::CString::new(instantiation_token(ModelKind::Controller)).unwrap();
+        let c = fmi2Instantiate(c"me".as_ptr(), fmi2ModelExchange, guid.as_ptr(), std::ptr::null(), &cb, 0, 0);
+        assert!(c.is_null());
+    }
+    let log = sink.lock().unwrap();
+    assert!(log.iter().any(|l| l.message.contains("illegal call sequence") && l.message.contains("Model Exchange")));
+    assert!(log.iter().any(|l| l.message.contains("implements Co-Simulation only")));
+}
