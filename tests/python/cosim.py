@@ -19,7 +19,7 @@ import numpy as np
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
 
-from stewart import PLATFORM_FMU, ROOT
+from stewart import PLATFORM_FMU
 
 CONTROLLER_FMU = Path(PLATFORM_FMU).parent / "StewartController.fmu"
 SYSTEM_SSP = Path(PLATFORM_FMU).parent / "StewartSystem.ssp"

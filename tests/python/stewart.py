@@ -4,12 +4,11 @@ thin driver around fmpy's FMU2Slave."""
 
 import math
 import os
-import shutil
 from pathlib import Path
 
 import numpy as np
 from fmpy import extract, read_model_description
-from fmpy.fmi2 import FMU2Slave, fmi2OK
+from fmpy.fmi2 import FMU2Slave
 
 ROOT = Path(__file__).resolve().parents[2]
 PLATFORM_FMU = Path(os.environ.get("STEWART_PLATFORM_FMU", ROOT / "target" / "fmu" / "StewartPlatform.fmu"))
@@ -94,7 +93,6 @@ class Platform:
         if fmu not in Platform._extracted:
             Platform._extracted[fmu] = extract(fmu)
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
-        kwargs = {"fmiCallLogger": None}
         self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=Platform._extracted[fmu],
                                modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
         self.slave.instantiate(loggingOn=False, callbacks=logger)
@@ -131,3 +129,16 @@ class Platform:
     def free(self):
         self.slave.terminate()
         self.slave.freeInstance()
+
+
+def bisect_boundary(holds_at, lo, hi, tolerance):
+    """The boundary between `lo`, where `holds_at` is true, and `hi`, where it is false,
+    to within `tolerance`; returns (lo, hi) bracketing it. Checks both ends first."""
+    assert holds_at(lo) and not holds_at(hi), f"no change of {holds_at.__name__} between {lo} and {hi}"
+    while hi - lo > tolerance:
+        mid = 0.5 * (lo + hi)
+        if holds_at(mid):
+            lo = mid
+        else:
+            hi = mid
+    return lo, hi

@@ -9,7 +9,7 @@ from fmpy.ssp.simulation import simulate_ssp
 from fmpy.validation import validate_fmu
 
 from cosim import CONTROLLER_FMU, SYSTEM_SSP, closed_loop
-from stewart import stand_parameters
+from stewart import bisect_boundary, stand_parameters
 
 P = stand_parameters(nondimensional=True)
 Z0 = P["r0[3]"]
@@ -95,14 +95,7 @@ def test_communication_step_limits_stability():
         _, _, e, s = closed_loop(20.0, h, platform_reals=P, controller_reals=paper_controller(gain, damping, 0.0))
         return s == "ok" and e.max() < 0.01
 
-    lo, hi = 0.05, 1.0
-    assert stable(lo) and not stable(hi)
-    while hi - lo > 0.005:
-        mid = 0.5 * (lo + hi)
-        if stable(mid):
-            lo = mid
-        else:
-            hi = mid
+    lo, hi = bisect_boundary(stable, 0.05, 1.0, 0.005)
     print(f"G = {gain}, D = {damping:.2f}: largest stable communication step {lo:.3f} (unstable at {hi:.3f}); "
           f"as a fraction of the closed loop's period: {lo * math.sqrt(6 * gain * 0.69) / (2 * math.pi):.2f}")
     assert 0.1 < lo < 0.5
@@ -121,14 +114,7 @@ def test_critical_gain_through_the_controller_fmu():
                                     record=("r[1]", "angles[1]", "angles[2]"))
         return s != "ok" or np.max(np.abs(rows[t > 80.0])) > 100 * seed
 
-    lo, hi = 0.5, 2.0
-    assert unstable(lo) and not unstable(hi)
-    while hi - lo > 0.005:
-        mid = 0.5 * (lo + hi)
-        if unstable(mid):
-            lo = mid
-        else:
-            hi = mid
+    lo, hi = bisect_boundary(unstable, 0.5, 2.0, 0.005)
     print(f"critical gain through the controller FMU (communication step 0.01): G_c = {0.5 * (lo + hi):.3f}")
     assert 0.9 < 0.5 * (lo + hi) < 1.1
 

@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from linearise import closed_loop, critical_gain, eigen_table, linearise, max_real_part
-from stewart import EQUILIBRIUM_FORCE, Platform, heave_forces, stand_parameters
+from stewart import EQUILIBRIUM_FORCE, Platform, bisect_boundary, heave_forces, stand_parameters
 
 P = stand_parameters(nondimensional=True)
 
@@ -98,14 +98,7 @@ def test_critical_gain_matches_the_closed_loop_simulation():
         pl.free()
         return late > 100 * seed
 
-    lo, hi = 0.9 * lin_gc, 1.1 * lin_gc
-    assert unstable(lo) and not unstable(hi)
-    while hi - lo > 0.002:
-        mid = 0.5 * (lo + hi)
-        if unstable(mid):
-            lo = mid
-        else:
-            hi = mid
+    lo, hi = bisect_boundary(unstable, 0.9 * lin_gc, 1.1 * lin_gc, 0.002)
     sim_gc = 0.5 * (lo + hi)
     print(f"critical gain: linearisation {lin_gc:.4f}, closed-loop simulation {sim_gc:.4f} "
           f"(relative difference {abs(sim_gc - lin_gc) / lin_gc:.1e})")

@@ -3,7 +3,6 @@ Euler), with Baumgarte terms keeping the constraints; the results match Co-Simul
 paper's experiments. And the FMU's exact directional derivatives match central differences."""
 
 import math
-from ctypes import c_double
 
 import numpy as np
 import pytest

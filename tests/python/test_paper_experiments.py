@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 
-from stewart import EQUILIBRIUM_FORCE, Platform, heave_forces, heave_programme, stand_parameters
+from stewart import EQUILIBRIUM_FORCE, Platform, bisect_boundary, heave_forces, heave_programme, stand_parameters
 
 P = stand_parameters(nondimensional=True)
 Z0 = P["r0[3]"]
@@ -139,14 +139,7 @@ def test_5_feedback_tracks_above_the_critical_gain(h):
         pl.free()
         return late > 100 * seed
 
-    lo, hi = 0.2, 3.0
-    assert unstable(lo) and not unstable(hi)
-    while hi - lo > 0.005:
-        mid = 0.5 * (lo + hi)
-        if unstable(mid):
-            lo = mid
-        else:
-            hi = mid
+    lo, hi = bisect_boundary(unstable, 0.2, 3.0, 0.005)
     critical = 0.5 * (lo + hi)
 
     def track(gain, damping=0.0):
