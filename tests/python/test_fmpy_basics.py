@@ -24,8 +24,11 @@ def test_model_description_declares_the_capabilities(platform_fmu):
     units = {v.name: v.unit for v in md.modelVariables}
     assert units["F[1]"] == "N" and units["r[3]"] == "m" and units["angles[1]"] == "rad" and units["E"] == "J"
     assert {v.name: v.displayUnit for v in md.modelVariables}["angles[2]"] == "deg"
-    # Pose and leg lengths have no direct feed-through from the forces.
-    assert all(not o.dependencies for o in md.outputs)
+    # Pose and leg lengths have no direct feed-through from the forces: outputs depend on
+    # states only (declared for Model Exchange), never on an input.
+    inputs = {v.name for v in md.modelVariables if v.causality == "input"}
+    assert all(d.name not in inputs for o in md.outputs for d in o.dependencies)
+    assert any(o.dependencies for o in md.outputs)  # derived outputs list their states
 
 
 def test_simulate_with_defaults_holds_the_neutral_equilibrium(platform_fmu):
