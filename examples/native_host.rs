@@ -103,23 +103,28 @@ fn main() -> Result<(), String> {
             environment: std::ptr::null_mut(),
         };
         let guid_c = CString::new(guid).map_err(|e| e.to_string())?;
-        let c = instantiate(c"native".as_ptr(), 1, guid_c.as_ptr(), std::ptr::null(), &callbacks, 0, 0);
-        if c.is_null() {
-            return Err("fmi2Instantiate failed".into());
-        }
-        setup(c, 0, 0.0, 0.0, 0, 0.0);
-        enter(c);
-        set_integer(c, &80, 1, &method);
-        // solver.relTol (81) and solver.fixedStep (84).
-        if let Some(x) = rel_tol {
-            set_real(c, &81, 1, &x);
-        }
-        if let Some(x) = fixed_step {
-            set_real(c, &84, 1, &x);
-        }
-        if exit(c) != 0 {
-            return Err("fmi2ExitInitializationMode failed".into());
-        }
+        // An initialised instance with the chosen solver: solver.method (80), solver.relTol (81),
+        // solver.fixedStep (84).
+        let start = |name: &std::ffi::CStr| -> Result<Component, String> {
+            let c = instantiate(name.as_ptr(), 1, guid_c.as_ptr(), std::ptr::null(), &callbacks, 0, 0);
+            if c.is_null() {
+                return Err("fmi2Instantiate failed".into());
+            }
+            setup(c, 0, 0.0, 0.0, 0, 0.0);
+            enter(c);
+            set_integer(c, &80, 1, &method);
+            if let Some(x) = rel_tol {
+                set_real(c, &81, 1, &x);
+            }
+            if let Some(x) = fixed_step {
+                set_real(c, &84, 1, &x);
+            }
+            if exit(c) != 0 {
+                return Err("fmi2ExitInitializationMode failed".into());
+            }
+            Ok(c)
+        };
+        let c = start(c"native")?;
         let force_vrs: [c_uint; 6] = [1, 2, 3, 4, 5, 6];
         let leg_vrs: [c_uint; 12] = [121, 122, 123, 124, 125, 126, 127, 128, 129, 130, 131, 132];
         let mut legs = [0.0; 12];
@@ -158,17 +163,7 @@ fn main() -> Result<(), String> {
         let elapsed = wall.elapsed().as_secs_f64();
         // doStep alone: the recorded forces replayed on a second instance (the same trajectory),
         // one clock read per batch.
-        let c2 = instantiate(c"native2".as_ptr(), 1, guid_c.as_ptr(), std::ptr::null(), &callbacks, 0, 0);
-        setup(c2, 0, 0.0, 0.0, 0, 0.0);
-        enter(c2);
-        set_integer(c2, &80, 1, &method);
-        if let Some(x) = rel_tol {
-            set_real(c2, &81, 1, &x);
-        }
-        if let Some(x) = fixed_step {
-            set_real(c2, &84, 1, &x);
-        }
-        exit(c2);
+        let c2 = start(c"native2")?;
         let mut t2 = 0.0;
         let mut failed = 0;
         for batch in history.chunks(BATCH) {

@@ -91,9 +91,7 @@ fn output_tangent_matches_central_differences() {
         let (y, _, dy, _) = random_case(&mut rng, false);
         let s = BodyState::from_vector(&y);
         let ds = BodyState::from_vector(&dy);
-        let mut exact = flatten(&PlatformOutputs::tangent(&stand, &s, &ds));
-        let last = exact.len() - 1;
-        exact[last] = PlatformOutputs::tangent(&stand, &s, &ds).energy / 1e4;
+        let exact = flatten(&PlatformOutputs::tangent(&stand, &s, &ds));
         let h = 1e-6;
         let at = |sign: f64| {
             let yy: StateVector = std::array::from_fn(|i| y[i] + sign * h * dy[i]);

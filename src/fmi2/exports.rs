@@ -120,7 +120,7 @@ pub unsafe extern "C" fn fmi2Instantiate(
             return fail("instanceName contains NUL");
         };
         let logger = Logger::new(f.logger, f.componentEnvironment, cname, logging_on != fmi2False);
-        Instance::new(kind, interface, logger).into_handle()
+        Instance::new(kind, &guid, interface, logger).into_handle()
     })
 }
 

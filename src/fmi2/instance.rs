@@ -21,7 +21,7 @@ use crate::models::snapshot::{ByteReader, ByteWriter, SnapshotError, fnv1a64};
 use crate::models::variables::{
     Causality, Initial, Variability, VariableGroup, VariableRef, VariableTable, VariableType,
 };
-use crate::models::{AnyModel, ModelKind, model_description};
+use crate::models::{AnyModel, ModelKind};
 
 /// First field of every instance; checked on every call to catch foreign or freed pointers.
 const INSTANCE_MAGIC: u64 = 0x5354_4557_4152_5449; // "STEWARTI"
@@ -144,7 +144,8 @@ fn read_option_f64(r: &mut ByteReader, what: &str) -> Result<Option<f64>, Snapsh
 }
 
 impl Instance {
-    pub fn new(kind: ModelKind, interface: InterfaceType, logger: Logger) -> Self {
+    /// `guid` is the importer's GUID, already matched to `kind` by `ModelKind::from_guid`.
+    pub fn new(kind: ModelKind, guid: &str, interface: InterfaceType, logger: Logger) -> Self {
         let info = kind.info();
         Instance {
             magic: INSTANCE_MAGIC,
@@ -154,7 +155,7 @@ impl Instance {
             logger,
             model: kind.instantiate(),
             table: VariableTable::new(info.groups),
-            token_hash: fnv1a64(model_description::instantiation_token(kind).as_bytes()),
+            token_hash: fnv1a64(guid.as_bytes()),
             start_time: 0.0,
             stop_time: None,
             tolerance: None,

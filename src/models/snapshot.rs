@@ -2,6 +2,10 @@
 //! (`fmi2SerializeFMUstate`). Every read is bounds-checked: a truncated, corrupted or foreign
 //! buffer gives an error, never an out-of-bounds read.
 
+use nalgebra::Vector3;
+
+use crate::physics::stand::{LEG_COUNT, Stand};
+
 /// Appends little-endian values to a byte buffer.
 #[derive(Default)]
 pub struct ByteWriter {
@@ -34,6 +38,15 @@ impl ByteWriter {
     }
     pub fn raw(&mut self, b: &[u8]) {
         self.bytes.extend_from_slice(b);
+    }
+    /// A stand: mass, inertia, gravity, base joints, platform joints.
+    pub fn stand(&mut self, s: &Stand) {
+        self.f64(s.mass);
+        self.f64s(&s.inertia);
+        self.f64(s.gravity);
+        for p in s.base_joints.iter().chain(s.platform_joints.iter()) {
+            self.f64s(p.as_slice());
+        }
     }
 }
 
@@ -110,6 +123,23 @@ impl<'a> ByteReader<'a> {
             1 => Ok(true),
             b => Err(SnapshotError(format!("invalid boolean byte {b}"))),
         }
+    }
+    /// What [`ByteWriter::stand`] wrote (finite values only).
+    pub fn stand(&mut self) -> Result<Stand, SnapshotError> {
+        let mass = self.finite("M")?;
+        let inertia = self.finite_array::<3>("J")?;
+        let gravity = self.finite("g")?;
+        let mut joints = [Vector3::zeros(); 2 * LEG_COUNT];
+        for j in joints.iter_mut() {
+            *j = Vector3::from(self.finite_array::<3>("joint")?);
+        }
+        Ok(Stand {
+            mass,
+            inertia,
+            gravity,
+            base_joints: std::array::from_fn(|k| joints[k]),
+            platform_joints: std::array::from_fn(|k| joints[LEG_COUNT + k]),
+        })
     }
     pub fn remaining(&self) -> usize {
         self.bytes.len() - self.pos

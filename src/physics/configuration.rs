@@ -112,13 +112,19 @@ impl ConfigurationGuard {
         Ok(())
     }
 
+    /// Both checks, for a state reached outside the integrator (Model Exchange).
+    pub fn check_all(&self, stand: &Stand, state: &BodyState) -> Result<(), PhysicsFault> {
+        self.check(stand, state).and_then(|()| self.check_singularity(stand, state))
+    }
+
     /// Singularity check (once per communication step, a 6x6 determinant): a sign change of
     /// the determinant since the initial pose means the legs passed through a singular
     /// configuration during the step; a shrunken determinant triggers the condition number.
-    pub fn check_singularity(&self, stand: &Stand, legs: &LegGeometry) -> Result<(), PhysicsFault> {
+    pub fn check_singularity(&self, stand: &Stand, state: &BodyState) -> Result<(), PhysicsFault> {
         if !self.detect_singularities {
             return Ok(());
         }
+        let legs = &LegGeometry::new(stand, state);
         let det = force_moment_determinant(legs, self.characteristic_length);
         if det * self.reference_determinant <= 0.0 {
             return Err(PhysicsFault::PassedSingularConfiguration);

@@ -5,7 +5,6 @@ use crate::physics::body_state::{BodyState, STATE_DIM, StateVector};
 use crate::physics::configuration::ConfigurationGuard;
 use crate::physics::error::{ParameterError, PhysicsFault};
 use crate::physics::forces::LegForceLaw;
-use crate::physics::legs::LegGeometry;
 use crate::physics::projection::project_onto_constraints;
 use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::Stand;
@@ -148,9 +147,9 @@ impl PlatformSimulation {
             other => StepFailure::Solver(other),
         });
         let result = result.and_then(|()| {
-            let state = BodyState::from_vector(&self.state);
-            let legs = LegGeometry::new(&self.form.stand, &state);
-            self.guard.check_singularity(&self.form.stand, &legs).map_err(|fault| StepFailure::Physics { t: t1, fault })
+            self.guard
+                .check_singularity(&self.form.stand, &BodyState::from_vector(&self.state))
+                .map_err(|fault| StepFailure::Physics { t: t1, fault })
         });
         match result {
             Ok(()) => {

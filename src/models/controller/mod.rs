@@ -351,12 +351,7 @@ impl FmuModel for ControllerModel {
 
     fn save(&self, w: &mut ByteWriter) {
         let p = &self.parameters;
-        w.f64(p.stand.mass);
-        w.f64s(&p.stand.inertia);
-        w.f64(p.stand.gravity);
-        for j in p.stand.base_joints.iter().chain(p.stand.platform_joints.iter()) {
-            w.f64s(j.as_slice());
-        }
+        w.stand(&p.stand);
         w.f64s(&[p.feedback.gain, p.feedback.damping]);
         w.bool(p.feedback.feedforward);
         w.i32(p.programme as i32);
@@ -376,20 +371,7 @@ impl FmuModel for ControllerModel {
     }
 
     fn restore(r: &mut ByteReader) -> Result<Self, SnapshotError> {
-        let mass = r.finite("M")?;
-        let inertia = r.finite_array::<3>("J")?;
-        let gravity = r.finite("g")?;
-        let mut joints = [Vector3::zeros(); 2 * LEG_COUNT];
-        for j in joints.iter_mut() {
-            *j = Vector3::from(r.finite_array::<3>("joint")?);
-        }
-        let stand = Stand {
-            mass,
-            inertia,
-            gravity,
-            base_joints: std::array::from_fn(|k| joints[k]),
-            platform_joints: std::array::from_fn(|k| joints[LEG_COUNT + k]),
-        };
+        let stand = r.stand()?;
         let [gain, damping] = r.finite_array::<2>("gains")?;
         let feedforward = r.bool()?;
         let code = r.i32()?;

@@ -382,11 +382,9 @@ impl FmuModel for PlatformModel {
     fn completed_integrator_step(&mut self) -> Result<(), StepError> {
         let Some(sim) = &self.simulation else { return Ok(()) };
         let state = BodyState::from_vector(&sim.state);
-        let fault = sim.guard.check(sim.stand(), &state).and_then(|()| {
-            let legs = crate::physics::legs::LegGeometry::new(sim.stand(), &state);
-            sim.guard.check_singularity(sim.stand(), &legs)
-        });
-        fault.map_err(|f| StepError { message: format!("at t = {}: {f}; the simulation cannot go on", sim.time) })
+        sim.guard
+            .check_all(sim.stand(), &state)
+            .map_err(|f| StepError { message: format!("at t = {}: {f}; the simulation cannot go on", sim.time) })
     }
 
     fn directional_derivative(
@@ -411,13 +409,11 @@ impl FmuModel for PlatformModel {
             }
         }
         let forces = self.forces;
-        let stand = self.parameters.stand.clone();
         let (df, doutputs) = self.with_current(|form, y, _t| {
             let df = form.derivative_tangent(y, &forces, &dy, &du);
             let o = PlatformOutputs::tangent(&form.stand, &BodyState::from_vector(y), &BodyState::from_vector(&dy));
             (df, o)
         });
-        let _ = stand;
         for (value, u) in out.iter_mut().zip(unknowns) {
             *value = match u.group {
                 group::DER_V => df[layout::V + u.index],
@@ -437,7 +433,7 @@ impl FmuModel for PlatformModel {
 
     fn save(&self, w: &mut ByteWriter) {
         let p = &self.parameters;
-        save_stand(w, &p.stand);
+        w.stand(&p.stand);
         for v in [&p.r0, &p.angles0, &p.v0, &p.w0] {
             w.f64s(v.as_slice());
         }
@@ -452,7 +448,7 @@ impl FmuModel for PlatformModel {
                 w.bool(true);
                 // The stand and stabilisation equal the parameters'; the guard, integrator,
                 // time and state are the simulation's own.
-                save_stand(w, sim.stand());
+                w.stand(sim.stand());
                 w.i32(sim.stabilisation.code());
                 w.f64(sim.form.baumgarte_rate);
                 save_settings(w, &sim.integrator.settings);
@@ -472,7 +468,7 @@ impl FmuModel for PlatformModel {
     }
 
     fn restore(r: &mut ByteReader) -> Result<Self, SnapshotError> {
-        let stand = read_stand(r)?;
+        let stand = r.stand()?;
         let r0 = Vector3::from(r.finite_array::<3>("r0")?);
         let angles0 = Vector3::from(r.finite_array::<3>("angles0")?);
         let v0 = Vector3::from(r.finite_array::<3>("v0")?);
@@ -483,7 +479,7 @@ impl FmuModel for PlatformModel {
         let forces = r.finite_array::<LEG_COUNT>("F")?;
         let force_rates = r.finite_array::<LEG_COUNT>("der(F)")?;
         let simulation = if r.bool()? {
-            let sim_stand = read_stand(r)?;
+            let sim_stand = r.stand()?;
             let sim_stabilisation = read_stabilisation(r)?;
             let sim_baumgarte = r.finite("Baumgarte rate")?;
             let sim_settings = read_settings(r)?;
@@ -545,30 +541,6 @@ fn seed_of(var: VariableRef) -> Option<Seed> {
         group::F => Seed::Force(var.index),
         _ => return None,
     })
-}
-
-fn save_stand(w: &mut ByteWriter, s: &Stand) {
-    w.f64(s.mass);
-    w.f64s(&s.inertia);
-    w.f64(s.gravity);
-    for p in s.base_joints.iter().chain(s.platform_joints.iter()) {
-        w.f64s(p.as_slice());
-    }
-}
-
-fn read_stand(r: &mut ByteReader) -> Result<Stand, SnapshotError> {
-    let mass = r.finite("M")?;
-    let inertia = r.finite_array::<3>("J")?;
-    let gravity = r.finite("g")?;
-    let mut joints = [Vector3::zeros(); 2 * LEG_COUNT];
-    for j in joints.iter_mut() {
-        *j = Vector3::from(r.finite_array::<3>("joint")?);
-    }
-    let mut base_joints = [Vector3::zeros(); LEG_COUNT];
-    let mut platform_joints = [Vector3::zeros(); LEG_COUNT];
-    base_joints.copy_from_slice(&joints[..LEG_COUNT]);
-    platform_joints.copy_from_slice(&joints[LEG_COUNT..]);
-    Ok(Stand { mass, inertia, gravity, base_joints, platform_joints })
 }
 
 fn save_settings(w: &mut ByteWriter, s: &SolverSettings) {
