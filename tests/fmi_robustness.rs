@@ -26,6 +26,7 @@ fn bad_arguments_are_refused_and_change_nothing() {
     let vr_f1 = h.vr("F[1]");
     let vr_m = h.vr("M");
     let vr_method = h.vr("solver.method");
+    let vr_stops = h.vr("stops");
     type Case = (&'static str, Box<dyn FnOnce(&mut Host) -> fmi2Status>, &'static str);
     let cases: Vec<Case> = vec![
         (
@@ -69,9 +70,19 @@ fn bad_arguments_are_refused_and_change_nothing() {
             "F[1] = inf refused",
         ),
         (
-            "Boolean value reference",
+            "Real value reference to fmi2GetBoolean",
             Box::new(|h: &mut Host| unsafe { fmi2GetBoolean(h.c, &1, 1, [0i32; 4].as_mut_ptr()) }),
-            "has no Boolean variables",
+            "F[1] of type Real, not a Boolean variable",
+        ),
+        (
+            "Boolean value reference to fmi2GetReal",
+            Box::new(move |h: &mut Host| unsafe { fmi2GetReal(h.c, &vr_stops, 1, [0.0f64; 4].as_mut_ptr()) }),
+            "stops of type Boolean, not a Real variable",
+        ),
+        (
+            "fixed Boolean parameter after initialisation",
+            Box::new(move |h: &mut Host| unsafe { fmi2SetBoolean(h.c, &vr_stops, 1, &fmi2False) }),
+            "stops (fixed parameter) may not be set in state stepComplete",
         ),
         (
             "zero step",
@@ -204,14 +215,28 @@ fn bad_parameter_sets_are_refused_at_exit_initialization_mode() {
             "leg 1 has zero length",
         ),
         (
-            "singular initial pose (yaw 90 degrees)",
-            vec![("angles0[3]", std::f64::consts::FRAC_PI_2)],
-            "singular leg configuration",
+            "singular initial pose (yaw 90 degrees) with stopAtSingularity",
+            vec![("stops", 0.0), ("stopAtSingularity", 1.0), ("angles0[3]", std::f64::consts::FRAC_PI_2)],
+            "the initial pose is a singular leg arrangement",
         ),
-        ("platform joints on the base plane", vec![("r0[3]", 0.5)], "on or across the base plane"),
+        ("initial pose outside the stroke", vec![("r0[3]", 1.5)], "parameter r0: in the initial pose leg 1 has length"),
+        ("initial pose above the stroke", vec![("lmax[4]", 1.7)], "above its stroke limit lmax[4] = 1.7 m"),
+        ("empty stroke", vec![("lmin[2]", 2.2)], "parameter lmin[2]: the stroke is empty"),
+        ("zero shortest leg", vec![("lmin[6]", 0.0)], "parameter lmin[6]: the shortest leg length must be positive"),
+        (
+            "zero stop stiffness",
+            vec![("stops.stiffness", 0.0)],
+            "parameter stops.stiffness: the stop stiffness must be positive",
+        ),
+        (
+            "negative stop damping",
+            vec![("stops.damping", -1.0)],
+            "parameter stops.damping: the contact damping must be >= 0",
+        ),
+        ("platform joints on the base plane", vec![("stops", 0.0), ("r0[3]", 0.5)], "on or across the base plane"),
         (
             "platform joints across the base plane",
-            vec![("r0[3]", 0.6), ("angles0[1]", 0.5)],
+            vec![("stops", 0.0), ("r0[3]", 0.6), ("angles0[1]", 0.5)],
             "on or across the base plane",
         ),
         ("zero relative tolerance", vec![("solver.relTol", 0.0)], "parameter solver.relTol: must be in (0, 1)"),
@@ -238,13 +263,19 @@ fn bad_parameter_sets_are_refused_at_exit_initialization_mode() {
         assert_eq!(unsafe { fmi2Reset(h.c) }, fmi2OK);
         assert_eq!(h.initialise(&[]), fmi2OK);
     }
-    // The singular pose reports its condition number.
+    // The singular pose reports its condition number; without stopAtSingularity it is a
+    // pose like any other.
     let mut h = Host::platform("cond");
     h.setup(None);
     h.enter();
-    h.set("angles0[3]", std::f64::consts::FRAC_PI_2);
+    for (n, v) in [("stops", 0.0), ("stopAtSingularity", 1.0), ("angles0[3]", std::f64::consts::FRAC_PI_2)] {
+        h.set(n, v);
+    }
     h.exit();
     assert!(h.last_message().contains("condition number"), "{}", h.last_message());
+    let mut h = Host::platform("singular start");
+    assert_eq!(h.initialise(&[("stops", 0.0), ("angles0[3]", std::f64::consts::FRAC_PI_2)]), fmi2OK);
+    assert!(h.get("kappa") > 1e8, "kappa {}", h.get("kappa"));
 }
 
 /// Physics that cannot go on: the step is rolled back, fmi2Discard, the status functions
@@ -252,13 +283,14 @@ fn bad_parameter_sets_are_refused_at_exit_initialization_mode() {
 #[test]
 fn impossible_motions_are_discarded_with_roll_back() {
     let cases: Vec<(&str, Vec<(&str, f64)>, [f64; 6], f64, &str)> = vec![
-        ("platform pulled through the base", vec![], [-1.0e6; 6], 1.0, "passed through the base plane"),
+        // Without end stops nothing stops the legs; with them, see the workspace tests.
+        ("platform pulled through the base", vec![("stops", 0.0)], [-1.0e6; 6], 1.0, "passed through the base plane"),
         (
-            "platform pushed into a singular yaw",
-            vec![("g", 0.0), ("angles0[3]", 1.35), ("w0[3]", 1.0)],
+            "platform turned through a singular yaw, stopAtSingularity",
+            vec![("stops", 0.0), ("stopAtSingularity", 1.0), ("g", 0.0), ("angles0[3]", 1.35), ("w0[3]", 1.0)],
             [0.0; 6],
             0.5,
-            "singular configuration",
+            "passed through a singular arrangement",
         ),
         ("forces beyond any scale", vec![], [1e300, -1e300, 1e300, -1e300, 1e300, -1e300], 0.1, "rolled back"),
     ];
@@ -285,7 +317,7 @@ fn impossible_motions_are_discarded_with_roll_back() {
         // Outputs (and everything else) as before the step, apart from the new force inputs
         // and what they determine directly (the accelerations der(v), der(R,2)).
         let after = h.all_reals();
-        let f_vrs: Vec<u32> = (1..=6).chain(140..=142).chain(152..=160).collect();
+        let f_vrs: Vec<u32> = (1..=6).chain(140..=142).chain(152..=160).chain([210]).collect();
         let real_vrs: Vec<u32> =
             h.table.elements().filter(|(_, g, _)| g.var_type.is_real()).map(|(_, g, i)| g.vr(i)).collect();
         for ((vr, a), b) in real_vrs.iter().zip(&after).zip(&before) {

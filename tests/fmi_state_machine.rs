@@ -92,6 +92,11 @@ const FUNCTIONS: [&str; 43] = [
     "fmi2FreeInstance",
 ];
 
+/// Continuous states of the platform (24 special-form coordinates, work.F, work.dissipated).
+const NX: usize = 26;
+/// Event indicators: twelve stroke limits and the force/moment determinant.
+const NZ: usize = 13;
+
 /// A fresh instance driven into `state`.
 fn instance_in(state: &str) -> Host {
     let mut h = Host::platform("walk");
@@ -103,8 +108,8 @@ fn instance_in(state: &str) -> Host {
         }
         "stepComplete" => assert_eq!(h.initialise(&[]), fmi2OK),
         "stepFailed" => {
-            assert_eq!(h.initialise(&[]), fmi2OK);
-            h.set_forces([-1.0e6; 6]); // pulls the platform through the base
+            assert_eq!(h.initialise(&[("stops", 0.0)]), fmi2OK);
+            h.set_forces([-1.0e6; 6]); // pulls the platform through the base (no end stops)
             assert_eq!(h.step(1.0), fmi2Discard);
         }
         "terminated" => {
@@ -133,7 +138,7 @@ fn invoke(h: &mut Host, function: &str) -> fmi2Status {
     let mut int = 0i32;
     let mut status = 0i32;
     let mut text: fmi2String = std::ptr::null();
-    let mut buf = [0.0f64; 24];
+    let mut buf = [0.0f64; NX];
     unsafe {
         match function {
             "fmi2SetDebugLogging" => fmi2SetDebugLogging(c, fmi2True, 0, std::ptr::null()),
@@ -200,11 +205,11 @@ fn invoke(h: &mut Host, function: &str) -> fmi2Status {
             "fmi2EnterContinuousTimeMode" => fmi2EnterContinuousTimeMode(c),
             "fmi2CompletedIntegratorStep" => fmi2CompletedIntegratorStep(c, fmi2True, &mut int, &mut status),
             "fmi2SetTime" => fmi2SetTime(c, 0.0),
-            "fmi2SetContinuousStates" => fmi2SetContinuousStates(c, buf.as_ptr(), 24),
-            "fmi2GetDerivatives" => fmi2GetDerivatives(c, buf.as_mut_ptr(), 24),
-            "fmi2GetEventIndicators" => fmi2GetEventIndicators(c, buf.as_mut_ptr(), 0),
-            "fmi2GetContinuousStates" => fmi2GetContinuousStates(c, buf.as_mut_ptr(), 24),
-            "fmi2GetNominalsOfContinuousStates" => fmi2GetNominalsOfContinuousStates(c, buf.as_mut_ptr(), 24),
+            "fmi2SetContinuousStates" => fmi2SetContinuousStates(c, buf.as_ptr(), NX),
+            "fmi2GetDerivatives" => fmi2GetDerivatives(c, buf.as_mut_ptr(), NX),
+            "fmi2GetEventIndicators" => fmi2GetEventIndicators(c, buf.as_mut_ptr(), NZ),
+            "fmi2GetContinuousStates" => fmi2GetContinuousStates(c, buf.as_mut_ptr(), NX),
+            "fmi2GetNominalsOfContinuousStates" => fmi2GetNominalsOfContinuousStates(c, buf.as_mut_ptr(), NX),
             other => panic!("{other}"),
         }
     }
@@ -292,30 +297,37 @@ fn model_exchange_life_cycle_and_refusals() {
     unsafe {
         let c = fmi2Instantiate(c"me".as_ptr(), fmi2ModelExchange, guid.as_ptr(), std::ptr::null(), &cb, 0, 0);
         assert!(!c.is_null());
-        let mut x = [0.0; 24];
-        let mut dx = [0.0; 24];
-        assert_eq!(fmi2GetDerivatives(c, dx.as_mut_ptr(), 24), fmi2Error); // instantiated: not yet
+        let mut x = [0.0; NX];
+        let mut dx = [0.0; NX];
+        assert_eq!(fmi2GetDerivatives(c, dx.as_mut_ptr(), NX), fmi2Error); // instantiated: not yet
         assert_eq!(fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0), fmi2OK);
         assert_eq!(fmi2EnterInitializationMode(c), fmi2OK);
         assert_eq!(fmi2ExitInitializationMode(c), fmi2OK);
         let mut info = fmi2EventInfo::default();
         assert_eq!(fmi2NewDiscreteStates(c, &mut info), fmi2OK);
         assert_eq!(info.newDiscreteStatesNeeded, 0);
-        assert_eq!(fmi2SetContinuousStates(c, x.as_ptr(), 24), fmi2Error); // event mode: refused
+        assert_eq!(fmi2SetContinuousStates(c, x.as_ptr(), NX), fmi2Error); // event mode: refused
         assert_eq!(fmi2EnterContinuousTimeMode(c), fmi2OK);
-        assert_eq!(fmi2GetContinuousStates(c, x.as_mut_ptr(), 24), fmi2OK);
+        assert_eq!(fmi2GetContinuousStates(c, x.as_mut_ptr(), NX), fmi2OK);
         assert!((x[2] - 1.9589244164161732).abs() < 1e-15 && x[6] == 1.0);
-        assert_eq!(fmi2GetContinuousStates(c, x.as_mut_ptr(), 23), fmi2Error); // wrong nx
+        assert_eq!(fmi2GetContinuousStates(c, x.as_mut_ptr(), NX - 1), fmi2Error); // wrong nx
         assert_eq!(fmi2SetTime(c, 0.01), fmi2OK);
-        assert_eq!(fmi2GetDerivatives(c, dx.as_mut_ptr(), 24), fmi2OK);
+        assert_eq!(fmi2GetDerivatives(c, dx.as_mut_ptr(), NX), fmi2OK);
         assert!(dx.iter().all(|d| d.abs() < 1e-9), "equilibrium: {dx:?}");
         x[2] += 1e-3;
-        assert_eq!(fmi2SetContinuousStates(c, x.as_ptr(), 24), fmi2OK);
-        assert_eq!(fmi2GetDerivatives(c, dx.as_mut_ptr(), 24), fmi2OK);
+        assert_eq!(fmi2SetContinuousStates(c, x.as_ptr(), NX), fmi2OK);
+        assert_eq!(fmi2GetDerivatives(c, dx.as_mut_ptr(), NX), fmi2OK);
         assert!(dx[2] == 0.0 && dx[5] > 0.0, "raised platform accelerates upward");
+        // Event indicators: every leg inside its stroke (positive margins), the determinant
+        // of the neutral pose; a wrong count is refused.
+        let mut z = [0.0; NZ];
+        assert_eq!(fmi2GetEventIndicators(c, z.as_mut_ptr(), NZ), fmi2OK);
+        assert!(z[..12].iter().all(|&m| m > 0.2 && m < 0.5), "{z:?}");
+        assert!(z[12] != 0.0);
+        assert_eq!(fmi2GetEventIndicators(c, z.as_mut_ptr(), NZ - 1), fmi2Error);
         let mut nan_x = x;
         nan_x[0] = f64::NAN;
-        assert_eq!(fmi2SetContinuousStates(c, nan_x.as_ptr(), 24), fmi2Error);
+        assert_eq!(fmi2SetContinuousStates(c, nan_x.as_ptr(), NX), fmi2Error);
         let (mut enter, mut terminate) = (1, 1);
         assert_eq!(fmi2CompletedIntegratorStep(c, 1, &mut enter, &mut terminate), fmi2OK);
         assert_eq!((enter, terminate), (0, 0));

@@ -1,14 +1,18 @@
-//! The exact directional derivatives (right-hand side with and without Baumgarte terms, and
-//! the outputs) against central finite differences at random states, on and off the
-//! constraint manifold: relative error <= 1e-6.
+//! The exact directional derivatives (right-hand side with and without Baumgarte terms and
+//! end stops, the leg powers, the outputs and `kappa`) against central finite differences at
+//! random states, on and off the constraint manifold, with legs inside their strokes and in
+//! contact with their lower and upper stops: relative error <= 1e-6.
 
 use nalgebra::Vector3;
 use stewart_fmu::physics::body_state::{BodyState, StateVector};
+use stewart_fmu::physics::end_stops::EndStops;
 use stewart_fmu::physics::forces::HeldForces;
 use stewart_fmu::physics::kinematics::rotation_from_angles;
+use stewart_fmu::physics::legs::LegGeometry;
 use stewart_fmu::physics::special_form::SpecialForm;
 use stewart_fmu::physics::stand::Stand;
-use stewart_fmu::simulation::PlatformOutputs;
+use stewart_fmu::simulation::outputs::{condition_number, condition_number_tangent};
+use stewart_fmu::simulation::{PlatformOutputs, SimulationState};
 
 struct Rng(u64);
 impl Rng {
@@ -39,6 +43,29 @@ fn random_case(rng: &mut Rng, off_manifold: bool) -> (StateVector, [f64; 6], Sta
     (y, u, dy, du)
 }
 
+/// End stops around the state's legs: leg k inside its stroke, on its lower stop or on its
+/// upper stop (3 mm in) by `k % 3` shifted by `case`.
+fn stops_around(y: &StateVector, case: usize) -> EndStops {
+    let stand = Stand::truck_cabin();
+    let legs = LegGeometry::new(&stand, &BodyState::from_vector(y));
+    let mut stops = EndStops::default();
+    for k in 0..6 {
+        let l = legs.length[k];
+        (stops.lower[k], stops.upper[k]) = match (k + case) % 3 {
+            0 => (l - 0.2, l + 0.2),
+            1 => (l + 0.003, l + 0.3),
+            _ => (l - 0.3, l - 0.003),
+        };
+    }
+    // Alternate damping so that the clamp of the damper is met on some legs and not others.
+    stops.damping = if case.is_multiple_of(2) { 1e5 } else { 1e7 };
+    stops
+}
+
+fn extended(y: &StateVector, work: [f64; 2]) -> SimulationState {
+    std::array::from_fn(|i| if i < 24 { y[i] } else { work[i - 24] })
+}
+
 fn relative_error(exact: &[f64], fd: &[f64]) -> f64 {
     let scale = exact.iter().chain(fd).map(|x| x.abs()).fold(0.0, f64::max).max(1e-12);
     exact.iter().zip(fd).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max) / scale
@@ -49,20 +76,25 @@ fn right_hand_side_tangent_matches_central_differences() {
     let mut rng = Rng(0x1234_5678_9abc_def1);
     let mut worst: f64 = 0.0;
     for case in 0..40 {
-        let mut form = SpecialForm::new(Stand::truck_cabin());
-        form.baumgarte_rate = if case % 2 == 0 { 0.0 } else { 10.0 };
         let (y, u, dy, du) = random_case(&mut rng, case % 4 >= 2);
-        let exact = form.derivative_tangent(&y, &u, &dy, &du);
+        let stops = (case % 8 >= 4).then(|| stops_around(&y, case));
+        let mut form = SpecialForm::new(Stand::truck_cabin()).with_end_stops(stops);
+        form.baumgarte_rate = if case % 2 == 0 { 0.0 } else { 10.0 };
+        let (exact, dpower) = form.derivative_tangent(&y, &u, &dy, &du);
         let h = 1e-6;
         let eval = |sign: f64| {
             let yy: StateVector = std::array::from_fn(|i| y[i] + sign * h * dy[i]);
             let uu: [f64; 6] = std::array::from_fn(|k| u[k] + sign * h * du[k]);
             let mut f = [0.0; 24];
-            form.derivative(0.0, &yy, &HeldForces::constant(uu), &mut f);
-            f
+            let p = form.derivative(0.0, &yy, &HeldForces::constant(uu), &mut f);
+            let mut v = f.to_vec();
+            v.extend([p.actuator / 1e4, p.dissipation / 1e4]);
+            v
         };
         let (fp, fm) = (eval(1.0), eval(-1.0));
-        let fd: Vec<f64> = (0..24).map(|i| (fp[i] - fm[i]) / (2.0 * h)).collect();
+        let fd: Vec<f64> = (0..26).map(|i| (fp[i] - fm[i]) / (2.0 * h)).collect();
+        let mut exact = exact.to_vec();
+        exact.extend([dpower.actuator / 1e4, dpower.dissipation / 1e4]);
         let e = relative_error(&exact, &fd);
         worst = worst.max(e);
         assert!(e <= 1e-6, "case {case}: relative error {e:e}");
@@ -73,7 +105,6 @@ fn right_hand_side_tangent_matches_central_differences() {
 #[test]
 fn output_tangent_matches_central_differences() {
     let mut rng = Rng(0x0fed_cba9_8765_4321);
-    let stand = Stand::truck_cabin();
     let flatten = |o: &PlatformOutputs| -> Vec<f64> {
         let mut v = vec![];
         v.extend(o.r.iter());
@@ -84,21 +115,29 @@ fn output_tangent_matches_central_differences() {
         v.extend(o.l.iter());
         v.extend(o.ldot.iter());
         v.push(o.energy / 1e4);
+        v.extend(o.stop_force.iter().map(|f| f / 1e5));
+        v.push(o.work_of_forces);
+        v.push(o.dissipated_energy);
         v
     };
     let mut worst: f64 = 0.0;
     for case in 0..40 {
         let (y, _, dy, _) = random_case(&mut rng, false);
-        let s = BodyState::from_vector(&y);
-        let ds = BodyState::from_vector(&dy);
-        let exact = flatten(&PlatformOutputs::tangent(&stand, &s, &ds));
+        let stops = (case % 2 == 1).then(|| stops_around(&y, case));
+        let form = SpecialForm::new(Stand::truck_cabin()).with_end_stops(stops);
+        let (y, dy) = (extended(&y, [12.0, 3.0]), extended(&dy, [0.4, -0.7]));
+        let mut exact = flatten(&PlatformOutputs::tangent(&form, &y, &dy));
+        exact.push(condition_number_tangent(&form.stand, &y, &dy));
         let h = 1e-6;
         let at = |sign: f64| {
-            let yy: StateVector = std::array::from_fn(|i| y[i] + sign * h * dy[i]);
-            flatten(&PlatformOutputs::compute(&stand, &BodyState::from_vector(&yy)))
+            let yy: SimulationState = std::array::from_fn(|i| y[i] + sign * h * dy[i]);
+            let mut v = flatten(&PlatformOutputs::compute(&form, &yy));
+            v.push(condition_number(&form.stand, &yy));
+            v
         };
         let (p, m) = (at(1.0), at(-1.0));
         let fd: Vec<f64> = p.iter().zip(&m).map(|(a, b)| (a - b) / (2.0 * h)).collect();
+        assert_eq!(exact.len(), fd.len());
         let e = relative_error(&exact, &fd);
         worst = worst.max(e);
         assert!(e <= 1e-6, "case {case}: relative error {e:e}");

@@ -230,8 +230,8 @@ pub unsafe extern "C" fn fmi2GetBoolean(
 ) -> fmi2Status {
     boundary!(c, F::GetBoolean, |inst| {
         let vrs = try_slice!(inst, F::GetBoolean, vr, nvr, "vr");
-        let _ = try_slice_mut!(inst, F::GetBoolean, value, nvr, "value");
-        inst.no_variables_of_type(F::GetBoolean, vrs, "Boolean")
+        let values = try_slice_mut!(inst, F::GetBoolean, value, nvr, "value");
+        inst.get_boolean(F::GetBoolean, vrs, values)
     })
 }
 
@@ -294,8 +294,8 @@ pub unsafe extern "C" fn fmi2SetBoolean(
 ) -> fmi2Status {
     boundary!(c, F::SetBoolean, |inst| {
         let vrs = try_slice!(inst, F::SetBoolean, vr, nvr, "vr");
-        let _ = try_slice!(inst, F::SetBoolean, value, nvr, "value");
-        inst.no_variables_of_type(F::SetBoolean, vrs, "Boolean")
+        let values = try_slice!(inst, F::SetBoolean, value, nvr, "value");
+        inst.set_boolean(F::SetBoolean, vrs, values)
     })
 }
 
@@ -663,8 +663,11 @@ pub unsafe extern "C" fn fmi2GetDerivatives(c: fmi2Component, derivatives: *mut 
 /// # Safety
 /// See the module documentation.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetEventIndicators(c: fmi2Component, _indicators: *mut fmi2Real, ni: usize) -> fmi2Status {
-    boundary!(c, F::GetEventIndicators, |inst| inst.get_event_indicators(F::GetEventIndicators, ni))
+pub unsafe extern "C" fn fmi2GetEventIndicators(c: fmi2Component, indicators: *mut fmi2Real, ni: usize) -> fmi2Status {
+    boundary!(c, F::GetEventIndicators, |inst| {
+        let z = try_slice_mut!(inst, F::GetEventIndicators, indicators, ni, "eventIndicators");
+        inst.get_event_indicators(F::GetEventIndicators, z)
+    })
 }
 
 /// # Safety

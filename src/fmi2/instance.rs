@@ -40,6 +40,7 @@ pub const COMMUNICATION_POINT_TOLERANCE: f64 = 1e-9;
 pub enum BaseType {
     Real,
     Integer,
+    Boolean,
 }
 
 impl BaseType {
@@ -47,6 +48,7 @@ impl BaseType {
         match self {
             BaseType::Real => t.is_real(),
             BaseType::Integer => t.is_integer_like(),
+            BaseType::Boolean => t.is_boolean(),
         }
     }
 
@@ -54,6 +56,7 @@ impl BaseType {
         match self {
             BaseType::Real => "Real",
             BaseType::Integer => "Integer",
+            BaseType::Boolean => "Boolean",
         }
     }
 }
@@ -481,6 +484,38 @@ impl Instance {
         fmi2OK
     }
 
+    pub fn get_boolean(&mut self, func: Fmi2Function, vrs: &[u32], values: &mut [fmi2Boolean]) -> fmi2Status {
+        for &vr in vrs {
+            if let Err(s) = self.lookup(func, vr, BaseType::Boolean) {
+                return s;
+            }
+        }
+        for (value, &vr) in values.iter_mut().zip(vrs) {
+            let Some((_, r)) = self.table.lookup(vr) else { return fmi2Error };
+            *value = if self.model.get_boolean(r) { fmi2True } else { fmi2False };
+        }
+        fmi2OK
+    }
+
+    pub fn set_boolean(&mut self, func: Fmi2Function, vrs: &[u32], values: &[fmi2Boolean]) -> fmi2Status {
+        for &vr in vrs {
+            let (g, r) = match self.lookup(func, vr, BaseType::Boolean) {
+                Ok(f) => f,
+                Err(s) => return s,
+            };
+            if let Err(s) = self.check_settable(func, g, r) {
+                return s;
+            }
+        }
+        for (&vr, &x) in vrs.iter().zip(values) {
+            let Some((_, r)) = self.table.lookup(vr) else { return fmi2Error };
+            if let Err(m) = self.model.set_boolean(r, x != fmi2False) {
+                return self.error(func, &m);
+            }
+        }
+        fmi2OK
+    }
+
     /// A deep copy of the model through its own serialization (models are not `Clone`
     /// through `AnyModel`).
     fn snapshot_model(&self) -> AnyModel {
@@ -531,6 +566,10 @@ impl Instance {
             Ok(()) => {
                 self.time = t_end;
                 self.last_successful_time = t_end;
+                if self.logger.is_enabled(LogCategory::Events) {
+                    let logger = &self.logger;
+                    self.model.report_events(&mut |m| logger.log(fmi2OK, LogCategory::Events, m));
+                }
                 fmi2OK
             }
             Err(e) => {
@@ -746,8 +785,13 @@ impl Instance {
         fmi2OK
     }
 
-    pub fn get_event_indicators(&mut self, func: Fmi2Function, n: usize) -> fmi2Status {
-        if n == 0 { fmi2OK } else { self.error(func, &format!("ni = {n}, but the model has no event indicators")) }
+    pub fn get_event_indicators(&mut self, func: Fmi2Function, z: &mut [f64]) -> fmi2Status {
+        let count = self.kind.info().event_indicators;
+        if z.len() != count {
+            return self.error(func, &format!("ni = {}, but the model has {count} event indicators", z.len()));
+        }
+        self.model.event_indicators(z);
+        fmi2OK
     }
 
     pub fn enter_event_mode(&mut self) -> fmi2Status {
@@ -761,8 +805,17 @@ impl Instance {
     }
 
     pub fn new_discrete_states(&mut self, info: &mut fmi2EventInfo) -> fmi2Status {
-        // No discrete states, no time events.
+        // No discrete states and no time events: the end-stop forces are continuous in the
+        // state, the events only mark their kinks (and singular arrangements passed), so one
+        // update settles every event and the continuous states are unchanged.
         *info = fmi2EventInfo::default();
+        let logger = &self.logger;
+        let update = self.model.event_update(&mut |m| logger.log(fmi2OK, LogCategory::Events, m));
+        if let Some(reason) = update.terminate {
+            info.terminateSimulation = fmi2True;
+            self.terminated = true;
+            self.logger.log(fmi2Warning, LogCategory::Discard, &format!("fmi2NewDiscreteStates: {reason}"));
+        }
         fmi2OK
     }
 

@@ -1,7 +1,9 @@
 //! Dormand-Prince 5(4) (Hairer, Nørsett, Wanner, Solving ODEs I, II.5), with the PI step-size
 //! control of Hairer's DOPRI5 code. Propagates the 5th-order solution (local extrapolation).
 
-use super::{IntegrationError, IntegratorStats, OdeSystem, SolverSettings};
+use super::{
+    Crossing, Events, IntegrationError, IntegratorStats, MAX_SWITCHING, OdeSystem, SolverSettings, SwitchingKind, bits,
+};
 
 const C2: f64 = 1.0 / 5.0;
 const C3: f64 = 3.0 / 10.0;
@@ -99,11 +101,100 @@ fn initial_step<S: OdeSystem<N>, const N: usize>(
     (100.0 * h0).min(h1).min(h_max)
 }
 
+/// Coefficients of the continuous extension (Hairer's `dense output` of DOPRI5, order 4).
+const D1: f64 = -12715105075.0 / 11282082432.0;
+const D3: f64 = 87487479700.0 / 32700410799.0;
+const D4: f64 = -10690763975.0 / 1880347072.0;
+const D5: f64 = 701980252875.0 / 199316789632.0;
+const D6: f64 = -1453857185.0 / 822651844.0;
+const D7: f64 = 69997945.0 / 29380423.0;
+
+/// The step's interpolant `y(t + theta h)`, theta in [0, 1]: built only when a switching
+/// function changed sign in the step.
+struct DenseOutput<const N: usize> {
+    r: [[f64; N]; 5],
+}
+
+impl<const N: usize> DenseOutput<N> {
+    fn new(y0: &[f64; N], y1: &[f64; N], k: [&[f64; N]; 7], h: f64) -> Self {
+        let mut r = [[0.0; N]; 5];
+        for i in 0..N {
+            let ydiff = y1[i] - y0[i];
+            let bspl = h * k[0][i] - ydiff;
+            r[0][i] = y0[i];
+            r[1][i] = ydiff;
+            r[2][i] = bspl;
+            r[3][i] = ydiff - h * k[6][i] - bspl;
+            r[4][i] = h * (D1 * k[0][i] + D3 * k[2][i] + D4 * k[3][i] + D5 * k[4][i] + D6 * k[5][i] + D7 * k[6][i]);
+        }
+        DenseOutput { r }
+    }
+
+    fn at(&self, theta: f64) -> [f64; N] {
+        let theta1 = 1.0 - theta;
+        let mut y = [0.0; N];
+        for i in 0..N {
+            y[i] = self.r[0][i]
+                + theta * (self.r[1][i] + theta1 * (self.r[2][i] + theta * (self.r[3][i] + theta1 * self.r[4][i])));
+        }
+        y
+    }
+}
+
+/// The root of switching function `index` on the step's interpolant, by the Illinois
+/// variant of regula falsi: returns the theta in (0, 1] at the end of the final bracket that
+/// is on the function's new side.
+fn locate<S: OdeSystem<N>, const N: usize>(
+    system: &S,
+    dense: &DenseOutput<N>,
+    t: f64,
+    h: f64,
+    index: usize,
+    g_start: f64,
+    g_end: f64,
+) -> f64 {
+    let (mut a, mut b, mut fa, mut fb) = (0.0, 1.0, g_start, g_end);
+    let new_side = g_end > 0.0;
+    // Time resolution: far below any integration error, above the clock's round-off.
+    let tolerance = (1e-12 + 4.0 * f64::EPSILON * t.abs() / h).min(1e-3);
+    let mut g = [0.0; MAX_SWITCHING];
+    let mut last_moved = 0i8;
+    for _ in 0..100 {
+        if b - a <= tolerance {
+            break;
+        }
+        let mut c = if fb != fa { (a * fb - b * fa) / (fb - fa) } else { 0.5 * (a + b) };
+        if !(c > a && c < b) {
+            c = 0.5 * (a + b);
+        }
+        system.switching(t + c * h, &dense.at(c), &mut g);
+        let fc = g.get(index).copied().unwrap_or(0.0);
+        if (fc > 0.0) == new_side {
+            b = c;
+            fb = fc;
+            if last_moved == -1 {
+                fa *= 0.5;
+            }
+            last_moved = -1;
+        } else {
+            a = c;
+            fa = fc;
+            if last_moved == 1 {
+                fb *= 0.5;
+            }
+            last_moved = 1;
+        }
+    }
+    b
+}
+
+#[allow(clippy::too_many_arguments)]
 pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
     system: &S,
     s: &SolverSettings,
     memory: &mut Dopri5Memory,
     stats: &mut IntegratorStats,
+    events: &mut Events<'_, N>,
     t0: f64,
     y: &mut [f64; N],
     t1: f64,
@@ -111,6 +202,7 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
     let span = t1 - t0;
     let h_max = if s.max_step > 0.0 { s.max_step.min(span) } else { span };
     let fsal = !system.modifies_state_after_step();
+    let switching = system.switching_count().min(MAX_SWITCHING);
 
     let mut k1 = [0.0; N];
     system.derivative(t0, y, &mut k1);
@@ -122,17 +214,22 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
     let mut stage = [0.0; N];
     let mut y_new = [0.0; N];
     let mut err_vec = [0.0; N];
+    let mut g = [0.0; MAX_SWITCHING];
     let mut t = t0;
     let mut rejected_last = false;
     let mut steps: u64 = 0;
+    // A step redone to end on a non-smooth point: the function it lands on, and the step
+    // size the controller had before.
+    let mut landing: Option<(usize, f64)> = None;
 
     loop {
         if steps >= s.max_steps_per_call {
             return Err(IntegrationError::TooManySteps { t, steps });
         }
-        // Land exactly on t1: stretch or shorten the last step (Hairer's 1.01 rule).
+        // Land exactly on t1: stretch or shorten the last step (Hairer's 1.01 rule); a
+        // landing step ends where it was told to.
         let h_unclamped = h;
-        let last = t + 1.01 * h >= t1;
+        let last = landing.is_none() && t + 1.01 * h >= t1;
         if last {
             h = t1 - t;
         }
@@ -177,11 +274,43 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
 
         let fac11 = err.powf(EXPO1);
         if err <= 1.0 {
+            if switching > 0 {
+                system.switching(t_new, &y_new, &mut g);
+                let target = landing.map(|(i, _)| i);
+                let changed = events.sides.changed(&g, switching);
+                if changed != 0 {
+                    let dense = DenseOutput::new(y, &y_new, [&k1, &k2, &k3, &k4, &k5, &k6, &k7], h);
+                    match locate_crossings(system, s, &dense, events, t, h, span, &g, changed, target) {
+                        Located::Stop { t: ts, fault } => return Err(IntegrationError::Fault { t: ts, fault }),
+                        Located::Land { index, theta } => {
+                            // Redo the step to end on the non-smooth point; the controller's
+                            // memory is untouched.
+                            let resume = landing.map_or(h, |(_, r)| r);
+                            landing = Some((index, resume));
+                            h *= theta;
+                            stats.event_landings += 1;
+                            continue;
+                        }
+                        Located::Recorded => {}
+                    }
+                }
+                if let Some(i) = target
+                    && changed >> i & 1 == 0
+                {
+                    // The landing step ended a hair before the root: the crossing is here.
+                    events.sides.bits ^= 1 << i;
+                    events.log.push(Crossing { index: i, t: t_new, rising: events.sides.bits >> i & 1 == 1, y: y_new });
+                }
+            }
             // Accept.
             let fac = (fac11 / memory.err_old.powf(BETA) / SAFETY).clamp(FAC_GROW_LIMIT, FAC_SHRINK_LIMIT);
             let mut h_new = h / fac;
             if rejected_last {
                 h_new = h_new.min(h);
+            }
+            if let Some((_, resume)) = landing.take() {
+                // After a non-smooth point go on no faster than before it.
+                h_new = h_new.min(resume);
             }
             memory.err_old = err.max(1e-4);
             stats.accepted_steps += 1;
@@ -207,6 +336,88 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
             stats.rejected_steps += 1;
             h /= (fac11 / SAFETY).min(FAC_SHRINK_LIMIT);
             rejected_last = true;
+            // A shortened landing step no longer reaches its point: it will be found again.
+            landing = None;
         }
     }
+}
+
+/// What the sign changes found at the end of an accepted step call for.
+enum Located<F> {
+    /// A [`SwitchingKind::Stop`] function crossed first: stop with this fault at `t`.
+    Stop { t: f64, fault: F },
+    /// A non-smooth point lies inside the step at `theta`: redo the step to end there.
+    Land { index: usize, theta: f64 },
+    /// Every crossing was recorded and the sides updated: accept the step.
+    Recorded,
+}
+
+/// Locates the crossings `changed` of an accepted step from `t` of size `h` on its
+/// interpolant and decides what to do. `target` is the function a landing step was aimed at
+/// (its crossing at the step's end is expected, not a reason to land again).
+#[allow(clippy::too_many_arguments)]
+fn locate_crossings<S: OdeSystem<N>, const N: usize>(
+    system: &S,
+    settings: &SolverSettings,
+    dense: &DenseOutput<N>,
+    events: &mut Events<'_, N>,
+    t: f64,
+    h: f64,
+    span: f64,
+    g_end: &[f64; MAX_SWITCHING],
+    changed: u32,
+    target: Option<usize>,
+) -> Located<S::Fault> {
+    let mut g_start = [0.0; MAX_SWITCHING];
+    system.switching(t, &dense.at(0.0), &mut g_start);
+    // Shorter landing steps than this are not worth it (and would underflow): a crossing
+    // this close to the step's start is taken as at the start.
+    let min_landing = (1e-9 * h).max(1e3 * f64::EPSILON * t.abs().max(span));
+    let mut theta = [1.0; MAX_SWITCHING];
+    let mut land: Option<(f64, usize)> = None;
+    let mut stop: Option<(f64, usize)> = None;
+    for i in bits(changed) {
+        let (Some(&g0), Some(&g1)) = (g_start.get(i), g_end.get(i)) else { continue };
+        // Same sign at both ends: the side was stale (the crossing happened at the start).
+        let th = if (g0 > 0.0) == (g1 > 0.0) { 0.0 } else { locate(system, dense, t, h, i, g0, g1) };
+        if let Some(slot) = theta.get_mut(i) {
+            *slot = th;
+        }
+        let first = |best: Option<(f64, usize)>| if best.is_none_or(|(b, _)| th < b) { Some((th, i)) } else { best };
+        match system.switching_kind(i) {
+            SwitchingKind::Restart
+                if settings.locate_events && th * h > min_landing && th < 1.0 && target != Some(i) =>
+            {
+                land = first(land)
+            }
+            SwitchingKind::Stop => stop = first(stop),
+            _ => {}
+        }
+    }
+    if let Some((th, i)) = stop
+        && land.is_none_or(|(tl, _)| th <= tl)
+    {
+        let ts = t + th * h;
+        if let Some(fault) = system.switching_fault(i, ts, &dense.at(th)) {
+            return Located::Stop { t: ts, fault };
+        }
+    }
+    if let Some((th, index)) = land {
+        return Located::Land { index, theta: th };
+    }
+    // Record in time order.
+    let mut pending = changed;
+    while pending != 0 {
+        let Some(i) = bits(pending).min_by(|&a, &b| theta[a].total_cmp(&theta[b])) else { break };
+        pending &= !(1 << i);
+        let th = theta.get(i).copied().unwrap_or(1.0);
+        events.log.push(Crossing {
+            index: i,
+            t: t + th * h,
+            rising: g_end.get(i).is_some_and(|&x| x > 0.0),
+            y: dense.at(th),
+        });
+    }
+    events.sides.bits ^= changed;
+    Located::Recorded
 }

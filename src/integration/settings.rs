@@ -44,6 +44,10 @@ pub struct SolverSettings {
     pub fixed_step: f64,
     /// Upper bound on internal steps in one call; guards against a stalled integration.
     pub max_steps_per_call: u64,
+    /// Whether the adaptive method lands on the non-smooth points of the right-hand side
+    /// (sign changes of [`crate::integration::SwitchingKind::Restart`] functions) instead of
+    /// stepping across them. Always on in the FMU; off only to measure what it buys.
+    pub locate_events: bool,
 }
 
 /// Default relative tolerance: 1e-8, about the accuracy a co-simulation needs and well below
@@ -69,6 +73,7 @@ impl Default for SolverSettings {
             max_step: DEFAULT_MAX_STEP,
             fixed_step: DEFAULT_FIXED_STEP,
             max_steps_per_call: DEFAULT_MAX_STEPS_PER_CALL,
+            locate_events: true,
         }
     }
 }

@@ -48,6 +48,8 @@ pub struct ModelInfo {
     /// The continuous states in the order of the state vector (Model Exchange): `(group
     /// name, element index)`; `<Derivatives>` is written in this order.
     pub states: &'static [(&'static str, usize)],
+    /// Number of event indicators (`numberOfEventIndicators`, Model Exchange).
+    pub event_indicators: usize,
     /// Whether the binary implements Model Exchange for this model.
     pub model_exchange: bool,
     /// Whether `fmi2GetDirectionalDerivative` is implemented.
@@ -62,6 +64,13 @@ pub struct StepError {
     pub message: String,
 }
 
+/// What an event update (`fmi2NewDiscreteStates`) found.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct EventUpdate {
+    /// The simulation must stop here, and why.
+    pub terminate: Option<String>,
+}
+
 /// What the FMI layer needs from a model. Value references are already resolved to
 /// [`VariableRef`]s of the right type and access rules are already checked.
 pub trait FmuModel {
@@ -74,6 +83,12 @@ pub trait FmuModel {
     fn set_real(&mut self, var: VariableRef, value: f64) -> Result<(), String>;
     fn get_integer(&mut self, var: VariableRef) -> i32;
     fn set_integer(&mut self, var: VariableRef, value: i32) -> Result<(), String>;
+    fn get_boolean(&mut self, _var: VariableRef) -> bool {
+        false
+    }
+    fn set_boolean(&mut self, _var: VariableRef, _value: bool) -> Result<(), String> {
+        Err("not a settable Boolean variable".into())
+    }
     /// Validates the parameters and builds the simulation at `start_time`. `tolerance` is
     /// the importer's `fmi2SetupExperiment` tolerance, if defined. Returns a summary for the
     /// log.
@@ -85,6 +100,9 @@ pub trait FmuModel {
     ) -> Result<String, String>;
     /// Advances from the communication point `t` to exactly `t + h`.
     fn do_step(&mut self, t: f64, h: f64) -> Result<(), StepError>;
+    /// After a successful step: describes the events met during it (contacts, singular
+    /// arrangements passed), one message each, for `logEvents`.
+    fn report_events(&mut self, _sink: &mut dyn FnMut(&str)) {}
     /// First derivative of a Real input for the next step (`fmi2SetRealInputDerivatives`).
     fn set_input_derivative(&mut self, var: VariableRef, value: f64);
     /// First time derivative of a Real output (`fmi2GetRealOutputDerivatives`).
@@ -97,6 +115,13 @@ pub trait FmuModel {
     fn set_continuous_states(&mut self, _x: &[f64]) {}
     /// Model Exchange: the state derivatives at the current time, states and inputs.
     fn derivatives(&mut self, _dx: &mut [f64]) {}
+    /// Model Exchange: the event indicators (`ModelInfo::event_indicators` of them).
+    fn event_indicators(&mut self, _z: &mut [f64]) {}
+    /// Model Exchange: an event update at the current time and state (the event indicators'
+    /// signs are taken as the new reference); messages describe what happened.
+    fn event_update(&mut self, _sink: &mut dyn FnMut(&str)) -> EventUpdate {
+        EventUpdate::default()
+    }
     /// Model Exchange: after an accepted integrator step, whether the state is still one the
     /// motion can continue from.
     fn completed_integrator_step(&mut self) -> Result<(), StepError> {
@@ -218,6 +243,21 @@ impl AnyModel {
     }
     pub fn set_integer(&mut self, var: VariableRef, value: i32) -> Result<(), String> {
         dispatch!(self, m => m.set_integer(var, value))
+    }
+    pub fn get_boolean(&mut self, var: VariableRef) -> bool {
+        dispatch!(self, m => m.get_boolean(var))
+    }
+    pub fn set_boolean(&mut self, var: VariableRef, value: bool) -> Result<(), String> {
+        dispatch!(self, m => m.set_boolean(var, value))
+    }
+    pub fn report_events(&mut self, sink: &mut dyn FnMut(&str)) {
+        dispatch!(self, m => m.report_events(sink))
+    }
+    pub fn event_indicators(&mut self, z: &mut [f64]) {
+        dispatch!(self, m => m.event_indicators(z))
+    }
+    pub fn event_update(&mut self, sink: &mut dyn FnMut(&str)) -> EventUpdate {
+        dispatch!(self, m => m.event_update(sink))
     }
     pub fn exit_initialization(
         &mut self,

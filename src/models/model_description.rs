@@ -65,12 +65,13 @@ fn render(kind: ModelKind, guid: &str) -> String {
     let _ = writeln!(x, r#"<?xml version="1.0" encoding="UTF-8"?>"#);
     let _ = writeln!(
         x,
-        r#"<fmiModelDescription fmiVersion="2.0" modelName="{}" guid="{}" description="{}" author="stewart_fmu developers" version="{}" generationTool="stewart_fmu {} (build-fmu)" variableNamingConvention="structured" numberOfEventIndicators="0">"#,
+        r#"<fmiModelDescription fmiVersion="2.0" modelName="{}" guid="{}" description="{}" author="stewart_fmu developers" version="{}" generationTool="stewart_fmu {} (build-fmu)" variableNamingConvention="structured" numberOfEventIndicators="{}">"#,
         xml_escape(info.model_name),
         guid,
         xml_escape(info.description),
         env!("CARGO_PKG_VERSION"),
         env!("CARGO_PKG_VERSION"),
+        info.event_indicators,
     );
     let directional = info.directional_derivatives;
     if info.model_exchange {
@@ -162,6 +163,7 @@ fn render(kind: ModelKind, guid: &str) -> String {
                 (VariableType::Integer | VariableType::Enumeration(_), Some(v)) => {
                     format!(r#" start="{}""#, model.get_integer(v))
                 }
+                (VariableType::Boolean, Some(v)) => format!(r#" start="{}""#, model.get_boolean(v)),
                 _ => String::new(),
             }
         } else {
@@ -262,7 +264,13 @@ pub fn documentation_html(kind: ModelKind) -> String {
             let vals: Vec<String> = (0..g.len())
                 .filter_map(|i| table.lookup(g.vr(i)))
                 .map(|(_, r)| {
-                    if g.var_type.is_real() { format_real(model.get_real(r)) } else { model.get_integer(r).to_string() }
+                    if g.var_type.is_real() {
+                        format_real(model.get_real(r))
+                    } else if g.var_type.is_boolean() {
+                        model.get_boolean(r).to_string()
+                    } else {
+                        model.get_integer(r).to_string()
+                    }
                 })
                 .collect();
             vals.join(", ")

@@ -18,11 +18,12 @@ pub static INFO: ModelInfo = ModelInfo {
     default_experiment: DefaultExperiment { start_time: 0.0, stop_time: 3.0, step_size: 1e-2 },
     documentation: "<p>Benchmark floor for the performance comparison: no physics.</p>",
     states: super::platform::variables::STATES,
+    event_indicators: 0,
     model_exchange: false,
     directional_derivatives: false,
 };
 
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default)]
 pub struct TrivialModel {
     /// Holds the parameters and inputs (its simulation is never built).
     pub storage: PlatformModel,
@@ -50,6 +51,12 @@ impl FmuModel for TrivialModel {
     }
     fn set_integer(&mut self, var: VariableRef, value: i32) -> Result<(), String> {
         self.storage.set_integer(var, value)
+    }
+    fn get_boolean(&mut self, var: VariableRef) -> bool {
+        self.storage.get_boolean(var)
+    }
+    fn set_boolean(&mut self, var: VariableRef, value: bool) -> Result<(), String> {
+        self.storage.set_boolean(var, value)
     }
     fn exit_initialization(
         &mut self,

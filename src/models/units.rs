@@ -19,6 +19,7 @@ pub static UNITS: &[UnitDefinition] = &[
     UnitDefinition { name: "N/m", base: [1, 0, -2, 0, 0, 0, 0, 0], display_units: &[] },
     UnitDefinition { name: "N.s/m", base: [1, 0, -1, 0, 0, 0, 0, 0], display_units: &[] },
     UnitDefinition { name: "J", base: [1, 2, -2, 0, 0, 0, 0, 0], display_units: &[] },
+    UnitDefinition { name: "W", base: [1, 2, -3, 0, 0, 0, 0, 0], display_units: &[] },
     UnitDefinition { name: "rad", base: [0, 0, 0, 0, 0, 0, 0, 1], display_units: &[("deg", DEG_PER_RAD)] },
     UnitDefinition { name: "rad/s", base: [0, 0, -1, 0, 0, 0, 0, 1], display_units: &[("deg/s", DEG_PER_RAD)] },
     UnitDefinition { name: "rad/s2", base: [0, 0, -2, 0, 0, 0, 0, 1], display_units: &[("deg/s2", DEG_PER_RAD)] },

@@ -87,6 +87,10 @@ pub enum VariableType {
 }
 
 impl VariableType {
+    /// Whether `fmi2GetBoolean`/`fmi2SetBoolean` apply.
+    pub fn is_boolean(self) -> bool {
+        self == VariableType::Boolean
+    }
     /// Whether `fmi2GetReal`/`fmi2SetReal` (true) or the Integer functions apply.
     pub fn is_real(self) -> bool {
         self == VariableType::Real
@@ -345,6 +349,11 @@ impl VariableGroup {
     /// An Integer parameter with a range instead of a Real one.
     pub const fn integer(self, min: i32, max: i32) -> Self {
         VariableGroup { var_type: VariableType::Integer, unit: None, range: Some((min as f64, max as f64)), ..self }
+    }
+
+    /// A Boolean parameter instead of a Real one.
+    pub const fn boolean(self) -> Self {
+        VariableGroup { var_type: VariableType::Boolean, unit: None, ..self }
     }
 
     /// A parameter that may be changed between steps.

@@ -100,6 +100,13 @@ impl BodyState {
         Vector3::new(0.5 * (d2.dot(e3) - d3.dot(e2)), 0.5 * (d3.dot(e1) - d1.dot(e3)), 0.5 * (d1.dot(e2) - d2.dot(e1)))
     }
 
+    /// Angular velocity in inertial components, `omega = 1/2 sum_a e_a x e_a'` (exact on the
+    /// constraint manifold, where `e_a' = omega x e_a`).
+    #[inline(always)]
+    pub fn angular_velocity_inertial(&self) -> Vector3<f64> {
+        (self.e[0].cross(&self.e_dot[0]) + self.e[1].cross(&self.e_dot[1]) + self.e[2].cross(&self.e_dot[2])) * 0.5
+    }
+
     /// Position of a body-fixed point given in body coordinates, relative to the centre of
     /// mass, in inertial components: `R p = p1 e1 + p2 e2 + p3 e3`.
     #[inline(always)]

@@ -1,10 +1,11 @@
 //! Which configurations the motion may pass through: legs of nonzero length, platform joints
-//! on the side of the base plane where they started, a finite state, a non-singular leg
-//! arrangement. Checked on the initial pose (as parameter errors) and after every internal
-//! integration step (as faults that stop the step).
+//! on the side of the base plane where they started, a finite state. Checked on the initial
+//! pose (as parameter errors) and after every internal integration step (as faults that stop
+//! the step). A singular leg arrangement is not among them: with the leg forces given, the
+//! motion is regular there (the simulation reports such passages instead).
 
 use super::body_state::BodyState;
-use super::direct_problem::{ForceMomentMatrix, SINGULAR_CONDITION_NUMBER, force_moment_determinant};
+use super::direct_problem::ForceMomentMatrix;
 use super::error::{ParameterError, PhysicsFault};
 use super::legs::LegGeometry;
 use super::stand::{COINCIDENCE_TOLERANCE, LEG_COUNT, Stand};
@@ -19,19 +20,9 @@ pub struct ConfigurationGuard {
     /// +1 if the platform joints started above the base plane, -1 if below (a suspended
     /// platform).
     pub side: f64,
-    /// Determinant of the force/moment matrix in the initial pose (signed). A sign change
-    /// means the motion passed through a singular configuration; a small `|det| / |det0|`
-    /// triggers the condition-number check.
-    pub reference_determinant: f64,
     /// The stand's characteristic length (scales the moment rows of the force/moment matrix).
     pub characteristic_length: f64,
-    /// Whether [`ConfigurationGuard::check_singularity`] is applied. Always on in the FMU;
-    /// tests of a free body far from its (unloaded) legs switch it off.
-    pub detect_singularities: bool,
 }
-
-/// Ratio `|det M| / |det M0|` below which the condition number is computed.
-const DETERMINANT_ALARM: f64 = 1e-3;
 
 impl ConfigurationGuard {
     /// Checks the initial pose and fixes the limits for the motion that starts there.
@@ -69,24 +60,11 @@ impl ConfigurationGuard {
                 ),
             ));
         }
-        let matrix = ForceMomentMatrix::new(stand, &legs);
-        let condition_number = matrix.condition_number();
-        if !(condition_number < SINGULAR_CONDITION_NUMBER) {
-            return Err(ParameterError::new(
-                "r0",
-                format!(
-                    "the initial pose is a singular leg configuration: the 6x6 force/moment matrix has condition \
-                     number {condition_number:e} (limit {SINGULAR_CONDITION_NUMBER:e}); the legs cannot hold the platform"
-                ),
-            ));
-        }
         Ok(ConfigurationGuard {
             min_leg_length,
             base_plane,
             side,
-            reference_determinant: matrix.determinant(),
-            characteristic_length: matrix.moment_scale,
-            detect_singularities: true,
+            characteristic_length: stand.characteristic_length().max(f64::MIN_POSITIVE),
         })
     }
 
@@ -112,31 +90,9 @@ impl ConfigurationGuard {
         Ok(())
     }
 
-    /// Both checks, for a state reached outside the integrator (Model Exchange).
-    pub fn check_all(&self, stand: &Stand, state: &BodyState) -> Result<(), PhysicsFault> {
-        self.check(stand, state).and_then(|()| self.check_singularity(stand, state))
-    }
-
-    /// Singularity check (once per communication step, a 6x6 determinant): a sign change of
-    /// the determinant since the initial pose means the legs passed through a singular
-    /// configuration during the step; a shrunken determinant triggers the condition number.
-    pub fn check_singularity(&self, stand: &Stand, state: &BodyState) -> Result<(), PhysicsFault> {
-        if !self.detect_singularities {
-            return Ok(());
-        }
-        let legs = &LegGeometry::new(stand, state);
-        let det = force_moment_determinant(legs, self.characteristic_length);
-        if det * self.reference_determinant <= 0.0 {
-            return Err(PhysicsFault::PassedSingularConfiguration);
-        }
-        if det.abs() >= DETERMINANT_ALARM * self.reference_determinant.abs() {
-            return Ok(());
-        }
-        let condition_number = ForceMomentMatrix::new(stand, legs).condition_number();
-        if condition_number < SINGULAR_CONDITION_NUMBER {
-            Ok(())
-        } else {
-            Err(PhysicsFault::SingularConfiguration { condition_number })
-        }
+    /// The condition number of the force/moment matrix of a state (the FMU output `kappa`;
+    /// infinite at a singular arrangement).
+    pub fn condition_number(stand: &Stand, state: &BodyState) -> f64 {
+        ForceMomentMatrix::new(stand, &LegGeometry::new(stand, state)).condition_number()
     }
 }

@@ -107,6 +107,23 @@ impl ForceMomentMatrix {
     }
 }
 
+/// The legs that take part in a singular arrangement: the entries of the force combination
+/// `x` with `M x = 0` (the right singular vector of the smallest singular value) larger than a
+/// tenth of the largest. Far from a singular arrangement this names the legs of the weakest
+/// combination.
+pub fn singular_legs(stand: &Stand, legs: &LegGeometry) -> [bool; LEG_COUNT] {
+    let svd = ForceMomentMatrix::new(stand, legs).matrix.svd(false, true);
+    let mut out = [false; LEG_COUNT];
+    let Some(v_t) = svd.v_t else { return out };
+    let weakest = svd.singular_values.imin();
+    let x = v_t.row(weakest);
+    let largest = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    for k in 0..LEG_COUNT {
+        out[k] = x[k].abs() >= 0.1 * largest;
+    }
+    out
+}
+
 /// Determinant of the dimensionless force/moment matrix straight from the leg geometry
 /// (columns `[n_k; (R A_k) x n_k / ell]`), without building a nalgebra matrix: the
 /// once-per-step singularity check of the FMU.

@@ -3,6 +3,14 @@
 
 use std::fmt;
 
+use super::stand::LEG_COUNT;
+
+/// "1, 3, 4": the 1-based numbers of the legs flagged in `legs`.
+pub fn leg_list(legs: &[bool; LEG_COUNT]) -> String {
+    let numbers: Vec<String> = (0..LEG_COUNT).filter(|&k| legs[k]).map(|k| (k + 1).to_string()).collect();
+    numbers.join(", ")
+}
+
 /// A parameter set that does not describe a physical stand or a usable initial pose.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ParameterError {
@@ -36,12 +44,11 @@ pub enum PhysicsFault {
     JointBelowBase { leg: usize, height: f64 },
     /// The state is no longer finite (the motion diverged).
     NonFiniteState,
-    /// The legs' force/moment matrix became singular: the six legs no longer determine the
-    /// platform's pose (a singular configuration of the mechanism).
-    SingularConfiguration { condition_number: f64 },
-    /// The motion passed through a singular configuration between two checks (the
-    /// force/moment matrix's determinant changed sign).
-    PassedSingularConfiguration,
+    /// The motion passed through a singular leg arrangement (the force/moment matrix's
+    /// determinant changed sign) and the simulation was asked to stop there
+    /// (`stopAtSingularity`). `legs[k]`: leg k+1 takes part in the force combination that
+    /// produces no force and no moment there.
+    PassedSingularConfiguration { legs: [bool; LEG_COUNT] },
 }
 
 impl fmt::Display for PhysicsFault {
@@ -56,13 +63,11 @@ impl fmt::Display for PhysicsFault {
             PhysicsFault::NonFiniteState => {
                 write!(f, "the state is no longer finite (the motion diverged)")
             }
-            PhysicsFault::SingularConfiguration { condition_number } => write!(
+            PhysicsFault::PassedSingularConfiguration { legs } => write!(
                 f,
-                "the legs reached a singular configuration (force/moment matrix condition number {condition_number:e})"
-            ),
-            PhysicsFault::PassedSingularConfiguration => write!(
-                f,
-                "the legs passed through a singular configuration (the force/moment matrix's determinant changed sign)"
+                "the legs passed through a singular arrangement (the force/moment matrix's determinant changed sign; \
+                 legs {} form a force combination without resultant there), and stopAtSingularity is on",
+                leg_list(&legs)
             ),
         }
     }

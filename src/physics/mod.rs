@@ -7,6 +7,7 @@
 //! | [`stand`] | mass, inertia, gravity, joint positions; the default truck-cabin stand; validation |
 //! | [`body_state`] | the 24 redundant coordinates `r, v, e_a, e_a'` |
 //! | [`legs`] | leg arms, lengths, directions, rates and the resultant wrench |
+//! | [`end_stops`] | stroke limits as a unilateral virtual potential with contact damping |
 //! | [`forces`] | leg force laws (held inputs, springs, closures) |
 //! | [`special_form`] | the special-form equations of motion (paper 1.4-1.6) |
 //! | [`direct_problem`] | leg forces for a prescribed motion (paper 2.2-2.7) |
@@ -21,6 +22,7 @@
 pub mod body_state;
 pub mod configuration;
 pub mod direct_problem;
+pub mod end_stops;
 pub mod error;
 pub mod forces;
 pub mod invariants;

@@ -9,19 +9,26 @@
 //!
 //! with `L_a = L . e_a` the moment about the centre of mass projected on the body axes. Note
 //! `I1 + I2 = J3`, `I2 + I3 = J1`, `I3 + I1 = J2`.
+//!
+//! The leg forces are the actuator forces `F_k` plus, for a leg outside its stroke, the end
+//! stop's force ([`super::end_stops`]), both along the leg. With the forces given, nothing
+//! here is singular at a singular leg arrangement: only a collapsed leg (no direction) is.
 
 use nalgebra::Vector3;
 
 use super::body_state::{BodyState, STATE_DIM, StateVector, layout};
+use super::end_stops::EndStops;
 use super::forces::LegForceLaw;
 use super::legs::LegGeometry;
-use super::stand::Stand;
+use super::stand::{LEG_COUNT, Stand};
 
 /// The stand-dependent coefficients of the special form, computed once per parameter set so
 /// that a right-hand-side evaluation does no divisions by inertias.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SpecialForm {
     pub stand: Stand,
+    /// The legs' end stops, or `None` for the paper's idealised legs of unlimited stroke.
+    pub stops: Option<EndStops>,
     inverse_mass: f64,
     /// `1/(I2+I3) = 1/J1`, `1/(I3+I1) = 1/J2`, `1/(I1+I2) = 1/J3`.
     inverse_pair: [f64; 3],
@@ -50,8 +57,15 @@ impl SpecialForm {
             c23: (2.0 * i3 / (i2 + i3), 2.0 * i2 / (i2 + i3)),
             c31: (2.0 * i1 / (i3 + i1), 2.0 * i3 / (i3 + i1)),
             baumgarte_rate: 0.0,
+            stops: None,
             stand,
         }
+    }
+
+    /// The same form with end stops (`None`: without).
+    pub fn with_end_stops(mut self, stops: Option<EndStops>) -> Self {
+        self.stops = stops;
+        self
     }
 
     /// The same form with Baumgarte stabilisation at `rate` (1/s; 0 = off).
@@ -111,17 +125,27 @@ impl SpecialForm {
     }
 
     /// Directional derivative (Jacobian-vector product) of the right-hand side for leg
-    /// forces `u` held constant: the change `df` of `dy/dt` for a change `dy` of the state and
-    /// `du` of the forces. Exact (the chain rule written out, term by term with
-    /// [`SpecialForm::accelerations`]), for `fmi2GetDirectionalDerivative` and linearisation.
-    pub fn derivative_tangent(&self, y: &StateVector, u: &[f64; 6], dy: &StateVector, du: &[f64; 6]) -> StateVector {
+    /// forces `u` held constant: the change of `dy/dt` and of the leg powers for a change `dy`
+    /// of the state and `du` of the forces. Exact (the chain rule written out, term by term
+    /// with [`SpecialForm::derivative`], end stops included), for
+    /// `fmi2GetDirectionalDerivative` and linearisation.
+    pub fn derivative_tangent(
+        &self,
+        y: &StateVector,
+        u: &[f64; LEG_COUNT],
+        dy: &StateVector,
+        du: &[f64; LEG_COUNT],
+    ) -> (StateVector, LegPower) {
         let s = BodyState::from_vector(y);
         let ds = BodyState::from_vector(dy);
         let stand = &self.stand;
-        // Leg forces and their resultant, with tangents.
+        // Leg forces and their resultant, with tangents; actuator and stop parts apart.
         let (mut force, mut moment) = (Vector3::zeros(), Vector3::zeros());
         let (mut dforce, mut dmoment) = (Vector3::zeros(), Vector3::zeros());
-        for k in 0..6 {
+        let (mut stop_force, mut stop_moment) = (Vector3::zeros(), Vector3::zeros());
+        let (mut dstop_force, mut dstop_moment) = (Vector3::zeros(), Vector3::zeros());
+        let mut d_dissipation = 0.0;
+        for k in 0..LEG_COUNT {
             let p = &stand.platform_joints[k];
             let arm = s.body_vector(p);
             let darm = ds.body_vector(p);
@@ -139,7 +163,29 @@ impl SpecialForm {
             dforce += df;
             moment += arm.cross(&f);
             dmoment += darm.cross(&f) + arm.cross(&df);
+            if let Some(stops) = &self.stops
+                && stops.is_outside(k, l)
+            {
+                let rate = s.v + s.body_vector_rate(p);
+                let drate = ds.v + ds.body_vector_rate(p);
+                let ldot = n.dot(&rate);
+                let (dl, dldot) = (n.dot(&dq), dn.dot(&rate) + n.dot(&drate));
+                let c = stops.contact(k, l, ldot);
+                let dc = stops.contact_tangent(k, l, ldot, dl, dldot);
+                let fs = n * c.force;
+                let dfs = dn * c.force + n * dc.force;
+                stop_force += fs;
+                dstop_force += dfs;
+                stop_moment += arm.cross(&fs);
+                dstop_moment += darm.cross(&fs) + arm.cross(&dfs);
+                d_dissipation += dc.dissipation;
+            }
         }
+        let omega = s.angular_velocity_inertial();
+        let domega = ds_angular_velocity_inertial(&s, &ds);
+        let d_actuator = dforce.dot(&s.v) + force.dot(&ds.v) + dmoment.dot(&omega) + moment.dot(&domega);
+        let moment = moment + stop_moment;
+        let (dforce, dmoment) = (dforce + dstop_force, dmoment + dstop_moment);
         let da = dforce * self.inverse_mass;
         let [e1, e2, e3] = &s.e;
         let [d1, d2, d3] = &s.e_dot;
@@ -189,30 +235,50 @@ impl SpecialForm {
         for (i, v) in de_dd.iter().enumerate() {
             out[layout::E_DOT + 3 * i..layout::E_DOT + 3 * i + 3].copy_from_slice(v.as_slice());
         }
-        out
+        (out, LegPower { actuator: d_actuator, dissipation: d_dissipation })
     }
 
-    /// Resultant force and moment of given leg forces in one pass over the legs, without
-    /// keeping the geometry (the same sums as [`LegGeometry::resultant`]).
+    /// Adds leg `k` (arm `R A_k`, leg vector `a_k - B_k`, actuator force `u`) to the
+    /// resultant, and its end stop's force if the leg is outside its stroke.
     #[inline(always)]
-    fn resultant_of(&self, state: &BodyState, u: &[f64; 6]) -> (Vector3<f64>, Vector3<f64>) {
-        let mut force = Vector3::zeros();
-        let mut moment = Vector3::zeros();
-        for k in 0..6 {
+    fn add_leg(&self, state: &BodyState, k: usize, arm: &Vector3<f64>, leg: &Vector3<f64>, u: f64, w: &mut LegWrench) {
+        let length = leg.norm_squared().sqrt();
+        if !(length > 0.0) {
+            return;
+        }
+        let inverse_length = 1.0 / length;
+        let f = leg * (u * inverse_length);
+        w.force += f;
+        w.moment += arm.cross(&f);
+        if let Some(stops) = &self.stops
+            && stops.is_outside(k, length)
+        {
+            let n = leg * inverse_length;
+            let ldot = n.dot(&(state.v + state.body_vector_rate(&self.stand.platform_joints[k])));
+            let c = stops.contact(k, length, ldot);
+            let fs = n * c.force;
+            w.stop_force += fs;
+            w.stop_moment += arm.cross(&fs);
+            w.dissipation += c.dissipation;
+        }
+    }
+
+    /// The legs' resultant for actuator forces `u` in one pass over the legs (geometry not
+    /// kept).
+    #[inline(always)]
+    fn wrench_of(&self, state: &BodyState, u: &[f64; LEG_COUNT]) -> LegWrench {
+        let mut w = LegWrench::default();
+        for k in 0..LEG_COUNT {
             let arm = state.body_vector(&self.stand.platform_joints[k]);
             let leg = state.r + arm - self.stand.base_joints[k];
-            let length_squared = leg.norm_squared();
-            if length_squared > 0.0 {
-                let f = leg * (u[k] / length_squared.sqrt());
-                force += f;
-                moment += arm.cross(&f);
-            }
+            self.add_leg(state, k, &arm, &leg, u[k], &mut w);
         }
-        (force, moment)
+        w
     }
 
-    /// The full first-order right-hand side `dy/dt` for leg forces given by `law` at time `t`.
-    /// Returns the leg forces used, for callers that want them.
+    /// The full first-order right-hand side `dy/dt` for leg forces given by `law` at time `t`,
+    /// end stops included. Returns the power of the actuator forces and the power the stops'
+    /// damping takes (the integrands of `work.F` and `work.dissipated`).
     #[inline(always)]
     pub fn derivative<L: LegForceLaw + ?Sized>(
         &self,
@@ -220,26 +286,61 @@ impl SpecialForm {
         y: &StateVector,
         law: &L,
         dy: &mut StateVector,
-    ) -> [f64; 6] {
+    ) -> LegPower {
         let state = BodyState::from_vector(y);
-        let (u, force, moment) = if law.depends_on_state() {
+        let w = if law.depends_on_state() {
             let legs = LegGeometry::new(&self.stand, &state);
             let u = law.leg_forces(t, &state, &legs);
-            let (force, moment) = legs.resultant(&u);
-            (u, force, moment)
+            let mut w = LegWrench::default();
+            for k in 0..LEG_COUNT {
+                let leg = state.r + legs.arm[k] - self.stand.base_joints[k];
+                self.add_leg(&state, k, &legs.arm[k], &leg, u[k], &mut w);
+            }
+            w
         } else {
-            let u = law.leg_forces_at(t);
-            let (force, moment) = self.resultant_of(&state, &u);
-            (u, force, moment)
+            self.wrench_of(&state, &law.leg_forces_at(t))
         };
-        let (a, e_dd) = self.accelerations(&state, &force, &moment);
+        let power = LegPower {
+            actuator: w.force.dot(&state.v) + w.moment.dot(&state.angular_velocity_inertial()),
+            dissipation: w.dissipation,
+        };
+        let (a, e_dd) = self.accelerations(&state, &(w.force + w.stop_force), &(w.moment + w.stop_moment));
         dy[layout::R..layout::R + 3].copy_from_slice(&y[layout::V..layout::V + 3]);
         dy[layout::V..layout::V + 3].copy_from_slice(a.as_slice());
         dy[layout::E..layout::E + 9].copy_from_slice(&y[layout::E_DOT..layout::E_DOT + 9]);
         for (i, e) in e_dd.iter().enumerate() {
             dy[layout::E_DOT + 3 * i..layout::E_DOT + 3 * i + 3].copy_from_slice(e.as_slice());
         }
-        debug_assert_eq!(dy.len(), STATE_DIM);
-        u
+        power
     }
+}
+
+/// The powers of a right-hand-side evaluation (or their changes, from
+/// [`SpecialForm::derivative_tangent`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LegPower {
+    /// Power of the actuator forces, `sum_k F_k ldot_k = F.v + L.omega`, W.
+    pub actuator: f64,
+    /// Power taken by the end stops' damping, W (>= 0).
+    pub dissipation: f64,
+}
+
+/// Resultant of the legs about the centre of mass: actuators and end stops apart.
+#[derive(Clone, Copy, Debug, Default)]
+struct LegWrench {
+    force: Vector3<f64>,
+    moment: Vector3<f64>,
+    stop_force: Vector3<f64>,
+    stop_moment: Vector3<f64>,
+    dissipation: f64,
+}
+
+/// Change of the inertial angular velocity `omega = 1/2 sum_a e_a x e_a'` for a change `ds`
+/// of the state.
+fn ds_angular_velocity_inertial(s: &BodyState, ds: &BodyState) -> Vector3<f64> {
+    let mut d = Vector3::zeros();
+    for a in 0..3 {
+        d += ds.e[a].cross(&s.e_dot[a]) + s.e[a].cross(&ds.e_dot[a]);
+    }
+    d * 0.5
 }

@@ -11,4 +11,4 @@ pub mod outputs;
 pub mod platform;
 
 pub use outputs::PlatformOutputs;
-pub use platform::{PlatformDynamics, PlatformSimulation, Stabilisation, StepFailure};
+pub use platform::{PlatformDynamics, PlatformSimulation, SIMULATION_DIM, SimulationState, Stabilisation, StepFailure};

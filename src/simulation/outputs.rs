@@ -1,15 +1,20 @@
-//! The FMU outputs derived from a state (SPEC §3), and their first time derivatives for
-//! `fmi2GetRealOutputDerivatives`.
+//! The FMU outputs derived from a simulation state, and their directional derivatives. The
+//! time derivatives of the outputs (`fmi2GetRealOutputDerivatives`) are the directional
+//! derivative along the state's own rate `dy/dt`: one chain rule serves both.
 
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Matrix3, Matrix6, Vector3};
 
-use crate::physics::body_state::{BodyState, StateVector, layout};
+use super::platform::{SimulationState, body, quadrature};
+use crate::physics::body_state::BodyState;
+use crate::physics::direct_problem::ForceMomentMatrix;
 use crate::physics::invariants::mechanical_energy;
-use crate::physics::kinematics::{angle_rates, angles_from_rotation};
+use crate::physics::kinematics::angles_from_rotation;
 use crate::physics::legs::LegGeometry;
+use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::{LEG_COUNT, Stand};
 
-/// Everything the platform FMU reports about a state.
+/// Everything the platform FMU reports about a state (except `kappa`, which costs a
+/// singular value decomposition and is computed on request: [`condition_number`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PlatformOutputs {
     /// Centre of mass, m.
@@ -26,16 +31,33 @@ pub struct PlatformOutputs {
     pub l: [f64; LEG_COUNT],
     /// Leg length rates, m/s.
     pub ldot: [f64; LEG_COUNT],
-    /// Kinetic plus gravitational potential energy, J.
+    /// Kinetic plus gravitational potential energy plus the stops' potential energy, J.
     pub energy: f64,
     /// max over a, b of |e_a . e_b - delta_ab|.
     pub constraint_error: f64,
+    /// End-stop force along each leg, N (sign as the leg forces; 0 inside the stroke).
+    pub stop_force: [f64; LEG_COUNT],
+    /// Work of the actuator forces since the start, J.
+    pub work_of_forces: f64,
+    /// Energy taken by the stops' damping since the start, J.
+    pub dissipated_energy: f64,
 }
 
 impl PlatformOutputs {
-    pub fn compute(stand: &Stand, state: &BodyState) -> Self {
-        let legs = LegGeometry::new(stand, state);
+    pub fn compute(form: &SpecialForm, y: &SimulationState) -> Self {
+        let stand = &form.stand;
+        let state = BodyState::from_vector(body(y));
+        let legs = LegGeometry::new(stand, &state);
         let rotation = state.rotation();
+        let ldot = legs.length_rates(stand, &state);
+        let mut stop_force = [0.0; LEG_COUNT];
+        let mut stop_energy = 0.0;
+        if let Some(stops) = &form.stops {
+            for k in 0..LEG_COUNT {
+                stop_force[k] = stops.contact(k, legs.length[k], ldot[k]).force;
+            }
+            stop_energy = stops.potential_energy(&legs.length);
+        }
         PlatformOutputs {
             r: state.r,
             v: state.v,
@@ -43,64 +65,24 @@ impl PlatformOutputs {
             angles: angles_from_rotation(&rotation),
             w: state.angular_velocity_body(),
             l: legs.length,
-            ldot: legs.length_rates(stand, state),
-            energy: mechanical_energy(stand, state),
+            ldot,
+            energy: mechanical_energy(stand, &state) + stop_energy,
             constraint_error: state.constraint_residual(),
+            stop_force,
+            work_of_forces: y[quadrature::WORK_F],
+            dissipated_energy: y[quadrature::WORK_DISSIPATED],
         }
     }
 
-    /// First time derivatives of the outputs, given the state derivative `dy` (which carries
-    /// the accelerations for the current leg forces). `constraint_error` has none (it is a
-    /// maximum of absolute values); its entry is 0.
-    pub fn time_derivatives(stand: &Stand, state: &BodyState, dy: &StateVector) -> Self {
-        let at = |i: usize| Vector3::new(dy[i], dy[i + 1], dy[i + 2]);
-        let acc = at(layout::V);
-        let e_dd = [at(layout::E_DOT), at(layout::E_DOT + 3), at(layout::E_DOT + 6)];
-        let out = Self::compute(stand, state);
-        let [e1, e2, e3] = &state.e;
-        // d/dt of w1 = (e2'.e3 - e3'.e2)/2 is (e2''.e3 - e3''.e2)/2: the e'.e' terms cancel.
-        let w_dot = Vector3::new(
-            0.5 * (e_dd[1].dot(e3) - e_dd[2].dot(e2)),
-            0.5 * (e_dd[2].dot(e1) - e_dd[0].dot(e3)),
-            0.5 * (e_dd[0].dot(e2) - e_dd[1].dot(e1)),
-        );
-        let legs = LegGeometry::new(stand, state);
-        let mut l_ddot = [0.0; LEG_COUNT];
-        for k in 0..LEG_COUNT {
-            let p = &stand.platform_joints[k];
-            let s = state.v + state.body_vector_rate(p);
-            let s_dot = acc + e_dd[0] * p.x + e_dd[1] * p.y + e_dd[2] * p.z;
-            let l = legs.length[k];
-            l_ddot[k] = if l > 0.0 {
-                (s.norm_squared() - out.ldot[k] * out.ldot[k]) / l + legs.direction[k].dot(&s_dot)
-            } else {
-                0.0
-            };
-        }
-        let j = Vector3::from(stand.inertia);
-        let energy_rate = stand.mass * state.v.dot(&acc)
-            + out.w.dot(&j.component_mul(&w_dot))
-            + stand.mass * stand.gravity * state.v.z;
-        PlatformOutputs {
-            r: state.v,
-            v: acc,
-            rotation: state.rotation_rate(),
-            angles: angle_rates(&out.angles, &out.w),
-            w: w_dot,
-            l: out.ldot,
-            ldot: l_ddot,
-            energy: energy_rate,
-            constraint_error: 0.0,
-        }
-    }
-}
-
-impl PlatformOutputs {
-    /// Directional derivative of the outputs: their change for a change `ds` of the state
-    /// (exact chain rule; for `fmi2GetDirectionalDerivative` and linearisation). The entry for
+    /// Directional derivative of the outputs: their change for a change `dy` of the state
+    /// (exact chain rule; for `fmi2GetDirectionalDerivative` and linearisation). With `dy`
+    /// the state's rate `dy/dt` it gives the outputs' time derivatives. The entry for
     /// `constraint_error` is the change of the largest residual `|e_a.e_b - delta_ab|`.
-    pub fn tangent(stand: &Stand, s: &BodyState, ds: &BodyState) -> Self {
-        let out = Self::compute(stand, s);
+    pub fn tangent(form: &SpecialForm, y: &SimulationState, dy: &SimulationState) -> Self {
+        let stand = &form.stand;
+        let s = BodyState::from_vector(body(y));
+        let ds = BodyState::from_vector(body(dy));
+        let out = Self::compute(form, y);
         let rot = s.rotation();
         let drot = Matrix3::from_columns(&ds.e);
         // angles: pitch = asin(R02), roll = atan2(-R12, R22), yaw = atan2(-R01, R00).
@@ -138,9 +120,19 @@ impl PlatformOutputs {
             dl[k] = n.dot(&dq);
             dldot[k] = dn.dot(&sv) + n.dot(&dsv);
         }
+        let mut dstop = [0.0; LEG_COUNT];
+        let mut dstop_energy = 0.0;
+        if let Some(stops) = &form.stops {
+            for k in 0..LEG_COUNT {
+                dstop[k] = stops.contact_tangent(k, out.l[k], out.ldot[k], dl[k], dldot[k]).force;
+            }
+            dstop_energy = stops.potential_energy_tangent(&out.l, &dl);
+        }
         let j = Vector3::from(stand.inertia);
-        let denergy =
-            stand.mass * s.v.dot(&ds.v) + out.w.dot(&j.component_mul(&dw)) + stand.mass * stand.gravity * ds.r.z;
+        let denergy = stand.mass * s.v.dot(&ds.v)
+            + out.w.dot(&j.component_mul(&dw))
+            + stand.mass * stand.gravity * ds.r.z
+            + dstop_energy;
         // The largest residual and its change.
         let (mut worst, mut dworst) = (-1.0, 0.0);
         for a in 0..3 {
@@ -163,6 +155,49 @@ impl PlatformOutputs {
             ldot: dldot,
             energy: denergy,
             constraint_error: dworst,
+            stop_force: dstop,
+            work_of_forces: dy[quadrature::WORK_F],
+            dissipated_energy: dy[quadrature::WORK_DISSIPATED],
         }
     }
+}
+
+/// `kappa`: the 2-norm condition number of the legs' force/moment matrix (moment rows
+/// divided by the stand's characteristic length), infinite at a singular arrangement.
+pub fn condition_number(stand: &Stand, y: &SimulationState) -> f64 {
+    let state = BodyState::from_vector(body(y));
+    ForceMomentMatrix::new(stand, &LegGeometry::new(stand, &state)).condition_number()
+}
+
+/// Change of `kappa` for a change `dy` of the state: `kappa = s_max / s_min` with
+/// `ds_i = u_i^T dM v_i` for the singular triplets. 0 where `kappa` is infinite.
+pub fn condition_number_tangent(stand: &Stand, y: &SimulationState, dy: &SimulationState) -> f64 {
+    let s = BodyState::from_vector(body(y));
+    let ds = BodyState::from_vector(body(dy));
+    let legs = LegGeometry::new(stand, &s);
+    let m = ForceMomentMatrix::new(stand, &legs);
+    let ell = m.moment_scale;
+    let mut dm = Matrix6::zeros();
+    for k in 0..LEG_COUNT {
+        let l = legs.length[k];
+        if l <= 0.0 {
+            continue;
+        }
+        let n = legs.direction[k];
+        let darm = ds.body_vector(&stand.platform_joints[k]);
+        let dq = ds.r + darm;
+        let dn = (dq - n * n.dot(&dq)) / l;
+        let dmoment = (darm.cross(&n) + legs.arm[k].cross(&dn)) / ell;
+        dm.fixed_view_mut::<3, 1>(0, k).copy_from(&dn);
+        dm.fixed_view_mut::<3, 1>(3, k).copy_from(&dmoment);
+    }
+    let svd = m.matrix.svd(true, true);
+    let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else { return 0.0 };
+    let (imax, imin) = (svd.singular_values.imax(), svd.singular_values.imin());
+    let (smax, smin) = (svd.singular_values[imax], svd.singular_values[imin]);
+    if !(smin > 0.0) {
+        return 0.0;
+    }
+    let dsigma = |i: usize| (u.column(i).transpose() * dm * v_t.row(i).transpose())[0];
+    (dsigma(imax) * smin - smax * dsigma(imin)) / (smin * smin)
 }

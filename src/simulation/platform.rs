@@ -1,13 +1,53 @@
 //! [`PlatformSimulation`]: one stand, one state, one integrator.
 
-use crate::integration::{IntegrationError, Integrator, OdeSystem, SolverSettings};
+use crate::integration::{
+    CrossingLog, IntegrationError, Integrator, MAX_SWITCHING, OdeSystem, SolverSettings, SwitchingKind, SwitchingSides,
+};
 use crate::physics::body_state::{BodyState, STATE_DIM, StateVector};
 use crate::physics::configuration::ConfigurationGuard;
+use crate::physics::direct_problem::{force_moment_determinant, singular_legs};
+use crate::physics::end_stops::{EndStops, STROKE_LIMITS};
 use crate::physics::error::{ParameterError, PhysicsFault};
 use crate::physics::forces::LegForceLaw;
+use crate::physics::legs::LegGeometry;
 use crate::physics::projection::project_onto_constraints;
 use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::Stand;
+
+/// Length of the simulation state: the 24 special-form coordinates, then the work of the
+/// actuator forces and the energy taken by the stops' damping (quadratures integrated with
+/// the motion, so that the energy balance holds to the integration tolerance).
+pub const SIMULATION_DIM: usize = STATE_DIM + 2;
+
+/// The simulation state, `r, v, e1, e2, e3, e1', e2', e3', W_F, W_d`.
+pub type SimulationState = [f64; SIMULATION_DIM];
+
+/// Offsets of the quadratures in a [`SimulationState`].
+pub mod quadrature {
+    /// `work.F = integral of sum_k F_k ldot_k dt`, J.
+    pub const WORK_F: usize = super::STATE_DIM;
+    /// `work.dissipated = integral of P_d dt`, J.
+    pub const WORK_DISSIPATED: usize = super::STATE_DIM + 1;
+}
+
+/// The switching functions of a platform: where the motion is not smooth or is worth
+/// reporting.
+pub mod switching {
+    /// `l_k - lmin_k`, k = 0..5 (a sign change is a contact onset or release at a lower stop).
+    pub const LOWER: usize = 0;
+    /// `lmax_k - l_k`, k = 0..5.
+    pub const UPPER: usize = 6;
+    /// Determinant of the force/moment matrix: a sign change is a passage through a singular
+    /// leg arrangement.
+    pub const DETERMINANT: usize = 12;
+    pub const COUNT: usize = 13;
+}
+
+/// The special-form body coordinates of a simulation state.
+#[inline(always)]
+pub fn body(y: &SimulationState) -> &StateVector {
+    y.first_chunk::<STATE_DIM>().unwrap_or(&[0.0; STATE_DIM])
+}
 
 /// How the constraints `e_a . e_b = delta_ab` are kept during integration.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -42,26 +82,55 @@ impl Stabilisation {
     }
 }
 
-/// The special-form equations with a force law, as an ODE system for the integrators.
+/// The special-form equations with a force law, plus the work quadratures, as an ODE system
+/// for the integrators.
 pub struct PlatformDynamics<'a, L: ?Sized> {
     pub form: &'a SpecialForm,
     pub law: &'a L,
     pub stabilisation: Stabilisation,
     pub guard: &'a ConfigurationGuard,
+    /// Whether a passage through a singular leg arrangement stops the integration.
+    pub stop_at_singularity: bool,
 }
 
-impl<L: LegForceLaw + ?Sized> OdeSystem<STATE_DIM> for PlatformDynamics<'_, L> {
+impl<L: LegForceLaw + ?Sized> PlatformDynamics<'_, L> {
+    /// The switching function values of a body state (see [`switching`]).
+    pub fn switching_values(&self, y: &StateVector, g: &mut [f64]) {
+        let legs = LegGeometry::new(&self.form.stand, &BodyState::from_vector(y));
+        match &self.form.stops {
+            Some(stops) => stops.stroke_margins(&legs.length, g),
+            None => {
+                for x in g.iter_mut().take(STROKE_LIMITS) {
+                    *x = 1.0;
+                }
+            }
+        }
+        if let Some(x) = g.get_mut(switching::DETERMINANT) {
+            *x = force_moment_determinant(&legs, self.guard.characteristic_length);
+        }
+    }
+}
+
+impl<L: LegForceLaw + ?Sized> OdeSystem<SIMULATION_DIM> for PlatformDynamics<'_, L> {
     type Fault = PhysicsFault;
 
     #[inline(always)]
-    fn derivative(&self, t: f64, y: &StateVector, dy: &mut StateVector) {
-        self.form.derivative(t, y, self.law, dy);
+    fn derivative(&self, t: f64, y: &SimulationState, dy: &mut SimulationState) {
+        if let Some((body_rate, quadrature_rate)) = dy.split_first_chunk_mut::<STATE_DIM>() {
+            let power = self.form.derivative(t, body(y), self.law, body_rate);
+            if let [work, dissipated] = quadrature_rate {
+                *work = power.actuator;
+                *dissipated = power.dissipation;
+            }
+        }
     }
 
     #[inline]
-    fn after_step(&self, y: &mut StateVector) {
-        if self.stabilisation == Stabilisation::Projection {
-            project_onto_constraints(y);
+    fn after_step(&self, y: &mut SimulationState) {
+        if self.stabilisation == Stabilisation::Projection
+            && let Some(b) = y.first_chunk_mut::<STATE_DIM>()
+        {
+            project_onto_constraints(b);
         }
     }
 
@@ -70,8 +139,32 @@ impl<L: LegForceLaw + ?Sized> OdeSystem<STATE_DIM> for PlatformDynamics<'_, L> {
     }
 
     #[inline]
-    fn check(&self, _t: f64, y: &StateVector) -> Result<(), PhysicsFault> {
-        self.guard.check(&self.form.stand, &BodyState::from_vector(y))
+    fn check(&self, _t: f64, y: &SimulationState) -> Result<(), PhysicsFault> {
+        self.guard.check(&self.form.stand, &BodyState::from_vector(body(y)))
+    }
+
+    fn switching_count(&self) -> usize {
+        switching::COUNT
+    }
+
+    #[inline]
+    fn switching(&self, _t: f64, y: &SimulationState, g: &mut [f64; MAX_SWITCHING]) {
+        self.switching_values(body(y), g);
+    }
+
+    fn switching_kind(&self, index: usize) -> SwitchingKind {
+        match index {
+            switching::DETERMINANT if self.stop_at_singularity => SwitchingKind::Stop,
+            switching::DETERMINANT => SwitchingKind::Report,
+            _ => SwitchingKind::Restart,
+        }
+    }
+
+    fn switching_fault(&self, index: usize, _t: f64, y: &SimulationState) -> Option<PhysicsFault> {
+        (index == switching::DETERMINANT).then(|| {
+            let legs = LegGeometry::new(&self.form.stand, &BodyState::from_vector(body(y)));
+            PhysicsFault::PassedSingularConfiguration { legs: singular_legs(&self.form.stand, &legs) }
+        })
     }
 }
 
@@ -95,18 +188,24 @@ impl std::fmt::Display for StepFailure {
 }
 
 /// One stand in motion.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub struct PlatformSimulation {
     pub form: SpecialForm,
     pub guard: ConfigurationGuard,
     pub stabilisation: Stabilisation,
+    /// Discard a step that passes a singular leg arrangement (the FMU's `stopAtSingularity`).
+    pub stop_at_singularity: bool,
     pub integrator: Integrator,
     pub time: f64,
-    pub state: StateVector,
+    pub state: SimulationState,
+    /// Sign changes of the switching functions during the last [`PlatformSimulation::advance`]
+    /// (contacts, singular arrangements passed), in time order.
+    pub crossings: CrossingLog<SIMULATION_DIM>,
 }
 
 impl PlatformSimulation {
-    /// Validates the stand and the initial state and sets up the simulation at time `t0`.
+    /// Validates the stand and the initial state and sets up the simulation at time `t0`
+    /// (idealised legs, no end stops; see [`PlatformSimulation::with_end_stops`]).
     pub fn new(
         stand: Stand,
         initial: BodyState,
@@ -116,14 +215,33 @@ impl PlatformSimulation {
     ) -> Result<Self, ParameterError> {
         stand.validate()?;
         let guard = ConfigurationGuard::for_initial_state(&stand, &initial)?;
+        let mut state = [0.0; SIMULATION_DIM];
+        if let Some(b) = state.first_chunk_mut::<STATE_DIM>() {
+            *b = initial.to_vector();
+        }
         Ok(PlatformSimulation {
             form: SpecialForm::new(stand),
             guard,
             stabilisation,
+            stop_at_singularity: false,
             integrator: Integrator::new(settings),
             time: t0,
-            state: initial.to_vector(),
+            state,
+            crossings: CrossingLog::default(),
         })
+    }
+
+    /// The same simulation with end stops (validated, and the initial pose checked against
+    /// the strokes).
+    pub fn with_end_stops(mut self, stops: Option<EndStops>) -> Result<Self, ParameterError> {
+        if let Some(s) = &stops {
+            s.validate()?;
+            let legs = LegGeometry::new(self.stand(), &self.body_state());
+            s.validate_initial_lengths(self.stand(), &legs.length)?;
+        }
+        self.form.stops = stops;
+        self.integrator.sides = SwitchingSides::default();
+        Ok(self)
     }
 
     pub fn stand(&self) -> &Stand {
@@ -131,26 +249,45 @@ impl PlatformSimulation {
     }
 
     pub fn body_state(&self) -> BodyState {
-        BodyState::from_vector(&self.state)
+        BodyState::from_vector(body(&self.state))
+    }
+
+    /// `work.F`, J.
+    pub fn work_of_forces(&self) -> f64 {
+        self.state[quadrature::WORK_F]
+    }
+
+    /// `work.dissipated`, J.
+    pub fn dissipated_energy(&self) -> f64 {
+        self.state[quadrature::WORK_DISSIPATED]
+    }
+
+    /// The ODE system for a force law.
+    pub fn dynamics<'a, L: LegForceLaw + ?Sized>(&'a self, law: &'a L) -> PlatformDynamics<'a, L> {
+        PlatformDynamics {
+            form: &self.form,
+            law,
+            stabilisation: self.stabilisation,
+            guard: &self.guard,
+            stop_at_singularity: self.stop_at_singularity,
+        }
     }
 
     /// Integrates to `t1` (> current time) with leg forces from `law`. On failure nothing
-    /// changes: state, time and integrator memory are rolled back.
+    /// changes: state, time and integrator memory are rolled back. The crossings met on the
+    /// way are in [`PlatformSimulation::crossings`].
     pub fn advance<L: LegForceLaw + ?Sized>(&mut self, law: &L, t1: f64) -> Result<(), StepFailure> {
         let saved_state = self.state;
         let saved_integrator = self.integrator;
-        let dynamics =
-            PlatformDynamics { form: &self.form, law, stabilisation: self.stabilisation, guard: &self.guard };
-        let result = self.integrator.integrate(&dynamics, self.time, &mut self.state, t1);
-        let result = result.map_err(|e| match e {
-            IntegrationError::Fault { t, fault } => StepFailure::Physics { t, fault },
-            other => StepFailure::Solver(other),
-        });
-        let result = result.and_then(|()| {
-            self.guard
-                .check_singularity(&self.form.stand, &BodyState::from_vector(&self.state))
-                .map_err(|fault| StepFailure::Physics { t: t1, fault })
-        });
+        self.crossings.clear();
+        let dynamics = PlatformDynamics {
+            form: &self.form,
+            law,
+            stabilisation: self.stabilisation,
+            guard: &self.guard,
+            stop_at_singularity: self.stop_at_singularity,
+        };
+        let result = self.integrator.integrate(&dynamics, self.time, &mut self.state, t1, &mut self.crossings);
         match result {
             Ok(()) => {
                 self.time = t1;
@@ -159,15 +296,23 @@ impl PlatformSimulation {
             Err(e) => {
                 self.state = saved_state;
                 self.integrator = saved_integrator;
-                Err(e)
+                Err(match e {
+                    IntegrationError::Fault { t, fault } => StepFailure::Physics { t, fault },
+                    other => StepFailure::Solver(other),
+                })
             }
         }
     }
 
     /// `dy/dt` at the current state for the force law (for output derivatives).
-    pub fn derivative<L: LegForceLaw + ?Sized>(&self, law: &L) -> StateVector {
-        let mut dy = [0.0; STATE_DIM];
-        self.form.derivative(self.time, &self.state, law, &mut dy);
+    pub fn derivative<L: LegForceLaw + ?Sized>(&self, law: &L) -> SimulationState {
+        let mut dy = [0.0; SIMULATION_DIM];
+        self.dynamics(law).derivative(self.time, &self.state, &mut dy);
         dy
+    }
+
+    /// The switching function values at the current state (Model Exchange event indicators).
+    pub fn switching_values<L: LegForceLaw + ?Sized>(&self, law: &L, g: &mut [f64]) {
+        self.dynamics(law).switching_values(body(&self.state), g);
     }
 }

@@ -142,9 +142,25 @@ impl Host {
         self.exit()
     }
 
+    /// Sets a Real, or a Boolean (`value != 0` is true) or Integer parameter by name.
     pub fn set(&mut self, name: &str, value: f64) -> fmi2Status {
         let vr = self.vr(name);
-        unsafe { fmi2SetReal(self.c, &vr, 1, &value) }
+        let ty = self.table.lookup(vr).map(|(g, _)| g.var_type);
+        match ty {
+            Some(t) if t.is_boolean() => {
+                let b = if value != 0.0 { fmi2True } else { fmi2False };
+                unsafe { fmi2SetBoolean(self.c, &vr, 1, &b) }
+            }
+            Some(t) if t.is_integer_like() => unsafe { fmi2SetInteger(self.c, &vr, 1, &(value as i32)) },
+            _ => unsafe { fmi2SetReal(self.c, &vr, 1, &value) },
+        }
+    }
+
+    pub fn get_bool(&self, name: &str) -> bool {
+        let vr = self.vr(name);
+        let mut x = fmi2False;
+        assert_eq!(unsafe { fmi2GetBoolean(self.c, &vr, 1, &mut x) }, fmi2OK, "get {name}");
+        x != fmi2False
     }
 
     pub fn set_many(&mut self, names: &[&str], values: &[f64]) -> fmi2Status {

@@ -31,6 +31,7 @@ pub static INFO: ModelInfo = ModelInfo {
     default_experiment: DefaultExperiment { start_time: 0.0, stop_time: 3.0, step_size: 1e-3 },
     documentation: include_str!("documentation.html"),
     states: &[],
+    event_indicators: 0,
     model_exchange: false,
     directional_derivatives: false,
 };

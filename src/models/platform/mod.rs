@@ -7,15 +7,21 @@ use nalgebra::Vector3;
 
 use super::snapshot::{ByteReader, ByteWriter, SnapshotError};
 use super::variables::VariableRef;
-use super::{DefaultExperiment, FmuModel, ModelInfo, StepError};
+use super::{DefaultExperiment, EventUpdate, FmuModel, ModelInfo, StepError};
 use crate::integration::dopri5::Dopri5Memory;
-use crate::integration::{Integrator, IntegratorStats, Method, SolverSettings};
-use crate::physics::body_state::{BodyState, STATE_DIM, StateVector, layout};
+use crate::integration::{Crossing, Integrator, IntegratorStats, Method, SolverSettings, SwitchingSides};
+use crate::physics::body_state::{BodyState, STATE_DIM, layout};
 use crate::physics::configuration::ConfigurationGuard;
+use crate::physics::direct_problem::{SINGULAR_CONDITION_NUMBER, singular_legs};
+use crate::physics::end_stops::EndStops;
+use crate::physics::error::leg_list;
 use crate::physics::forces::HeldForces;
 use crate::physics::kinematics::rotation_from_angles;
+use crate::physics::legs::LegGeometry;
 use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::{LEG_COUNT, PAPER_EQUILIBRIUM_LEG_FORCE, Stand};
+use crate::simulation::outputs::{condition_number, condition_number_tangent};
+use crate::simulation::platform::{SIMULATION_DIM, SimulationState, body, quadrature, switching};
 use crate::simulation::{PlatformOutputs, PlatformSimulation, Stabilisation};
 use variables::group;
 
@@ -30,6 +36,7 @@ pub static INFO: ModelInfo = ModelInfo {
     default_experiment: DefaultExperiment { start_time: 0.0, stop_time: 3.0, step_size: 1e-2 },
     documentation: include_str!("documentation.html"),
     states: variables::STATES,
+    event_indicators: switching::COUNT,
     model_exchange: true,
     directional_derivatives: true,
 };
@@ -46,6 +53,12 @@ pub struct PlatformParameters {
     pub stabilisation: Stabilisation,
     /// Baumgarte rate (1/s) for Model Exchange and `Stabilisation::Baumgarte`.
     pub baumgarte_rate: f64,
+    /// `stops`: whether the end stops act.
+    pub stops_enabled: bool,
+    /// `lmin`, `lmax`, `stops.stiffness`, `stops.damping`.
+    pub stops: EndStops,
+    /// `stopAtSingularity`.
+    pub stop_at_singularity: bool,
 }
 
 impl Default for PlatformParameters {
@@ -60,6 +73,9 @@ impl Default for PlatformParameters {
             settings: SolverSettings::default(),
             stabilisation: Stabilisation::Projection,
             baumgarte_rate: DEFAULT_BAUMGARTE_RATE,
+            stops_enabled: true,
+            stops: EndStops::default(),
+            stop_at_singularity: false,
         }
     }
 }
@@ -67,6 +83,25 @@ impl Default for PlatformParameters {
 impl PlatformParameters {
     pub fn initial_state(&self) -> BodyState {
         BodyState::from_pose(self.r0, self.v0, &rotation_from_angles(&self.angles0), &self.w0)
+    }
+
+    /// The end stops if they are on.
+    pub fn end_stops(&self) -> Option<EndStops> {
+        self.stops_enabled.then_some(self.stops)
+    }
+
+    /// The special form these parameters describe (before initialisation).
+    fn special_form(&self) -> SpecialForm {
+        SpecialForm::new(self.stand.clone()).with_end_stops(self.end_stops())
+    }
+
+    /// The simulation state these parameters describe (before initialisation).
+    fn initial_simulation_state(&self) -> SimulationState {
+        let mut y = [0.0; SIMULATION_DIM];
+        if let Some(b) = y.first_chunk_mut::<STATE_DIM>() {
+            *b = self.initial_state().to_vector();
+        }
+        y
     }
 
     fn validate_settings(&self) -> Result<(), String> {
@@ -108,7 +143,7 @@ pub fn default_leg_force() -> f64 {
 }
 
 /// The platform FMU model.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub struct PlatformModel {
     pub parameters: PlatformParameters,
     /// Leg forces `F[k]`, N.
@@ -119,6 +154,8 @@ pub struct PlatformModel {
     pub simulation: Option<PlatformSimulation>,
     /// Outputs of the current state, computed on the first read after a change.
     outputs: Option<PlatformOutputs>,
+    /// `kappa` of the current state, computed on its first read after a change.
+    kappa: Option<f64>,
 }
 
 impl Default for PlatformModel {
@@ -129,6 +166,7 @@ impl Default for PlatformModel {
             force_rates: [0.0; LEG_COUNT],
             simulation: None,
             outputs: None,
+            kappa: None,
         }
     }
 }
@@ -138,9 +176,24 @@ impl PlatformModel {
     fn outputs(&mut self) -> &PlatformOutputs {
         let (simulation, parameters) = (&self.simulation, &self.parameters);
         self.outputs.get_or_insert_with(|| match simulation {
-            Some(sim) => PlatformOutputs::compute(sim.stand(), &sim.body_state()),
-            None => PlatformOutputs::compute(&parameters.stand, &parameters.initial_state()),
+            Some(sim) => PlatformOutputs::compute(&sim.form, &sim.state),
+            None => PlatformOutputs::compute(&parameters.special_form(), &parameters.initial_simulation_state()),
         })
+    }
+
+    /// `kappa` of the current state, computed on its first read after a change.
+    fn kappa(&mut self) -> f64 {
+        let (simulation, parameters) = (&self.simulation, &self.parameters);
+        *self.kappa.get_or_insert_with(|| match simulation {
+            Some(sim) => condition_number(sim.stand(), &sim.state),
+            None => condition_number(&parameters.stand, &parameters.initial_simulation_state()),
+        })
+    }
+
+    /// The current state changed: the cached outputs are stale.
+    fn invalidate_outputs(&mut self) {
+        self.outputs = None;
+        self.kappa = None;
     }
 
     fn held_forces(&self, t0: f64) -> HeldForces {
@@ -165,6 +218,10 @@ impl PlatformModel {
             group::MAX_STEP => &mut p.settings.max_step,
             group::FIXED_STEP => &mut p.settings.fixed_step,
             group::BAUMGARTE_RATE => &mut p.baumgarte_rate,
+            group::LMIN => p.stops.lower.get_mut(i)?,
+            group::LMAX => p.stops.upper.get_mut(i)?,
+            group::STOP_STIFFNESS => &mut p.stops.stiffness,
+            group::STOP_DAMPING => &mut p.stops.damping,
             group::F => self.forces.get_mut(i)?,
             _ => return None,
         })
@@ -172,25 +229,40 @@ impl PlatformModel {
 
     /// Runs `f` with the special form and the state the model is at: the simulation's, or
     /// before initialisation the one the parameters describe.
-    fn with_current<R>(&self, f: impl FnOnce(&SpecialForm, &StateVector, f64) -> R) -> R {
+    fn with_current<R>(&self, f: impl FnOnce(&SpecialForm, &SimulationState, f64) -> R) -> R {
         match &self.simulation {
             Some(sim) => f(&sim.form, &sim.state, sim.time),
-            None => {
-                f(&SpecialForm::new(self.parameters.stand.clone()), &self.parameters.initial_state().to_vector(), 0.0)
-            }
+            None => f(&self.parameters.special_form(), &self.parameters.initial_simulation_state(), 0.0),
         }
     }
 
-    /// `der(v)`, `der(R)`, `der(R,2)`: the derivative variables of Model Exchange.
+    /// The rate of the simulation state for the current (held) forces.
+    fn state_rate(form: &SpecialForm, y: &SimulationState, t: f64, forces: [f64; LEG_COUNT]) -> SimulationState {
+        let mut dy = [0.0; SIMULATION_DIM];
+        let law = HeldForces::constant(forces);
+        if let Some((db, dq)) = dy.split_first_chunk_mut::<STATE_DIM>() {
+            let power = form.derivative(t, body(y), &law, db);
+            if let [w, d] = dq {
+                *w = power.actuator;
+                *d = power.dissipation;
+            }
+        }
+        dy
+    }
+
+    /// `der(v)`, `der(R)`, `der(R,2)`, `der(work.F)`, `der(work.dissipated)`: the derivative
+    /// variables of Model Exchange.
     fn derivative_value(&self, var: VariableRef) -> f64 {
         let forces = self.forces;
         self.with_current(|form, y, t| {
-            let mut dy = [0.0; STATE_DIM];
-            form.derivative(t, y, &HeldForces::constant(forces), &mut dy);
+            let dy = Self::state_rate(form, y, t, forces);
+            let pick = |i: usize| dy.get(i).copied().unwrap_or(f64::NAN);
             match var.group {
-                group::DER_V => dy.get(layout::V + var.index).copied().unwrap_or(f64::NAN),
+                group::DER_V => pick(layout::V + var.index),
                 group::DER_R => y.get(rotation_state_index(layout::E_DOT, var.index)).copied().unwrap_or(f64::NAN),
-                _ => dy.get(rotation_state_index(layout::E_DOT, var.index)).copied().unwrap_or(f64::NAN),
+                group::DER2_R => pick(rotation_state_index(layout::E_DOT, var.index)),
+                group::DER_WORK_F => pick(quadrature::WORK_F),
+                _ => pick(quadrature::WORK_DISSIPATED),
             }
         })
     }
@@ -210,8 +282,34 @@ impl PlatformModel {
             group::LDOT => pick6(&o.ldot),
             group::E => o.energy,
             group::CONSTRAINT_ERROR => o.constraint_error,
+            group::FSTOP => pick6(&o.stop_force),
+            group::WORK_F => o.work_of_forces,
+            group::WORK_DISSIPATED => o.dissipated_energy,
             _ => 0.0,
         }
+    }
+
+    /// What a crossing of switching function `c.index` means, in words.
+    fn describe_crossing(sim: &PlatformSimulation, c: &Crossing<SIMULATION_DIM>) -> String {
+        let state = BodyState::from_vector(body(&c.y));
+        let legs = LegGeometry::new(sim.stand(), &state);
+        let rates = legs.length_rates(sim.stand(), &state);
+        let (stop, k) = match c.index {
+            i if i < switching::UPPER => ("lower", i - switching::LOWER),
+            i if i < switching::DETERMINANT => ("upper", i - switching::UPPER),
+            _ => {
+                let involved = singular_legs(sim.stand(), &legs);
+                return format!(
+                    "t = {}: the legs passed through a singular arrangement (determinant of the force/moment matrix \
+                     changed sign; legs {} form a force combination without resultant there)",
+                    c.t,
+                    leg_list(&involved)
+                );
+            }
+        };
+        let (Some(l), Some(ldot)) = (legs.length.get(k), rates.get(k)) else { return String::new() };
+        let what = if c.rising { "left" } else { "reached" };
+        format!("t = {}: leg {} {what} its {stop} end stop (l = {l} m, ldot = {ldot} m/s)", c.t, k + 1)
     }
 }
 
@@ -225,7 +323,10 @@ impl FmuModel for PlatformModel {
             return self.simulation.as_ref().map_or(0.0, |s| s.time);
         }
         match var.group {
-            group::DER_V | group::DER_R | group::DER2_R => self.derivative_value(var),
+            group::DER_V | group::DER_R | group::DER2_R | group::DER_WORK_F | group::DER_WORK_DISSIPATED => {
+                self.derivative_value(var)
+            }
+            group::KAPPA => self.kappa(),
             g if group::is_output_or_derivative(g) => Self::output_value(self.outputs(), var),
             _ => self.parameter_slot(var).map_or(f64::NAN, |slot| *slot),
         }
@@ -236,7 +337,7 @@ impl FmuModel for PlatformModel {
         *slot = value;
         if self.simulation.is_none() {
             // In Initialization Mode outputs follow the parameters.
-            self.outputs = None;
+            self.invalidate_outputs();
         }
         Ok(())
     }
@@ -265,6 +366,26 @@ impl FmuModel for PlatformModel {
         Ok(())
     }
 
+    fn get_boolean(&mut self, var: VariableRef) -> bool {
+        match var.group {
+            group::STOPS => self.parameters.stops_enabled,
+            group::STOP_AT_SINGULARITY => self.parameters.stop_at_singularity,
+            _ => false,
+        }
+    }
+
+    fn set_boolean(&mut self, var: VariableRef, value: bool) -> Result<(), String> {
+        match var.group {
+            group::STOPS => self.parameters.stops_enabled = value,
+            group::STOP_AT_SINGULARITY => self.parameters.stop_at_singularity = value,
+            _ => return Err("not a settable Boolean variable".into()),
+        }
+        if self.simulation.is_none() {
+            self.invalidate_outputs();
+        }
+        Ok(())
+    }
+
     fn exit_initialization(
         &mut self,
         start_time: f64,
@@ -278,7 +399,16 @@ impl FmuModel for PlatformModel {
         p.validate_settings()?;
         let mut sim =
             PlatformSimulation::new(p.stand.clone(), p.initial_state(), p.settings, p.stabilisation, start_time)
+                .and_then(|sim| sim.with_end_stops(p.end_stops()))
                 .map_err(|e| e.to_string())?;
+        sim.stop_at_singularity = p.stop_at_singularity;
+        let kappa = condition_number(sim.stand(), &sim.state);
+        if p.stop_at_singularity && !(kappa < SINGULAR_CONDITION_NUMBER) {
+            return Err(format!(
+                "parameter r0: the initial pose is a singular leg arrangement (force/moment matrix condition number \
+                 {kappa:e}, limit {SINGULAR_CONDITION_NUMBER:e}) and stopAtSingularity is on"
+            ));
+        }
         // Model Exchange cannot project (the host's integrator owns the state): Baumgarte
         // terms keep the constraints unless stabilisation is off.
         let baumgarte = if model_exchange {
@@ -287,14 +417,29 @@ impl FmuModel for PlatformModel {
             p.stabilisation == Stabilisation::Baumgarte
         };
         sim.form.baumgarte_rate = if baumgarte { p.baumgarte_rate } else { 0.0 };
-        let legs = PlatformOutputs::compute(sim.stand(), &sim.body_state()).l;
+        // The sides of the switching functions at the start (Model Exchange's event
+        // bookkeeping; the co-simulation integrator uses the same).
+        sim.integrator.sides = crate::integration::switching_sides(
+            &sim.dynamics(&HeldForces::constant(self.forces)),
+            start_time,
+            &sim.state,
+        );
+        let legs = PlatformOutputs::compute(&sim.form, &sim.state).l;
+        let stops = match p.end_stops() {
+            Some(s) => format!(
+                "end stops on (stiffness {} N/m, damping {} N.s/m, strokes {:?} .. {:?} m)",
+                s.stiffness, s.damping, s.lower, s.upper
+            ),
+            None => "end stops off".to_string(),
+        };
         let summary = format!(
             "initialised at t = {start_time}: M = {} kg, J = {:?} kg.m2, g = {} m/s2, leg lengths {:?} m, \
-             method {:?}, relTol {:e}{}, stabilisation {:?}",
+             kappa {kappa:.4}, {stops}, stopAtSingularity {}, method {:?}, relTol {:e}{}, stabilisation {}",
             p.stand.mass,
             p.stand.inertia,
             p.stand.gravity,
             legs,
+            p.stop_at_singularity,
             p.settings.method,
             p.settings.rel_tol,
             if tolerance.is_some() { " (from fmi2SetupExperiment)" } else { "" },
@@ -305,7 +450,7 @@ impl FmuModel for PlatformModel {
             }
         );
         self.simulation = Some(sim);
-        self.outputs = None;
+        self.invalidate_outputs();
         Ok(summary)
     }
 
@@ -319,12 +464,25 @@ impl FmuModel for PlatformModel {
         self.force_rates = [0.0; LEG_COUNT];
         match result {
             Ok(()) => {
-                self.outputs = None;
+                self.invalidate_outputs();
                 Ok(())
             }
             Err(failure) => Err(StepError {
                 message: format!("step from t = {t} to {t_end} rolled back: {failure}; leg forces {:?} N", self.forces),
             }),
+        }
+    }
+
+    fn report_events(&mut self, sink: &mut dyn FnMut(&str)) {
+        let Some(sim) = &self.simulation else { return };
+        for c in sim.crossings.as_slice() {
+            sink(&Self::describe_crossing(sim, c));
+        }
+        if sim.crossings.dropped > 0 {
+            sink(&format!(
+                "{} more contact or singularity events in this step were not reported",
+                sim.crossings.dropped
+            ));
         }
     }
 
@@ -340,10 +498,11 @@ impl FmuModel for PlatformModel {
         let Some(sim) = &self.simulation else {
             return 0.0;
         };
-        let law = HeldForces { value: self.forces, slope: [0.0; LEG_COUNT], t0: sim.time };
-        let dy = sim.derivative(&law);
-        let d = PlatformOutputs::time_derivatives(sim.stand(), &sim.body_state(), &dy);
-        Self::output_value(&d, var)
+        let dy = Self::state_rate(&sim.form, &sim.state, sim.time, self.forces);
+        if var.group == group::KAPPA {
+            return condition_number_tangent(sim.stand(), &sim.state, &dy);
+        }
+        Self::output_value(&PlatformOutputs::tangent(&sim.form, &sim.state, &dy), var)
     }
 
     fn set_time(&mut self, t: f64) {
@@ -365,25 +524,46 @@ impl FmuModel for PlatformModel {
             for (yi, xi) in sim.state.iter_mut().zip(x) {
                 *yi = *xi;
             }
-            self.outputs = None;
+            self.invalidate_outputs();
         }
     }
 
     fn derivatives(&mut self, dx: &mut [f64]) {
-        let forces = self.forces;
         let Some(sim) = &self.simulation else { return };
-        let mut dy = [0.0; STATE_DIM];
-        sim.form.derivative(sim.time, &sim.state, &HeldForces::constant(forces), &mut dy);
+        let dy = Self::state_rate(&sim.form, &sim.state, sim.time, self.forces);
         for (d, v) in dx.iter_mut().zip(dy) {
             *d = v;
         }
     }
 
+    fn event_indicators(&mut self, z: &mut [f64]) {
+        let Some(sim) = &self.simulation else { return };
+        sim.switching_values(&HeldForces::constant(self.forces), z);
+    }
+
+    fn event_update(&mut self, sink: &mut dyn FnMut(&str)) -> EventUpdate {
+        let forces = self.forces;
+        let Some(sim) = self.simulation.as_mut() else { return EventUpdate::default() };
+        let law = HeldForces::constant(forces);
+        let now = crate::integration::switching_sides(&sim.dynamics(&law), sim.time, &sim.state);
+        let changed = now.bits ^ sim.integrator.sides.bits;
+        let mut update = EventUpdate::default();
+        for i in (0..switching::COUNT).filter(|i| changed >> i & 1 == 1) {
+            let c = Crossing { index: i, t: sim.time, rising: now.bits >> i & 1 == 1, y: sim.state };
+            let message = Self::describe_crossing(sim, &c);
+            if i == switching::DETERMINANT && sim.stop_at_singularity {
+                update.terminate = Some(format!("{message}, and stopAtSingularity is on"));
+            }
+            sink(&message);
+        }
+        sim.integrator.sides = now;
+        update
+    }
+
     fn completed_integrator_step(&mut self) -> Result<(), StepError> {
         let Some(sim) = &self.simulation else { return Ok(()) };
-        let state = BodyState::from_vector(&sim.state);
         sim.guard
-            .check_all(sim.stand(), &state)
+            .check(sim.stand(), &sim.body_state())
             .map_err(|f| StepError { message: format!("at t = {}: {f}; the simulation cannot go on", sim.time) })
     }
 
@@ -394,31 +574,45 @@ impl FmuModel for PlatformModel {
         seeds: &[f64],
         out: &mut [f64],
     ) -> Result<(), String> {
-        let mut dy = [0.0; STATE_DIM];
+        let mut dy = [0.0; SIMULATION_DIM];
         let mut du = [0.0; LEG_COUNT];
         for (k, &seed) in knowns.iter().zip(seeds) {
             match seed_of(*k) {
-                Some(Seed::State(i)) => dy[i] += seed,
-                Some(Seed::Force(i)) => du[i] += seed,
+                Some(Seed::State(i)) => {
+                    if let Some(x) = dy.get_mut(i) {
+                        *x += seed;
+                    }
+                }
+                Some(Seed::Force(i)) => {
+                    if let Some(x) = du.get_mut(i) {
+                        *x += seed;
+                    }
+                }
                 None => {
                     return Err(format!(
-                        "known {} is neither a state nor an input (derivatives are with respect to r, v, R, der(R) and F)",
+                        "known {} is neither a state nor an input (derivatives are with respect to r, v, R, der(R), \
+                         work.F, work.dissipated and F)",
                         variables::GROUPS.get(k.group).map_or(String::new(), |g| g.element_name(k.index))
                     ));
                 }
             }
         }
         let forces = self.forces;
-        let (df, doutputs) = self.with_current(|form, y, _t| {
-            let df = form.derivative_tangent(y, &forces, &dy, &du);
-            let o = PlatformOutputs::tangent(&form.stand, &BodyState::from_vector(y), &BodyState::from_vector(&dy));
-            (df, o)
+        let (df, power, doutputs, dkappa) = self.with_current(|form, y, _t| {
+            let (df, power) = form.derivative_tangent(body(y), &forces, body(&dy), &du);
+            let o = PlatformOutputs::tangent(form, y, &dy);
+            let needs_kappa = unknowns.iter().any(|u| u.group == group::KAPPA);
+            let dk = if needs_kappa { condition_number_tangent(&form.stand, y, &dy) } else { 0.0 };
+            (df, power, o, dk)
         });
         for (value, u) in out.iter_mut().zip(unknowns) {
             *value = match u.group {
-                group::DER_V => df[layout::V + u.index],
+                group::DER_V => df[layout::V + u.index % 3],
                 group::DER_R => dy[rotation_state_index(layout::E_DOT, u.index)],
                 group::DER2_R => df[rotation_state_index(layout::E_DOT, u.index)],
+                group::DER_WORK_F => power.actuator,
+                group::DER_WORK_DISSIPATED => power.dissipation,
+                group::KAPPA => dkappa,
                 g if group::is_output_or_derivative(g) => Self::output_value(&doutputs, *u),
                 _ => {
                     return Err(format!(
@@ -440,6 +634,9 @@ impl FmuModel for PlatformModel {
         save_settings(w, &p.settings);
         w.i32(p.stabilisation.code());
         w.f64(p.baumgarte_rate);
+        w.bool(p.stops_enabled);
+        save_stops(w, &p.stops);
+        w.bool(p.stop_at_singularity);
         w.f64s(&self.forces);
         w.f64s(&self.force_rates);
         match &self.simulation {
@@ -449,18 +646,22 @@ impl FmuModel for PlatformModel {
                 // The stand and stabilisation equal the parameters'; the guard, integrator,
                 // time and state are the simulation's own.
                 w.stand(sim.stand());
+                w.bool(sim.form.stops.is_some());
+                save_stops(w, &sim.form.stops.unwrap_or_default());
+                w.bool(sim.stop_at_singularity);
                 w.i32(sim.stabilisation.code());
                 w.f64(sim.form.baumgarte_rate);
                 save_settings(w, &sim.integrator.settings);
                 w.f64(sim.integrator.dopri5.h_next);
                 w.f64(sim.integrator.dopri5.err_old);
                 let st = &sim.integrator.stats;
-                for n in [st.accepted_steps, st.rejected_steps, st.rhs_evaluations] {
+                for n in [st.accepted_steps, st.rejected_steps, st.rhs_evaluations, st.event_landings] {
                     w.u64(n);
                 }
+                w.u32(sim.integrator.sides.bits);
+                w.bool(sim.integrator.sides.known);
                 let g = &sim.guard;
-                w.f64s(&[g.min_leg_length, g.base_plane, g.side, g.reference_determinant, g.characteristic_length]);
-                w.bool(g.detect_singularities);
+                w.f64s(&[g.min_leg_length, g.base_plane, g.side, g.characteristic_length]);
                 w.f64(sim.time);
                 w.f64s(&sim.state);
             }
@@ -476,48 +677,80 @@ impl FmuModel for PlatformModel {
         let settings = read_settings(r)?;
         let stabilisation = read_stabilisation(r)?;
         let baumgarte_rate = r.finite("solver.baumgarteRate")?;
+        let stops_enabled = r.bool()?;
+        let stops = read_stops(r)?;
+        let stop_at_singularity = r.bool()?;
         let forces = r.finite_array::<LEG_COUNT>("F")?;
         let force_rates = r.finite_array::<LEG_COUNT>("der(F)")?;
         let simulation = if r.bool()? {
             let sim_stand = r.stand()?;
+            let sim_stops_on = r.bool()?;
+            let sim_stops = read_stops(r)?;
+            let sim_stop_at_singularity = r.bool()?;
             let sim_stabilisation = read_stabilisation(r)?;
             let sim_baumgarte = r.finite("Baumgarte rate")?;
             let sim_settings = read_settings(r)?;
             let dopri5 = Dopri5Memory { h_next: r.finite("h_next")?, err_old: r.finite("err_old")? };
-            let stats =
-                IntegratorStats { accepted_steps: r.u64()?, rejected_steps: r.u64()?, rhs_evaluations: r.u64()? };
-            let [min_leg_length, base_plane, side, reference_determinant, characteristic_length] =
-                r.finite_array::<5>("guard")?;
-            let detect_singularities = r.bool()?;
-            let guard = ConfigurationGuard {
-                min_leg_length,
-                base_plane,
-                side,
-                reference_determinant,
-                characteristic_length,
-                detect_singularities,
+            let stats = IntegratorStats {
+                accepted_steps: r.u64()?,
+                rejected_steps: r.u64()?,
+                rhs_evaluations: r.u64()?,
+                event_landings: r.u64()?,
             };
+            let sides = SwitchingSides { bits: r.u32()?, known: r.bool()? };
+            let [min_leg_length, base_plane, side, characteristic_length] = r.finite_array::<4>("guard")?;
+            let guard = ConfigurationGuard { min_leg_length, base_plane, side, characteristic_length };
             let time = r.finite("time")?;
-            let state = r.finite_array::<STATE_DIM>("state")?;
+            let state = r.finite_array::<SIMULATION_DIM>("state")?;
             Some(PlatformSimulation {
-                form: SpecialForm::new(sim_stand).with_baumgarte_rate(sim_baumgarte),
+                form: SpecialForm::new(sim_stand)
+                    .with_baumgarte_rate(sim_baumgarte)
+                    .with_end_stops(sim_stops_on.then_some(sim_stops)),
                 guard,
                 stabilisation: sim_stabilisation,
-                integrator: Integrator { settings: sim_settings, dopri5, stats },
+                stop_at_singularity: sim_stop_at_singularity,
+                integrator: Integrator { settings: sim_settings, dopri5, stats, sides },
                 time,
                 state,
+                crossings: Default::default(),
             })
         } else {
             None
         };
         Ok(PlatformModel {
-            parameters: PlatformParameters { stand, r0, angles0, v0, w0, settings, stabilisation, baumgarte_rate },
+            parameters: PlatformParameters {
+                stand,
+                r0,
+                angles0,
+                v0,
+                w0,
+                settings,
+                stabilisation,
+                baumgarte_rate,
+                stops_enabled,
+                stops,
+                stop_at_singularity,
+            },
             forces,
             force_rates,
             simulation,
             outputs: None,
+            kappa: None,
         })
     }
+}
+
+fn save_stops(w: &mut ByteWriter, s: &EndStops) {
+    w.f64s(&s.lower);
+    w.f64s(&s.upper);
+    w.f64s(&[s.stiffness, s.damping]);
+}
+
+fn read_stops(r: &mut ByteReader) -> Result<EndStops, SnapshotError> {
+    let lower = r.finite_array::<LEG_COUNT>("lmin")?;
+    let upper = r.finite_array::<LEG_COUNT>("lmax")?;
+    let [stiffness, damping] = r.finite_array::<2>("stops")?;
+    Ok(EndStops { lower, upper, stiffness, damping })
 }
 
 /// State-vector index of element `index` of the rotation matrix `R` (row-major `R[a,b]`,
@@ -538,6 +771,8 @@ fn seed_of(var: VariableRef) -> Option<Seed> {
         group::V => Seed::State(layout::V + var.index),
         group::ROT => Seed::State(rotation_state_index(layout::E, var.index)),
         group::DER_R => Seed::State(rotation_state_index(layout::E_DOT, var.index)),
+        group::WORK_F => Seed::State(quadrature::WORK_F),
+        group::WORK_DISSIPATED => Seed::State(quadrature::WORK_DISSIPATED),
         group::F => Seed::Force(var.index),
         _ => return None,
     })
@@ -553,7 +788,15 @@ fn read_settings(r: &mut ByteReader) -> Result<SolverSettings, SnapshotError> {
     let code = r.i32()?;
     let method = Method::from_code(code).ok_or_else(|| SnapshotError(format!("invalid integration method {code}")))?;
     let [rel_tol, abs_tol, max_step, fixed_step] = r.finite_array::<4>("solver settings")?;
-    Ok(SolverSettings { method, rel_tol, abs_tol, max_step, fixed_step, max_steps_per_call: r.u64()? })
+    Ok(SolverSettings {
+        method,
+        rel_tol,
+        abs_tol,
+        max_step,
+        fixed_step,
+        max_steps_per_call: r.u64()?,
+        locate_events: true,
+    })
 }
 
 fn read_stabilisation(r: &mut ByteReader) -> Result<Stabilisation, SnapshotError> {
@@ -598,6 +841,18 @@ mod tests {
             (group::DER_V, "der(v)"),
             (group::DER_R, "der(R)"),
             (group::DER2_R, "der2(R)"),
+            (group::STOPS, "stops"),
+            (group::LMIN, "lmin"),
+            (group::LMAX, "lmax"),
+            (group::STOP_STIFFNESS, "stops.stiffness"),
+            (group::STOP_DAMPING, "stops.damping"),
+            (group::STOP_AT_SINGULARITY, "stopAtSingularity"),
+            (group::FSTOP, "Fstop"),
+            (group::KAPPA, "kappa"),
+            (group::WORK_F, "work.F"),
+            (group::WORK_DISSIPATED, "work.dissipated"),
+            (group::DER_WORK_F, "der(work.F)"),
+            (group::DER_WORK_DISSIPATED, "der(work.dissipated)"),
         ];
         assert_eq!(names.len(), variables::GROUPS.len());
         for (i, name) in names {

@@ -36,10 +36,24 @@ pub mod group {
     pub const DER_V: usize = 27;
     pub const DER_R: usize = 28;
     pub const DER2_R: usize = 29;
+    pub const STOPS: usize = 30;
+    pub const LMIN: usize = 31;
+    pub const LMAX: usize = 32;
+    pub const STOP_STIFFNESS: usize = 33;
+    pub const STOP_DAMPING: usize = 34;
+    pub const STOP_AT_SINGULARITY: usize = 35;
+    pub const FSTOP: usize = 36;
+    pub const KAPPA: usize = 37;
+    pub const WORK_F: usize = 38;
+    pub const WORK_DISSIPATED: usize = 39;
+    pub const DER_WORK_F: usize = 40;
+    pub const DER_WORK_DISSIPATED: usize = 41;
 
     /// Groups computed from the state (outputs and Model Exchange derivatives).
     pub fn is_output_or_derivative(group: usize) -> bool {
-        (R..=CONSTRAINT_ERROR).contains(&group) || (DER_V..=DER2_R).contains(&group)
+        (R..=CONSTRAINT_ERROR).contains(&group)
+            || (DER_V..=DER2_R).contains(&group)
+            || (FSTOP..=DER_WORK_DISSIPATED).contains(&group)
     }
 }
 
@@ -71,13 +85,31 @@ pub static STATES: &[(&str, usize)] = &[
     ("der(R)", 2),
     ("der(R)", 5),
     ("der(R)", 8),
+    ("work.F", 0),
+    ("work.dissipated", 0),
 ];
 
 const POSE_STATES: &[crate::models::variables::Dependency] = &[All("r"), All("R")];
 const ALL_STATES: &[crate::models::variables::Dependency] = &[All("r"), All("v"), All("R"), All("der(R)")];
-const ACCELERATION_KNOWNS: &[crate::models::variables::Dependency] = &[All("r"), All("R"), All("F")];
+/// The end stops' forces depend on the leg rates: with stops every acceleration depends on
+/// the whole body state.
+const ACCELERATION_KNOWNS: &[crate::models::variables::Dependency] =
+    &[All("r"), All("v"), All("R"), All("der(R)"), All("F")];
 const ANGULAR_ACCELERATION_KNOWNS: &[crate::models::variables::Dependency] =
-    &[All("r"), All("R"), All("der(R)"), All("F")];
+    &[All("r"), All("v"), All("R"), All("der(R)"), All("F")];
+const STOP_PARAMETERS: &[crate::models::variables::Dependency] = &[
+    All("A"),
+    All("B"),
+    All("r0"),
+    All("angles0"),
+    All("v0"),
+    All("w0"),
+    All("stops"),
+    All("lmin"),
+    All("lmax"),
+    All("stops.stiffness"),
+    All("stops.damping"),
+];
 const ALL_PARAMETERS: &[crate::models::variables::Dependency] = &[
     All("F"),
     All("M"),
@@ -91,6 +123,11 @@ const ALL_PARAMETERS: &[crate::models::variables::Dependency] = &[
     All("w0"),
     All("solver.stabilisation"),
     All("solver.baumgarteRate"),
+    All("stops"),
+    All("lmin"),
+    All("lmax"),
+    All("stops.stiffness"),
+    All("stops.damping"),
 ];
 
 pub static GROUPS: &[V] = &[
@@ -217,8 +254,23 @@ pub static GROUPS: &[V] = &[
         &[],
         133,
         Some("J"),
-        "Kinetic plus gravitational potential energy M v^2/2 + w.J w/2 + M g z",
-        &[All("M"), All("J"), All("g"), All("r0"), All("v0"), All("w0")],
+        "Kinetic plus gravitational potential energy plus the end stops' potential energy M v^2/2 + w.J w/2 + M g z \
+         + sum_k V_k (E(t) - E(0) = work.F - work.dissipated)",
+        &[
+            All("M"),
+            All("J"),
+            All("g"),
+            All("A"),
+            All("B"),
+            All("r0"),
+            All("angles0"),
+            All("v0"),
+            All("w0"),
+            All("stops"),
+            All("lmin"),
+            All("lmax"),
+            All("stops.stiffness"),
+        ],
     )
     .depends_on(ALL_STATES),
     V::output(
@@ -265,4 +317,104 @@ pub static GROUPS: &[V] = &[
         ALL_PARAMETERS,
     )
     .derivative("der(R)", "R", 2, ANGULAR_ACCELERATION_KNOWNS),
+    V::parameter(
+        "stops",
+        &[],
+        170,
+        None,
+        "End stops on: each leg is limited to its stroke lmin[k] <= l_k <= lmax[k] by a unilateral virtual potential \
+         with contact damping (Fstop). false = the paper's idealised legs of unlimited stroke",
+    )
+    .boolean(),
+    V::parameter(
+        "lmin",
+        &[6],
+        171,
+        Some("m"),
+        "Shortest leg length (lower end stop) of leg k: below it the stop pushes the platform away from the base",
+    ),
+    V::parameter(
+        "lmax",
+        &[6],
+        177,
+        Some("m"),
+        "Longest leg length (upper end stop) of leg k: above it the stop pulls the platform towards the base",
+    ),
+    V::parameter(
+        "stops.stiffness",
+        &[],
+        183,
+        Some("N/m"),
+        "End-stop stiffness k_s: the stop force is k_s times the penetration (potential V = k_s delta^2 / 2)",
+    ),
+    V::parameter(
+        "stops.damping",
+        &[],
+        184,
+        Some("N.s/m"),
+        "End-stop contact damping c_s: a damper force c_s d(delta)/dt in contact only, limited to the spring force \
+         k_s delta so that the stop force is continuous at onset and never sticks (0 = elastic stops)",
+    ),
+    V::parameter(
+        "stopAtSingularity",
+        &[],
+        185,
+        None,
+        "Discard a step in which the legs pass through a singular arrangement (the force/moment matrix's \
+         determinant changes sign), located inside the step. false = pass it and report it (logEvents)",
+    )
+    .boolean(),
+    V::output(
+        "Fstop",
+        &[6],
+        200,
+        Some("N"),
+        "End-stop force along leg k (sign as F: positive pushes the platform away from the base); 0 inside the stroke",
+        STOP_PARAMETERS,
+    )
+    .depends_on(ALL_STATES),
+    V::output(
+        "kappa",
+        &[],
+        206,
+        Some("1"),
+        "Condition number of the 6x6 leg force/moment matrix (moment rows divided by the stand's characteristic \
+         length): large near a singular leg arrangement, infinite at one",
+        &[All("A"), All("B"), All("r0"), All("angles0")],
+    )
+    .depends_on(POSE_STATES),
+    V::output(
+        "work.F",
+        &[],
+        207,
+        Some("J"),
+        "Work done by the leg forces F since the start, the integral of sum_k F_k ldot_k (Model Exchange state)",
+        &[],
+    ),
+    V::output(
+        "work.dissipated",
+        &[],
+        208,
+        Some("J"),
+        "Energy taken by the end stops' damping since the start (>= 0; Model Exchange state)",
+        &[],
+    ),
+    V::local(
+        "der(work.F)",
+        &[],
+        210,
+        Some("W"),
+        "Power of the leg forces sum_k F_k ldot_k (Model Exchange derivative of work.F)",
+        ALL_PARAMETERS,
+    )
+    .derivative("work.F", "work.F", 1, ANGULAR_ACCELERATION_KNOWNS),
+    V::local(
+        "der(work.dissipated)",
+        &[],
+        211,
+        Some("W"),
+        "Power taken by the end stops' damping (Model Exchange derivative of work.dissipated)",
+        STOP_PARAMETERS,
+    )
+    .derivative("work.dissipated", "work.dissipated", 1, ALL_STATES),
 ];
