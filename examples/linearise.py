@@ -31,7 +31,7 @@ from fmpy.fmi2 import FMU2Model
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "python"))
-from stewart import EQUILIBRIUM_FORCE, GRAVITY, MASS, PLATFORM_FMU, stand_parameters  # noqa: E402
+from stewart import EQUILIBRIUM_FORCE, GRAVITY, MASS, PLATFORM_FMU, set_values, stand_parameters  # noqa: E402
 
 DOF = ["surge x", "sway y", "heave z", "roll", "pitch", "yaw"]
 
@@ -46,17 +46,20 @@ class PlatformModel:
                              modelIdentifier=self.md.modelExchange.modelIdentifier, instanceName="linearise")
         self.fmu.instantiate()
         self.fmu.setupExperiment(startTime=0.0)
-        names = list(parameters)
-        self.fmu.setReal([self.vr[n] for n in names], [float(parameters[n]) for n in names])
+        set_values(self.fmu, self.md, parameters)
         self.fmu.enterInitializationMode()
         self.fmu.exitInitializationMode()
         self.fmu.newDiscreteStates()
         self.fmu.enterContinuousTimeMode()
         self.force_vrs = [self.vr[f"F[{k}]"] for k in range(1, 7)]
         self.fmu.setReal(self.force_vrs, [float(f) for f in forces])
-        self.state_vrs = [d.variable.derivative.valueReference for d in self.md.derivatives]
-        self.derivative_vrs = [d.variable.valueReference for d in self.md.derivatives]
-        self.nx = len(self.state_vrs)
+        # The 24 special-form states; the FMU's last two states, work.F and work.dissipated,
+        # are quadratures that do not act back on the motion.
+        self.nx = len(self.md.derivatives)
+        self.all_state_vrs = [d.variable.derivative.valueReference for d in self.md.derivatives]
+        self.all_derivative_vrs = [d.variable.valueReference for d in self.md.derivatives]
+        self.state_vrs = self.all_state_vrs[:24]
+        self.derivative_vrs = self.all_derivative_vrs[:24]
 
     def states(self):
         from ctypes import c_double
@@ -126,8 +129,8 @@ def linearise(nondimensional=True, fmu=PLATFORM_FMU):
     parameters = stand_parameters(nondimensional=nondimensional)
     u_eq = EQUILIBRIUM_FORCE * (1.0 if nondimensional else MASS * GRAVITY)
     model = PlatformModel(parameters, [u_eq] * 6, fmu=fmu)
-    x0 = model.states()
-    residual = np.max(np.abs(model.derivatives()))
+    x0 = model.states()[:24]
+    residual = np.max(np.abs(model.derivatives()[:24]))
     j = model.jacobian(model.derivative_vrs, model.state_vrs)
     b_full = model.jacobian(model.derivative_vrs, model.force_vrs)
     leg_vrs = [model.vr[f"l[{k}]"] for k in range(1, 7)]

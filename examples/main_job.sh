@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The main job: build and package the FMU, then run the paper's experiments through it with
-# FMPy, writing CSV data and PNG plots to output/ (or the folder given as the first argument).
+# The main job: build and package the FMU, then run the paper's experiments and the workspace
+# scenarios (end stops, singular arrangements) through it with FMPy, writing CSV data and PNG
+# plots to output/ (or the folder given as the first argument).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 OUT="${1:-output}"
@@ -12,4 +13,5 @@ fi
 
 cargo run --release --bin build-fmu
 .venv/bin/python examples/paper_experiments.py "$OUT"
+.venv/bin/python examples/workspace_scenarios.py "$OUT"
 .venv/bin/python examples/linearise.py --output "$OUT"

@@ -278,3 +278,41 @@ fn tumbling_through_singular_arrangements_matches_newton_euler() {
     assert!(fmu.get("r[3]") > 2.5, "the platform rose while tumbling");
     assert!(worst_r < 1e-9 && worst_rot < 1e-9, "{worst_r:e} {worst_rot:e}");
 }
+
+/// `stopAtSingularity`: the passage is located inside the step, so the discard reports the
+/// same time whether the host steps 10 ms at a time or asks for 3 s in one call.
+#[test]
+fn stop_at_singularity_finds_the_passage_inside_the_step() {
+    use common::fmi_host::Host;
+    use stewart_fmu::fmi2::types::*;
+
+    let u = equilibrium_force();
+    let forces: [f64; 6] = std::array::from_fn(|k| u * (1.05 + 0.5 * (1.1 * k as f64).sin()));
+    let located = |h: f64| -> (f64, String) {
+        let mut fmu = Host::platform("stop at singularity");
+        assert_eq!(fmu.initialise(&[("stops", 0.0), ("stopAtSingularity", 1.0)]), fmi2OK);
+        assert_eq!(fmu.set_forces(forces), fmi2OK);
+        while fmu.time < 3.0 {
+            match fmu.step(h) {
+                s if s == fmi2OK => {}
+                s => {
+                    assert_eq!(s, fmi2Discard);
+                    let message = fmu.last_message();
+                    let t: f64 = message
+                        .split("at t = ")
+                        .nth(1)
+                        .and_then(|rest| rest.split(':').next())
+                        .and_then(|x| x.parse().ok())
+                        .expect("time in the message");
+                    return (t, message);
+                }
+            }
+        }
+        panic!("no singular arrangement within 3 s")
+    };
+    let (t_small, message) = located(0.01);
+    let (t_large, _) = located(3.0);
+    println!("stopAtSingularity: passage at t = {t_small} (10 ms steps), {t_large} (one 3 s step): {message}");
+    assert!((t_small - t_large).abs() < 1e-6, "{t_small} vs {t_large}");
+    assert!(message.contains("stopAtSingularity is on") && message.contains("rolled back"));
+}

@@ -171,6 +171,51 @@ impl EndStops {
         stand.mass * stand.gravity / self.stiffness
     }
 
+    /// The height of the centre of mass at which a platform in its level pose rests on its six
+    /// lower stops without leg forces: the vertical stop forces `sum_k k_s delta_k n_k.z`
+    /// carry `M g` (damping vanishes at rest). Exact for a stand whose level rest is pure
+    /// heave (the default stand, by its symmetry); `None` if the stops cannot carry the
+    /// platform level.
+    pub fn level_rest_height(&self, stand: &Stand) -> Option<f64> {
+        let lift = |z: f64| -> f64 {
+            let mut up = 0.0;
+            for k in 0..LEG_COUNT {
+                let leg = nalgebra::Vector3::new(0.0, 0.0, z) + stand.platform_joints[k] - stand.base_joints[k];
+                let l = leg.norm();
+                let delta = self.lower[k] - l;
+                if delta > 0.0 && l > 0.0 {
+                    up += self.stiffness * delta * leg.z / l;
+                }
+            }
+            up - stand.mass * stand.gravity
+        };
+        // The highest touching height: every lower stop touches at or below it.
+        let mut hi = f64::NEG_INFINITY;
+        for k in 0..LEG_COUNT {
+            let d = (stand.platform_joints[k] - stand.base_joints[k]).xy().norm();
+            let h =
+                (self.lower[k] * self.lower[k] - d * d).sqrt() - (stand.platform_joints[k].z - stand.base_joints[k].z);
+            hi = hi.max(h);
+        }
+        if !hi.is_finite() || lift(hi) > 0.0 {
+            return None;
+        }
+        let mut lo = hi;
+        let mut step = 1e-3 * stand.characteristic_length();
+        while lift(lo) <= 0.0 {
+            lo -= step;
+            step *= 2.0;
+            if !(lo > hi - 10.0 * stand.characteristic_length()) {
+                return None;
+            }
+        }
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if lift(mid) > 0.0 { lo = mid } else { hi = mid }
+        }
+        Some(0.5 * (lo + hi))
+    }
+
     /// Checks the stroke and contact parameters (FMI names in the errors).
     pub fn validate(&self) -> Result<(), ParameterError> {
         for k in 0..LEG_COUNT {
@@ -271,6 +316,14 @@ mod tests {
             assert!((t.force - fd_force).abs() <= 1e-5 * fd_force.abs().max(1.0), "{l} {ld}: {t:?} vs {fd_force}");
             assert!((t.dissipation - fd_diss).abs() <= 1e-5 * fd_diss.abs().max(1.0), "{l} {ld}: {t:?} vs {fd_diss}");
         }
+    }
+
+    #[test]
+    fn level_rest_height_balances_the_weight() {
+        let stand = Stand::truck_cabin();
+        let z = EndStops::default().level_rest_height(&stand).unwrap();
+        // 0.66 mm into the stops, 0.39 m below the neutral pose.
+        assert!((z - 1.5717790).abs() < 1e-6, "{z}");
     }
 
     #[test]

@@ -87,9 +87,58 @@ impl PoseProgramme {
     }
 }
 
+/// A rest-to-rest transfer of the centre of mass from `from` to `to` in `duration`, along the
+/// quintic smooth step `s(tau) = 10 tau³ - 15 tau⁴ + 6 tau⁵` (velocity and acceleration zero
+/// at both ends, so the programme forces start and end without a jump), no rotation; then
+/// `then` with its time counted from the end of the transfer. The start-up of a platform
+/// parked on its lower stops: lift it to the working pose, then run the programme.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StartUp {
+    /// Centre of mass at `t = 0` (the parked pose), m.
+    pub from: Vector3<f64>,
+    /// Centre of mass at `t = duration`, m (where `then` starts).
+    pub to: Vector3<f64>,
+    /// s; > 0.
+    pub duration: f64,
+    pub then: PoseProgramme,
+}
+
+impl StartUp {
+    pub fn point(&self, t: f64) -> PoseTrajectoryPoint {
+        if t >= self.duration || !(self.duration > 0.0) {
+            return self.then.point(t - self.duration);
+        }
+        let tau = (t / self.duration).max(0.0);
+        let s = tau * tau * tau * (10.0 + tau * (-15.0 + 6.0 * tau));
+        let ds = 30.0 * tau * tau * (1.0 - tau) * (1.0 - tau) / self.duration;
+        let dds = 60.0 * tau * (1.0 - tau) * (1.0 - 2.0 * tau) / (self.duration * self.duration);
+        let d = self.to - self.from;
+        let zero = Vector3::zeros();
+        PoseTrajectoryPoint::from_angles(self.from + d * s, d * ds, d * dds, &zero, &zero, &zero)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn start_up_is_smooth_and_hands_over_to_the_programme() {
+        let then = PoseProgramme::heave(Vector3::new(0.0, 0.0, 1.96), 0.3, 2.0, 1.0);
+        let up = StartUp { from: Vector3::new(0.0, 0.0, 1.57), to: Vector3::new(0.0, 0.0, 1.96), duration: 3.0, then };
+        let p0 = up.point(0.0);
+        assert_eq!((p0.r.z, p0.v.z, p0.a.z), (1.57, 0.0, 0.0));
+        // Continuous value, rate and acceleration at the hand-over.
+        let (before, after) = (up.point(3.0 - 1e-9), up.point(3.0 + 1e-9));
+        assert!((before.r - after.r).norm() < 1e-8 && (before.v - after.v).norm() < 1e-7);
+        assert!((before.a - after.a).norm() < 1e-6, "{:?} {:?}", before.a, after.a);
+        for t in [0.3, 1.5, 2.7] {
+            let h = 1e-5;
+            let fd1 = (up.point(t + h).r.z - up.point(t - h).r.z) / (2.0 * h);
+            let fd2 = (up.point(t + h).v.z - up.point(t - h).v.z) / (2.0 * h);
+            assert!((up.point(t).v.z - fd1).abs() < 1e-8 && (up.point(t).a.z - fd2).abs() < 1e-7);
+        }
+    }
 
     #[test]
     fn derivatives_match_finite_differences() {

@@ -47,6 +47,7 @@ typedef fmi2Status (*fmi2ExitInitializationMode_t)(fmi2Component);
 typedef fmi2Status (*fmi2Terminate_t)(fmi2Component);
 typedef fmi2Status (*fmi2Reset_t)(fmi2Component);
 typedef fmi2Status (*fmi2SetReal_t)(fmi2Component, const fmi2ValueReference *, size_t, const double *);
+typedef fmi2Status (*fmi2SetBoolean_t)(fmi2Component, const fmi2ValueReference *, size_t, const fmi2Boolean *);
 typedef fmi2Status (*fmi2GetReal_t)(fmi2Component, const fmi2ValueReference *, size_t, double *);
 typedef fmi2Status (*fmi2DoStep_t)(fmi2Component, double, double, fmi2Boolean);
 typedef fmi2Status (*fmi2GetFMUstate_t)(fmi2Component, fmi2FMUstate *);
@@ -66,6 +67,8 @@ int main(int argc, char **argv) {
     fmi2CallbackFunctions callbacks = {logger, NULL, NULL, NULL, NULL};
     const fmi2ValueReference forces[6] = {1, 2, 3, 4, 5, 6};
     const fmi2ValueReference mass = 10;
+    const fmi2ValueReference stops = 170; /* Boolean "stops" */
+    const fmi2Boolean off = 0;
     const fmi2ValueReference outputs[4] = {102, 115, 121, 133}; /* r[3], angles[1], l[1], E */
     double values[6], out[4];
     long ok = 0, discard = 0, error = 0, states = 0, reloads = 0;
@@ -81,7 +84,7 @@ int main(int argc, char **argv) {
         LOAD(fmi2ExitInitializationMode) LOAD(fmi2Terminate) LOAD(fmi2Reset) LOAD(fmi2SetReal) LOAD(fmi2GetReal)
         LOAD(fmi2DoStep) LOAD(fmi2GetFMUstate) LOAD(fmi2SetFMUstate) LOAD(fmi2FreeFMUstate)
         LOAD(fmi2SerializedFMUstateSize) LOAD(fmi2SerializeFMUstate) LOAD(fmi2DeSerializeFMUstate)
-        LOAD(fmi2SetDebugLogging)
+        LOAD(fmi2SetDebugLogging) LOAD(fmi2SetBoolean)
 
         char name[32];
         snprintf(name, sizeof name, "leak%d", cycle);
@@ -98,6 +101,8 @@ int main(int argc, char **argv) {
             fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0);
             fmi2EnterInitializationMode(c);
         }
+        /* Without end stops a strong pull takes the platform through the base: the discard path. */
+        if (cycle % 10 == 5) fmi2SetBoolean(c, &stops, 1, &off);
         fmi2ExitInitializationMode(c);
         double t = 0.0;
         for (int i = 0; i < 10; i++) {

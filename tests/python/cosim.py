@@ -19,7 +19,7 @@ import numpy as np
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
 
-from stewart import PLATFORM_FMU
+from stewart import PLATFORM_FMU, recording_callbacks, set_values
 
 CONTROLLER_FMU = Path(PLATFORM_FMU).parent / "StewartController.fmu"
 SYSTEM_SSP = Path(PLATFORM_FMU).parent / "StewartSystem.ssp"
@@ -28,7 +28,7 @@ _extracted = {}
 
 
 class Component:
-    def __init__(self, fmu, name, reals=None, integers=None, start_time=0.0):
+    def __init__(self, fmu, name, reals=None, integers=None, start_time=0.0, events=None):
         fmu = str(fmu)
         self.md = read_model_description(fmu)
         if fmu not in _extracted:
@@ -36,14 +36,13 @@ class Component:
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=_extracted[fmu],
                              modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
-        self.fmu.instantiate()
+        if events is None:
+            self.fmu.instantiate()
+        else:
+            self.fmu.instantiate(callbacks=recording_callbacks(events))
+            self.fmu.setDebugLogging(True, ["logEvents"])
         self.fmu.setupExperiment(startTime=start_time)
-        if reals:
-            names = [n for n in reals if n in self.vr]
-            self.fmu.setReal([self.vr[n] for n in names], [float(reals[n]) for n in names])
-        if integers:
-            names = [n for n in integers if n in self.vr]
-            self.fmu.setInteger([self.vr[n] for n in names], [int(integers[n]) for n in names])
+        set_values(self.fmu, self.md, dict(reals or {}, **(integers or {})))
         self.fmu.enterInitializationMode()
         self.fmu.exitInitializationMode()
 
@@ -65,10 +64,12 @@ LP = [f"lp[{k}]" for k in LEGS]
 
 
 def closed_loop(t_end, h, scheme="gauss-seidel", platform_reals=None, controller_reals=None, controller_integers=None,
-                record=("r[3]",)):
+                record=("r[3]",), force_hook=None, events=None):
     """Runs the coupled system; returns (times, recorded platform outputs, max |l - l^p| per
-    step, status) with status "ok" or the exception text if a step failed."""
-    platform = Component(PLATFORM_FMU, "platform", reals=platform_reals)
+    step, status) with status "ok" or the exception text if a step failed. `force_hook(t, F)`
+    may change the forces on their way to the platform (an actuator failure); `events`
+    receives the platform's logEvents messages."""
+    platform = Component(PLATFORM_FMU, "platform", reals=platform_reals, events=events)
     controller = Component(CONTROLLER_FMU, "controller", reals=controller_reals, integers=controller_integers)
     times, rows, errors, status = [], [], [], "ok"
     n = int(round(t_end / h))
@@ -80,7 +81,8 @@ def closed_loop(t_end, h, scheme="gauss-seidel", platform_reals=None, controller
         for _ in range(n):
             if scheme == "gauss-seidel":
                 controller.set(L + LDOT, np.concatenate([platform.get(L), platform.get(LDOT)]))
-                platform.set(F, controller.get(F))
+                forces = controller.get(F)
+                platform.set(F, force_hook(time, forces) if force_hook else forces)
                 platform.fmu.doStep(currentCommunicationPoint=time, communicationStepSize=h)
                 controller.fmu.doStep(currentCommunicationPoint=time, communicationStepSize=h)
                 time += h

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 from fmpy import extract, read_model_description
-from fmpy.fmi2 import FMU2Slave
+from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
 
 ROOT = Path(__file__).resolve().parents[2]
 PLATFORM_FMU = Path(os.environ.get("STEWART_PLATFORM_FMU", ROOT / "target" / "fmu" / "StewartPlatform.fmu"))
@@ -24,7 +24,8 @@ EQUILIBRIUM_FORCE = 0.2005  # units of M g
 
 def stand_parameters(nondimensional=True):
     """FMI parameter values of the default stand, in the paper's units (R_b, M, M g,
-    sqrt(R_b/g)) or in SI."""
+    sqrt(R_b/g)) or in SI. The paper's experiments use its idealised legs: in
+    non-dimensional units the end stops are off (`stops` false)."""
     length = R_B if nondimensional else 1.0
     mass = MASS if nondimensional else 1.0
     p = {
@@ -42,7 +43,26 @@ def stand_parameters(nondimensional=True):
             p[f"B[{k + 1},{i + 1}]"] = x / length
         for i, x in enumerate((R_P * math.cos(pp), R_P * math.sin(pp), -H_C)):
             p[f"A[{k + 1},{i + 1}]"] = x / length
+    if nondimensional:
+        p["stops"] = False
     return p
+
+
+def set_values(slave, md, values):
+    """Sets parameters or inputs by name through the setter of each variable's type (Real,
+    Integer or Boolean); names the model does not have are skipped."""
+    types = {v.name: (v.valueReference, v.type) for v in md.modelVariables}
+    groups = {"Real": [], "Integer": [], "Boolean": []}
+    for name, value in values.items():
+        if name in types:
+            vr, kind = types[name]
+            groups["Integer" if kind == "Enumeration" else kind].append((vr, value))
+    if groups["Real"]:
+        slave.setReal([vr for vr, _ in groups["Real"]], [float(x) for _, x in groups["Real"]])
+    if groups["Integer"]:
+        slave.setInteger([vr for vr, _ in groups["Integer"]], [int(x) for _, x in groups["Integer"]])
+    if groups["Boolean"]:
+        slave.setBoolean([vr for vr, _ in groups["Boolean"]], [bool(x) for _, x in groups["Boolean"]])
 
 
 def neutral_leg_geometry(nondimensional=True):
@@ -81,13 +101,27 @@ def heave_forces(t, z0=NEUTRAL_Z / R_B):
     return u, du, l, ldot
 
 
+def recording_callbacks(messages):
+    """FMI 2 callbacks whose logger appends (status, category, message) to `messages`. The
+    FMU passes each message pre-formatted with `%` doubled (see src/fmi2/logger.rs)."""
+    def log(_env, _name, status, category, message):
+        messages.append((status, (category or b"").decode(), (message or b"").decode().replace("%%", "%")))
+
+    callbacks = fmi2CallbackFunctions()
+    callbacks.logger = fmi2CallbackLoggerTYPE(log)
+    callbacks._keep = log  # the ctypes callback must outlive the instance
+    return callbacks
+
+
 class Platform:
     """One FMU2Slave instance of StewartPlatform with name-based access."""
 
     _extracted = {}
 
     def __init__(self, fmu=PLATFORM_FMU, parameters=None, integers=None, start_time=0.0, stop_time=None,
-                 tolerance=None, name="platform", logger=None):
+                 tolerance=None, name="platform", logger=None, events=None):
+        """`events`: a list that receives the FMU's logEvents messages (contacts, singular
+        arrangements passed) as (status, category, message)."""
         fmu = str(fmu)
         self.md = read_model_description(fmu)
         if fmu not in Platform._extracted:
@@ -95,7 +129,11 @@ class Platform:
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=Platform._extracted[fmu],
                                modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
+        if events is not None:
+            logger = recording_callbacks(events)
         self.slave.instantiate(loggingOn=False, callbacks=logger)
+        if events is not None:
+            self.slave.setDebugLogging(True, ["logEvents"])
         self.slave.setupExperiment(tolerance=tolerance, startTime=start_time, stopTime=stop_time)
         self.slave.enterInitializationMode()
         if parameters:
@@ -107,8 +145,9 @@ class Platform:
         self.time = start_time
 
     def set(self, values):
-        names = list(values)
-        self.slave.setReal([self.vr[n] for n in names], [float(values[n]) for n in names])
+        unknown = [n for n in values if n not in self.vr]
+        assert not unknown, f"the platform has no variables {unknown}"
+        set_values(self.slave, self.md, values)
 
     def set_forces(self, forces, rates=None):
         self.slave.setReal([self.vr[f"F[{k + 1}]"] for k in range(6)], [float(f) for f in forces])

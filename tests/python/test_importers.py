@@ -109,3 +109,85 @@ def test_fmi_sim_runs_the_fmu_like_fmpy(tmp_path):
     assert got.shape == want.shape
     assert np.ptp(want[:, 2]) > 1e-4
     assert difference < 1e-12
+
+
+def rest_height_on_stops(force, lower):
+    """Pure-heave rest of the default stand with every leg pushing `force` (N) and resting on
+    its lower (or upper) stops, from the SPEC geometry and the FMU's stop defaults:
+    6 (force +- k_s delta) H / l = M g."""
+    from workspace import stop_defaults
+    from test_workspace import horizontal_leg_projection
+    lmin, lmax, k, _ = stop_defaults()
+    d = horizontal_leg_projection()
+    limit = lmin if lower else lmax
+
+    def excess(h):
+        l = math.hypot(d, h)
+        stop = k * (limit - l) if lower else -k * (l - limit)
+        return 6.0 * (force + stop) * h / l - 3000.0 * 9.81
+
+    h_limit = math.sqrt(limit**2 - d**2)
+    lo, hi = (h_limit - 0.05, h_limit) if lower else (h_limit, h_limit + 0.05)
+    assert excess(lo) > 0 > excess(hi)
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        # Above the root the stops' (or the legs') net lift falls short of the weight.
+        if excess(mid) > 0:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi) + 0.5
+
+
+@pytest.mark.parametrize("offset", [-0.05, 0.05])
+def test_open_loop_forces_five_percent_off_equilibrium_settle_on_the_stops_in_every_host(offset, tmp_path):
+    """Open-loop leg forces 5 % below (above) the equilibrium force for 10 s: the platform
+    sinks (rises) onto its lower (upper) stops and rests there, in FMPy, libcosim and fmi-sim
+    alike, without a discard."""
+    from fmpy import simulate_fmu
+    from libcosimpy.CosimEnums import CosimVariableType
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimObserver import CosimObserver
+    from libcosimpy.CosimSlave import CosimLocalSlave
+
+    force = FORCE * (1.0 + offset)
+    expected = rest_height_on_stops(force, lower=offset < 0)
+    forces = {f"F[{k}]": force for k in range(1, 7)}
+    finals = {}
+    # FMPy
+    r = simulate_fmu(str(PLATFORM_FMU), start_values=forces, stop_time=10.0, output_interval=0.01,
+                     output=["r[3]", "Fstop[1]"])
+    assert abs(r["time"][-1] - 10.0) < 1e-9
+    finals["FMPy"] = r["r[3]"][-1]
+    # libcosim
+    from fmpy import read_model_description
+    vr = {v.name: v.valueReference for v in read_model_description(str(PLATFORM_FMU)).modelVariables}
+    step_ns = 10_000_000
+    execution = CosimExecution.from_step_size(step_size=step_ns)
+    index = execution.add_local_slave(local_slave=CosimLocalSlave(fmu_path=str(PLATFORM_FMU), instance_name="p"))
+    for name, value in forces.items():
+        assert execution.real_initial_value(slave_index=index, variable_reference=vr[name], value=value)
+    observer = CosimObserver.create_last_value()
+    execution.add_observer(observer=observer)
+    assert execution.simulate_until(target_time=1000 * step_ns)
+    finals["libcosim"] = observer.last_real_values(slave_index=index, variable_references=[vr["r[3]"]])[0]
+    # fmi-sim
+    inputs = tmp_path / "forces.csv"
+    with open(inputs, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["time"] + list(forces))
+        for t in (0.0, 10.0):
+            w.writerow([repr(t)] + [repr(force)] * 6)
+    out = tmp_path / "out.csv"
+    run = subprocess.run([fmi_sim_binary(), "--model", str(PLATFORM_FMU), "-i", str(inputs), "-o", str(out),
+                          "co-simulation", "--step", "0.01", "-f", "10.0"], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr[-2000:]
+    with open(out) as f:
+        rows = list(csv.DictReader(f))
+    assert abs(float(rows[-1]["time"]) - 10.0) < 1e-9
+    finals["fmi-sim"] = float(rows[-1]["r[3]"])
+    print(f"forces {1 + offset:.2f} x equilibrium for 10 s: rest z " + ", ".join(
+        f"{host} {z:.9f} m" for host, z in finals.items()) + f"; static solution on the "
+          f"{'lower' if offset < 0 else 'upper'} stops {expected:.9f} m")
+    for host, z in finals.items():
+        assert abs(z - expected) < 1e-6, f"{host}: {z} vs {expected}"

@@ -41,10 +41,14 @@ def cs_reference(force_of_t, t_end):
 EXPERIMENTS = {
     # name: (leg force as a function of time, end time, tolerance CVODE, tolerance Euler)
     "equilibrium": (lambda t: EQUILIBRIUM_FORCE, 4.0, 1e-9, 1e-9),
-    "parasitic oscillations": (lambda t: EQUILIBRIUM_FORCE + 1e-4 * math.sin(t), 10.0, 1e-5, 5e-4),
-    # FMPy's ME loop sets inputs only at output points, while CVODE (CV_NORMAL) steps past
-    # them and interpolates back: a time-varying force is seen inexactly, hence the looser
-    # bound; test_model_exchange_with_exact_forces_matches_co_simulation is the tight check.
+    # FMPy's ME loop sets inputs at output points, while CVODE (CV_NORMAL) steps past them
+    # and interpolates back; and since the FMU has event indicators, FMPy's CVODE root
+    # function also applies the inputs at CVODE's internal times (fmpy/sundials/__init__.py,
+    # CVodeSolver.g), so the right-hand side sees the force of whichever time the root
+    # function was last called at. A time-varying force is seen inexactly, and the heave
+    # instability (rate 0.56) amplifies the difference, hence the looser bounds;
+    # test_model_exchange_with_exact_forces_matches_co_simulation is the tight check.
+    "parasitic oscillations": (lambda t: EQUILIBRIUM_FORCE + 1e-4 * math.sin(t), 10.0, 3e-4, 5e-4),
     "heave programme": (lambda t: heave_forces(t)[0], 8.0, 2e-3, 1e-3),
 }
 
@@ -125,15 +129,16 @@ def test_directional_derivatives_match_central_differences():
     m = PlatformModel(P, [EQUILIBRIUM_FORCE] * 6)
     rng = np.random.default_rng(11)
     x0 = m.states()
-    outputs = [m.vr[n] for n in ["l[1]", "l[5]", "ldot[2]", "angles[1]", "angles[3]", "w[2]", "E"]]
+    outputs = [m.vr[n] for n in ["l[1]", "l[5]", "ldot[2]", "angles[1]", "angles[3]", "w[2]", "E", "kappa", "work.F"]]
     worst = 0.0
     for case in range(5):
-        x = x0 + np.concatenate([rng.normal(0, 0.02, 6), rng.normal(0, 0.02, 9), rng.normal(0, 0.3, 9)])
+        # The 24 special-form states; the work quadratures (states 25, 26) stay as they are.
+        x = x0 + np.concatenate([rng.normal(0, 0.02, 6), rng.normal(0, 0.02, 9), rng.normal(0, 0.3, 9), [0.0, 0.0]])
         u = EQUILIBRIUM_FORCE * (1 + 0.2 * rng.normal(size=6))
         m.set_states(x)
         m.fmu.setReal(m.force_vrs, list(u))
-        for known_set, knowns in (("states", m.state_vrs), ("inputs", m.force_vrs)):
-            exact = m.jacobian(m.derivative_vrs, knowns)
+        for known_set, knowns in (("states", m.all_state_vrs), ("inputs", m.force_vrs)):
+            exact = m.jacobian(m.all_derivative_vrs, knowns)
             exact_out = m.jacobian(outputs, knowns)
             fd = np.zeros_like(exact)
             fd_out = np.zeros_like(exact_out)

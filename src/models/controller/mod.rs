@@ -14,8 +14,9 @@ use super::variables::VariableRef;
 use super::{DefaultExperiment, FmuModel, ModelInfo, StepError};
 use crate::control::{Disturbance, LegFeedback};
 use crate::physics::direct_problem::solve_direct_problem;
+use crate::physics::end_stops::EndStops;
 use crate::physics::kinematics::{PoseTrajectoryPoint, angles_from_rotation};
-use crate::physics::programme::{PoseProgramme, SoftStartSinusoid};
+use crate::physics::programme::{PoseProgramme, SoftStartSinusoid, StartUp};
 use crate::physics::stand::{LEG_COUNT, Stand};
 use variables::group;
 
@@ -43,6 +44,11 @@ pub const DEFAULT_GAIN: f64 = 2.0e5;
 /// Default rate gain, N s/m: a damping ratio near 0.8 for the heave mode with
 /// [`DEFAULT_GAIN`].
 pub const DEFAULT_DAMPING: f64 = 2.0e4;
+/// Default actuator saturation, N: each drive can push or pull the whole default platform's
+/// weight (29.4 kN); the default heave programme needs at most 7.7 kN per leg.
+pub const DEFAULT_FORCE_LIMIT: f64 = 3.0e4;
+/// Default lift duration of the start-up programme, s.
+pub const DEFAULT_STARTUP_DURATION: f64 = 3.0;
 
 /// Which programme motion the controller follows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -50,6 +56,7 @@ pub enum ProgrammeKind {
     Heave = 1,
     Sinusoid = 2,
     External = 3,
+    StartUp = 4,
 }
 
 impl ProgrammeKind {
@@ -58,6 +65,7 @@ impl ProgrammeKind {
             1 => Some(ProgrammeKind::Heave),
             2 => Some(ProgrammeKind::Sinusoid),
             3 => Some(ProgrammeKind::External),
+            4 => Some(ProgrammeKind::StartUp),
             _ => None,
         }
     }
@@ -78,6 +86,11 @@ pub struct ControllerParameters {
     pub sine_phase: [f64; 6],
     pub sine_time_constant: f64,
     pub disturbance: Disturbance,
+    /// Programme 4: parked centre of mass (m) and lift duration (s).
+    pub startup_position: Vector3<f64>,
+    pub startup_duration: f64,
+    /// `Fmin`, `Fmax`, N.
+    pub force_limits: [f64; 2],
 }
 
 impl Default for ControllerParameters {
@@ -99,6 +112,13 @@ impl Default for ControllerParameters {
             sine_phase: [0.0; 6],
             sine_time_constant: 2.0 / omega,
             disturbance: Disturbance { amplitude: 0.0, frequency: 2.0 * omega, time_constant: 2.0 / omega },
+            startup_position: Vector3::new(
+                centre.x,
+                centre.y,
+                EndStops::default().level_rest_height(&stand).unwrap_or(centre.z),
+            ),
+            startup_duration: DEFAULT_STARTUP_DURATION,
+            force_limits: [-DEFAULT_FORCE_LIMIT, DEFAULT_FORCE_LIMIT],
             stand,
         }
     }
@@ -152,8 +172,13 @@ impl ControllerModel {
     /// The programme pose with its derivatives at time `t`.
     pub fn programme_point(&self, t: f64) -> PoseTrajectoryPoint {
         let p = &self.parameters;
+        let heave = PoseProgramme::heave(p.heave_centre, p.heave[0], p.heave[1], p.heave[2]);
         match p.programme {
-            ProgrammeKind::Heave => PoseProgramme::heave(p.heave_centre, p.heave[0], p.heave[1], p.heave[2]).point(t),
+            ProgrammeKind::Heave => heave.point(t),
+            ProgrammeKind::StartUp => {
+                StartUp { from: p.startup_position, to: p.heave_centre, duration: p.startup_duration, then: heave }
+                    .point(t)
+            }
             ProgrammeKind::Sinusoid => PoseProgramme {
                 dof: std::array::from_fn(|i| SoftStartSinusoid {
                     offset: p.sine_offset[i],
@@ -178,8 +203,9 @@ impl ControllerModel {
             .map_err(|e| format!("the programme pose at t = {} cannot be produced by the legs: {e}", self.time))?;
         let mut f = self.parameters.feedback.leg_forces(&solution, &self.l, &self.ldot);
         let d = self.parameters.disturbance.at(self.time);
+        let [f_min, f_max] = self.parameters.force_limits;
         for fk in f.iter_mut() {
-            *fk += d;
+            *fk = (*fk + d).clamp(f_min, f_max);
         }
         Ok(ControllerOutputs {
             f,
@@ -226,6 +252,10 @@ impl ControllerModel {
             group::DISTURBANCE_AMPLITUDE => &mut p.disturbance.amplitude,
             group::DISTURBANCE_FREQUENCY => &mut p.disturbance.frequency,
             group::DISTURBANCE_TIME_CONSTANT => &mut p.disturbance.time_constant,
+            group::STARTUP_POSITION => p.startup_position.get_mut(i)?,
+            group::STARTUP_DURATION => &mut p.startup_duration,
+            group::FMIN => &mut p.force_limits[0],
+            group::FMAX => &mut p.force_limits[1],
             _ => return None,
         })
     }
@@ -241,6 +271,13 @@ impl ControllerModel {
             if value < 0.0 {
                 return Err(format!("parameter {name}: must be >= 0 s (0 = no soft start), got {value}"));
             }
+        }
+        if p.programme == ProgrammeKind::StartUp && !(p.startup_duration > 0.0) {
+            return Err(format!("parameter startup.duration: must be > 0 s, got {}", p.startup_duration));
+        }
+        let [f_min, f_max] = p.force_limits;
+        if !(f_min < f_max) {
+            return Err(format!("parameter Fmin: must be less than Fmax = {f_max} N, got {f_min} N"));
         }
         self.compute().map(|_| ()).map_err(|e| format!("programme: {e}"))
     }
@@ -296,8 +333,9 @@ impl FmuModel for ControllerModel {
                 _ => return Err(format!("{value} is neither 0 (off) nor 1 (on)")),
             },
             group::PROGRAMME => {
-                self.parameters.programme = ProgrammeKind::from_code(value)
-                    .ok_or_else(|| format!("{value} is not a programme (1 = heave, 2 = sinusoid, 3 = external)"))?;
+                self.parameters.programme = ProgrammeKind::from_code(value).ok_or_else(|| {
+                    format!("{value} is not a programme (1 = heave, 2 = sinusoid, 3 = external, 4 = start-up)")
+                })?;
             }
             _ => return Err("not a settable Integer variable".into()),
         }
@@ -363,6 +401,9 @@ impl FmuModel for ControllerModel {
         }
         w.f64(p.sine_time_constant);
         w.f64s(&[p.disturbance.amplitude, p.disturbance.frequency, p.disturbance.time_constant]);
+        w.f64s(p.startup_position.as_slice());
+        w.f64(p.startup_duration);
+        w.f64s(&p.force_limits);
         w.f64s(&self.l);
         w.f64s(&self.ldot);
         for v in &self.pose {
@@ -386,6 +427,9 @@ impl FmuModel for ControllerModel {
         let sine_phase = r.finite_array::<6>("sine.phase")?;
         let sine_time_constant = r.finite("sine.timeConstant")?;
         let [amplitude, frequency, time_constant] = r.finite_array::<3>("disturbance")?;
+        let startup_position = Vector3::from(r.finite_array::<3>("startup.position")?);
+        let startup_duration = r.finite("startup.duration")?;
+        let force_limits = r.finite_array::<2>("Fmin, Fmax")?;
         let l = r.finite_array::<LEG_COUNT>("l")?;
         let ldot = r.finite_array::<LEG_COUNT>("ldot")?;
         let mut pose = [[0.0; 3]; 6];
@@ -406,6 +450,9 @@ impl FmuModel for ControllerModel {
                 sine_phase,
                 sine_time_constant,
                 disturbance: Disturbance { amplitude, frequency, time_constant },
+                startup_position,
+                startup_duration,
+                force_limits,
             },
             l,
             ldot,
@@ -432,7 +479,11 @@ mod tests {
         assert_eq!(g[group::DISTURBANCE_TIME_CONSTANT].name, "disturbance.timeConstant");
         assert_eq!(g[group::F].name, "F");
         assert_eq!(g[group::ANGLESP].name, "anglesp");
-        assert_eq!(g.len(), group::ANGLESP + 1);
+        assert_eq!(g[group::STARTUP_POSITION].name, "startup.position");
+        assert_eq!(g[group::STARTUP_DURATION].name, "startup.duration");
+        assert_eq!(g[group::FMIN].name, "Fmin");
+        assert_eq!(g[group::FMAX].name, "Fmax");
+        assert_eq!(g.len(), group::FMAX + 1);
     }
 
     #[test]

@@ -44,6 +44,10 @@ pub mod group {
     pub const LDOTP: usize = 35;
     pub const RP: usize = 36;
     pub const ANGLESP: usize = 37;
+    pub const STARTUP_POSITION: usize = 38;
+    pub const STARTUP_DURATION: usize = 39;
+    pub const FMIN: usize = 40;
+    pub const FMAX: usize = 41;
 }
 
 const POSE_INPUTS: &[crate::models::variables::Dependency] = &[
@@ -100,6 +104,10 @@ const ALL_KNOWNS: &[crate::models::variables::Dependency] = &[
     All("disturbance.amplitude"),
     All("disturbance.frequency"),
     All("disturbance.timeConstant"),
+    All("startup.position"),
+    All("startup.duration"),
+    All("Fmin"),
+    All("Fmax"),
 ];
 
 pub static GROUPS: &[V] = &[
@@ -140,9 +148,10 @@ pub static GROUPS: &[V] = &[
         None,
         "Programme motion: 1 = the paper's heave z = z0 + a sin(Omega t)(1 - exp(-t/T))^2 above heave.centre; \
          2 = a sinusoid with soft start in each of the six degrees of freedom (sine.*); 3 = the pose and its \
-         derivatives from the inputs pose.*",
+         derivatives from the inputs pose.*; 4 = start-up: a rest-to-rest lift from startup.position to \
+         heave.centre in startup.duration, then programme 1",
     )
-    .integer(1, 3),
+    .integer(1, 4),
     V::parameter("heave.centre", &[3], 94, Some("m"), "Programme 1: centre of mass about which the platform heaves"),
     V::parameter("heave.amplitude", &[], 97, Some("m"), "Programme 1: heave amplitude a"),
     V::parameter("heave.frequency", &[], 98, Some("rad/s"), "Programme 1: heave circular frequency Omega"),
@@ -191,4 +200,28 @@ pub static GROUPS: &[V] = &[
     V::output("anglesp", &[3], 177, Some("rad"), "Programme roll, pitch, yaw", ALL_KNOWNS)
         .display("deg")
         .depends_on(&[All("pose.angles")]),
+    V::parameter(
+        "startup.position",
+        &[3],
+        128,
+        Some("m"),
+        "Programme 4: centre of mass of the parked platform at t = 0 (default: the default stand at rest on its \
+         lower end stops)",
+    ),
+    V::parameter(
+        "startup.duration",
+        &[],
+        131,
+        Some("s"),
+        "Programme 4: duration of the lift to heave.centre (quintic rest-to-rest profile); the heave programme \
+         starts at its end",
+    ),
+    V::parameter(
+        "Fmin",
+        &[],
+        132,
+        Some("N"),
+        "Actuator saturation: the force command F_k is limited to [Fmin, Fmax] (real drives saturate)",
+    ),
+    V::parameter("Fmax", &[], 133, Some("N"), "Actuator saturation: largest force command (see Fmin)"),
 ];

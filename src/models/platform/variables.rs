@@ -91,12 +91,9 @@ pub static STATES: &[(&str, usize)] = &[
 
 const POSE_STATES: &[crate::models::variables::Dependency] = &[All("r"), All("R")];
 const ALL_STATES: &[crate::models::variables::Dependency] = &[All("r"), All("v"), All("R"), All("der(R)")];
-/// The end stops' forces depend on the leg rates: with stops every acceleration depends on
-/// the whole body state.
-const ACCELERATION_KNOWNS: &[crate::models::variables::Dependency] =
-    &[All("r"), All("v"), All("R"), All("der(R)"), All("F")];
-const ANGULAR_ACCELERATION_KNOWNS: &[crate::models::variables::Dependency] =
-    &[All("r"), All("v"), All("R"), All("der(R)"), All("F")];
+/// The knowns of the accelerations and powers: the end stops' forces depend on the leg rates,
+/// so with stops every acceleration depends on the whole body state, and on the leg forces.
+const MOTION_KNOWNS: &[crate::models::variables::Dependency] = &[All("r"), All("v"), All("R"), All("der(R)"), All("F")];
 const STOP_PARAMETERS: &[crate::models::variables::Dependency] = &[
     All("A"),
     All("B"),
@@ -298,7 +295,7 @@ pub static GROUPS: &[V] = &[
         "Acceleration of the centre of mass (Model Exchange derivative of v)",
         ALL_PARAMETERS,
     )
-    .derivative("v", "v", 1, ACCELERATION_KNOWNS),
+    .derivative("v", "v", 1, MOTION_KNOWNS),
     V::local(
         "der(R)",
         &[3, 3],
@@ -316,7 +313,7 @@ pub static GROUPS: &[V] = &[
         "Second time derivative of the rotation matrix (the special form's e_b'', Model Exchange derivative of der(R))",
         ALL_PARAMETERS,
     )
-    .derivative("der(R)", "R", 2, ANGULAR_ACCELERATION_KNOWNS),
+    .derivative("der(R)", "R", 2, MOTION_KNOWNS),
     V::parameter(
         "stops",
         &[],
@@ -407,7 +404,7 @@ pub static GROUPS: &[V] = &[
         "Power of the leg forces sum_k F_k ldot_k (Model Exchange derivative of work.F)",
         ALL_PARAMETERS,
     )
-    .derivative("work.F", "work.F", 1, ANGULAR_ACCELERATION_KNOWNS),
+    .derivative("work.F", "work.F", 1, MOTION_KNOWNS),
     V::local(
         "der(work.dissipated)",
         &[],
