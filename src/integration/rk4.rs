@@ -24,9 +24,6 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
     let mut g_start = [0.0; MAX_SWITCHING];
     let mut g_end = [0.0; MAX_SWITCHING];
     let mut y_start = [0.0; N];
-    if switching > 0 {
-        system.switching(t0, y, &mut g_start);
-    }
     let span = t1 - t0;
     // The 1e-9 slack keeps an interval that is a multiple of the step (up to round-off) at
     // that multiple.
@@ -67,6 +64,10 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
         if switching > 0 {
             system.switching(t_end, y, &mut g_end);
             let changed = events.sides.changed(&g_end, switching);
+            if changed != 0 {
+                // Only now the start values are needed (rare: no cost in the hot path).
+                system.switching(t, &y_start, &mut g_start);
+            }
             for i in bits(changed) {
                 let (g0, g1) = (g_start.get(i).copied().unwrap_or(0.0), g_end.get(i).copied().unwrap_or(0.0));
                 // Linear interpolation between the step's ends.
@@ -84,7 +85,6 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
                 events.log.push(Crossing { index: i, t: tc, rising: g1 > 0.0, y: yc });
             }
             events.sides.bits ^= changed;
-            g_start = g_end;
         }
     }
     Ok(())
