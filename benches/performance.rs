@@ -11,11 +11,12 @@ use std::time::{Duration, Instant};
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use nalgebra::{Matrix3, Vector3};
+use stewart_fmu::fmi::FmiVersion;
+use stewart_fmu::fmi::description::instantiation_token;
 use stewart_fmu::fmi2::exports::*;
 use stewart_fmu::fmi2::types::*;
 use stewart_fmu::integration::{CrossingLog, Integrator, Method, SolverSettings};
 use stewart_fmu::models::ModelKind;
-use stewart_fmu::models::model_description::instantiation_token;
 use stewart_fmu::physics::body_state::BodyState;
 use stewart_fmu::physics::configuration::ConfigurationGuard;
 use stewart_fmu::physics::forces::HeldForces;
@@ -88,7 +89,7 @@ struct Fmu {
 
 impl Fmu {
     fn new(method: i32) -> Fmu {
-        let guid = std::ffi::CString::new(instantiation_token(ModelKind::Platform)).unwrap();
+        let guid = std::ffi::CString::new(instantiation_token(ModelKind::Platform, FmiVersion::Fmi2)).unwrap();
         let cb = fmi2CallbackFunctions {
             logger: None,
             allocateMemory: None,

@@ -10,15 +10,20 @@
 //! 2. [`integration`]: generic ODE integrators (Dormand-Prince 5(4), RK4).
 //! 3. [`simulation`]: a stand in motion (integration + constraint projection + roll-back).
 //! 4. [`control`]: the paper's programme-following feedback law (pure).
-//! 5. [`models`]: the FMU models (variables, parameters, co-simulation steps), safe Rust.
-//! 6. [`fmi2`]: the FMI 2.0 C boundary (`extern "C"` functions, state machine, logging).
+//! 5. [`models`]: the FMU models (variables, parameters, co-simulation steps), safe Rust,
+//!    knowing nothing of FMI versions.
+//! 6. [`fmi`]: what both FMI versions share: the instance around a model, the panic
+//!    boundary, logging, the model descriptions and instantiation tokens.
+//! 7. [`fmi2`], [`fmi3`]: the two C boundaries (`extern "C"` functions, C types, state tables).
 //!
 //! See `ARCHITECTURE.md` for the map of the repository.
 
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used, clippy::panic))]
 
 pub mod control;
+pub mod fmi;
 pub mod fmi2;
+pub mod fmi3;
 pub mod integration;
 pub mod models;
 pub mod physics;

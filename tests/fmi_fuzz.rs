@@ -9,10 +9,11 @@ use std::ffi::CString;
 use std::sync::Mutex;
 
 use common::fmi_host::{LogSink, callbacks};
+use stewart_fmu::fmi::FmiVersion;
+use stewart_fmu::fmi::description::instantiation_token;
 use stewart_fmu::fmi2::exports::*;
 use stewart_fmu::fmi2::types::*;
 use stewart_fmu::models::ModelKind;
-use stewart_fmu::models::model_description::instantiation_token;
 
 /// xorshift64*: deterministic, no dependency.
 struct Rng(u64);
@@ -57,7 +58,7 @@ fn hundred_thousand_random_calls() {
     let sink: Box<LogSink> = Box::new(Mutex::new(vec![]));
     let cbs = callbacks(&sink);
     let silent = fmi2CallbackFunctions { logger: None, ..cbs };
-    let good_guid = CString::new(instantiation_token(ModelKind::Platform)).unwrap();
+    let good_guid = CString::new(instantiation_token(ModelKind::Platform, FmiVersion::Fmi2)).unwrap();
     let mut instances: Vec<fmi2Component> = vec![];
     let mut states: Vec<(fmi2Component, fmi2FMUstate)> = vec![];
     let mut times: Vec<f64> = vec![];

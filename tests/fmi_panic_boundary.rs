@@ -5,7 +5,8 @@
 mod common;
 
 use common::fmi_host::Host;
-use stewart_fmu::fmi2::boundary::call;
+use stewart_fmu::fmi::Status;
+use stewart_fmu::fmi::boundary::call;
 use stewart_fmu::fmi2::exports::*;
 use stewart_fmu::fmi2::state_machine::Fmi2Function;
 use stewart_fmu::fmi2::types::*;
@@ -17,7 +18,7 @@ fn a_panic_is_caught_and_poisons_the_instance() {
     assert_eq!(h.step(0.01), fmi2OK);
     // The boundary every export uses, with a body that panics (as a bug in the model would).
     let status = unsafe { call(h.c, Fmi2Function::DoStep, |_instance| panic!("deliberate test panic")) };
-    assert_eq!(status, fmi2Error);
+    assert_eq!(status, Status::Error);
     let fatal = h.messages().into_iter().find(|l| l.category == "logStatusFatal").expect("a logStatusFatal message");
     assert!(fatal.message.contains("deliberate test panic") && fatal.message.contains("poisoned"), "{}", fatal.message);
     assert_eq!(fatal.status, fmi2Fatal);
@@ -38,7 +39,7 @@ fn a_panic_is_caught_and_poisons_the_instance() {
 #[test]
 fn a_panic_without_a_valid_instance_is_still_contained() {
     let status = unsafe { call(std::ptr::null_mut(), Fmi2Function::DoStep, |_instance| panic!("never runs")) };
-    assert_eq!(status, fmi2Error);
-    let r = stewart_fmu::fmi2::boundary::no_instance(7, || -> i32 { panic!("contained") });
+    assert_eq!(status, Status::Error);
+    let r = stewart_fmu::fmi::boundary::no_instance(7, || -> i32 { panic!("contained") });
     assert_eq!(r, 7);
 }

@@ -289,11 +289,12 @@ fn after_an_error_only_the_allowed_calls_work_and_reset_restores_the_start_value
 /// refusals (no fmi2DoStep, no state changes outside continuous-time mode).
 #[test]
 fn model_exchange_life_cycle_and_refusals() {
+    use stewart_fmu::fmi::FmiVersion;
+    use stewart_fmu::fmi::description::instantiation_token;
     use stewart_fmu::models::ModelKind;
-    use stewart_fmu::models::model_description::instantiation_token;
     let sink = std::sync::Mutex::new(vec![]);
     let cb = common::fmi_host::callbacks(&sink);
-    let guid = std::ffi::CString::new(instantiation_token(ModelKind::Platform)).unwrap();
+    let guid = std::ffi::CString::new(instantiation_token(ModelKind::Platform, FmiVersion::Fmi2)).unwrap();
     unsafe {
         let c = fmi2Instantiate(c"me".as_ptr(), fmi2ModelExchange, guid.as_ptr(), std::ptr::null(), &cb, 0, 0);
         assert!(!c.is_null());
@@ -336,7 +337,7 @@ fn model_exchange_life_cycle_and_refusals() {
         assert_eq!(fmi2Terminate(c), fmi2OK);
         fmi2FreeInstance(c);
         // The controller has no Model Exchange.
-        let guid = std::ffi::CString::new(instantiation_token(ModelKind::Controller)).unwrap();
+        let guid = std::ffi::CString::new(instantiation_token(ModelKind::Controller, FmiVersion::Fmi2)).unwrap();
         let c = fmi2Instantiate(c"me".as_ptr(), fmi2ModelExchange, guid.as_ptr(), std::ptr::null(), &cb, 0, 0);
         assert!(c.is_null());
     }

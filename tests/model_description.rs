@@ -1,22 +1,74 @@
-//! The committed `modelDescription/*.xml` files are exactly what the binary's variable tables
-//! generate: the XML a host reads and the code it runs cannot disagree.
+//! The committed `modelDescription/*.xml` (FMI 2) and `modelDescription/fmi3/*.xml` (FMI 3)
+//! files are exactly what the binary's variable tables generate, every dependency in the
+//! tables names a variable that exists, and each token selects its own model.
 
+use stewart_fmu::fmi::FmiVersion;
+use stewart_fmu::fmi::description::{documentation_html, instantiation_token, model_description_xml, model_of_token};
 use stewart_fmu::models::ModelKind;
-use stewart_fmu::models::model_description::{documentation_html, instantiation_token, model_description_xml};
+use stewart_fmu::models::variables::Dependency;
+
+fn committed(path: &str) -> String {
+    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{path}: {e}"))
+}
 
 #[test]
 fn committed_model_descriptions_match_the_code() {
     for kind in ModelKind::ALL {
         let id = kind.info().model_identifier;
-        let path = format!("{}/modelDescription/{id}.xml", env!("CARGO_MANIFEST_DIR"));
-        let committed = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
-        assert!(
-            committed == model_description_xml(kind),
-            "{path} is out of date: run `cargo run --release --bin build-fmu -- --update-model-description`"
-        );
-        assert!(committed.contains(&instantiation_token(kind)));
-        assert_eq!(ModelKind::from_guid(&instantiation_token(kind)), Some(kind));
-        let html = documentation_html(kind);
-        assert!(html.contains("<table>") && html.contains(id));
+        let mut versions =
+            vec![(FmiVersion::Fmi2, format!("{}/modelDescription/{id}.xml", env!("CARGO_MANIFEST_DIR")))];
+        if !kind.is_benchmark_floor() {
+            versions.push((FmiVersion::Fmi3, format!("{}/modelDescription/fmi3/{id}.xml", env!("CARGO_MANIFEST_DIR"))));
+        }
+        for (version, path) in versions {
+            let text = committed(&path);
+            assert!(
+                text == model_description_xml(kind, version),
+                "{path} is out of date: run `cargo run --release --bin build-fmu -- --update-model-description`"
+            );
+            let token = instantiation_token(kind, version);
+            assert!(text.contains(&token));
+            assert_eq!(model_of_token(&token, version), Some(kind));
+            let other = if version == FmiVersion::Fmi2 { FmiVersion::Fmi3 } else { FmiVersion::Fmi2 };
+            assert_eq!(model_of_token(&token, other), None, "a token belongs to one FMI version");
+            let html = documentation_html(kind, version);
+            assert!(html.contains("<table>") && html.contains(id));
+        }
+    }
+}
+
+#[test]
+fn every_dependency_names_an_existing_variable() {
+    for kind in ModelKind::ALL {
+        let groups = kind.info().groups;
+        for g in groups {
+            for d in g.output_dependencies.iter().chain(g.initial_dependencies).chain(g.derivative_dependencies) {
+                let (Dependency::All(name) | Dependency::SameIndex(name)) = *d;
+                let target = groups.iter().find(|t| t.name == name);
+                assert!(
+                    target.is_some(),
+                    "{}: {} depends on {name}, which does not exist",
+                    kind.info().model_name,
+                    g.name
+                );
+                if let (Dependency::SameIndex(_), Some(t)) = (d, target) {
+                    assert_eq!(
+                        t.len(),
+                        g.len(),
+                        "{}: {} depends element-wise on {name} of another size",
+                        kind.info().model_name,
+                        g.name
+                    );
+                }
+            }
+            if let Some(state) = g.derivative_of {
+                assert!(groups.iter().any(|t| t.name == state), "{}: derivative of unknown {state}", g.name);
+            }
+        }
+        for (state, element) in kind.info().states {
+            let g =
+                groups.iter().find(|g| g.name == *state).unwrap_or_else(|| panic!("state {state} is not a variable"));
+            assert!(*element < g.len());
+        }
     }
 }

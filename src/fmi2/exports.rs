@@ -10,12 +10,12 @@
 
 use std::ffi::{CStr, CString, c_char};
 
-use super::boundary::{self, boundary, no_instance, try_out, try_slice, try_slice_mut};
-use super::instance::{FmuStateHandle, Instance};
-use super::logger::{Logger, log_without_instance};
-use super::state_machine::{Fmi2Function as F, InterfaceType};
+use super::state_machine::Fmi2Function as F;
 use super::types::*;
-use crate::models::ModelKind;
+use crate::fmi::boundary::{boundary, no_instance, try_out, try_slice, try_slice_mut};
+use crate::fmi::instance::{FmuStateHandle, Instance};
+use crate::fmi::log::{Callback, Logger, log_without_instance};
+use crate::fmi::{FmiVersion, InterfaceType, Status, library};
 
 /// # Safety
 /// `p` must be NULL or a NUL-terminated string.
@@ -48,10 +48,10 @@ pub unsafe extern "C" fn fmi2SetDebugLogging(
     categories: *const fmi2String,
 ) -> fmi2Status {
     boundary!(c, F::SetDebugLogging, |inst| {
-        let list = try_slice!(inst, F::SetDebugLogging, categories, n_categories, "categories");
+        let list = try_slice!(inst, categories, n_categories, "categories");
         // SAFETY: each entry is NULL or a NUL-terminated string.
         let names: Vec<Option<String>> = list.iter().map(|&p| unsafe { c_str(p) }).collect();
-        inst.set_debug_logging(F::SetDebugLogging, logging_on != fmi2False, &names)
+        inst.set_debug_logging(logging_on != fmi2False, &names)
     })
 }
 
@@ -75,7 +75,10 @@ pub unsafe extern "C" fn fmi2Instantiate(
         // SAFETY: NULL or NUL-terminated strings.
         let name = unsafe { c_str(instance_name) }.unwrap_or_default();
         let fail = |message: &str| {
-            log_without_instance(functions.as_ref(), &name, fmi2Error, &format!("fmi2Instantiate: {message}"));
+            if let Some(f) = functions.as_ref() {
+                let message = format!("fmi2Instantiate: {message}");
+                log_without_instance(Callback::Fmi2(f.logger), f.componentEnvironment, &name, Status::Error, &message);
+            }
             std::ptr::null_mut()
         };
         let Some(f) = functions else {
@@ -88,26 +91,13 @@ pub unsafe extern "C" fn fmi2Instantiate(
         let Some(guid) = (unsafe { c_str(fmu_guid) }) else {
             return fail("fmuGUID is NULL");
         };
-        let Some(kind) = ModelKind::from_guid(&guid) else {
-            let known: Vec<String> = ModelKind::ALL
-                .iter()
-                .map(|k| {
-                    format!(
-                        "{} {}",
-                        k.info().model_identifier,
-                        crate::models::model_description::instantiation_token(*k)
-                    )
-                })
-                .collect();
-            return fail(&format!(
-                "GUID {guid} does not belong to this binary (it implements {}); the modelDescription.xml and the \
-                 binary come from different builds",
-                known.join(", ")
-            ));
+        let kind = match library::model_for_token(&guid, FmiVersion::Fmi2) {
+            Ok(kind) => kind,
+            Err(message) => return fail(&format!("fmuGUID {message}")),
         };
         let interface = match fmu_type {
             fmi2CoSimulation => InterfaceType::CoSimulation,
-            fmi2ModelExchange if kind.info().model_exchange => InterfaceType::ModelExchange,
+            fmi2ModelExchange if kind.info().capabilities.model_exchange => InterfaceType::ModelExchange,
             fmi2ModelExchange => {
                 return fail(&format!(
                     "fmuType fmi2ModelExchange: {} implements Co-Simulation only",
@@ -119,8 +109,8 @@ pub unsafe extern "C" fn fmi2Instantiate(
         let Ok(cname) = CString::new(name.clone()) else {
             return fail("instanceName contains NUL");
         };
-        let logger = Logger::new(f.logger, f.componentEnvironment, cname, logging_on != fmi2False);
-        Instance::new(kind, &guid, interface, logger).into_handle()
+        let logger = Logger::new(Callback::Fmi2(f.logger), f.componentEnvironment, cname, logging_on != fmi2False);
+        Instance::new(kind, &guid, FmiVersion::Fmi2, interface, logger).into_handle()
     })
 }
 
@@ -130,8 +120,9 @@ pub unsafe extern "C" fn fmi2Instantiate(
 pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
     no_instance((), || {
         // SAFETY: NULL, or an instance from fmi2Instantiate not yet freed (magic checked).
-        if let Some(inst) = unsafe { Instance::from_handle(c) } {
-            inst.log_call(F::FreeInstance, fmi2OK);
+        if let Some(inst) = unsafe { Instance::from_handle(c, FmiVersion::Fmi2) } {
+            inst.begin("fmi2FreeInstance");
+            inst.log_call(Status::Ok);
             // SAFETY: checked above to be one of our live instances.
             unsafe { Instance::free(c) };
         }
@@ -151,7 +142,6 @@ pub unsafe extern "C" fn fmi2SetupExperiment(
 ) -> fmi2Status {
     boundary!(c, F::SetupExperiment, |inst| {
         inst.setup_experiment(
-            F::SetupExperiment,
             (tolerance_defined != fmi2False).then_some(tolerance),
             start_time,
             (stop_time_defined != fmi2False).then_some(stop_time),
@@ -170,7 +160,7 @@ pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2St
 /// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status {
-    boundary!(c, F::ExitInitializationMode, |inst| inst.exit_initialization_mode(F::ExitInitializationMode))
+    boundary!(c, F::ExitInitializationMode, |inst| inst.exit_initialization_mode())
 }
 
 /// # Safety
@@ -197,9 +187,9 @@ pub unsafe extern "C" fn fmi2GetReal(
     value: *mut fmi2Real,
 ) -> fmi2Status {
     boundary!(c, F::GetReal, |inst| {
-        let vrs = try_slice!(inst, F::GetReal, vr, nvr, "vr");
-        let values = try_slice_mut!(inst, F::GetReal, value, nvr, "value");
-        inst.get_real(F::GetReal, vrs, values)
+        let vrs = try_slice!(inst, vr, nvr, "vr");
+        let values = try_slice_mut!(inst, value, nvr, "value");
+        inst.get_real(vrs, values)
     })
 }
 
@@ -213,9 +203,9 @@ pub unsafe extern "C" fn fmi2GetInteger(
     value: *mut fmi2Integer,
 ) -> fmi2Status {
     boundary!(c, F::GetInteger, |inst| {
-        let vrs = try_slice!(inst, F::GetInteger, vr, nvr, "vr");
-        let values = try_slice_mut!(inst, F::GetInteger, value, nvr, "value");
-        inst.get_integer(F::GetInteger, vrs, values)
+        let vrs = try_slice!(inst, vr, nvr, "vr");
+        let values = try_slice_mut!(inst, value, nvr, "value");
+        inst.get_integer(vrs, values)
     })
 }
 
@@ -229,9 +219,16 @@ pub unsafe extern "C" fn fmi2GetBoolean(
     value: *mut fmi2Boolean,
 ) -> fmi2Status {
     boundary!(c, F::GetBoolean, |inst| {
-        let vrs = try_slice!(inst, F::GetBoolean, vr, nvr, "vr");
-        let values = try_slice_mut!(inst, F::GetBoolean, value, nvr, "value");
-        inst.get_boolean(F::GetBoolean, vrs, values)
+        let vrs = try_slice!(inst, vr, nvr, "vr");
+        let values = try_slice_mut!(inst, value, nvr, "value");
+        let mut flags = vec![false; values.len()];
+        let status = inst.get_boolean(vrs, &mut flags);
+        if status == Status::Ok {
+            for (v, f) in values.iter_mut().zip(flags) {
+                *v = if f { fmi2True } else { fmi2False };
+            }
+        }
+        status
     })
 }
 
@@ -245,9 +242,9 @@ pub unsafe extern "C" fn fmi2GetString(
     value: *mut fmi2String,
 ) -> fmi2Status {
     boundary!(c, F::GetString, |inst| {
-        let vrs = try_slice!(inst, F::GetString, vr, nvr, "vr");
-        let _ = try_slice_mut!(inst, F::GetString, value, nvr, "value");
-        inst.no_variables_of_type(F::GetString, vrs, "String")
+        let vrs = try_slice!(inst, vr, nvr, "vr");
+        let _ = try_slice_mut!(inst, value, nvr, "value");
+        inst.no_variables_of_type(vrs, "String")
     })
 }
 
@@ -261,9 +258,9 @@ pub unsafe extern "C" fn fmi2SetReal(
     value: *const fmi2Real,
 ) -> fmi2Status {
     boundary!(c, F::SetReal, |inst| {
-        let vrs = try_slice!(inst, F::SetReal, vr, nvr, "vr");
-        let values = try_slice!(inst, F::SetReal, value, nvr, "value");
-        inst.set_real(F::SetReal, vrs, values)
+        let vrs = try_slice!(inst, vr, nvr, "vr");
+        let values = try_slice!(inst, value, nvr, "value");
+        inst.set_real(vrs, values)
     })
 }
 
@@ -277,9 +274,9 @@ pub unsafe extern "C" fn fmi2SetInteger(
     value: *const fmi2Integer,
 ) -> fmi2Status {
     boundary!(c, F::SetInteger, |inst| {
-        let vrs = try_slice!(inst, F::SetInteger, vr, nvr, "vr");
-        let values = try_slice!(inst, F::SetInteger, value, nvr, "value");
-        inst.set_integer(F::SetInteger, vrs, values)
+        let vrs = try_slice!(inst, vr, nvr, "vr");
+        let values = try_slice!(inst, value, nvr, "value");
+        inst.set_integer(vrs, values)
     })
 }
 
@@ -293,9 +290,10 @@ pub unsafe extern "C" fn fmi2SetBoolean(
     value: *const fmi2Boolean,
 ) -> fmi2Status {
     boundary!(c, F::SetBoolean, |inst| {
-        let vrs = try_slice!(inst, F::SetBoolean, vr, nvr, "vr");
-        let values = try_slice!(inst, F::SetBoolean, value, nvr, "value");
-        inst.set_boolean(F::SetBoolean, vrs, values)
+        let vrs = try_slice!(inst, vr, nvr, "vr");
+        let values = try_slice!(inst, value, nvr, "value");
+        let flags: Vec<bool> = values.iter().map(|&v| v != fmi2False).collect();
+        inst.set_boolean(vrs, &flags)
     })
 }
 
@@ -309,9 +307,9 @@ pub unsafe extern "C" fn fmi2SetString(
     value: *const fmi2String,
 ) -> fmi2Status {
     boundary!(c, F::SetString, |inst| {
-        let vrs = try_slice!(inst, F::SetString, vr, nvr, "vr");
-        let _ = try_slice!(inst, F::SetString, value, nvr, "value");
-        inst.no_variables_of_type(F::SetString, vrs, "String")
+        let vrs = try_slice!(inst, vr, nvr, "vr");
+        let _ = try_slice!(inst, value, nvr, "value");
+        inst.no_variables_of_type(vrs, "String")
     })
 }
 
@@ -320,19 +318,19 @@ pub unsafe extern "C" fn fmi2SetString(
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
     boundary!(c, F::GetFMUstate, |inst| {
-        let slot = try_out!(inst, F::GetFMUstate, state, "FMUstate");
+        let slot = try_out!(inst, state, "FMUstate");
         let bytes = inst.serialize();
         if slot.is_null() {
-            *slot = Instance::new_state_handle(bytes).into_handle();
-            return fmi2OK;
+            *slot = FmuStateHandle::new(bytes).into_handle();
+            return Status::Ok;
         }
         // SAFETY: non-NULL *state must be one of our handles (magic checked).
         match unsafe { FmuStateHandle::from_handle(*slot) } {
             Some(h) => {
                 h.replace_bytes(bytes);
-                fmi2OK
+                Status::Ok
             }
-            None => inst.error(F::GetFMUstate, "*FMUstate is neither NULL nor a state of this FMU"),
+            None => inst.error("*FMUstate is neither NULL nor a state of this FMU"),
         }
     })
 }
@@ -344,11 +342,11 @@ pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, state: fmi2FMUstate) 
     boundary!(c, F::SetFMUstate, |inst| {
         // SAFETY: NULL or one of our handles (magic checked).
         let Some(h) = (unsafe { FmuStateHandle::from_handle(state) }) else {
-            return inst.error(F::SetFMUstate, "FMUstate is NULL or not a state of this FMU");
+            return inst.error("FMUstate is NULL or not a state of this FMU");
         };
         match inst.restore(h.bytes()) {
-            Ok(()) => fmi2OK,
-            Err(e) => inst.error(F::SetFMUstate, &format!("state refused: {e}")),
+            Ok(()) => Status::Ok,
+            Err(e) => inst.error(&format!("state refused: {e}")),
         }
     })
 }
@@ -358,18 +356,18 @@ pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, state: fmi2FMUstate) 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2FreeFMUstate(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
     boundary!(c, F::FreeFMUstate, |inst| {
-        let slot = try_out!(inst, F::FreeFMUstate, state, "FMUstate");
+        let slot = try_out!(inst, state, "FMUstate");
         if slot.is_null() {
-            return fmi2OK;
+            return Status::Ok;
         }
         // SAFETY: non-NULL *state must be one of our handles (magic checked).
         if unsafe { FmuStateHandle::from_handle(*slot) }.is_none() {
-            return inst.error(F::FreeFMUstate, "*FMUstate is not a state of this FMU");
+            return inst.error("*FMUstate is not a state of this FMU");
         }
         // SAFETY: checked to be one of our live handles.
         unsafe { FmuStateHandle::free(*slot) };
         *slot = std::ptr::null_mut();
-        fmi2OK
+        Status::Ok
     })
 }
 
@@ -382,13 +380,13 @@ pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
     size: *mut usize,
 ) -> fmi2Status {
     boundary!(c, F::SerializedFMUstateSize, |inst| {
-        let out = try_out!(inst, F::SerializedFMUstateSize, size, "size");
+        let out = try_out!(inst, size, "size");
         // SAFETY: NULL or one of our handles (magic checked).
         let Some(h) = (unsafe { FmuStateHandle::from_handle(state) }) else {
-            return inst.error(F::SerializedFMUstateSize, "FMUstate is NULL or not a state of this FMU");
+            return inst.error("FMUstate is NULL or not a state of this FMU");
         };
         *out = h.bytes().len();
-        fmi2OK
+        Status::Ok
     })
 }
 
@@ -404,18 +402,15 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
     boundary!(c, F::SerializeFMUstate, |inst| {
         // SAFETY: NULL or one of our handles (magic checked).
         let Some(h) = (unsafe { FmuStateHandle::from_handle(state) }) else {
-            return inst.error(F::SerializeFMUstate, "FMUstate is NULL or not a state of this FMU");
+            return inst.error("FMUstate is NULL or not a state of this FMU");
         };
         let needed = h.bytes().len();
         if size < needed {
-            return inst.error(
-                F::SerializeFMUstate,
-                &format!("buffer of {size} bytes is too small, the state needs {needed}"),
-            );
+            return inst.error(&format!("buffer of {size} bytes is too small, the state needs {needed}"));
         }
-        let out = try_slice_mut!(inst, F::SerializeFMUstate, serialized as *mut u8, needed, "serializedState");
+        let out = try_slice_mut!(inst, serialized as *mut u8, needed, "serializedState");
         out.copy_from_slice(h.bytes());
-        fmi2OK
+        Status::Ok
     })
 }
 
@@ -429,22 +424,22 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
     state: *mut fmi2FMUstate,
 ) -> fmi2Status {
     boundary!(c, F::DeSerializeFMUstate, |inst| {
-        let bytes = try_slice!(inst, F::DeSerializeFMUstate, serialized as *const u8, size, "serializedState");
-        let slot = try_out!(inst, F::DeSerializeFMUstate, state, "FMUstate");
+        let bytes = try_slice!(inst, serialized as *const u8, size, "serializedState");
+        let slot = try_out!(inst, state, "FMUstate");
         if let Err(e) = inst.validate_state_bytes(bytes) {
-            return inst.error(F::DeSerializeFMUstate, &format!("serialized state refused: {e}"));
+            return inst.error(&format!("serialized state refused: {e}"));
         }
         if slot.is_null() {
-            *slot = Instance::new_state_handle(bytes.to_vec()).into_handle();
-            return fmi2OK;
+            *slot = FmuStateHandle::new(bytes.to_vec()).into_handle();
+            return Status::Ok;
         }
         // SAFETY: non-NULL *state must be one of our handles (magic checked).
         match unsafe { FmuStateHandle::from_handle(*slot) } {
             Some(h) => {
                 h.replace_bytes(bytes.to_vec());
-                fmi2OK
+                Status::Ok
             }
-            None => inst.error(F::DeSerializeFMUstate, "*FMUstate is neither NULL nor a state of this FMU"),
+            None => inst.error("*FMUstate is neither NULL nor a state of this FMU"),
         }
     })
 }
@@ -462,11 +457,11 @@ pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
     dv_unknown: *mut fmi2Real,
 ) -> fmi2Status {
     boundary!(c, F::GetDirectionalDerivative, |inst| {
-        let unknowns = try_slice!(inst, F::GetDirectionalDerivative, unknown, n_unknown, "vUnknown_ref");
-        let knowns = try_slice!(inst, F::GetDirectionalDerivative, known, n_known, "vKnown_ref");
-        let seeds = try_slice!(inst, F::GetDirectionalDerivative, dv_known, n_known, "dvKnown");
-        let out = try_slice_mut!(inst, F::GetDirectionalDerivative, dv_unknown, n_unknown, "dvUnknown");
-        inst.get_directional_derivative(F::GetDirectionalDerivative, unknowns, knowns, seeds, out)
+        let unknowns = try_slice!(inst, unknown, n_unknown, "vUnknown_ref");
+        let knowns = try_slice!(inst, known, n_known, "vKnown_ref");
+        let seeds = try_slice!(inst, dv_known, n_known, "dvKnown");
+        let out = try_slice_mut!(inst, dv_unknown, n_unknown, "dvUnknown");
+        inst.get_directional_derivative(unknowns, knowns, seeds, out)
     })
 }
 
@@ -483,10 +478,10 @@ pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
     value: *const fmi2Real,
 ) -> fmi2Status {
     boundary!(c, F::SetRealInputDerivatives, |inst| {
-        let vrs = try_slice!(inst, F::SetRealInputDerivatives, vr, nvr, "vr");
-        let orders = try_slice!(inst, F::SetRealInputDerivatives, order, nvr, "order");
-        let values = try_slice!(inst, F::SetRealInputDerivatives, value, nvr, "value");
-        inst.set_real_input_derivatives(F::SetRealInputDerivatives, vrs, orders, values)
+        let vrs = try_slice!(inst, vr, nvr, "vr");
+        let orders = try_slice!(inst, order, nvr, "order");
+        let values = try_slice!(inst, value, nvr, "value");
+        inst.set_real_input_derivatives(vrs, orders, values)
     })
 }
 
@@ -501,10 +496,10 @@ pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
     value: *mut fmi2Real,
 ) -> fmi2Status {
     boundary!(c, F::GetRealOutputDerivatives, |inst| {
-        let vrs = try_slice!(inst, F::GetRealOutputDerivatives, vr, nvr, "vr");
-        let orders = try_slice!(inst, F::GetRealOutputDerivatives, order, nvr, "order");
-        let values = try_slice_mut!(inst, F::GetRealOutputDerivatives, value, nvr, "value");
-        inst.get_real_output_derivatives(F::GetRealOutputDerivatives, vrs, orders, values)
+        let vrs = try_slice!(inst, vr, nvr, "vr");
+        let orders = try_slice!(inst, order, nvr, "order");
+        let values = try_slice_mut!(inst, value, nvr, "value");
+        inst.get_output_derivatives(vrs, orders, values)
     })
 }
 
@@ -517,7 +512,7 @@ pub unsafe extern "C" fn fmi2DoStep(
     communication_step_size: fmi2Real,
     _no_set_fmu_state_prior_to_current_point: fmi2Boolean,
 ) -> fmi2Status {
-    boundary!(c, F::DoStep, |inst| inst.do_step(F::DoStep, current_communication_point, communication_step_size))
+    boundary!(c, F::DoStep, |inst| inst.do_step(current_communication_point, communication_step_size).0)
 }
 
 /// # Safety
@@ -526,7 +521,7 @@ pub unsafe extern "C" fn fmi2DoStep(
 pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
     // Only allowed in stepInProgress, which this synchronous FMU never enters: the state
     // table refuses it.
-    boundary!(c, F::CancelStep, |inst| inst.error(F::CancelStep, "no asynchronous step to cancel"))
+    boundary!(c, F::CancelStep, |inst| inst.error("no asynchronous step to cancel"))
 }
 
 /// # Safety
@@ -534,8 +529,8 @@ pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetStatus(c: fmi2Component, kind: fmi2StatusKind, value: *mut fmi2Status) -> fmi2Status {
     boundary!(c, F::GetStatus, |inst| {
-        let _ = try_out!(inst, F::GetStatus, value, "value");
-        inst.status_not_available(F::GetStatus, kind)
+        let _ = try_out!(inst, value, "value");
+        status_not_available(inst, kind)
     })
 }
 
@@ -544,8 +539,12 @@ pub unsafe extern "C" fn fmi2GetStatus(c: fmi2Component, kind: fmi2StatusKind, v
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetRealStatus(c: fmi2Component, kind: fmi2StatusKind, value: *mut fmi2Real) -> fmi2Status {
     boundary!(c, F::GetRealStatus, |inst| {
-        let out = try_out!(inst, F::GetRealStatus, value, "value");
-        inst.get_real_status(F::GetRealStatus, kind, out)
+        let out = try_out!(inst, value, "value");
+        if kind != fmi2LastSuccessfulTime {
+            return status_not_available(inst, kind);
+        }
+        *out = inst.last_successful_time;
+        Status::Ok
     })
 }
 
@@ -558,8 +557,8 @@ pub unsafe extern "C" fn fmi2GetIntegerStatus(
     value: *mut fmi2Integer,
 ) -> fmi2Status {
     boundary!(c, F::GetIntegerStatus, |inst| {
-        let _ = try_out!(inst, F::GetIntegerStatus, value, "value");
-        inst.status_not_available(F::GetIntegerStatus, kind)
+        let _ = try_out!(inst, value, "value");
+        status_not_available(inst, kind)
     })
 }
 
@@ -572,8 +571,12 @@ pub unsafe extern "C" fn fmi2GetBooleanStatus(
     value: *mut fmi2Boolean,
 ) -> fmi2Status {
     boundary!(c, F::GetBooleanStatus, |inst| {
-        let out = try_out!(inst, F::GetBooleanStatus, value, "value");
-        inst.get_boolean_status(F::GetBooleanStatus, kind, out)
+        let out = try_out!(inst, value, "value");
+        if kind != fmi2Terminated {
+            return status_not_available(inst, kind);
+        }
+        *out = if inst.terminated { fmi2True } else { fmi2False };
+        Status::Ok
     })
 }
 
@@ -586,8 +589,8 @@ pub unsafe extern "C" fn fmi2GetStringStatus(
     value: *mut fmi2String,
 ) -> fmi2Status {
     boundary!(c, F::GetStringStatus, |inst| {
-        let _ = try_out!(inst, F::GetStringStatus, value, "value");
-        inst.status_not_available(F::GetStringStatus, kind)
+        let _ = try_out!(inst, value, "value");
+        status_not_available(inst, kind)
     })
 }
 
@@ -605,8 +608,17 @@ pub unsafe extern "C" fn fmi2EnterEventMode(c: fmi2Component) -> fmi2Status {
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2NewDiscreteStates(c: fmi2Component, event_info: *mut fmi2EventInfo) -> fmi2Status {
     boundary!(c, F::NewDiscreteStates, |inst| {
-        let info = try_out!(inst, F::NewDiscreteStates, event_info, "fmi2EventInfo");
-        inst.new_discrete_states(info)
+        let info = try_out!(inst, event_info, "fmi2EventInfo");
+        let update = inst.update_discrete_states();
+        *info = fmi2EventInfo {
+            newDiscreteStatesNeeded: update.discrete_states_need_update as fmi2Boolean,
+            terminateSimulation: update.terminate_simulation as fmi2Boolean,
+            nominalsOfContinuousStatesChanged: update.nominals_changed as fmi2Boolean,
+            valuesOfContinuousStatesChanged: update.values_changed as fmi2Boolean,
+            nextEventTimeDefined: update.next_event_time.is_some() as fmi2Boolean,
+            nextEventTime: update.next_event_time.unwrap_or(0.0),
+        };
+        Status::Ok
     })
 }
 
@@ -627,9 +639,11 @@ pub unsafe extern "C" fn fmi2CompletedIntegratorStep(
     terminate_simulation: *mut fmi2Boolean,
 ) -> fmi2Status {
     boundary!(c, F::CompletedIntegratorStep, |inst| {
-        let enter = try_out!(inst, F::CompletedIntegratorStep, enter_event_mode, "enterEventMode");
-        let terminate = try_out!(inst, F::CompletedIntegratorStep, terminate_simulation, "terminateSimulation");
-        inst.completed_integrator_step(enter, terminate)
+        let enter = try_out!(inst, enter_event_mode, "enterEventMode");
+        let terminate = try_out!(inst, terminate_simulation, "terminateSimulation");
+        let (e, t) = inst.completed_integrator_step();
+        (*enter, *terminate) = (e as fmi2Boolean, t as fmi2Boolean);
+        Status::Ok
     })
 }
 
@@ -637,7 +651,7 @@ pub unsafe extern "C" fn fmi2CompletedIntegratorStep(
 /// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SetTime(c: fmi2Component, time: fmi2Real) -> fmi2Status {
-    boundary!(c, F::SetTime, |inst| inst.set_time(F::SetTime, time))
+    boundary!(c, F::SetTime, |inst| inst.set_time(time))
 }
 
 /// # Safety
@@ -645,8 +659,8 @@ pub unsafe extern "C" fn fmi2SetTime(c: fmi2Component, time: fmi2Real) -> fmi2St
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SetContinuousStates(c: fmi2Component, x: *const fmi2Real, nx: usize) -> fmi2Status {
     boundary!(c, F::SetContinuousStates, |inst| {
-        let states = try_slice!(inst, F::SetContinuousStates, x, nx, "x");
-        inst.set_continuous_states(F::SetContinuousStates, states)
+        let states = try_slice!(inst, x, nx, "x");
+        inst.set_continuous_states(states)
     })
 }
 
@@ -655,8 +669,8 @@ pub unsafe extern "C" fn fmi2SetContinuousStates(c: fmi2Component, x: *const fmi
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetDerivatives(c: fmi2Component, derivatives: *mut fmi2Real, nx: usize) -> fmi2Status {
     boundary!(c, F::GetDerivatives, |inst| {
-        let dx = try_slice_mut!(inst, F::GetDerivatives, derivatives, nx, "derivatives");
-        inst.get_derivatives(F::GetDerivatives, dx)
+        let dx = try_slice_mut!(inst, derivatives, nx, "derivatives");
+        inst.get_derivatives(dx)
     })
 }
 
@@ -665,8 +679,8 @@ pub unsafe extern "C" fn fmi2GetDerivatives(c: fmi2Component, derivatives: *mut 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetEventIndicators(c: fmi2Component, indicators: *mut fmi2Real, ni: usize) -> fmi2Status {
     boundary!(c, F::GetEventIndicators, |inst| {
-        let z = try_slice_mut!(inst, F::GetEventIndicators, indicators, ni, "eventIndicators");
-        inst.get_event_indicators(F::GetEventIndicators, z)
+        let z = try_slice_mut!(inst, indicators, ni, "eventIndicators");
+        inst.get_event_indicators(z)
     })
 }
 
@@ -675,8 +689,8 @@ pub unsafe extern "C" fn fmi2GetEventIndicators(c: fmi2Component, indicators: *m
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetContinuousStates(c: fmi2Component, x: *mut fmi2Real, nx: usize) -> fmi2Status {
     boundary!(c, F::GetContinuousStates, |inst| {
-        let states = try_slice_mut!(inst, F::GetContinuousStates, x, nx, "x");
-        inst.get_continuous_states(F::GetContinuousStates, states)
+        let states = try_slice_mut!(inst, x, nx, "x");
+        inst.get_continuous_states(states)
     })
 }
 
@@ -689,10 +703,23 @@ pub unsafe extern "C" fn fmi2GetNominalsOfContinuousStates(
     nx: usize,
 ) -> fmi2Status {
     boundary!(c, F::GetNominalsOfContinuousStates, |inst| {
-        let nominals = try_slice_mut!(inst, F::GetNominalsOfContinuousStates, x_nominal, nx, "x_nominal");
-        inst.get_nominals(F::GetNominalsOfContinuousStates, nominals)
+        let nominals = try_slice_mut!(inst, x_nominal, nx, "x_nominal");
+        inst.get_nominals(nominals)
     })
 }
 
-#[allow(unused_imports)]
-use boundary::c_slice as _;
+// ----- status queries (FMI 2 Co-Simulation) --------------------------------------------------
+
+/// Status kinds this synchronous FMU cannot answer: logged, `fmi2Discard` (as the standard
+/// prescribes).
+fn status_not_available(inst: &Instance, kind: fmi2StatusKind) -> Status {
+    inst.log(
+        Status::Discard,
+        &format!(
+            "{}: status kind {kind} is not available (this FMU steps synchronously; it answers fmi2LastSuccessfulTime \
+             with fmi2GetRealStatus and fmi2Terminated with fmi2GetBooleanStatus)",
+            inst.function()
+        ),
+    );
+    Status::Discard
+}

@@ -1,75 +1,12 @@
 //! The FMI 2.0 calling-sequence state machine as a table: for each function, the set of
-//! states in which it may be called (FMI 2.0.5, sections 3.2.3 and 4.2.4; the CS table is
-//! reproduced in `shared/research/fmi-anchors.md` §1.6). A call outside its set returns
-//! `fmi2Error`, logs the function and the state, and changes nothing.
+//! states in which it may be called (FMI 2.0.5, sections 3.2.3 and 4.2.4). A call outside
+//! its set returns `fmi2Error`, logs the function and the state, and changes nothing.
 //!
 //! Unlike Reference-FMUs this keeps an explicit `Error` state (the tables' "error" column):
 //! after a failed computation only the calls allowed there work, until `fmi2Reset`,
 //! `fmi2SetFMUstate` or `fmi2FreeInstance`.
 
-/// Interface type of an instance.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum InterfaceType {
-    ModelExchange,
-    CoSimulation,
-}
-
-/// States of an instance (the columns of the tables).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[repr(u8)]
-pub enum ModelState {
-    Instantiated = 0,
-    InitializationMode = 1,
-    StepComplete = 2,
-    StepInProgress = 3,
-    StepFailed = 4,
-    StepCanceled = 5,
-    Terminated = 6,
-    Error = 7,
-    Fatal = 8,
-    EventMode = 9,
-    ContinuousTimeMode = 10,
-}
-
-impl ModelState {
-    pub const ALL: [ModelState; 11] = [
-        ModelState::Instantiated,
-        ModelState::InitializationMode,
-        ModelState::StepComplete,
-        ModelState::StepInProgress,
-        ModelState::StepFailed,
-        ModelState::StepCanceled,
-        ModelState::Terminated,
-        ModelState::Error,
-        ModelState::Fatal,
-        ModelState::EventMode,
-        ModelState::ContinuousTimeMode,
-    ];
-
-    const fn bit(self) -> u16 {
-        1 << self as u8
-    }
-
-    pub fn from_code(code: u8) -> Option<Self> {
-        Self::ALL.iter().copied().find(|s| *s as u8 == code)
-    }
-
-    pub fn name(self) -> &'static str {
-        match self {
-            ModelState::Instantiated => "instantiated",
-            ModelState::InitializationMode => "initializationMode",
-            ModelState::StepComplete => "stepComplete",
-            ModelState::StepInProgress => "stepInProgress",
-            ModelState::StepFailed => "stepFailed",
-            ModelState::StepCanceled => "stepCanceled",
-            ModelState::Terminated => "terminated",
-            ModelState::Error => "error",
-            ModelState::Fatal => "fatal",
-            ModelState::EventMode => "eventMode",
-            ModelState::ContinuousTimeMode => "continuousTimeMode",
-        }
-    }
-}
+use crate::fmi::{FmiFunction, FmiVersion, InterfaceType, ModelState};
 
 /// The FMI 2.0 functions that take an instance.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -131,6 +68,18 @@ const TERMINATED: u16 = S::Terminated.bit();
 const ERROR: u16 = S::Error.bit();
 const EVENT: u16 = S::EventMode.bit();
 const CONTINUOUS: u16 = S::ContinuousTimeMode.bit();
+
+impl FmiFunction for Fmi2Function {
+    const VERSION: FmiVersion = FmiVersion::Fmi2;
+
+    fn name(self) -> &'static str {
+        Fmi2Function::name(self)
+    }
+
+    fn allowed_states(self, interface: InterfaceType) -> u16 {
+        Fmi2Function::allowed_states(self, interface)
+    }
+}
 
 impl Fmi2Function {
     pub const ALL: [Fmi2Function; 41] = {
@@ -311,13 +260,29 @@ impl Fmi2Function {
     }
 }
 
+/// The states FMI 2 has (FMI 3's intermediate update and configuration modes are not among
+/// them).
+pub const FMI2_STATES: [ModelState; 11] = [
+    ModelState::Instantiated,
+    ModelState::InitializationMode,
+    ModelState::StepComplete,
+    ModelState::StepInProgress,
+    ModelState::StepFailed,
+    ModelState::StepCanceled,
+    ModelState::Terminated,
+    ModelState::Error,
+    ModelState::Fatal,
+    ModelState::EventMode,
+    ModelState::ContinuousTimeMode,
+];
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn do_step_only_in_step_complete_and_fatal_allows_nothing() {
-        for state in ModelState::ALL {
+        for state in FMI2_STATES {
             assert_eq!(
                 Fmi2Function::DoStep.allowed_in(InterfaceType::CoSimulation, state),
                 state == ModelState::StepComplete

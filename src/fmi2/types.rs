@@ -43,8 +43,7 @@ pub const fmi2Terminated: fmi2StatusKind = 3;
 
 /// The logger is C-variadic: `(env, instanceName, status, category, message, ...)`, with
 /// `message` a printf format. Rust can declare and call such a pointer on stable.
-pub type fmi2CallbackLogger =
-    Option<unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String, fmi2String, ...)>;
+pub type fmi2CallbackLogger = crate::fmi::log::Fmi2Logger;
 pub type fmi2CallbackAllocateMemory = Option<unsafe extern "C" fn(usize, usize) -> *mut c_void>;
 pub type fmi2CallbackFreeMemory = Option<unsafe extern "C" fn(*mut c_void)>;
 pub type fmi2StepFinished = Option<unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2Status)>;

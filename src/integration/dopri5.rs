@@ -198,7 +198,7 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
     t0: f64,
     y: &mut [f64; N],
     t1: f64,
-) -> Result<(), IntegrationError<S::Fault>> {
+) -> Result<f64, IntegrationError<S::Fault>> {
     let span = t1 - t0;
     let h_max = if s.max_step > 0.0 { s.max_step.min(span) } else { span };
     let fsal = !system.modifies_state_after_step();
@@ -274,6 +274,7 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
 
         let fac11 = err.powf(EXPO1);
         if err <= 1.0 {
+            let logged_before = events.log.as_slice().len();
             if switching > 0 {
                 system.switching(t_new, &y_new, &mut g);
                 let target = landing.map(|(i, _)| i);
@@ -322,7 +323,11 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
                 // Keep the step the controller wanted before the landing clamp, so that a
                 // short final piece does not throttle the next call.
                 memory.h_next = if rejected_last { h_new } else { h_new.max(h_unclamped) };
-                return Ok(());
+                return Ok(t);
+            }
+            if events.stops_after(system, logged_before) {
+                memory.h_next = h_new;
+                return Ok(t);
             }
             h = h_new.min(h_max);
             rejected_last = false;

@@ -246,10 +246,26 @@ impl Integrator {
         t1: f64,
         crossings: &mut CrossingLog<N>,
     ) -> Result<(), IntegrationError<S::Fault>> {
+        self.integrate_until_event(system, t0, y, t1, crossings, false).map(|_| ())
+    }
+
+    /// As [`Integrator::integrate`]; with `stop_at_restart`, returns early at the first
+    /// non-smooth point (a [`SwitchingKind::Restart`] crossing: the adaptive method has landed
+    /// on it, the fixed-step method stops at the end of the step that crossed it). Returns
+    /// the time reached.
+    pub fn integrate_until_event<S: OdeSystem<N>, const N: usize>(
+        &mut self,
+        system: &S,
+        t0: f64,
+        y: &mut [f64; N],
+        t1: f64,
+        crossings: &mut CrossingLog<N>,
+        stop_at_restart: bool,
+    ) -> Result<f64, IntegrationError<S::Fault>> {
         if system.switching_count() > 0 && !self.sides.known {
             self.sides = switching_sides(system, t0, y);
         }
-        let mut events = Events { sides: &mut self.sides, log: crossings };
+        let mut events = Events { sides: &mut self.sides, log: crossings, stop_at_restart };
         match self.settings.method {
             Method::DormandPrince45 => {
                 dopri5::integrate(system, &self.settings, &mut self.dopri5, &mut self.stats, &mut events, t0, y, t1)
@@ -263,6 +279,17 @@ impl Integrator {
 pub(crate) struct Events<'a, const N: usize> {
     pub sides: &'a mut SwitchingSides,
     pub log: &'a mut CrossingLog<N>,
+    /// End the call at the first [`SwitchingKind::Restart`] crossing.
+    pub stop_at_restart: bool,
+}
+
+impl<const N: usize> Events<'_, N> {
+    /// Whether the crossings logged from `first` on include a non-smooth point that ends the
+    /// call.
+    pub fn stops_after<S: OdeSystem<N>>(&self, system: &S, first: usize) -> bool {
+        self.stop_at_restart
+            && self.log.as_slice().iter().skip(first).any(|c| system.switching_kind(c.index) == SwitchingKind::Restart)
+    }
 }
 
 /// Iterates over the set bits of `mask`, lowest first.

@@ -19,7 +19,7 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
     t0: f64,
     y: &mut [f64; N],
     t1: f64,
-) -> Result<(), IntegrationError<S::Fault>> {
+) -> Result<f64, IntegrationError<S::Fault>> {
     let switching = system.switching_count().min(MAX_SWITCHING);
     let mut g_start = [0.0; MAX_SWITCHING];
     let mut g_end = [0.0; MAX_SWITCHING];
@@ -61,6 +61,7 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
         stats.accepted_steps += 1;
         system.after_step(y);
         system.check(t_end, y).map_err(|fault| IntegrationError::Fault { t: t_end, fault })?;
+        let logged_before = events.log.as_slice().len();
         if switching > 0 {
             system.switching(t_end, y, &mut g_end);
             let changed = events.sides.changed(&g_end, switching);
@@ -85,9 +86,12 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
                 events.log.push(Crossing { index: i, t: tc, rising: g1 > 0.0, y: yc });
             }
             events.sides.bits ^= changed;
+            if events.stops_after(system, logged_before) {
+                return Ok(t_end);
+            }
         }
     }
-    Ok(())
+    Ok(t1)
 }
 
 #[cfg(test)]

@@ -6,7 +6,6 @@
 //! |---|---|
 //! | [`variables`] | variable groups, value references, access metadata |
 //! | [`units`] | unit definitions |
-//! | [`model_description`] | `modelDescription.xml` and the instantiation token from the tables |
 //! | [`snapshot`] | the byte format of serialized FMU states |
 //! | [`platform`] | the `StewartPlatform` model |
 //! | [`controller`] | the `StewartController` model (programme, direct problem, feedback) |
@@ -16,7 +15,6 @@
 //! passes (each FMU's `modelDescription.xml` carries its own).
 
 pub mod controller;
-pub mod model_description;
 pub mod platform;
 pub mod snapshot;
 pub mod trivial;
@@ -46,14 +44,40 @@ pub struct ModelInfo {
     /// Extra HTML for `documentation/index.html` (conventions, references).
     pub documentation: &'static str,
     /// The continuous states in the order of the state vector (Model Exchange): `(group
-    /// name, element index)`; `<Derivatives>` is written in this order.
+    /// name, element index)`; FMI 2's `<Derivatives>` is written in this order.
     pub states: &'static [(&'static str, usize)],
-    /// Number of event indicators (`numberOfEventIndicators`, Model Exchange).
-    pub event_indicators: usize,
-    /// Whether the binary implements Model Exchange for this model.
+    /// What the model supports, declared in the model descriptions and enforced by the
+    /// instance.
+    pub capabilities: Capabilities,
+}
+
+/// A model's capabilities: written into both model descriptions, checked by the FMI layer.
+#[derive(Clone, Copy, Debug)]
+pub struct Capabilities {
+    /// Model Exchange is implemented.
     pub model_exchange: bool,
-    /// Whether `fmi2GetDirectionalDerivative` is implemented.
+    /// Directional derivatives (Jacobian-vector products) of outputs and derivatives.
     pub directional_derivatives: bool,
+    /// Adjoint derivatives (vector-Jacobian products, FMI 3).
+    pub adjoint_derivatives: bool,
+    /// Co-Simulation: inputs follow their derivatives over a step (FMI 2
+    /// `canInterpolateInputs`).
+    pub can_interpolate_inputs: bool,
+    /// Co-Simulation: highest order of exact output derivatives (0: none).
+    pub max_output_derivative_order: u32,
+    /// Number of event indicators (Model Exchange), and in Co-Simulation whether steps report
+    /// events (FMI 3 `hasEventMode`, early return at them) when it is not 0.
+    pub event_indicators: usize,
+}
+
+/// What a completed co-simulation step did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepReport {
+    /// The time the step reached: its end, or an earlier event where the step was asked to
+    /// stop at events.
+    pub reached: f64,
+    /// Whether a non-smooth event (an end-stop contact onset or release) happened in the step.
+    pub event: bool,
 }
 
 /// Why a co-simulation step could not be completed. The model is left as it was before the
@@ -98,8 +122,9 @@ pub trait FmuModel {
         tolerance: Option<f64>,
         model_exchange: bool,
     ) -> Result<String, String>;
-    /// Advances from the communication point `t` to exactly `t + h`.
-    fn do_step(&mut self, t: f64, h: f64) -> Result<(), StepError>;
+    /// Advances from the communication point `t` to exactly `t + h`, or with `stop_at_event`
+    /// to the first event before it.
+    fn do_step(&mut self, t: f64, h: f64, stop_at_event: bool) -> Result<StepReport, StepError>;
     /// After a successful step: describes the events met during it (contacts, singular
     /// arrangements passed), one message each, for `logEvents`.
     fn report_events(&mut self, _sink: &mut dyn FnMut(&str)) {}
@@ -192,11 +217,6 @@ impl ModelKind {
             ModelKind::Controller => AnyModel::Controller(Box::default()),
             ModelKind::Trivial => AnyModel::Trivial(Box::default()),
         }
-    }
-
-    /// The model whose instantiation token (GUID) this is.
-    pub fn from_guid(guid: &str) -> Option<ModelKind> {
-        Self::ALL.iter().copied().find(|k| model_description::instantiation_token(*k) == guid)
     }
 }
 
@@ -291,8 +311,8 @@ impl AnyModel {
     ) -> Result<(), String> {
         dispatch!(self, m => m.directional_derivative(unknowns, knowns, seeds, out))
     }
-    pub fn do_step(&mut self, t: f64, h: f64) -> Result<(), StepError> {
-        dispatch!(self, m => m.do_step(t, h))
+    pub fn do_step(&mut self, t: f64, h: f64, stop_at_event: bool) -> Result<StepReport, StepError> {
+        dispatch!(self, m => m.do_step(t, h, stop_at_event))
     }
     pub fn set_input_derivative(&mut self, var: VariableRef, value: f64) {
         dispatch!(self, m => m.set_input_derivative(var, value))

@@ -1,6 +1,10 @@
-//! A small pointer-free, versioned, checksummed byte format for FMU states
-//! (`fmi2SerializeFMUstate`). Every read is bounds-checked: a truncated, corrupted or foreign
-//! buffer gives an error, never an out-of-bounds read.
+//! The byte format of FMU states (`fmi2SerializeFMUstate`, `fmi3SerializeFMUState`), owned
+//! here: pointer-free, little-endian, versioned and checksummed. An envelope
+//! ([`seal`]/[`open`]: magic, format version, model kind, instantiation-token hash, payload
+//! length, payload, FNV-1a checksum) around a payload that the instance (its own fields) and
+//! the model ([`crate::models::FmuModel::save`]) write with [`ByteWriter`]. Every read is
+//! bounds-checked: a truncated, corrupted or foreign buffer gives an error, never an
+//! out-of-bounds read.
 
 use nalgebra::Vector3;
 
@@ -155,4 +159,74 @@ pub fn fnv1a64(bytes: &[u8]) -> u64 {
         h = h.wrapping_mul(0x100000001b3);
     }
     h
+}
+
+/// Serialized FMU states start with this.
+const STATE_FORMAT_MAGIC: &[u8; 8] = b"STEWFMU\x00";
+/// Version of the format; a state of another version is refused with a message.
+pub const STATE_FORMAT_VERSION: u32 = 2;
+
+/// Wraps a payload in the envelope: magic, version, model kind, token hash, length, payload,
+/// checksum.
+pub fn seal(kind_code: u8, token_hash: u64, payload: &[u8]) -> Vec<u8> {
+    let mut w = ByteWriter::default();
+    w.raw(STATE_FORMAT_MAGIC);
+    w.u32(STATE_FORMAT_VERSION);
+    w.u8(kind_code);
+    w.u64(token_hash);
+    w.u64(payload.len() as u64);
+    w.raw(payload);
+    let checksum = fnv1a64(&w.bytes);
+    w.u64(checksum);
+    w.bytes
+}
+
+/// Checks the envelope of `bytes` against the model kind and token hash and returns the
+/// payload.
+pub fn open(bytes: &[u8], kind_code: u8, token_hash: u64) -> Result<&[u8], SnapshotError> {
+    let mut r = ByteReader::new(bytes);
+    if r.take(8)? != STATE_FORMAT_MAGIC {
+        return Err(SnapshotError("not a state of this FMU (wrong magic bytes)".into()));
+    }
+    let version = r.u32()?;
+    if version != STATE_FORMAT_VERSION {
+        return Err(SnapshotError(format!("state format version {version}, this binary reads {STATE_FORMAT_VERSION}")));
+    }
+    let kind = r.u8()?;
+    if kind != kind_code {
+        return Err(SnapshotError(format!("state of model kind {kind}, this instance is of kind {kind_code}")));
+    }
+    if r.u64()? != token_hash {
+        return Err(SnapshotError("state of a different version of this model (instantiation token differs)".into()));
+    }
+    let len = usize::try_from(r.u64()?).map_err(|_| SnapshotError("payload length overflows".into()))?;
+    let payload = r.take(len)?;
+    let sealed = bytes.len() - r.remaining();
+    let checksum = r.u64()?;
+    if r.remaining() != 0 {
+        return Err(SnapshotError(format!("{} unexpected bytes after the checksum", r.remaining())));
+    }
+    if fnv1a64(bytes.get(..sealed).unwrap_or(&[])) != checksum {
+        return Err(SnapshotError("checksum mismatch: the state is corrupted".into()));
+    }
+    Ok(payload)
+}
+
+#[cfg(test)]
+mod envelope_tests {
+    use super::*;
+
+    #[test]
+    fn sealed_payload_opens_and_any_flipped_byte_is_refused() {
+        let bytes = seal(1, 42, b"payload");
+        assert_eq!(open(&bytes, 1, 42).unwrap(), b"payload");
+        assert!(open(&bytes, 2, 42).is_err());
+        assert!(open(&bytes, 1, 43).is_err());
+        for i in 0..bytes.len() {
+            let mut b = bytes.clone();
+            b[i] ^= 0x10;
+            assert!(open(&b, 1, 42).is_err(), "byte {i}");
+        }
+        assert!(open(&bytes[..bytes.len() - 1], 1, 42).is_err());
+    }
 }

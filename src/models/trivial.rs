@@ -6,7 +6,7 @@
 use super::platform::{PlatformModel, variables::group};
 use super::snapshot::{ByteReader, ByteWriter, SnapshotError};
 use super::variables::VariableRef;
-use super::{DefaultExperiment, FmuModel, ModelInfo, StepError};
+use super::{DefaultExperiment, FmuModel, ModelInfo, StepError, StepReport};
 
 pub static INFO: ModelInfo = ModelInfo {
     model_name: "TrivialPlatform",
@@ -18,9 +18,15 @@ pub static INFO: ModelInfo = ModelInfo {
     default_experiment: DefaultExperiment { start_time: 0.0, stop_time: 3.0, step_size: 1e-2 },
     documentation: "<p>Benchmark floor for the performance comparison: no physics.</p>",
     states: super::platform::variables::STATES,
-    event_indicators: 0,
-    model_exchange: false,
-    directional_derivatives: false,
+    // No physics: no derivatives of any kind.
+    capabilities: super::Capabilities {
+        model_exchange: false,
+        directional_derivatives: false,
+        adjoint_derivatives: false,
+        can_interpolate_inputs: false,
+        max_output_derivative_order: 0,
+        event_indicators: 0,
+    },
 };
 
 #[derive(Clone, Debug, Default)]
@@ -67,9 +73,9 @@ impl FmuModel for TrivialModel {
         self.time = start_time;
         Ok("trivial model: no physics".into())
     }
-    fn do_step(&mut self, t: f64, h: f64) -> Result<(), StepError> {
+    fn do_step(&mut self, t: f64, h: f64, _stop_at_event: bool) -> Result<StepReport, StepError> {
         self.time = t + h;
-        Ok(())
+        Ok(StepReport { reached: t + h, event: false })
     }
     fn set_input_derivative(&mut self, _var: VariableRef, _value: f64) {}
     fn output_derivative(&mut self, _var: VariableRef) -> f64 {

@@ -140,6 +140,9 @@ pub struct VariableGroup {
     /// FMI name of a derivative group's elements: `(base, order)` gives `der(base[i])` or
     /// `der(base[i],order)`; the group's `name` is then only a key in the table.
     pub display_base: Option<(&'static str, u8)>,
+    /// Only in the FMI 3 model description (a variable FMI 2 expresses otherwise, such as
+    /// the event indicators).
+    pub fmi3_only: bool,
 }
 
 impl VariableGroup {
@@ -149,6 +152,16 @@ impl VariableGroup {
 
     pub fn is_empty(&self) -> bool {
         self.len() == 0
+    }
+
+    /// The name of the whole variable (FMI 3, where arrays are variables): `F`, `der(v)`,
+    /// `der(R,2)`.
+    pub fn variable_name(&self) -> String {
+        match self.display_base {
+            Some((base, 1)) => format!("der({base})"),
+            Some((base, order)) => format!("der({base},{order})"),
+            None => self.name.to_string(),
+        }
     }
 
     /// Structured name of element `index` (row-major, 0-based).
@@ -227,6 +240,13 @@ impl VariableTable {
         Some((self.groups.get(r.group)?, r))
     }
 
+    /// A whole variable by the value reference of its first element (FMI 3 addressing).
+    #[inline]
+    pub fn lookup_variable(&self, vr: u32) -> Option<(&'static VariableGroup, VariableRef)> {
+        let (g, r) = self.lookup(vr)?;
+        (r.index == 0).then_some((g, r))
+    }
+
     pub fn group(&self, name: &str) -> Option<(usize, &'static VariableGroup)> {
         self.groups.iter().enumerate().find(|(_, g)| g.name == name)
     }
@@ -294,6 +314,7 @@ impl VariableGroup {
             derivative_of: None,
             derivative_dependencies: &[],
             display_base: None,
+            fmi3_only: false,
         }
     }
 
@@ -397,6 +418,11 @@ impl VariableGroup {
     /// Marks a plainly named group (e.g. `v`) as the derivative of the state group `of`.
     pub const fn derivative_named(self, of: &'static str, dependencies: &'static [Dependency]) -> Self {
         VariableGroup { derivative_of: Some(of), derivative_dependencies: dependencies, ..self }
+    }
+
+    /// Only in the FMI 3 model description.
+    pub const fn fmi3_only(self) -> Self {
+        VariableGroup { fmi3_only: true, ..self }
     }
 
     /// Direct dependencies of an output on inputs (`<Outputs>`).

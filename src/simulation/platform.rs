@@ -277,6 +277,18 @@ impl PlatformSimulation {
     /// changes: state, time and integrator memory are rolled back. The crossings met on the
     /// way are in [`PlatformSimulation::crossings`].
     pub fn advance<L: LegForceLaw + ?Sized>(&mut self, law: &L, t1: f64) -> Result<(), StepFailure> {
+        self.advance_until_event(law, t1, false).map(|_| ())
+    }
+
+    /// As [`PlatformSimulation::advance`]; with `stop_at_contact`, stops early at the first
+    /// contact onset or release (located exactly by the adaptive method). Returns the time
+    /// reached.
+    pub fn advance_until_event<L: LegForceLaw + ?Sized>(
+        &mut self,
+        law: &L,
+        t1: f64,
+        stop_at_contact: bool,
+    ) -> Result<f64, StepFailure> {
         let saved_state = self.state;
         let saved_integrator = self.integrator;
         self.crossings.clear();
@@ -287,11 +299,18 @@ impl PlatformSimulation {
             guard: &self.guard,
             stop_at_singularity: self.stop_at_singularity,
         };
-        let result = self.integrator.integrate(&dynamics, self.time, &mut self.state, t1, &mut self.crossings);
+        let result = self.integrator.integrate_until_event(
+            &dynamics,
+            self.time,
+            &mut self.state,
+            t1,
+            &mut self.crossings,
+            stop_at_contact,
+        );
         match result {
-            Ok(()) => {
-                self.time = t1;
-                Ok(())
+            Ok(reached) => {
+                self.time = reached;
+                Ok(reached)
             }
             Err(e) => {
                 self.state = saved_state;

@@ -4,10 +4,11 @@
 use std::ffi::{CStr, CString, c_char, c_void};
 use std::sync::Mutex;
 
+use stewart_fmu::fmi::FmiVersion;
+use stewart_fmu::fmi::description::instantiation_token;
 use stewart_fmu::fmi2::exports::*;
 use stewart_fmu::fmi2::types::*;
 use stewart_fmu::models::ModelKind;
-use stewart_fmu::models::model_description::instantiation_token;
 use stewart_fmu::models::variables::VariableTable;
 
 /// One logged message.
@@ -79,7 +80,7 @@ impl Host {
         let log: Box<LogSink> = Box::new(Mutex::new(vec![]));
         let cb = Box::new(callbacks(&log));
         let name = CString::new(name).unwrap();
-        let guid = CString::new(instantiation_token(kind)).unwrap();
+        let guid = CString::new(instantiation_token(kind, FmiVersion::Fmi2)).unwrap();
         let c = unsafe {
             fmi2Instantiate(
                 name.as_ptr(),
@@ -182,10 +183,15 @@ impl Host {
         x
     }
 
-    /// Every Real output and parameter, for "nothing changed" comparisons.
+    /// Every Real output and parameter of the FMI 2 interface, for "nothing changed"
+    /// comparisons.
     pub fn all_reals(&self) -> Vec<u64> {
-        let vrs: Vec<u32> =
-            self.table.elements().filter(|(_, g, _)| g.var_type.is_real()).map(|(_, g, i)| g.vr(i)).collect();
+        let vrs: Vec<u32> = self
+            .table
+            .elements()
+            .filter(|(_, g, _)| g.var_type.is_real() && !g.fmi3_only)
+            .map(|(_, g, i)| g.vr(i))
+            .collect();
         let mut out = vec![0.0; vrs.len()];
         let s = unsafe { fmi2GetReal(self.c, vrs.as_ptr(), vrs.len(), out.as_mut_ptr()) };
         assert_eq!(s, fmi2OK);

@@ -130,3 +130,167 @@ pub fn check(library: &Path, guid: &str) -> Result<(), String> {
     unsafe { libc::dlclose(handle) };
     Ok(())
 }
+
+/// Every FMI 3.0 function (an FMU exports them all, implemented or answering with an error).
+pub const REQUIRED_SYMBOLS_FMI3: [&str; 75] = [
+    "fmi3GetVersion",
+    "fmi3SetDebugLogging",
+    "fmi3InstantiateModelExchange",
+    "fmi3InstantiateCoSimulation",
+    "fmi3InstantiateScheduledExecution",
+    "fmi3FreeInstance",
+    "fmi3EnterInitializationMode",
+    "fmi3ExitInitializationMode",
+    "fmi3EnterEventMode",
+    "fmi3Terminate",
+    "fmi3Reset",
+    "fmi3GetFloat32",
+    "fmi3GetFloat64",
+    "fmi3GetInt8",
+    "fmi3GetUInt8",
+    "fmi3GetInt16",
+    "fmi3GetUInt16",
+    "fmi3GetInt32",
+    "fmi3GetUInt32",
+    "fmi3GetInt64",
+    "fmi3GetUInt64",
+    "fmi3GetBoolean",
+    "fmi3GetString",
+    "fmi3GetBinary",
+    "fmi3GetClock",
+    "fmi3SetFloat32",
+    "fmi3SetFloat64",
+    "fmi3SetInt8",
+    "fmi3SetUInt8",
+    "fmi3SetInt16",
+    "fmi3SetUInt16",
+    "fmi3SetInt32",
+    "fmi3SetUInt32",
+    "fmi3SetInt64",
+    "fmi3SetUInt64",
+    "fmi3SetBoolean",
+    "fmi3SetString",
+    "fmi3SetBinary",
+    "fmi3SetClock",
+    "fmi3GetNumberOfVariableDependencies",
+    "fmi3GetVariableDependencies",
+    "fmi3GetFMUState",
+    "fmi3SetFMUState",
+    "fmi3FreeFMUState",
+    "fmi3SerializedFMUStateSize",
+    "fmi3SerializeFMUState",
+    "fmi3DeserializeFMUState",
+    "fmi3GetDirectionalDerivative",
+    "fmi3GetAdjointDerivative",
+    "fmi3EnterConfigurationMode",
+    "fmi3ExitConfigurationMode",
+    "fmi3GetIntervalDecimal",
+    "fmi3GetIntervalFraction",
+    "fmi3GetShiftDecimal",
+    "fmi3GetShiftFraction",
+    "fmi3SetIntervalDecimal",
+    "fmi3SetIntervalFraction",
+    "fmi3SetShiftDecimal",
+    "fmi3SetShiftFraction",
+    "fmi3EvaluateDiscreteStates",
+    "fmi3UpdateDiscreteStates",
+    "fmi3EnterContinuousTimeMode",
+    "fmi3CompletedIntegratorStep",
+    "fmi3SetTime",
+    "fmi3SetContinuousStates",
+    "fmi3GetContinuousStateDerivatives",
+    "fmi3GetEventIndicators",
+    "fmi3GetContinuousStates",
+    "fmi3GetNominalsOfContinuousStates",
+    "fmi3GetNumberOfEventIndicators",
+    "fmi3GetNumberOfContinuousStates",
+    "fmi3EnterStepMode",
+    "fmi3GetOutputDerivatives",
+    "fmi3DoStep",
+    "fmi3ActivateModelPartition",
+];
+
+type Instantiate3 = unsafe extern "C" fn(
+    *const std::ffi::c_char,
+    *const std::ffi::c_char,
+    *const std::ffi::c_char,
+    u8,
+    u8,
+    u8,
+    u8,
+    *const u32,
+    usize,
+    *mut c_void,
+    Option<unsafe extern "C" fn(*mut c_void, std::ffi::c_int, *const std::ffi::c_char, *const std::ffi::c_char)>,
+    Option<unsafe extern "C" fn(*mut c_void, f64, u8, u8, u8, u8, *mut u8, *mut f64)>,
+) -> *mut c_void;
+type FreeInstance3 = unsafe extern "C" fn(*mut c_void);
+
+/// The FMI 3 counterpart of [`check`]: every `fmi3*` symbol, and
+/// `fmi3InstantiateCoSimulation` accepting the description's token and refusing a wrong one.
+pub fn check_fmi3(library: &Path, token: &str) -> Result<(), String> {
+    let path = CString::new(library.to_string_lossy().as_bytes()).map_err(|_| "path contains NUL")?;
+    // SAFETY: dlopen of our own freshly built library; its initialisers are Rust's.
+    let handle = unsafe { libc::dlopen(path.as_ptr(), libc::RTLD_NOW | libc::RTLD_LOCAL) };
+    if handle.is_null() {
+        return Err("dlopen failed".into());
+    }
+    let symbol = |name: &str| -> Result<*mut c_void, String> {
+        let c = CString::new(name).map_err(|_| "bad symbol name")?;
+        // SAFETY: valid handle and NUL-terminated name.
+        let p = unsafe { libc::dlsym(handle, c.as_ptr()) };
+        if p.is_null() { Err(format!("symbol {name} is not exported")) } else { Ok(p) }
+    };
+    for name in REQUIRED_SYMBOLS_FMI3 {
+        symbol(name)?;
+    }
+    // SAFETY: the symbols have exactly these C signatures (fmi3FunctionTypes.h).
+    let instantiate: Instantiate3 = unsafe { std::mem::transmute(symbol("fmi3InstantiateCoSimulation")?) };
+    // SAFETY: as above.
+    let free: FreeInstance3 = unsafe { std::mem::transmute(symbol("fmi3FreeInstance")?) };
+    let name = c"build-fmu-check";
+    let good = CString::new(token).map_err(|_| "token contains NUL")?;
+    let bad = c"{00000000-0000-0000-0000-000000000000}";
+    // SAFETY: valid strings; NULL callbacks are allowed.
+    unsafe {
+        let c = instantiate(
+            name.as_ptr(),
+            good.as_ptr(),
+            std::ptr::null(),
+            0,
+            0,
+            0,
+            0,
+            std::ptr::null(),
+            0,
+            std::ptr::null_mut(),
+            None,
+            None,
+        );
+        if c.is_null() {
+            return Err(format!("fmi3InstantiateCoSimulation refused the model description's token {token}"));
+        }
+        free(c);
+        let c = instantiate(
+            name.as_ptr(),
+            bad.as_ptr(),
+            std::ptr::null(),
+            0,
+            0,
+            0,
+            0,
+            std::ptr::null(),
+            0,
+            std::ptr::null_mut(),
+            None,
+            None,
+        );
+        if !c.is_null() {
+            free(c);
+            return Err("fmi3InstantiateCoSimulation accepted a foreign token".into());
+        }
+    }
+    // SAFETY: handle from dlopen above.
+    unsafe { libc::dlclose(handle) };
+    Ok(())
+}

@@ -1,28 +1,33 @@
 //! `cargo run --release --bin build-fmu`: builds the FMU binary and packages
-//! `target/fmu/<ModelIdentifier>.fmu` for every model in the crate.
+//! `target/fmu/<ModelIdentifier>.fmu` (FMI 2.0) for every model in the crate and
+//! `target/fmu/fmi3/<ModelIdentifier>.fmu` (FMI 3.0) for the product models, from the same
+//! binary.
 //!
 //! Steps, each of which stops the build with a clear message when it fails:
 //! 1. `cargo build --release --lib` (the cdylib);
-//! 2. compare `modelDescription/<id>.xml` with what the binary's variable tables generate
-//!    (`--update-model-description` rewrites them);
+//! 2. compare `modelDescription/<id>.xml` and `modelDescription/fmi3/<id>.xml` with what the
+//!    binary's variable tables generate (`--update-model-description` rewrites them);
 //! 3. check the XML with quick-xml: well-formed, unique names and value references,
-//!    ModelStructure indices valid and complete, units defined;
-//! 4. load the built library with `dlopen` and check that it accepts the XML's GUID (and
-//!    refuses another), and that it exports every FMI 2.0 function;
-//! 5. zip `modelDescription.xml`, `binaries/linux64/<id>.so` and `documentation/index.html`;
+//!    ModelStructure valid and complete, units defined, start values sized;
+//! 4. load the built library with `dlopen` and check that it accepts the XML's GUID or token
+//!    (and refuses another), and that it exports every FMI 2.0 and FMI 3.0 function;
+//! 5. zip `modelDescription.xml`, the binary (`binaries/linux64/<id>.so`, FMI 3
+//!    `binaries/x86_64-linux/<id>.so`) and `documentation/index.html`;
 //! 6. check `modelDescription/StewartSystem.ssd` (the closed loop) against the models and zip
-//!    it with both FMUs into `target/fmu/StewartSystem.ssp`.
+//!    it with both FMI 2 FMUs into `target/fmu/StewartSystem.ssp`.
 
 mod binary_check;
 mod package;
 mod ssd_check;
 mod xml_check;
+mod xml_check3;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
 
+use stewart_fmu::fmi::FmiVersion;
+use stewart_fmu::fmi::description::{documentation_html, instantiation_token, model_description_xml};
 use stewart_fmu::models::ModelKind;
-use stewart_fmu::models::model_description::{documentation_html, instantiation_token, model_description_xml};
 
 fn main() -> ExitCode {
     match run() {
@@ -63,6 +68,9 @@ fn run() -> Result<(), String> {
     for kind in ModelKind::ALL {
         build_one(kind, &root, &library, &out_dir, update)?;
     }
+    for kind in ModelKind::ALL.into_iter().filter(|k| !k.is_benchmark_floor()) {
+        build_one_fmi3(kind, &root, &library, &out_dir.join("fmi3"), update)?;
+    }
 
     let ssd_path = root.join("modelDescription").join("StewartSystem.ssd");
     let ssd = std::fs::read_to_string(&ssd_path).map_err(|e| format!("cannot read {}: {e}", ssd_path.display()))?;
@@ -78,7 +86,7 @@ fn run() -> Result<(), String> {
 fn build_one(kind: ModelKind, root: &Path, library: &Path, out_dir: &Path, update: bool) -> Result<(), String> {
     let id = kind.info().model_identifier;
     let source = root.join("modelDescription").join(format!("{id}.xml"));
-    let generated = model_description_xml(kind);
+    let generated = model_description_xml(kind, FmiVersion::Fmi2);
     if update {
         std::fs::write(&source, &generated).map_err(|e| format!("cannot write {}: {e}", source.display()))?;
         println!("build-fmu: wrote {}", source.display());
@@ -92,7 +100,7 @@ fn build_one(kind: ModelKind, root: &Path, library: &Path, out_dir: &Path, updat
         ));
     }
     let summary = xml_check::check(&committed).map_err(|e| format!("{}: {e}", source.display()))?;
-    let guid = instantiation_token(kind);
+    let guid = instantiation_token(kind, FmiVersion::Fmi2);
     if summary.guid != guid {
         return Err(format!("{}: guid {} differs from the binary's {guid}", source.display(), summary.guid));
     }
@@ -100,13 +108,59 @@ fn build_one(kind: ModelKind, root: &Path, library: &Path, out_dir: &Path, updat
     let fmu_dir = if kind.is_benchmark_floor() { out_dir.join("bench") } else { out_dir.to_path_buf() };
     std::fs::create_dir_all(&fmu_dir).map_err(|e| format!("cannot create {}: {e}", fmu_dir.display()))?;
     let fmu = fmu_dir.join(format!("{id}.fmu"));
-    package::write_fmu(&fmu, id, &committed, library, &documentation_html(kind))?;
+    let binary = format!("binaries/linux64/{id}.so");
+    package::write_fmu(&fmu, &binary, &committed, library, &documentation_html(kind, FmiVersion::Fmi2))?;
     println!(
         "build-fmu: {} ({} variables, {} outputs, {} initial unknowns, GUID {guid}) -> {}",
         id,
         summary.variables,
         summary.outputs,
         summary.initial_unknowns,
+        fmu.display()
+    );
+    Ok(())
+}
+
+fn build_one_fmi3(kind: ModelKind, root: &Path, library: &Path, out_dir: &Path, update: bool) -> Result<(), String> {
+    let id = kind.info().model_identifier;
+    let source = root.join("modelDescription").join("fmi3").join(format!("{id}.xml"));
+    let generated = model_description_xml(kind, FmiVersion::Fmi3);
+    if update {
+        if let Some(dir) = source.parent() {
+            std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+        }
+        std::fs::write(&source, &generated).map_err(|e| format!("cannot write {}: {e}", source.display()))?;
+        println!("build-fmu: wrote {}", source.display());
+    }
+    let committed = std::fs::read_to_string(&source).map_err(|e| format!("cannot read {}: {e}", source.display()))?;
+    if committed != generated {
+        return Err(format!(
+            "{} is out of date with the variable tables in the code (run `cargo run --release --bin build-fmu -- \
+             --update-model-description` and review the diff)",
+            source.display()
+        ));
+    }
+    let summary = xml_check3::check(&committed).map_err(|e| format!("{}: {e}", source.display()))?;
+    let token = instantiation_token(kind, FmiVersion::Fmi3);
+    if summary.token != token {
+        return Err(format!(
+            "{}: instantiationToken {} differs from the binary's {token}",
+            source.display(),
+            summary.token
+        ));
+    }
+    binary_check::check_fmi3(library, &token).map_err(|e| format!("{}: {e}", library.display()))?;
+    std::fs::create_dir_all(out_dir).map_err(|e| format!("cannot create {}: {e}", out_dir.display()))?;
+    let fmu = out_dir.join(format!("{id}.fmu"));
+    let binary = format!("binaries/x86_64-linux/{id}.so");
+    package::write_fmu(&fmu, &binary, &committed, library, &documentation_html(kind, FmiVersion::Fmi3))?;
+    println!(
+        "build-fmu: {} FMI 3 ({} variables, {} outputs, {} states, {} event indicators, token {token}) -> {}",
+        id,
+        summary.variables,
+        summary.outputs,
+        summary.states,
+        summary.event_indicators,
         fmu.display()
     );
     Ok(())

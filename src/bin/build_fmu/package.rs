@@ -5,9 +5,10 @@ use std::path::Path;
 
 use zip::write::SimpleFileOptions;
 
+/// Writes an FMU with the binary at `binary_path` inside the archive.
 pub fn write_fmu(
     path: &Path,
-    model_identifier: &str,
+    binary_path: &str,
     model_description: &str,
     library: &Path,
     documentation: &str,
@@ -19,7 +20,7 @@ pub fn write_fmu(
     let executable = text.unix_permissions(0o755);
     let entries: [(String, &[u8], SimpleFileOptions); 3] = [
         ("modelDescription.xml".into(), model_description.as_bytes(), text),
-        (format!("binaries/linux64/{model_identifier}.so"), &binary, executable),
+        (binary_path.to_string(), &binary, executable),
         ("documentation/index.html".into(), documentation.as_bytes(), text),
     ];
     for (name, bytes, options) in entries {

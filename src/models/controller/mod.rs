@@ -11,7 +11,7 @@ use nalgebra::Vector3;
 
 use super::snapshot::{ByteReader, ByteWriter, SnapshotError};
 use super::variables::VariableRef;
-use super::{DefaultExperiment, FmuModel, ModelInfo, StepError};
+use super::{DefaultExperiment, FmuModel, ModelInfo, StepError, StepReport};
 use crate::control::{Disturbance, LegFeedback};
 use crate::physics::direct_problem::solve_direct_problem;
 use crate::physics::end_stops::EndStops;
@@ -32,9 +32,16 @@ pub static INFO: ModelInfo = ModelInfo {
     default_experiment: DefaultExperiment { start_time: 0.0, stop_time: 3.0, step_size: 1e-3 },
     documentation: include_str!("documentation.html"),
     states: &[],
-    event_indicators: 0,
-    model_exchange: false,
-    directional_derivatives: false,
+    // No dynamics: outputs follow the inputs at the communication points; input and output
+    // derivatives are not provided.
+    capabilities: super::Capabilities {
+        model_exchange: false,
+        directional_derivatives: false,
+        adjoint_derivatives: false,
+        can_interpolate_inputs: false,
+        max_output_derivative_order: 0,
+        event_indicators: 0,
+    },
 };
 
 /// Default feedback gain, N/m: with the default stand and a 1 ms communication step it keeps
@@ -363,14 +370,14 @@ impl FmuModel for ControllerModel {
         ))
     }
 
-    fn do_step(&mut self, t: f64, h: f64) -> Result<(), StepError> {
+    fn do_step(&mut self, t: f64, h: f64, _stop_at_event: bool) -> Result<StepReport, StepError> {
         let before = (self.time, self.outputs);
         self.time = t + h;
         self.outputs = None;
         match self.compute() {
             Ok(o) => {
                 self.outputs = Some(o);
-                Ok(())
+                Ok(StepReport { reached: t + h, event: false })
             }
             Err(message) => {
                 (self.time, self.outputs) = before;

@@ -7,7 +7,7 @@ use nalgebra::Vector3;
 
 use super::snapshot::{ByteReader, ByteWriter, SnapshotError};
 use super::variables::VariableRef;
-use super::{DefaultExperiment, EventUpdate, FmuModel, ModelInfo, StepError};
+use super::{DefaultExperiment, EventUpdate, FmuModel, ModelInfo, StepError, StepReport};
 use crate::integration::dopri5::Dopri5Memory;
 use crate::integration::{Crossing, Integrator, IntegratorStats, Method, SolverSettings, SwitchingSides};
 use crate::physics::body_state::{BodyState, STATE_DIM, layout};
@@ -36,9 +36,14 @@ pub static INFO: ModelInfo = ModelInfo {
     default_experiment: DefaultExperiment { start_time: 0.0, stop_time: 3.0, step_size: 1e-2 },
     documentation: include_str!("documentation.html"),
     states: variables::STATES,
-    event_indicators: switching::COUNT,
-    model_exchange: true,
-    directional_derivatives: true,
+    capabilities: super::Capabilities {
+        model_exchange: true,
+        directional_derivatives: true,
+        adjoint_derivatives: true,
+        can_interpolate_inputs: true,
+        max_output_derivative_order: 1,
+        event_indicators: switching::COUNT,
+    },
 };
 
 /// Everything set through parameters.
@@ -327,6 +332,11 @@ impl FmuModel for PlatformModel {
                 self.derivative_value(var)
             }
             group::KAPPA => self.kappa(),
+            group::EVENT_INDICATORS => {
+                let mut z = [0.0; switching::COUNT];
+                self.event_indicators(&mut z);
+                z.get(var.index).copied().unwrap_or(f64::NAN)
+            }
             g if group::is_output_or_derivative(g) => Self::output_value(self.outputs(), var),
             _ => self.parameter_slot(var).map_or(f64::NAN, |slot| *slot),
         }
@@ -454,18 +464,25 @@ impl FmuModel for PlatformModel {
         Ok(summary)
     }
 
-    fn do_step(&mut self, t: f64, h: f64) -> Result<(), StepError> {
+    fn do_step(&mut self, t: f64, h: f64, stop_at_event: bool) -> Result<StepReport, StepError> {
         let law = self.held_forces(t);
         let Some(sim) = self.simulation.as_mut() else {
             return Err(StepError { message: "the model is not initialised".into() });
         };
         let t_end = t + h;
-        let result = if t_end > sim.time { sim.advance(&law, t_end) } else { Ok(()) };
+        let result = if t_end > sim.time {
+            sim.advance_until_event(&law, t_end, stop_at_event)
+        } else {
+            sim.crossings.clear();
+            Ok(t_end)
+        };
+        let event =
+            sim.crossings.as_slice().iter().any(|c| c.index < switching::DETERMINANT) || sim.crossings.dropped > 0;
         self.force_rates = [0.0; LEG_COUNT];
         match result {
-            Ok(()) => {
+            Ok(reached) => {
                 self.invalidate_outputs();
-                Ok(())
+                Ok(StepReport { reached, event })
             }
             Err(failure) => Err(StepError {
                 message: format!("step from t = {t} to {t_end} rolled back: {failure}; leg forces {:?} N", self.forces),
@@ -537,8 +554,29 @@ impl FmuModel for PlatformModel {
     }
 
     fn event_indicators(&mut self, z: &mut [f64]) {
-        let Some(sim) = &self.simulation else { return };
-        sim.switching_values(&HeldForces::constant(self.forces), z);
+        let law = HeldForces::constant(self.forces);
+        match &self.simulation {
+            Some(sim) => sim.switching_values(&law, z),
+            None => {
+                // Before initialisation: the parameters' initial pose (for Initialization Mode).
+                let form = self.parameters.special_form();
+                let y = self.parameters.initial_simulation_state();
+                let guard = ConfigurationGuard {
+                    min_leg_length: 0.0,
+                    base_plane: 0.0,
+                    side: 1.0,
+                    characteristic_length: form.stand.characteristic_length().max(f64::MIN_POSITIVE),
+                };
+                let dynamics = crate::simulation::PlatformDynamics {
+                    form: &form,
+                    law: &law,
+                    stabilisation: Stabilisation::Projection,
+                    guard: &guard,
+                    stop_at_singularity: false,
+                };
+                dynamics.switching_values(body(&y), z);
+            }
+        }
     }
 
     fn event_update(&mut self, sink: &mut dyn FnMut(&str)) -> EventUpdate {
@@ -853,6 +891,7 @@ mod tests {
             (group::WORK_DISSIPATED, "work.dissipated"),
             (group::DER_WORK_F, "der(work.F)"),
             (group::DER_WORK_DISSIPATED, "der(work.dissipated)"),
+            (group::EVENT_INDICATORS, "eventIndicators"),
         ];
         assert_eq!(names.len(), variables::GROUPS.len());
         for (i, name) in names {

@@ -48,6 +48,7 @@ pub mod group {
     pub const WORK_DISSIPATED: usize = 39;
     pub const DER_WORK_F: usize = 40;
     pub const DER_WORK_DISSIPATED: usize = 41;
+    pub const EVENT_INDICATORS: usize = 42;
 
     /// Groups computed from the state (outputs and Model Exchange derivatives).
     pub fn is_output_or_derivative(group: usize) -> bool {
@@ -414,4 +415,16 @@ pub static GROUPS: &[V] = &[
         STOP_PARAMETERS,
     )
     .derivative("work.dissipated", "work.dissipated", 1, ALL_STATES),
+    V::local(
+        "eventIndicators",
+        &[13],
+        220,
+        Some("1"),
+        "Event indicators (FMI 3 Model Exchange): l_k - lmin_k (k = 1..6, m), lmax_k - l_k (m), and the determinant of \
+         the leg force/moment matrix (moment rows divided by the stand's characteristic length); a sign change is a \
+         contact onset or release, or a passage through a singular leg arrangement. Constant 1 for the stroke limits \
+         when the end stops are off",
+        &[],
+    )
+    .fmi3_only(),
 ];

@@ -1,14 +1,15 @@
-//! The C boundary's safety net, in one place (after rustls-ffi's `ffi_panic_boundary!` and
-//! pointer macros): every exported function runs its body through [`call`] (or
-//! [`no_instance`]), which catches panics, checks the instance pointer, the instance's
-//! poisoning and the state table, and turns everything into an FMI status.
+//! The C boundary's safety net, in one place for both FMI versions (after rustls-ffi's
+//! `ffi_panic_boundary!` and pointer macros): every exported function runs its body through
+//! [`call`] (or [`no_instance`]), which catches panics, checks the instance pointer, the
+//! instance's poisoning and the state table, sets the calling function as the instance's
+//! context for its messages, and turns everything into an FMI status.
 
 use std::any::Any;
+use std::ffi::c_void;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
 use super::instance::Instance;
-use super::state_machine::Fmi2Function;
-use super::types::*;
+use super::{FmiFunction, Status};
 
 /// A panic's message, if it carried one.
 pub fn panic_message(payload: &(dyn Any + Send)) -> String {
@@ -23,40 +24,42 @@ pub fn panic_message(payload: &(dyn Any + Send)) -> String {
 
 /// Runs an exported function's body on a valid instance.
 ///
-/// - `c` NULL or not one of ours: `fmi2Error` (there is no logger to tell).
+/// - `c` NULL or not one of ours: error (there is no logger to tell).
 /// - instance poisoned by an earlier panic, or `func` not allowed in its state: logged,
-///   `fmi2Error`, nothing changes.
-/// - body panics: the instance is poisoned, the panic is logged, `fmi2Error`.
+///   error, nothing changes.
+/// - body panics: the instance is poisoned, the panic is logged, error.
 ///
 /// # Safety
-/// `c` must be NULL or a pointer from `fmi2Instantiate` that has not been freed (the FMI
-/// calling convention); the magic number catches most foreign pointers but not all.
-pub unsafe fn call(c: fmi2Component, func: Fmi2Function, body: impl FnOnce(&mut Instance) -> fmi2Status) -> fmi2Status {
+/// `c` must be NULL or a pointer from this library's instantiation function that has not
+/// been freed (the FMI calling convention); the magic number catches most foreign pointers but
+/// not all.
+pub unsafe fn call<F: FmiFunction>(c: *mut c_void, func: F, body: impl FnOnce(&mut Instance) -> Status) -> Status {
     let outcome = catch_unwind(AssertUnwindSafe(|| {
-        // SAFETY: `from_handle` checks for NULL and for our magic number; the caller
-        // guarantees a pointer from fmi2Instantiate that has not been freed.
-        let Some(instance) = (unsafe { Instance::from_handle(c) }) else {
-            return fmi2Error;
+        // SAFETY: `from_handle` checks for NULL, our magic number and the FMI version; the
+        // caller guarantees a pointer from our instantiation that has not been freed.
+        let Some(instance) = (unsafe { Instance::from_handle(c, F::VERSION) }) else {
+            return Status::Error;
         };
+        instance.begin(func.name());
         if let Err(status) = instance.check_call(func) {
             return status;
         }
         match catch_unwind(AssertUnwindSafe(|| body(&mut *instance))) {
             Ok(status) => {
-                instance.log_call(func, status);
+                instance.log_call(status);
                 status
             }
             Err(payload) => {
-                instance.poison(func, &panic_message(payload.as_ref()));
-                fmi2Error
+                instance.poison(&panic_message(payload.as_ref()));
+                Status::Error
             }
         }
     }));
-    outcome.unwrap_or(fmi2Error)
+    outcome.unwrap_or(Status::Error)
 }
 
 /// Fixes the signature of an export's body closure (for type inference in `boundary!`).
-pub fn instance_body<F: FnOnce(&mut Instance) -> fmi2Status>(body: F) -> F {
+pub fn instance_body<F: FnOnce(&mut Instance) -> Status>(body: F) -> F {
     body
 }
 
@@ -98,50 +101,50 @@ pub unsafe fn c_slice_mut<'a, T>(ptr: *mut T, n: usize) -> Option<&'a mut [T]> {
     }
 }
 
-/// `try_slice!(instance, func, ptr, n, "name")`: the slice, or log and return `fmi2Error`.
+/// `try_slice!(instance, ptr, n, "name")`: the slice, or log and return an error.
 macro_rules! try_slice {
-    ($inst:expr, $func:expr, $ptr:expr, $n:expr, $what:expr) => {
-        // SAFETY: the importer passes arrays of `n` elements (FMI 2.0 calling convention).
-        match unsafe { $crate::fmi2::boundary::c_slice($ptr, $n) } {
+    ($inst:expr, $ptr:expr, $n:expr, $what:expr) => {
+        // SAFETY: the importer passes arrays of `n` elements (the FMI calling convention).
+        match unsafe { $crate::fmi::boundary::c_slice($ptr, $n) } {
             Some(s) => s,
-            None => return $inst.error($func, &format!("argument {} is NULL with {} elements", $what, $n)),
+            None => return $inst.error(&format!("argument {} is NULL with {} elements", $what, $n)),
         }
     };
 }
 
 /// Mutable counterpart of `try_slice!`.
 macro_rules! try_slice_mut {
-    ($inst:expr, $func:expr, $ptr:expr, $n:expr, $what:expr) => {
+    ($inst:expr, $ptr:expr, $n:expr, $what:expr) => {
         // SAFETY: the importer passes writable arrays of `n` elements.
-        match unsafe { $crate::fmi2::boundary::c_slice_mut($ptr, $n) } {
+        match unsafe { $crate::fmi::boundary::c_slice_mut($ptr, $n) } {
             Some(s) => s,
-            None => return $inst.error($func, &format!("argument {} is NULL with {} elements", $what, $n)),
+            None => return $inst.error(&format!("argument {} is NULL with {} elements", $what, $n)),
         }
     };
 }
 
-/// `try_out!(instance, func, ptr, "name")`: a `&mut T` from an out-pointer, or log and return
-/// `fmi2Error` if it is NULL.
+/// `try_out!(instance, ptr, "name")`: a `&mut T` from an out-pointer, or log and return an
+/// error if it is NULL.
 macro_rules! try_out {
-    ($inst:expr, $func:expr, $ptr:expr, $what:expr) => {
+    ($inst:expr, $ptr:expr, $what:expr) => {
         // SAFETY: a non-NULL out-pointer from the importer points to a writable value.
         match unsafe { $ptr.as_mut() } {
             Some(r) => r,
-            None => return $inst.error($func, &format!("argument {} is NULL", $what)),
+            None => return $inst.error(&format!("argument {} is NULL", $what)),
         }
     };
 }
 
-/// `boundary!(c, Fmi2Function::X, |inst| body)`: the panic boundary of an exported function
-/// that takes an instance (see [`call`]).
+/// `boundary!(c, function, |inst| body)`: the panic boundary of an exported function that
+/// takes an instance (see [`call`]), returning the status as the C int of either version.
 macro_rules! boundary {
     ($c:expr, $func:expr, $body:expr) => {{
         // The body is built outside the unsafe block, so its own unsafe operations keep
         // their own blocks and SAFETY comments.
-        let body = $crate::fmi2::boundary::instance_body($body);
-        // SAFETY: `$c` is the importer's instance pointer, NULL or from fmi2Instantiate and not
-        // freed, under the FMI 2.0 calling convention the exports document.
-        unsafe { $crate::fmi2::boundary::call($c, $func, body) }
+        let body = $crate::fmi::boundary::instance_body($body);
+        // SAFETY: `$c` is the importer's instance pointer, NULL or from our instantiation and
+        // not freed, under the FMI calling convention the exports document.
+        unsafe { $crate::fmi::boundary::call($c as *mut ::std::ffi::c_void, $func, body) }.code()
     }};
 }
 

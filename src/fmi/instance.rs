@@ -1,0 +1,1096 @@
+//! One FMU instance of either FMI version: the state machine, argument checks, time
+//! bookkeeping, FMU states and logging around a model. Safe Rust: the exported functions
+//! ([`crate::fmi2::exports`], [`crate::fmi3::exports`]) turn C pointers into slices and call
+//! these methods. The boundary ([`super::boundary`]) sets the calling function's name as the
+//! instance's context before each call, so every message names it.
+//!
+//! Error policy:
+//! - a call not allowed in the current state, a bad argument (NULL array, unknown or
+//!   wrong-type value reference, wrong number of values, non-finite value, variable not
+//!   settable now, bad step size or communication point): error, logged, and nothing changes
+//!   (the host can correct the call and go on);
+//! - a failed computation (parameters refused at exit from Initialization Mode): error and
+//!   the instance enters the `error` state of the FMI tables;
+//! - a step the physics or the integrator cannot complete: rolled back, discard, state
+//!   `stepFailed` (FMI 3: Step Discarded), terminated;
+//! - a panic: the instance is poisoned; every later call but reset and free is refused.
+//!
+//! Value references: FMI 2 gives every scalar element its own (`F[1]` .. `F[6]` are 1 .. 6);
+//! FMI 3 gives every variable one, that of its first element, and an array's values follow in
+//! row-major order.
+
+use std::ffi::c_void;
+
+use super::log::{LogCategory, Logger};
+use super::{FmiFunction, FmiVersion, InterfaceType, ModelState, Status};
+use crate::models::snapshot::{self, ByteReader, ByteWriter, SnapshotError, fnv1a64};
+use crate::models::variables::{
+    Causality, Initial, Variability, VariableGroup, VariableRef, VariableTable, VariableType,
+};
+use crate::models::{AnyModel, EventUpdate, ModelKind, StepReport};
+
+/// First field of every instance, one per FMI version: a handle of the other version (or a
+/// freed or foreign pointer) is refused.
+const INSTANCE_MAGIC_FMI2: u64 = 0x5354_4557_4152_5449; // "STEWARTI"
+const INSTANCE_MAGIC_FMI3: u64 = 0x5354_4557_4152_5433; // "STEWART3"
+/// First field of every FMU state handle.
+const FMU_STATE_MAGIC: u64 = 0x5354_4557_4152_5453; // "STEWARTS"
+
+/// Relative tolerance on `currentCommunicationPoint`: masters that accumulate `t += h`
+/// (FMPy's SSP loop) drift from the FMU's `t + h` by a few ulps per step.
+pub const COMMUNICATION_POINT_TOLERANCE: f64 = 1e-9;
+
+/// The base type a get/set function works on (FMI 2 Real/Integer/Boolean, FMI 3
+/// Float64/Int32/Boolean).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BaseType {
+    Real,
+    Integer,
+    Boolean,
+}
+
+impl BaseType {
+    fn matches(self, t: VariableType) -> bool {
+        match self {
+            BaseType::Real => t.is_real(),
+            BaseType::Integer => t.is_integer_like(),
+            BaseType::Boolean => t.is_boolean(),
+        }
+    }
+
+    fn name(self, version: FmiVersion) -> &'static str {
+        match (self, version) {
+            (BaseType::Real, FmiVersion::Fmi2) => "Real",
+            (BaseType::Real, FmiVersion::Fmi3) => "Float64",
+            (BaseType::Integer, FmiVersion::Fmi2) => "Integer",
+            (BaseType::Integer, FmiVersion::Fmi3) => "Int32",
+            (BaseType::Boolean, _) => "Boolean",
+        }
+    }
+}
+
+/// An FMU state (`fmi2FMUstate`, `fmi3FMUState`): the serialized bytes of an instance.
+pub struct FmuStateHandle {
+    magic: u64,
+    bytes: Vec<u8>,
+}
+
+impl FmuStateHandle {
+    /// # Safety
+    /// `p` must be NULL or a pointer the importer got from this library (magic checked).
+    pub unsafe fn from_handle<'a>(p: *mut c_void) -> Option<&'a mut FmuStateHandle> {
+        let h = p as *mut FmuStateHandle;
+        // SAFETY: non-NULL pointers handed out by this library point to a live FmuStateHandle
+        // (the importer must not pass freed ones); the magic check catches foreign pointers.
+        let h = unsafe { h.as_mut()? };
+        (h.magic == FMU_STATE_MAGIC).then_some(h)
+    }
+
+    pub fn new(bytes: Vec<u8>) -> Self {
+        FmuStateHandle { magic: FMU_STATE_MAGIC, bytes }
+    }
+
+    pub fn into_handle(self) -> *mut c_void {
+        Box::into_raw(Box::new(self)) as *mut c_void
+    }
+
+    /// # Safety
+    /// `p` must have come from [`FmuStateHandle::into_handle`] and not have been freed.
+    pub unsafe fn free(p: *mut c_void) {
+        // SAFETY: per the contract, `p` is a live Box<FmuStateHandle>.
+        let mut b = unsafe { Box::from_raw(p as *mut FmuStateHandle) };
+        b.magic = 0;
+        drop(b);
+    }
+
+    pub fn bytes(&self) -> &[u8] {
+        &self.bytes
+    }
+
+    pub fn replace_bytes(&mut self, bytes: Vec<u8>) {
+        self.bytes = bytes;
+    }
+}
+
+/// FMI 3's intermediate update callback: `(instanceEnvironment, intermediateUpdateTime,
+/// intermediateVariableSetRequested, intermediateVariableGetAllowed, intermediateStepFinished,
+/// canReturnEarly, *earlyReturnRequested, *earlyReturnTime)`; booleans as C `bool` bytes.
+pub type IntermediateUpdate = Option<unsafe extern "C" fn(*mut c_void, f64, u8, u8, u8, u8, *mut u8, *mut f64)>;
+
+/// FMI 3 Co-Simulation options chosen at instantiation.
+#[derive(Clone, Copy)]
+pub struct CoSimulationOptions {
+    /// `eventModeUsed`: steps report events (`eventHandlingNeeded`) and the importer handles
+    /// them in Event Mode.
+    pub event_mode_used: bool,
+    /// `earlyReturnAllowed`: a step may end early at an event.
+    pub early_return_allowed: bool,
+    pub intermediate_update: IntermediateUpdate,
+    pub environment: *mut c_void,
+}
+
+impl Default for CoSimulationOptions {
+    fn default() -> Self {
+        CoSimulationOptions {
+            event_mode_used: false,
+            early_return_allowed: false,
+            intermediate_update: None,
+            environment: std::ptr::null_mut(),
+        }
+    }
+}
+
+/// What `fmi3DoStep` reports besides its status.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct DoStepOutcome {
+    pub event_handling_needed: bool,
+    pub terminate_simulation: bool,
+    pub early_return: bool,
+    pub last_successful_time: f64,
+}
+
+/// What an event update (`fmi2NewDiscreteStates`, `fmi3UpdateDiscreteStates`) reports.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct EventInfo {
+    pub discrete_states_need_update: bool,
+    pub terminate_simulation: bool,
+    pub nominals_changed: bool,
+    pub values_changed: bool,
+    pub next_event_time: Option<f64>,
+}
+
+/// The elements addressed by `vrs` in order: one per reference in FMI 2, every element of
+/// each referenced variable in FMI 3. Unknown references are skipped (callers check first).
+fn elements<'a>(
+    table: &'a VariableTable,
+    version: FmiVersion,
+    vrs: &'a [u32],
+) -> impl Iterator<Item = (&'static VariableGroup, VariableRef)> + 'a {
+    vrs.iter()
+        .filter_map(move |&vr| match version {
+            FmiVersion::Fmi2 => table.lookup(vr).filter(|(g, _)| !g.fmi3_only).map(|(g, r)| (g, r, 1)),
+            FmiVersion::Fmi3 => table.lookup_variable(vr).map(|(g, r)| (g, r, g.len())),
+        })
+        .flat_map(|(g, first, n)| (0..n).map(move |i| (g, VariableRef { group: first.group, index: first.index + i })))
+}
+
+/// A restorable picture of an instance, parsed and validated.
+struct Snapshot {
+    state: ModelState,
+    time: f64,
+    start_time: f64,
+    stop_time: Option<f64>,
+    tolerance: Option<f64>,
+    terminated: bool,
+    last_successful_time: f64,
+    model: AnyModel,
+}
+
+pub struct Instance {
+    magic: u64,
+    pub version: FmiVersion,
+    pub kind: ModelKind,
+    pub interface: InterfaceType,
+    pub state: ModelState,
+    pub logger: Logger,
+    pub model: AnyModel,
+    pub table: VariableTable,
+    /// Hash of the instantiation token, stamped into serialized states.
+    token_hash: u64,
+    pub start_time: f64,
+    pub stop_time: Option<f64>,
+    pub tolerance: Option<f64>,
+    /// Current communication point (Co-Simulation) or time (Model Exchange).
+    pub time: f64,
+    /// The importer should end the simulation (`fmi2Terminated`).
+    pub terminated: bool,
+    /// End of the last completed step (`fmi2LastSuccessfulTime`).
+    pub last_successful_time: f64,
+    poisoned: Option<String>,
+    /// The exported function being called: every message names it.
+    current: &'static str,
+    /// Model Exchange: for each continuous state in the order the importer sees, its index in
+    /// the model's state vector (the identity in FMI 2; FMI 3 lists whole array variables).
+    state_order: Vec<usize>,
+    pub co_simulation: CoSimulationOptions,
+}
+
+fn option_f64(w: &mut ByteWriter, x: Option<f64>) {
+    w.bool(x.is_some());
+    w.f64(x.unwrap_or(0.0));
+}
+
+fn read_option_f64(r: &mut ByteReader, what: &str) -> Result<Option<f64>, SnapshotError> {
+    let present = r.bool()?;
+    let x = r.f64()?;
+    if present {
+        if x.is_finite() { Ok(Some(x)) } else { Err(SnapshotError(format!("{what} is not finite"))) }
+    } else {
+        Ok(None)
+    }
+}
+
+impl Instance {
+    /// `token` is the importer's instantiation token, already matched to `kind`.
+    pub fn new(kind: ModelKind, token: &str, version: FmiVersion, interface: InterfaceType, logger: Logger) -> Self {
+        let info = kind.info();
+        let table = VariableTable::new(info.groups);
+        let state_order = match version {
+            FmiVersion::Fmi2 => (0..info.states.len()).collect(),
+            FmiVersion::Fmi3 => super::description::fmi3_state_order(info),
+        };
+        Instance {
+            magic: match version {
+                FmiVersion::Fmi2 => INSTANCE_MAGIC_FMI2,
+                FmiVersion::Fmi3 => INSTANCE_MAGIC_FMI3,
+            },
+            version,
+            kind,
+            interface,
+            state: ModelState::Instantiated,
+            logger,
+            model: kind.instantiate(),
+            table,
+            token_hash: fnv1a64(token.as_bytes()),
+            start_time: 0.0,
+            stop_time: None,
+            tolerance: None,
+            time: 0.0,
+            terminated: false,
+            last_successful_time: 0.0,
+            poisoned: None,
+            current: "",
+            state_order,
+            co_simulation: CoSimulationOptions::default(),
+        }
+    }
+
+    /// # Safety
+    /// `c` must be NULL or a pointer from this library's instantiation that has not been freed.
+    pub unsafe fn from_handle<'a>(c: *mut c_void, version: FmiVersion) -> Option<&'a mut Instance> {
+        // SAFETY: see the function's contract; the magic number rejects foreign pointers and
+        // handles of the other FMI version.
+        let inst = unsafe { (c as *mut Instance).as_mut()? };
+        let magic = match version {
+            FmiVersion::Fmi2 => INSTANCE_MAGIC_FMI2,
+            FmiVersion::Fmi3 => INSTANCE_MAGIC_FMI3,
+        };
+        (inst.magic == magic).then_some(inst)
+    }
+
+    pub fn into_handle(self) -> *mut c_void {
+        Box::into_raw(Box::new(self)) as *mut c_void
+    }
+
+    /// # Safety
+    /// `c` must be a pointer from this library's instantiation that has not been freed.
+    pub unsafe fn free(c: *mut c_void) {
+        // SAFETY: per the contract `c` is a live Box<Instance>.
+        let mut b = unsafe { Box::from_raw(c as *mut Instance) };
+        b.magic = 0;
+        drop(b);
+    }
+
+    // ----- context, logging and checks -----------------------------------------------------
+
+    /// Sets the calling function (done by the boundary before each call).
+    pub fn begin(&mut self, function: &'static str) {
+        self.current = function;
+    }
+
+    /// The exported function being called.
+    pub fn function(&self) -> &'static str {
+        self.current
+    }
+
+    pub fn log(&self, status: Status, message: &str) {
+        self.logger.log(status, LogCategory::for_status(status), message);
+    }
+
+    /// Logs `"<function>: <message>"` as an error and returns the error status.
+    pub fn error(&self, message: &str) -> Status {
+        self.log(Status::Error, &format!("{}: {message}", self.current));
+        Status::Error
+    }
+
+    fn state_name(&self) -> &'static str {
+        self.state.name(self.version)
+    }
+
+    pub fn check_call<F: FmiFunction>(&self, func: F) -> Result<(), Status> {
+        if let Some(reason) = &self.poisoned {
+            if !func.name().ends_with("Reset") && !func.name().ends_with("FreeInstance") {
+                self.error(&format!(
+                    "refused, the instance is poisoned by an internal error ({reason}); reset or free it"
+                ));
+                return Err(Status::Error);
+            }
+            return Ok(());
+        }
+        if func.allowed_in(self.interface, self.state) {
+            return Ok(());
+        }
+        self.error(&format!(
+            "illegal call sequence, not allowed in state {} of a {} instance",
+            self.state_name(),
+            self.interface.name()
+        ));
+        Err(Status::Error)
+    }
+
+    pub fn log_call(&self, status: Status) {
+        if self.logger.is_enabled(LogCategory::Calls) {
+            self.logger.log(
+                Status::Ok,
+                LogCategory::Calls,
+                &format!(
+                    "{} -> {} (state {}, t = {})",
+                    self.current,
+                    status.name(self.version),
+                    self.state_name(),
+                    self.time
+                ),
+            );
+        }
+    }
+
+    pub fn poison(&mut self, message: &str) {
+        let reason = format!("panic in {} at t = {}: {message}", self.current, self.time);
+        self.logger.log(Status::Fatal, LogCategory::Fatal, &format!("{reason}; the instance is poisoned"));
+        self.poisoned = Some(reason);
+    }
+
+    pub fn is_poisoned(&self) -> bool {
+        self.poisoned.is_some()
+    }
+
+    /// Resolves a value reference to the elements it addresses: one for FMI 2, every element
+    /// of the variable for FMI 3.
+    fn lookup(&self, vr: u32, want: BaseType) -> Result<(&'static VariableGroup, VariableRef), Status> {
+        let found = match self.version {
+            FmiVersion::Fmi2 => self.table.lookup(vr).filter(|(g, _)| !g.fmi3_only),
+            FmiVersion::Fmi3 => self.table.lookup_variable(vr),
+        };
+        match found {
+            Some((g, r)) if want.matches(g.var_type) => Ok((g, r)),
+            Some((g, r)) => Err(self.error(&format!(
+                "value reference {vr} is {} of type {:?}, not a {} variable",
+                self.variable_name(g, r),
+                g.var_type,
+                want.name(self.version)
+            ))),
+            None => Err(self.error(&format!(
+                "value reference {vr} is not a {} variable of {}",
+                want.name(self.version),
+                self.kind.info().model_name
+            ))),
+        }
+    }
+
+    /// The name of what a reference addresses: the element (FMI 2) or the variable (FMI 3).
+    fn variable_name(&self, g: &VariableGroup, r: VariableRef) -> String {
+        match self.version {
+            FmiVersion::Fmi2 => g.element_name(r.index),
+            FmiVersion::Fmi3 => g.variable_name(),
+        }
+    }
+
+    /// Number of values a reference addresses.
+    fn width(&self, g: &VariableGroup) -> usize {
+        match self.version {
+            FmiVersion::Fmi2 => 1,
+            FmiVersion::Fmi3 => g.len(),
+        }
+    }
+
+    /// Checks `vrs` against a base type and counts the values they address, which must be
+    /// `n_values`; the first pass of every get/set (nothing is read or written before all is
+    /// known to be valid).
+    fn check_values(&self, vrs: &[u32], want: BaseType, n_values: usize, setting: bool) -> Result<(), Status> {
+        let mut count = 0usize;
+        for &vr in vrs {
+            let (g, r) = self.lookup(vr, want)?;
+            if setting {
+                self.check_settable(g, r)?;
+            }
+            count += self.width(g);
+        }
+        if count != n_values {
+            return Err(self.error(&format!("the value references address {count} values, but nValues = {n_values}")));
+        }
+        Ok(())
+    }
+
+    /// Whether a variable may be set in the current state (FMI 2.0 conditions 1, 3, 6 of the
+    /// CS table; 1, 3, 4, 5 of the ME table; the same rules in FMI 3).
+    fn settable(&self, g: &VariableGroup) -> bool {
+        if g.variability == Variability::Constant || g.causality == Causality::Independent {
+            return false;
+        }
+        let exact_or_approx = matches!(g.initial, Some(Initial::Exact | Initial::Approx));
+        match self.state {
+            ModelState::Instantiated => exact_or_approx || g.causality == Causality::Input,
+            ModelState::InitializationMode => g.initial == Some(Initial::Exact) || g.causality == Causality::Input,
+            ModelState::StepComplete | ModelState::EventMode => {
+                g.causality == Causality::Input
+                    || (g.causality == Causality::Parameter && g.variability == Variability::Tunable)
+            }
+            ModelState::ContinuousTimeMode => {
+                g.causality == Causality::Input && g.variability == Variability::Continuous
+            }
+            _ => false,
+        }
+    }
+
+    fn check_settable(&self, g: &VariableGroup, r: VariableRef) -> Result<(), Status> {
+        if self.settable(g) {
+            return Ok(());
+        }
+        Err(self.error(&format!(
+            "{} ({} {}) may not be set in state {}",
+            self.variable_name(g, r),
+            g.variability.xml(),
+            g.causality.xml(),
+            self.state_name()
+        )))
+    }
+
+    // ----- common functions -----------------------------------------------------------------
+
+    pub fn set_debug_logging(&mut self, logging_on: bool, names: &[Option<String>]) -> Status {
+        let mut categories = Vec::with_capacity(names.len());
+        for name in names {
+            match name.as_deref().map(|n| (n, LogCategory::from_name(n))) {
+                Some((_, Some(c))) => categories.push(c),
+                Some((n, None)) => {
+                    let known: Vec<&str> = LogCategory::ALL.iter().map(|c| c.name()).collect();
+                    return self.error(&format!("unknown log category \"{n}\" (known: {})", known.join(", ")));
+                }
+                None => return self.error("a category name is NULL"),
+            }
+        }
+        self.logger.set_debug_logging(logging_on, &categories);
+        Status::Ok
+    }
+
+    /// The experiment: `fmi2SetupExperiment`, and the arguments of `fmi3EnterInitializationMode`.
+    pub fn setup_experiment(&mut self, tolerance: Option<f64>, start_time: f64, stop_time: Option<f64>) -> Status {
+        if !start_time.is_finite() {
+            return self.error(&format!("startTime must be finite, got {start_time}"));
+        }
+        if let Some(tol) = tolerance
+            && !(tol > 0.0 && tol < 1.0)
+        {
+            return self.error(&format!("tolerance must be in (0, 1), got {tol}"));
+        }
+        if let Some(stop) = stop_time
+            && (!stop.is_finite() || stop < start_time)
+        {
+            return self.error(&format!("stopTime {stop} must be finite and not before startTime {start_time}"));
+        }
+        self.tolerance = tolerance;
+        self.start_time = start_time;
+        self.stop_time = stop_time;
+        self.time = start_time;
+        self.last_successful_time = start_time;
+        Status::Ok
+    }
+
+    pub fn enter_initialization_mode(&mut self) -> Status {
+        self.time = self.start_time;
+        self.last_successful_time = self.start_time;
+        self.state = ModelState::InitializationMode;
+        Status::Ok
+    }
+
+    pub fn exit_initialization_mode(&mut self) -> Status {
+        let model_exchange = self.interface == InterfaceType::ModelExchange;
+        match self.model.exit_initialization(self.start_time, self.tolerance, model_exchange) {
+            Ok(summary) => {
+                self.logger.log(Status::Ok, LogCategory::Events, &summary);
+                self.state = match (self.interface, self.version) {
+                    (InterfaceType::CoSimulation, FmiVersion::Fmi3) if self.co_simulation.event_mode_used => {
+                        ModelState::EventMode
+                    }
+                    (InterfaceType::CoSimulation, _) => ModelState::StepComplete,
+                    (InterfaceType::ModelExchange, _) => ModelState::EventMode,
+                };
+                Status::Ok
+            }
+            Err(message) => {
+                self.state = ModelState::Error;
+                self.error(&format!("{message}; the instance is in the error state (reset to start again)"))
+            }
+        }
+    }
+
+    pub fn terminate(&mut self) -> Status {
+        self.state = ModelState::Terminated;
+        Status::Ok
+    }
+
+    pub fn reset(&mut self) -> Status {
+        self.model = self.kind.instantiate();
+        self.state = ModelState::Instantiated;
+        self.start_time = 0.0;
+        self.stop_time = None;
+        self.tolerance = None;
+        self.time = 0.0;
+        self.terminated = false;
+        self.last_successful_time = 0.0;
+        self.poisoned = None;
+        self.logger.log(Status::Ok, LogCategory::Events, "reset to the start values");
+        Status::Ok
+    }
+
+    // ----- get/set ------------------------------------------------------------------------
+
+    pub fn get_real(&mut self, vrs: &[u32], values: &mut [f64]) -> Status {
+        // Two passes, no allocation: validate every reference, then read (all or nothing).
+        if let Err(s) = self.check_values(vrs, BaseType::Real, values.len(), false) {
+            return s;
+        }
+        for ((g, r), slot) in elements(&self.table, self.version, vrs).zip(values.iter_mut()) {
+            let x = self.model.get_real(r);
+            if x.is_nan() {
+                return self.error(&format!("{} is not a number with the current parameters", g.element_name(r.index)));
+            }
+            *slot = x;
+        }
+        Status::Ok
+    }
+
+    pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Status {
+        // Two passes, no allocation: validate every reference and value, then store.
+        if let Err(s) = self.check_values(vrs, BaseType::Real, values.len(), true) {
+            return s;
+        }
+        for ((g, r), &x) in elements(&self.table, self.version, vrs).zip(values) {
+            if !x.is_finite() {
+                return self.error(&format!("{} = {x} refused: values must be finite", g.element_name(r.index)));
+            }
+        }
+        for ((_, r), &x) in elements(&self.table, self.version, vrs).zip(values) {
+            if let Err(m) = self.model.set_real(r, x) {
+                return self.error(&m);
+            }
+        }
+        Status::Ok
+    }
+
+    pub fn get_integer(&mut self, vrs: &[u32], values: &mut [i32]) -> Status {
+        if let Err(s) = self.check_values(vrs, BaseType::Integer, values.len(), false) {
+            return s;
+        }
+        for (slot, (_, r)) in values.iter_mut().zip(elements(&self.table, self.version, vrs)) {
+            *slot = self.model.get_integer(r);
+        }
+        Status::Ok
+    }
+
+    pub fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> Status {
+        if let Err(s) = self.check_values(vrs, BaseType::Integer, values.len(), true) {
+            return s;
+        }
+        let refs: Vec<(&'static VariableGroup, VariableRef)> = elements(&self.table, self.version, vrs).collect();
+        // Validate every value on a copy first: all or nothing.
+        let mut trial = self.copy_model();
+        for ((g, r), &x) in refs.iter().zip(values) {
+            if let Err(m) = trial.set_integer(*r, x) {
+                return self.error(&format!("{} = {x} refused: {m}", g.element_name(r.index)));
+            }
+        }
+        self.model = trial;
+        Status::Ok
+    }
+
+    pub fn get_boolean(&mut self, vrs: &[u32], values: &mut [bool]) -> Status {
+        if let Err(s) = self.check_values(vrs, BaseType::Boolean, values.len(), false) {
+            return s;
+        }
+        for (slot, (_, r)) in values.iter_mut().zip(elements(&self.table, self.version, vrs)) {
+            *slot = self.model.get_boolean(r);
+        }
+        Status::Ok
+    }
+
+    pub fn set_boolean(&mut self, vrs: &[u32], values: &[bool]) -> Status {
+        if let Err(s) = self.check_values(vrs, BaseType::Boolean, values.len(), true) {
+            return s;
+        }
+        for ((_, r), &x) in elements(&self.table, self.version, vrs).zip(values) {
+            if let Err(m) = self.model.set_boolean(r, x) {
+                return self.error(&m);
+            }
+        }
+        Status::Ok
+    }
+
+    /// A deep copy of the model through its own serialization (models are not `Clone`
+    /// through `AnyModel`).
+    fn copy_model(&self) -> AnyModel {
+        let mut w = ByteWriter::default();
+        self.model.save(&mut w);
+        let mut r = ByteReader::new(&w.bytes);
+        AnyModel::restore(self.kind, &mut r).unwrap_or_else(|_| self.kind.instantiate())
+    }
+
+    /// A get or set of a type the model has no variables of: every reference is unknown.
+    pub fn no_variables_of_type(&self, vrs: &[u32], type_name: &str) -> Status {
+        match vrs.first() {
+            None => Status::Ok,
+            Some(vr) => self
+                .error(&format!("value reference {vr}: {} has no {type_name} variables", self.kind.info().model_name)),
+        }
+    }
+
+    // ----- co-simulation ---------------------------------------------------------------------
+
+    /// A co-simulation step from `tc` to `tc + h` (or, with FMI 3 early return, to an event
+    /// before it).
+    pub fn do_step(&mut self, tc: f64, h: f64) -> (Status, DoStepOutcome) {
+        let mut outcome = DoStepOutcome { last_successful_time: self.time, ..Default::default() };
+        if !(h.is_finite() && h > 0.0) {
+            return (self.error(&format!("communicationStepSize must be finite and > 0, got {h}")), outcome);
+        }
+        if !tc.is_finite() {
+            return (self.error(&format!("currentCommunicationPoint must be finite, got {tc}")), outcome);
+        }
+        let tol = COMMUNICATION_POINT_TOLERANCE * self.time.abs().max(1.0);
+        if (tc - self.time).abs() > tol {
+            let message = format!(
+                "currentCommunicationPoint {tc} does not match the FMU's time {} (difference {:e})",
+                self.time,
+                tc - self.time
+            );
+            return (self.error(&message), outcome);
+        }
+        let t_end = tc + h;
+        if let Some(stop) = self.stop_time
+            && t_end > stop + COMMUNICATION_POINT_TOLERANCE * stop.abs().max(1.0)
+        {
+            let message = format!("step to t = {t_end} goes past the stopTime {stop}");
+            return (self.error(&message), outcome);
+        }
+        let events = self.version == FmiVersion::Fmi3 && self.kind.info().capabilities.event_indicators > 0;
+        let early = events && self.co_simulation.early_return_allowed;
+        let mut t = tc;
+        loop {
+            let result = self.model.do_step(t, t_end - t, early);
+            match result {
+                Ok(StepReport { reached, event }) => {
+                    self.time = reached;
+                    self.last_successful_time = reached;
+                    outcome.last_successful_time = reached;
+                    if self.logger.is_enabled(LogCategory::Events) {
+                        let logger = &self.logger;
+                        self.model.report_events(&mut |m| logger.log(Status::Ok, LogCategory::Events, m));
+                    }
+                    if event && events && self.co_simulation.event_mode_used {
+                        outcome.event_handling_needed = true;
+                    }
+                    if reached >= t_end || !event {
+                        self.time = if reached >= t_end { t_end } else { reached };
+                        return (Status::Ok, outcome);
+                    }
+                    // An event before the step's end: ask the importer whether to return now.
+                    if self.return_early_at(reached) {
+                        outcome.early_return = true;
+                        return (Status::Ok, outcome);
+                    }
+                    t = reached;
+                }
+                Err(e) => {
+                    self.state = ModelState::StepFailed;
+                    self.terminated = true;
+                    outcome.terminate_simulation = true;
+                    outcome.last_successful_time = self.time;
+                    self.last_successful_time = self.time;
+                    self.log(Status::Discard, &format!("{}: {}", self.current, e.message));
+                    return (Status::Discard, outcome);
+                }
+            }
+        }
+    }
+
+    /// At an event at `t` inside an FMI 3 step with early return allowed: the importer's
+    /// intermediate update callback decides (`canReturnEarly`; getting and setting variables
+    /// is not allowed during the callback); without a callback, a step that reports events
+    /// returns at each, so that the importer can handle it in Event Mode.
+    fn return_early_at(&mut self, t: f64) -> bool {
+        let options = self.co_simulation;
+        match options.intermediate_update {
+            Some(callback) => {
+                let (mut requested, mut at) = (0u8, t);
+                self.state = ModelState::IntermediateUpdateMode;
+                // SAFETY: the importer gave us this callback for this instance; the out-pointers
+                // are local variables valid for the call.
+                unsafe { callback(options.environment, t, 0, 0, 0, 1, &mut requested, &mut at) };
+                self.state = ModelState::StepComplete;
+                requested != 0
+            }
+            None => options.event_mode_used,
+        }
+    }
+
+    pub fn set_real_input_derivatives(&mut self, vrs: &[u32], orders: &[i32], values: &[f64]) -> Status {
+        if !self.kind.info().capabilities.can_interpolate_inputs {
+            return self.error("not supported by this model (canInterpolateInputs=\"false\")");
+        }
+        let mut refs = Vec::with_capacity(vrs.len());
+        for ((&vr, &order), &x) in vrs.iter().zip(orders).zip(values) {
+            let (g, r) = match self.lookup(vr, BaseType::Real) {
+                Ok(f) => f,
+                Err(s) => return s,
+            };
+            if g.causality != Causality::Input {
+                return self.error(&format!("{} is not an input", g.element_name(r.index)));
+            }
+            if order != 1 {
+                return self
+                    .error(&format!("derivative order {order} of {} not supported (only 1)", g.element_name(r.index)));
+            }
+            if !x.is_finite() {
+                return self
+                    .error(&format!("derivative of {} = {x} refused: values must be finite", g.element_name(r.index)));
+            }
+            refs.push(r);
+        }
+        for (r, &x) in refs.into_iter().zip(values) {
+            self.model.set_input_derivative(r, x);
+        }
+        Status::Ok
+    }
+
+    /// Output derivatives: FMI 2 one per reference, FMI 3 one per element of each referenced
+    /// variable (`values` holds them all).
+    pub fn get_output_derivatives(&mut self, vrs: &[u32], orders: &[i32], values: &mut [f64]) -> Status {
+        let max_order = self.kind.info().capabilities.max_output_derivative_order;
+        if max_order == 0 {
+            return self.error("not supported by this model (maxOutputDerivativeOrder = 0)");
+        }
+        if let Err(s) = self.check_values(vrs, BaseType::Real, values.len(), false) {
+            return s;
+        }
+        for (&vr, &order) in vrs.iter().zip(orders) {
+            let Ok((g, r)) = self.lookup(vr, BaseType::Real) else { return Status::Error };
+            if g.causality != Causality::Output {
+                return self.error(&format!("{} is not an output", self.variable_name(g, r)));
+            }
+            if order < 1 || order as u32 > max_order {
+                return self.error(&format!(
+                    "derivative order {order} of {} not available (maxOutputDerivativeOrder = {max_order})",
+                    self.variable_name(g, r)
+                ));
+            }
+        }
+        for (slot, (_, r)) in values.iter_mut().zip(elements(&self.table, self.version, vrs)) {
+            *slot = self.model.output_derivative(r);
+        }
+        Status::Ok
+    }
+
+    // ----- directional and adjoint derivatives ---------------------------------------------
+
+    /// Resolves the unknowns and knowns of a derivative call into element references.
+    fn derivative_refs(
+        &self,
+        unknowns: &[u32],
+        knowns: &[u32],
+    ) -> Result<(Vec<VariableRef>, Vec<VariableRef>), Status> {
+        let resolve = |vrs: &[u32]| -> Result<Vec<VariableRef>, Status> {
+            for &vr in vrs {
+                self.lookup(vr, BaseType::Real)?;
+            }
+            Ok(elements(&self.table, self.version, vrs).map(|(_, r)| r).collect())
+        };
+        let u = resolve(unknowns)?;
+        let k = resolve(knowns)?;
+        Ok((u, k))
+    }
+
+    /// `sensitivity = J seed` for the Jacobian of `unknowns` with respect to `knowns`.
+    pub fn get_directional_derivative(
+        &mut self,
+        unknowns: &[u32],
+        knowns: &[u32],
+        seeds: &[f64],
+        out: &mut [f64],
+    ) -> Status {
+        if !self.kind.info().capabilities.directional_derivatives {
+            return self.error("not supported by this model (providesDirectionalDerivative=\"false\")");
+        }
+        let (u, k) = match self.derivative_refs(unknowns, knowns) {
+            Ok(x) => x,
+            Err(s) => return s,
+        };
+        if seeds.len() != k.len() || out.len() != u.len() {
+            return self.error(&format!(
+                "the knowns address {} values and the unknowns {}, but nSeed = {} and nSensitivity = {}",
+                k.len(),
+                u.len(),
+                seeds.len(),
+                out.len()
+            ));
+        }
+        if let Some(s) = seeds.iter().find(|s| !s.is_finite()) {
+            return self.error(&format!("seed {s} is not finite"));
+        }
+        match self.model.directional_derivative(&u, &k, seeds, out) {
+            Ok(()) => Status::Ok,
+            Err(m) => self.error(&m),
+        }
+    }
+
+    /// `sensitivity = J^T seed` (FMI 3 adjoint derivative), exact: the Jacobian's columns come
+    /// from one exact directional derivative per known.
+    pub fn get_adjoint_derivative(
+        &mut self,
+        unknowns: &[u32],
+        knowns: &[u32],
+        seeds: &[f64],
+        out: &mut [f64],
+    ) -> Status {
+        if !self.kind.info().capabilities.adjoint_derivatives {
+            return self.error("not supported by this model (providesAdjointDerivatives=\"false\")");
+        }
+        let (u, k) = match self.derivative_refs(unknowns, knowns) {
+            Ok(x) => x,
+            Err(s) => return s,
+        };
+        if seeds.len() != u.len() || out.len() != k.len() {
+            return self.error(&format!(
+                "the unknowns address {} values and the knowns {}, but nSeed = {} and nSensitivity = {}",
+                u.len(),
+                k.len(),
+                seeds.len(),
+                out.len()
+            ));
+        }
+        if let Some(s) = seeds.iter().find(|s| !s.is_finite()) {
+            return self.error(&format!("seed {s} is not finite"));
+        }
+        let mut column = vec![0.0; u.len()];
+        for (j, known) in k.iter().enumerate() {
+            if let Err(m) = self.model.directional_derivative(&u, std::slice::from_ref(known), &[1.0], &mut column) {
+                return self.error(&m);
+            }
+            if let Some(slot) = out.get_mut(j) {
+                *slot = column.iter().zip(seeds).map(|(c, s)| c * s).sum();
+            }
+        }
+        Status::Ok
+    }
+
+    // ----- Model Exchange -------------------------------------------------------------------
+
+    pub fn state_count(&self) -> usize {
+        self.state_order.len()
+    }
+
+    pub fn event_indicator_count(&self) -> usize {
+        self.kind.info().capabilities.event_indicators
+    }
+
+    fn check_state_count(&self, n: usize) -> Result<(), Status> {
+        if n == self.state_count() {
+            Ok(())
+        } else {
+            Err(self.error(&format!("nx = {n}, but the model has {} continuous states", self.state_count())))
+        }
+    }
+
+    pub fn set_time(&mut self, t: f64) -> Status {
+        if !t.is_finite() {
+            return self.error(&format!("time must be finite, got {t}"));
+        }
+        self.time = t;
+        self.model.set_time(t);
+        Status::Ok
+    }
+
+    pub fn set_continuous_states(&mut self, x: &[f64]) -> Status {
+        if let Err(s) = self.check_state_count(x.len()) {
+            return s;
+        }
+        if let Some(i) = x.iter().position(|v| !v.is_finite()) {
+            return self.error(&format!("state {i} = {} refused: states must be finite", x[i]));
+        }
+        let mut internal = vec![0.0; x.len()];
+        for (&xi, &i) in x.iter().zip(&self.state_order) {
+            if let Some(slot) = internal.get_mut(i) {
+                *slot = xi;
+            }
+        }
+        self.model.set_continuous_states(&internal);
+        Status::Ok
+    }
+
+    /// The model's state vector (or its derivative) in the importer's order.
+    fn in_importer_order(&self, internal: &[f64], out: &mut [f64]) {
+        for (slot, &i) in out.iter_mut().zip(&self.state_order) {
+            *slot = internal.get(i).copied().unwrap_or(f64::NAN);
+        }
+    }
+
+    pub fn get_continuous_states(&mut self, x: &mut [f64]) -> Status {
+        if let Err(s) = self.check_state_count(x.len()) {
+            return s;
+        }
+        let mut internal = vec![0.0; x.len()];
+        self.model.continuous_states(&mut internal);
+        self.in_importer_order(&internal, x);
+        Status::Ok
+    }
+
+    pub fn get_derivatives(&mut self, dx: &mut [f64]) -> Status {
+        if let Err(s) = self.check_state_count(dx.len()) {
+            return s;
+        }
+        let mut internal = vec![0.0; dx.len()];
+        self.model.derivatives(&mut internal);
+        self.in_importer_order(&internal, dx);
+        if let Some(i) = dx.iter().position(|v| !v.is_finite()) {
+            return self
+                .error(&format!("derivative {i} is not finite at t = {}: the state is not admissible", self.time));
+        }
+        Status::Ok
+    }
+
+    pub fn get_nominals(&mut self, x: &mut [f64]) -> Status {
+        if let Err(s) = self.check_state_count(x.len()) {
+            return s;
+        }
+        // Positions in m, velocities in m/s, unit vectors and their rates: all of order one;
+        // the work quadratures too in practice (the error control is relative).
+        x.fill(1.0);
+        Status::Ok
+    }
+
+    pub fn get_event_indicators(&mut self, z: &mut [f64]) -> Status {
+        let count = self.event_indicator_count();
+        if z.len() != count {
+            return self.error(&format!("ni = {}, but the model has {count} event indicators", z.len()));
+        }
+        self.model.event_indicators(z);
+        Status::Ok
+    }
+
+    pub fn enter_event_mode(&mut self) -> Status {
+        self.state = ModelState::EventMode;
+        Status::Ok
+    }
+
+    pub fn enter_continuous_time_mode(&mut self) -> Status {
+        self.state = ModelState::ContinuousTimeMode;
+        Status::Ok
+    }
+
+    /// FMI 3 Co-Simulation: from Initialization or Event Mode into Step Mode.
+    pub fn enter_step_mode(&mut self) -> Status {
+        self.state = ModelState::StepComplete;
+        Status::Ok
+    }
+
+    /// An event update. No discrete states and no time events: the end-stop forces are
+    /// continuous in the state and the events only mark their kinks (and singular
+    /// arrangements passed), so one update settles every event and the continuous states
+    /// are unchanged.
+    pub fn update_discrete_states(&mut self) -> EventInfo {
+        let mut info = EventInfo::default();
+        let logger = &self.logger;
+        let update: EventUpdate = self.model.event_update(&mut |m| logger.log(Status::Ok, LogCategory::Events, m));
+        if let Some(reason) = update.terminate {
+            info.terminate_simulation = true;
+            self.terminated = true;
+            self.logger.log(Status::Warning, LogCategory::Discard, &format!("{}: {reason}", self.current));
+        }
+        info
+    }
+
+    /// Returns `(enterEventMode, terminateSimulation)`.
+    pub fn completed_integrator_step(&mut self) -> (bool, bool) {
+        match self.model.completed_integrator_step() {
+            Ok(()) => (false, false),
+            Err(e) => {
+                self.terminated = true;
+                self.logger.log(Status::Warning, LogCategory::Discard, &format!("{}: {}", self.current, e.message));
+                (false, true)
+            }
+        }
+    }
+
+    // ----- FMU state ----------------------------------------------------------------------
+
+    /// The instance as pointer-free bytes (format: [`crate::models::snapshot`]).
+    pub fn serialize(&self) -> Vec<u8> {
+        let mut payload = ByteWriter::default();
+        payload.u8(match self.interface {
+            InterfaceType::ModelExchange => 0,
+            InterfaceType::CoSimulation => 1,
+        });
+        payload.u8(self.state as u8);
+        payload.f64(self.time);
+        payload.f64(self.start_time);
+        option_f64(&mut payload, self.stop_time);
+        option_f64(&mut payload, self.tolerance);
+        payload.bool(self.terminated);
+        payload.f64(self.last_successful_time);
+        self.model.save(&mut payload);
+        snapshot::seal(self.kind.code(), self.token_hash, &payload.bytes)
+    }
+
+    fn parse(&self, bytes: &[u8]) -> Result<Snapshot, SnapshotError> {
+        let payload = snapshot::open(bytes, self.kind.code(), self.token_hash)?;
+        let mut p = ByteReader::new(payload);
+        let interface = match p.u8()? {
+            0 => InterfaceType::ModelExchange,
+            1 => InterfaceType::CoSimulation,
+            x => return Err(SnapshotError(format!("invalid interface type {x}"))),
+        };
+        if interface != self.interface {
+            return Err(SnapshotError(format!(
+                "state of a {} instance, this one is {}",
+                interface.name(),
+                self.interface.name()
+            )));
+        }
+        let code = p.u8()?;
+        let state = ModelState::from_code(code).ok_or_else(|| SnapshotError(format!("invalid model state {code}")))?;
+        let time = p.finite("time")?;
+        let start_time = p.finite("start time")?;
+        let stop_time = read_option_f64(&mut p, "stop time")?;
+        let tolerance = read_option_f64(&mut p, "tolerance")?;
+        let terminated = p.bool()?;
+        let last_successful_time = p.finite("last successful time")?;
+        let model = AnyModel::restore(self.kind, &mut p)?;
+        if p.remaining() != 0 {
+            return Err(SnapshotError(format!("{} unexpected bytes at the end of the model data", p.remaining())));
+        }
+        Ok(Snapshot { state, time, start_time, stop_time, tolerance, terminated, last_successful_time, model })
+    }
+
+    /// Checks bytes without restoring them (deserialization).
+    pub fn validate_state_bytes(&self, bytes: &[u8]) -> Result<(), SnapshotError> {
+        self.parse(bytes).map(|_| ())
+    }
+
+    /// Restores the instance from bytes, all or nothing.
+    pub fn restore(&mut self, bytes: &[u8]) -> Result<(), SnapshotError> {
+        let s = self.parse(bytes)?;
+        self.state = s.state;
+        self.time = s.time;
+        self.start_time = s.start_time;
+        self.stop_time = s.stop_time;
+        self.tolerance = s.tolerance;
+        self.terminated = s.terminated;
+        self.last_successful_time = s.last_successful_time;
+        self.model = s.model;
+        self.logger.log(
+            Status::Ok,
+            LogCategory::Events,
+            &format!("FMU state restored: t = {}, state {}", self.time, self.state_name()),
+        );
+        Ok(())
+    }
+}
