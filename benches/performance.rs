@@ -219,6 +219,50 @@ fn fmi_do_step(c: &mut Criterion) {
     }
 }
 
+/// `fmi2Instantiate` + `fmi2FreeInstance`, and the FMI 3 Co-Simulation counterpart: the
+/// token check and the model's start values.
+fn instantiation(c: &mut Criterion) {
+    let guid = std::ffi::CString::new(instantiation_token(ModelKind::Platform, FmiVersion::Fmi2)).unwrap();
+    let token = std::ffi::CString::new(instantiation_token(ModelKind::Platform, FmiVersion::Fmi3)).unwrap();
+    let cb = fmi2CallbackFunctions {
+        logger: None,
+        allocateMemory: None,
+        freeMemory: None,
+        stepFinished: None,
+        componentEnvironment: std::ptr::null_mut(),
+    };
+    c.bench_function("instantiation token (platform, FMI 3)", |b| {
+        b.iter(|| instantiation_token(ModelKind::Platform, FmiVersion::Fmi3))
+    });
+    c.bench_function("fmi2Instantiate + fmi2FreeInstance (platform)", |b| {
+        b.iter(|| unsafe {
+            let inst = fmi2Instantiate(c"bench".as_ptr(), fmi2CoSimulation, guid.as_ptr(), std::ptr::null(), &cb, 0, 0);
+            assert!(!inst.is_null());
+            fmi2FreeInstance(inst);
+        })
+    });
+    c.bench_function("fmi3InstantiateCoSimulation + fmi3FreeInstance (platform)", |b| {
+        b.iter(|| unsafe {
+            let inst = stewart_fmu::fmi3::exports::fmi3InstantiateCoSimulation(
+                c"bench".as_ptr(),
+                token.as_ptr(),
+                std::ptr::null(),
+                0,
+                0,
+                0,
+                0,
+                std::ptr::null(),
+                0,
+                std::ptr::null_mut(),
+                None,
+                None,
+            );
+            assert!(!inst.is_null());
+            stewart_fmu::fmi3::exports::fmi3FreeInstance(inst);
+        })
+    });
+}
+
 fn many_instances(c: &mut Criterion) {
     let mut group = c.benchmark_group("N instances stepped in turn (co-simulation step each, RK4, 1 ms)");
     for n in [1usize, 10, 100, 1000] {
@@ -249,6 +293,6 @@ fn many_instances(c: &mut Criterion) {
 criterion_group! {
     name = benches;
     config = Criterion::default().warm_up_time(Duration::from_millis(500)).measurement_time(Duration::from_secs(3));
-    targets = physics, fmi_do_step, many_instances
+    targets = physics, fmi_do_step, instantiation, many_instances
 }
 criterion_main!(benches);

@@ -1,6 +1,6 @@
 """Performance side by side with the alternatives, in one run (issue: performance).
 
-Same stand (SPEC §2), same force law for everyone: a leg-length feedback around sinusoidal
+Same stand (docs/model.md §3), same force law for everyone: a leg-length feedback around sinusoidal
 programme lengths, sampled at every 1 ms communication point and held over the step,
 
     u_k = 0.2005 M g + G (l_k^p(t) - l_k) - D ldot_k,   l_k^p = l_0 + 0.02 sin(2 t + k),

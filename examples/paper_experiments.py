@@ -1,5 +1,5 @@
 """The main job's demonstration: the paper's experiments (Zegzhda, Petrova, Yushkov 2020,
-sections 5-7; SPEC §4) run through the packaged StewartPlatform FMU with FMPy, in the paper's
+sections 5-7; docs/model.md §6) run through the packaged StewartPlatform FMU with FMPy, in the paper's
 non-dimensional units. Writes one CSV per experiment and PNG plots to the output folder.
 
     python examples/paper_experiments.py [output-folder]   (default: output/)

@@ -1,4 +1,4 @@
-//! The textbook's checks of a model's correctness (section 1.3, SPEC §5): energy with spring
+//! The textbook's checks of a model's correctness (section 1.3, docs/model.md §7): energy with spring
 //! legs, linear and angular momentum of a free tumbling body (and the Euler top's unstable
 //! intermediate axis), and the constraint residual with and without projection.
 

@@ -17,7 +17,7 @@ fn a_panic_is_caught_and_poisons_the_instance() {
     assert_eq!(h.initialise(&[]), fmi2OK);
     assert_eq!(h.step(0.01), fmi2OK);
     // The boundary every export uses, with a body that panics (as a bug in the model would).
-    let status = unsafe { call(h.c, Fmi2Function::DoStep, |_instance| panic!("deliberate test panic")) };
+    let status = unsafe { call(h.c, Fmi2Function::DoStep, String::new, |_instance| panic!("deliberate test panic")) };
     assert_eq!(status, Status::Error);
     let fatal = h.messages().into_iter().find(|l| l.category == "logStatusFatal").expect("a logStatusFatal message");
     assert!(fatal.message.contains("deliberate test panic") && fatal.message.contains("poisoned"), "{}", fatal.message);
@@ -38,7 +38,8 @@ fn a_panic_is_caught_and_poisons_the_instance() {
 
 #[test]
 fn a_panic_without_a_valid_instance_is_still_contained() {
-    let status = unsafe { call(std::ptr::null_mut(), Fmi2Function::DoStep, |_instance| panic!("never runs")) };
+    let status =
+        unsafe { call(std::ptr::null_mut(), Fmi2Function::DoStep, String::new, |_instance| panic!("never runs")) };
     assert_eq!(status, Status::Error);
     let r = stewart_fmu::fmi::boundary::no_instance(7, || -> i32 { panic!("contained") });
     assert_eq!(r, 7);

@@ -178,7 +178,7 @@ fn stepping_past_the_stop_time_is_an_error() {
     assert!(message.contains("past the stopTime 0.05"), "{message}");
 }
 
-/// SPEC / issue: each invalid parameter and the message fragment that must name it.
+/// Each invalid parameter and the message fragment that must name it.
 #[test]
 fn bad_parameter_sets_are_refused_at_exit_initialization_mode() {
     let b1 = [1.5 * (-10f64).to_radians().cos(), 1.5 * (-10f64).to_radians().sin(), 0.0];

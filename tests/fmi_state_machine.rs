@@ -1,6 +1,6 @@
 //! Every FMI function in every reachable state, through the exported `extern "C"` functions:
-//! the status follows the FMI 2.0 Co-Simulation calling-sequence table (transcribed here
-//! from the standard, `shared/research/fmi-anchors.md` §1.6, independently of the crate's own
+//! the status follows the FMI 2.0 Co-Simulation calling-sequence table (transcribed here from
+//! the standard, section 4.2.4 and its table of allowed calls, independently of the crate's own
 //! table), an illegal call is logged with the function and the state, and changes nothing.
 
 mod common;

@@ -27,10 +27,10 @@ fn committed_model_descriptions_match_the_code() {
                 "{path} is out of date: run `cargo run --release --bin build-fmu -- --update-model-description`"
             );
             let token = instantiation_token(kind, version);
-            assert!(text.contains(&token));
-            assert_eq!(model_of_token(&token, version), Some(kind));
+            assert!(text.contains(token));
+            assert_eq!(model_of_token(token, version), Some(kind));
             let other = if version == FmiVersion::Fmi2 { FmiVersion::Fmi3 } else { FmiVersion::Fmi2 };
-            assert_eq!(model_of_token(&token, other), None, "a token belongs to one FMI version");
+            assert_eq!(model_of_token(token, other), None, "a token belongs to one FMI version");
             let html = documentation_html(kind, version);
             assert!(html.contains("<table>") && html.contains(id));
         }

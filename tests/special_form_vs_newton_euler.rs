@@ -1,6 +1,6 @@
 //! The special form (paper eqs. 1.4-1.6) against an independent Newton-Euler formulation
 //! (unit quaternion + Euler's equations, its own RK4): the paper's claim that both give the
-//! same motion, measured (SPEC §5, issue #2).
+//! same motion, measured (docs/model.md §7).
 
 mod common;
 

@@ -36,11 +36,11 @@ fn balance_residual(sim: &PlatformSimulation, e0: f64) -> f64 {
 }
 
 /// Static rest pose of the default stand on its lower stops (pure heave by symmetry), solved
-/// from the SPEC geometry alone: `6 k_s (lmin - l) (H / l) = M g`, `l = sqrt(d² + H²)`, with
+/// from the default stand's geometry (docs/model.md §3) alone: `6 k_s (lmin - l) (H / l) = M g`, `l = sqrt(d² + H²)`, with
 /// the horizontal leg projection `d` and the joint plane height `H`. Returns the centre of
 /// mass height.
 fn static_rest_height(stiffness: f64, lmin: f64) -> f64 {
-    let d = 0.9756365463855202; // SPEC §2
+    let d = 0.9756365463855202; // docs/model.md §3
     let residual = |h: f64| {
         let l = (d * d + h * h).sqrt();
         6.0 * stiffness * (lmin - l) * (h / l) - MASS * G

@@ -33,7 +33,12 @@ pub fn panic_message(payload: &(dyn Any + Send)) -> String {
 /// `c` must be NULL or a pointer from this library's instantiation function that has not
 /// been freed (the FMI calling convention); the magic number catches most foreign pointers but
 /// not all.
-pub unsafe fn call<F: FmiFunction>(c: *mut c_void, func: F, body: impl FnOnce(&mut Instance) -> Status) -> Status {
+pub unsafe fn call<F: FmiFunction>(
+    c: *mut c_void,
+    func: F,
+    args: impl FnOnce() -> String,
+    body: impl FnOnce(&mut Instance) -> Status,
+) -> Status {
     let outcome = catch_unwind(AssertUnwindSafe(|| {
         // SAFETY: `from_handle` checks for NULL, our magic number and the FMI version; the
         // caller guarantees a pointer from our instantiation that has not been freed.
@@ -46,7 +51,7 @@ pub unsafe fn call<F: FmiFunction>(c: *mut c_void, func: F, body: impl FnOnce(&m
         }
         match catch_unwind(AssertUnwindSafe(|| body(&mut *instance))) {
             Ok(status) => {
-                instance.log_call(status);
+                instance.log_call(status, args);
                 status
             }
             Err(payload) => {
@@ -101,6 +106,20 @@ pub unsafe fn c_slice_mut<'a, T>(ptr: *mut T, n: usize) -> Option<&'a mut [T]> {
     }
 }
 
+/// A C array for a `logCalls` message: up to eight values, then the count.
+///
+/// # Safety
+/// As for [`c_slice`].
+pub unsafe fn show<T: std::fmt::Debug>(ptr: *const T, n: usize) -> String {
+    const SHOWN: usize = 8;
+    // SAFETY: forwarded to the caller.
+    match unsafe { c_slice(ptr, n) } {
+        None => format!("NULL ({n} values)"),
+        Some(s) if n <= SHOWN => format!("{s:?}"),
+        Some(s) => format!("{:?}... ({n} values)", &s[..SHOWN]),
+    }
+}
+
 /// `try_slice!(instance, ptr, n, "name")`: the slice, or log and return an error.
 macro_rules! try_slice {
     ($inst:expr, $ptr:expr, $n:expr, $what:expr) => {
@@ -137,14 +156,24 @@ macro_rules! try_out {
 
 /// `boundary!(c, function, |inst| body)`: the panic boundary of an exported function that
 /// takes an instance (see [`call`]), returning the status as the C int of either version.
+/// `boundary!(c, function, args("fmt", ...), |inst| body)` also names the call's arguments
+/// for the `logCalls` message (formatted after the body, and only when that category is on,
+/// so output arrays show what was returned; [`show`] prints a C array).
 macro_rules! boundary {
-    ($c:expr, $func:expr, $body:expr) => {{
+    ($c:expr, $func:expr, $body:expr) => {
+        $crate::fmi::boundary::boundary!($c, $func, args(""), $body)
+    };
+    ($c:expr, $func:expr, args($($fmt:tt)+), $body:expr) => {{
         // The body is built outside the unsafe block, so its own unsafe operations keep
         // their own blocks and SAFETY comments.
         let body = $crate::fmi::boundary::instance_body($body);
+        #[allow(unused_unsafe)]
+        // SAFETY: runs during the call, while the importer's arrays are valid (`show` reads
+        // `n` elements of a non-NULL pointer, as the body does).
+        let args = || unsafe { format!($($fmt)+) };
         // SAFETY: `$c` is the importer's instance pointer, NULL or from our instantiation and
         // not freed, under the FMI calling convention the exports document.
-        unsafe { $crate::fmi::boundary::call($c as *mut ::std::ffi::c_void, $func, body) }.code()
+        unsafe { $crate::fmi::boundary::call($c as *mut ::std::ffi::c_void, $func, args, body) }.code()
     }};
 }
 

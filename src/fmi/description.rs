@@ -6,6 +6,7 @@
 
 use std::collections::BTreeSet;
 use std::fmt::Write;
+use std::sync::OnceLock;
 
 use super::FmiVersion;
 use super::log::LogCategory;
@@ -127,25 +128,42 @@ impl Digest {
     }
 }
 
+/// Length of a token: `{8-4-4-4-12}` hexadecimal digits.
+const TOKEN_LEN: usize = 38;
+
+/// The tokens, computed on first use (the digest reads every start value, about 27 us) and
+/// then only read: a write-once cache per model and FMI version, without heap memory, so
+/// `fmi2Instantiate`/`fmi3Instantiate*` compare against a fixed string.
+static TOKENS: [[OnceLock<[u8; TOKEN_LEN]>; 2]; ModelKind::ALL.len()] =
+    [const { [const { OnceLock::new() }; 2] }; ModelKind::ALL.len()];
+
 /// The instantiation token (FMI 2 GUID) of a model: `{aaaaaaaa-aaaa-KKVV-bbbb-bbbbbbbbbbbb}`
 /// from the digest of its description, with the model's kind code `KK` and the FMI version
 /// `VV` in the middle group, so that the binary finds the model of a token without trying
 /// every model.
-pub fn instantiation_token(kind: ModelKind, version: FmiVersion) -> String {
-    let (a, b) = digest(kind, version);
-    let v = match version {
+pub fn instantiation_token(kind: ModelKind, version: FmiVersion) -> &'static str {
+    let v: u8 = match version {
         FmiVersion::Fmi2 => 2,
         FmiVersion::Fmi3 => 3,
     };
-    format!(
-        "{{{:08x}-{:04x}-{:02x}{:02x}-{:04x}-{:012x}}}",
-        a >> 32,
-        (a >> 16) & 0xffff,
-        kind.code(),
-        v,
-        b >> 48,
-        b & 0xffff_ffff_ffff
-    )
+    let slot = &TOKENS[kind as usize][usize::from(v - 2)];
+    let bytes = slot.get_or_init(|| {
+        let (a, b) = digest(kind, version);
+        let text = format!(
+            "{{{:08x}-{:04x}-{:02x}{:02x}-{:04x}-{:012x}}}",
+            a >> 32,
+            (a >> 16) & 0xffff,
+            kind.code(),
+            v,
+            b >> 48,
+            b & 0xffff_ffff_ffff
+        );
+        let mut out = [0u8; TOKEN_LEN];
+        out.copy_from_slice(&text.as_bytes()[..TOKEN_LEN]);
+        out
+    });
+    // Hexadecimal digits, dashes and braces only: always UTF-8.
+    std::str::from_utf8(bytes).unwrap_or_default()
 }
 
 /// The model an importer's token belongs to, if it is one of this binary's for `version`.
@@ -159,8 +177,8 @@ pub fn model_of_token(token: &str, version: FmiVersion) -> Option<ModelKind> {
 pub fn model_description_xml(kind: ModelKind, version: FmiVersion) -> String {
     let token = instantiation_token(kind, version);
     match version {
-        FmiVersion::Fmi2 => render_fmi2(kind, &token),
-        FmiVersion::Fmi3 => render_fmi3(kind, &token),
+        FmiVersion::Fmi2 => render_fmi2(kind, token),
+        FmiVersion::Fmi3 => render_fmi3(kind, token),
     }
 }
 

@@ -338,14 +338,17 @@ impl Instance {
         Err(Status::Error)
     }
 
-    pub fn log_call(&self, status: Status) {
+    /// The `logCalls` line of a finished call; `args` formats its arguments (only called when
+    /// the category is on: no formatting in the hot path otherwise).
+    pub fn log_call(&self, status: Status, args: impl FnOnce() -> String) {
         if self.logger.is_enabled(LogCategory::Calls) {
             self.logger.log(
                 Status::Ok,
                 LogCategory::Calls,
                 &format!(
-                    "{} -> {} (state {}, t = {})",
+                    "{}({}) -> {} (state {}, t = {})",
                     self.current,
+                    args(),
                     status.name(self.version),
                     self.state_name(),
                     self.time

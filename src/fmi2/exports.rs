@@ -12,7 +12,7 @@ use std::ffi::{CStr, CString, c_char};
 
 use super::state_machine::Fmi2Function as F;
 use super::types::*;
-use crate::fmi::boundary::{boundary, no_instance, try_out, try_slice, try_slice_mut};
+use crate::fmi::boundary::{boundary, no_instance, show, try_out, try_slice, try_slice_mut};
 use crate::fmi::instance::{FmuStateHandle, Instance};
 use crate::fmi::log::{Callback, Logger, log_without_instance};
 use crate::fmi::{FmiVersion, InterfaceType, Status, library};
@@ -47,7 +47,7 @@ pub unsafe extern "C" fn fmi2SetDebugLogging(
     n_categories: usize,
     categories: *const fmi2String,
 ) -> fmi2Status {
-    boundary!(c, F::SetDebugLogging, |inst| {
+    boundary!(c, F::SetDebugLogging, args("loggingOn = {logging_on}, nCategories = {n_categories}"), |inst| {
         let list = try_slice!(inst, categories, n_categories, "categories");
         // SAFETY: each entry is NULL or a NUL-terminated string.
         let names: Vec<Option<String>> = list.iter().map(|&p| unsafe { c_str(p) }).collect();
@@ -122,7 +122,7 @@ pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
         // SAFETY: NULL, or an instance from fmi2Instantiate not yet freed (magic checked).
         if let Some(inst) = unsafe { Instance::from_handle(c, FmiVersion::Fmi2) } {
             inst.begin("fmi2FreeInstance");
-            inst.log_call(Status::Ok);
+            inst.log_call(Status::Ok, String::new);
             // SAFETY: checked above to be one of our live instances.
             unsafe { Instance::free(c) };
         }
@@ -140,13 +140,20 @@ pub unsafe extern "C" fn fmi2SetupExperiment(
     stop_time_defined: fmi2Boolean,
     stop_time: fmi2Real,
 ) -> fmi2Status {
-    boundary!(c, F::SetupExperiment, |inst| {
-        inst.setup_experiment(
-            (tolerance_defined != fmi2False).then_some(tolerance),
-            start_time,
-            (stop_time_defined != fmi2False).then_some(stop_time),
-        )
-    })
+    boundary!(
+        c,
+        F::SetupExperiment,
+        args(
+            "toleranceDefined = {tolerance_defined}, tolerance = {tolerance}, startTime = {start_time}, stopTimeDefined = {stop_time_defined}, stopTime = {stop_time}"
+        ),
+        |inst| {
+            inst.setup_experiment(
+                (tolerance_defined != fmi2False).then_some(tolerance),
+                start_time,
+                (stop_time_defined != fmi2False).then_some(stop_time),
+            )
+        }
+    )
 }
 
 /// # Safety
@@ -186,7 +193,7 @@ pub unsafe extern "C" fn fmi2GetReal(
     nvr: usize,
     value: *mut fmi2Real,
 ) -> fmi2Status {
-    boundary!(c, F::GetReal, |inst| {
+    boundary!(c, F::GetReal, args("vr = {}, value = {}", show(vr, nvr), show(value, nvr)), |inst| {
         let vrs = try_slice!(inst, vr, nvr, "vr");
         let values = try_slice_mut!(inst, value, nvr, "value");
         inst.get_real(vrs, values)
@@ -202,7 +209,7 @@ pub unsafe extern "C" fn fmi2GetInteger(
     nvr: usize,
     value: *mut fmi2Integer,
 ) -> fmi2Status {
-    boundary!(c, F::GetInteger, |inst| {
+    boundary!(c, F::GetInteger, args("vr = {}, value = {}", show(vr, nvr), show(value, nvr)), |inst| {
         let vrs = try_slice!(inst, vr, nvr, "vr");
         let values = try_slice_mut!(inst, value, nvr, "value");
         inst.get_integer(vrs, values)
@@ -218,7 +225,7 @@ pub unsafe extern "C" fn fmi2GetBoolean(
     nvr: usize,
     value: *mut fmi2Boolean,
 ) -> fmi2Status {
-    boundary!(c, F::GetBoolean, |inst| {
+    boundary!(c, F::GetBoolean, args("vr = {}, value = {}", show(vr, nvr), show(value, nvr)), |inst| {
         let vrs = try_slice!(inst, vr, nvr, "vr");
         let values = try_slice_mut!(inst, value, nvr, "value");
         let mut flags = vec![false; values.len()];
@@ -241,7 +248,7 @@ pub unsafe extern "C" fn fmi2GetString(
     nvr: usize,
     value: *mut fmi2String,
 ) -> fmi2Status {
-    boundary!(c, F::GetString, |inst| {
+    boundary!(c, F::GetString, args("vr = {}", show(vr, nvr)), |inst| {
         let vrs = try_slice!(inst, vr, nvr, "vr");
         let _ = try_slice_mut!(inst, value, nvr, "value");
         inst.no_variables_of_type(vrs, "String")
@@ -257,7 +264,7 @@ pub unsafe extern "C" fn fmi2SetReal(
     nvr: usize,
     value: *const fmi2Real,
 ) -> fmi2Status {
-    boundary!(c, F::SetReal, |inst| {
+    boundary!(c, F::SetReal, args("vr = {}, value = {}", show(vr, nvr), show(value, nvr)), |inst| {
         let vrs = try_slice!(inst, vr, nvr, "vr");
         let values = try_slice!(inst, value, nvr, "value");
         inst.set_real(vrs, values)
@@ -273,7 +280,7 @@ pub unsafe extern "C" fn fmi2SetInteger(
     nvr: usize,
     value: *const fmi2Integer,
 ) -> fmi2Status {
-    boundary!(c, F::SetInteger, |inst| {
+    boundary!(c, F::SetInteger, args("vr = {}, value = {}", show(vr, nvr), show(value, nvr)), |inst| {
         let vrs = try_slice!(inst, vr, nvr, "vr");
         let values = try_slice!(inst, value, nvr, "value");
         inst.set_integer(vrs, values)
@@ -289,7 +296,7 @@ pub unsafe extern "C" fn fmi2SetBoolean(
     nvr: usize,
     value: *const fmi2Boolean,
 ) -> fmi2Status {
-    boundary!(c, F::SetBoolean, |inst| {
+    boundary!(c, F::SetBoolean, args("vr = {}, value = {}", show(vr, nvr), show(value, nvr)), |inst| {
         let vrs = try_slice!(inst, vr, nvr, "vr");
         let values = try_slice!(inst, value, nvr, "value");
         let flags: Vec<bool> = values.iter().map(|&v| v != fmi2False).collect();
@@ -306,7 +313,7 @@ pub unsafe extern "C" fn fmi2SetString(
     nvr: usize,
     value: *const fmi2String,
 ) -> fmi2Status {
-    boundary!(c, F::SetString, |inst| {
+    boundary!(c, F::SetString, args("vr = {}", show(vr, nvr)), |inst| {
         let vrs = try_slice!(inst, vr, nvr, "vr");
         let _ = try_slice!(inst, value, nvr, "value");
         inst.no_variables_of_type(vrs, "String")
@@ -317,7 +324,7 @@ pub unsafe extern "C" fn fmi2SetString(
 /// See the module documentation. `*state` must be NULL or a state from this library.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
-    boundary!(c, F::GetFMUstate, |inst| {
+    boundary!(c, F::GetFMUstate, args("FMUstate = {state:?}"), |inst| {
         let slot = try_out!(inst, state, "FMUstate");
         let bytes = inst.serialize();
         if slot.is_null() {
@@ -339,7 +346,7 @@ pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, state: *mut fmi2FMUst
 /// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, state: fmi2FMUstate) -> fmi2Status {
-    boundary!(c, F::SetFMUstate, |inst| {
+    boundary!(c, F::SetFMUstate, args("FMUstate = {state:?}"), |inst| {
         // SAFETY: NULL or one of our handles (magic checked).
         let Some(h) = (unsafe { FmuStateHandle::from_handle(state) }) else {
             return inst.error("FMUstate is NULL or not a state of this FMU");
@@ -355,7 +362,7 @@ pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, state: fmi2FMUstate) 
 /// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2FreeFMUstate(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
-    boundary!(c, F::FreeFMUstate, |inst| {
+    boundary!(c, F::FreeFMUstate, args("FMUstate = {state:?}"), |inst| {
         let slot = try_out!(inst, state, "FMUstate");
         if slot.is_null() {
             return Status::Ok;
@@ -379,7 +386,7 @@ pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
     state: fmi2FMUstate,
     size: *mut usize,
 ) -> fmi2Status {
-    boundary!(c, F::SerializedFMUstateSize, |inst| {
+    boundary!(c, F::SerializedFMUstateSize, args("FMUstate = {state:?}"), |inst| {
         let out = try_out!(inst, size, "size");
         // SAFETY: NULL or one of our handles (magic checked).
         let Some(h) = (unsafe { FmuStateHandle::from_handle(state) }) else {
@@ -399,7 +406,7 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
     serialized: *mut fmi2Byte,
     size: usize,
 ) -> fmi2Status {
-    boundary!(c, F::SerializeFMUstate, |inst| {
+    boundary!(c, F::SerializeFMUstate, args("FMUstate = {state:?}, size = {size}"), |inst| {
         // SAFETY: NULL or one of our handles (magic checked).
         let Some(h) = (unsafe { FmuStateHandle::from_handle(state) }) else {
             return inst.error("FMUstate is NULL or not a state of this FMU");
@@ -423,7 +430,7 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
     size: usize,
     state: *mut fmi2FMUstate,
 ) -> fmi2Status {
-    boundary!(c, F::DeSerializeFMUstate, |inst| {
+    boundary!(c, F::DeSerializeFMUstate, args("size = {size}"), |inst| {
         let bytes = try_slice!(inst, serialized as *const u8, size, "serializedState");
         let slot = try_out!(inst, state, "FMUstate");
         if let Err(e) = inst.validate_state_bytes(bytes) {
@@ -456,13 +463,24 @@ pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
     dv_known: *const fmi2Real,
     dv_unknown: *mut fmi2Real,
 ) -> fmi2Status {
-    boundary!(c, F::GetDirectionalDerivative, |inst| {
-        let unknowns = try_slice!(inst, unknown, n_unknown, "vUnknown_ref");
-        let knowns = try_slice!(inst, known, n_known, "vKnown_ref");
-        let seeds = try_slice!(inst, dv_known, n_known, "dvKnown");
-        let out = try_slice_mut!(inst, dv_unknown, n_unknown, "dvUnknown");
-        inst.get_directional_derivative(unknowns, knowns, seeds, out)
-    })
+    boundary!(
+        c,
+        F::GetDirectionalDerivative,
+        args(
+            "vUnknown_ref = {}, vKnown_ref = {}, dvKnown = {}, dvUnknown = {}",
+            show(unknown, n_unknown),
+            show(known, n_known),
+            show(dv_known, n_known),
+            show(dv_unknown, n_unknown)
+        ),
+        |inst| {
+            let unknowns = try_slice!(inst, unknown, n_unknown, "vUnknown_ref");
+            let knowns = try_slice!(inst, known, n_known, "vKnown_ref");
+            let seeds = try_slice!(inst, dv_known, n_known, "dvKnown");
+            let out = try_slice_mut!(inst, dv_unknown, n_unknown, "dvUnknown");
+            inst.get_directional_derivative(unknowns, knowns, seeds, out)
+        }
+    )
 }
 
 // ----- Co-Simulation ----------------------------------------------------------------------
@@ -477,12 +495,17 @@ pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
     order: *const fmi2Integer,
     value: *const fmi2Real,
 ) -> fmi2Status {
-    boundary!(c, F::SetRealInputDerivatives, |inst| {
-        let vrs = try_slice!(inst, vr, nvr, "vr");
-        let orders = try_slice!(inst, order, nvr, "order");
-        let values = try_slice!(inst, value, nvr, "value");
-        inst.set_real_input_derivatives(vrs, orders, values)
-    })
+    boundary!(
+        c,
+        F::SetRealInputDerivatives,
+        args("vr = {}, order = {}, value = {}", show(vr, nvr), show(order, nvr), show(value, nvr)),
+        |inst| {
+            let vrs = try_slice!(inst, vr, nvr, "vr");
+            let orders = try_slice!(inst, order, nvr, "order");
+            let values = try_slice!(inst, value, nvr, "value");
+            inst.set_real_input_derivatives(vrs, orders, values)
+        }
+    )
 }
 
 /// # Safety
@@ -495,12 +518,17 @@ pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
     order: *const fmi2Integer,
     value: *mut fmi2Real,
 ) -> fmi2Status {
-    boundary!(c, F::GetRealOutputDerivatives, |inst| {
-        let vrs = try_slice!(inst, vr, nvr, "vr");
-        let orders = try_slice!(inst, order, nvr, "order");
-        let values = try_slice_mut!(inst, value, nvr, "value");
-        inst.get_output_derivatives(vrs, orders, values)
-    })
+    boundary!(
+        c,
+        F::GetRealOutputDerivatives,
+        args("vr = {}, order = {}, value = {}", show(vr, nvr), show(order, nvr), show(value, nvr)),
+        |inst| {
+            let vrs = try_slice!(inst, vr, nvr, "vr");
+            let orders = try_slice!(inst, order, nvr, "order");
+            let values = try_slice_mut!(inst, value, nvr, "value");
+            inst.get_output_derivatives(vrs, orders, values)
+        }
+    )
 }
 
 /// # Safety
@@ -512,7 +540,14 @@ pub unsafe extern "C" fn fmi2DoStep(
     communication_step_size: fmi2Real,
     _no_set_fmu_state_prior_to_current_point: fmi2Boolean,
 ) -> fmi2Status {
-    boundary!(c, F::DoStep, |inst| inst.do_step(current_communication_point, communication_step_size).0)
+    boundary!(
+        c,
+        F::DoStep,
+        args(
+            "currentCommunicationPoint = {current_communication_point}, communicationStepSize = {communication_step_size}"
+        ),
+        |inst| inst.do_step(current_communication_point, communication_step_size).0
+    )
 }
 
 /// # Safety
@@ -528,7 +563,7 @@ pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
 /// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetStatus(c: fmi2Component, kind: fmi2StatusKind, value: *mut fmi2Status) -> fmi2Status {
-    boundary!(c, F::GetStatus, |inst| {
+    boundary!(c, F::GetStatus, args("s = {kind}"), |inst| {
         let _ = try_out!(inst, value, "value");
         status_not_available(inst, kind)
     })
@@ -538,7 +573,7 @@ pub unsafe extern "C" fn fmi2GetStatus(c: fmi2Component, kind: fmi2StatusKind, v
 /// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetRealStatus(c: fmi2Component, kind: fmi2StatusKind, value: *mut fmi2Real) -> fmi2Status {
-    boundary!(c, F::GetRealStatus, |inst| {
+    boundary!(c, F::GetRealStatus, args("s = {kind}"), |inst| {
         let out = try_out!(inst, value, "value");
         if kind != fmi2LastSuccessfulTime {
             return status_not_available(inst, kind);
@@ -556,7 +591,7 @@ pub unsafe extern "C" fn fmi2GetIntegerStatus(
     kind: fmi2StatusKind,
     value: *mut fmi2Integer,
 ) -> fmi2Status {
-    boundary!(c, F::GetIntegerStatus, |inst| {
+    boundary!(c, F::GetIntegerStatus, args("s = {kind}"), |inst| {
         let _ = try_out!(inst, value, "value");
         status_not_available(inst, kind)
     })
@@ -570,7 +605,7 @@ pub unsafe extern "C" fn fmi2GetBooleanStatus(
     kind: fmi2StatusKind,
     value: *mut fmi2Boolean,
 ) -> fmi2Status {
-    boundary!(c, F::GetBooleanStatus, |inst| {
+    boundary!(c, F::GetBooleanStatus, args("s = {kind}"), |inst| {
         let out = try_out!(inst, value, "value");
         if kind != fmi2Terminated {
             return status_not_available(inst, kind);
@@ -588,7 +623,7 @@ pub unsafe extern "C" fn fmi2GetStringStatus(
     kind: fmi2StatusKind,
     value: *mut fmi2String,
 ) -> fmi2Status {
-    boundary!(c, F::GetStringStatus, |inst| {
+    boundary!(c, F::GetStringStatus, args("s = {kind}"), |inst| {
         let _ = try_out!(inst, value, "value");
         status_not_available(inst, kind)
     })
@@ -651,14 +686,14 @@ pub unsafe extern "C" fn fmi2CompletedIntegratorStep(
 /// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SetTime(c: fmi2Component, time: fmi2Real) -> fmi2Status {
-    boundary!(c, F::SetTime, |inst| inst.set_time(time))
+    boundary!(c, F::SetTime, args("time = {time}"), |inst| inst.set_time(time))
 }
 
 /// # Safety
 /// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SetContinuousStates(c: fmi2Component, x: *const fmi2Real, nx: usize) -> fmi2Status {
-    boundary!(c, F::SetContinuousStates, |inst| {
+    boundary!(c, F::SetContinuousStates, args("x = {}", show(x, nx)), |inst| {
         let states = try_slice!(inst, x, nx, "x");
         inst.set_continuous_states(states)
     })
@@ -668,7 +703,7 @@ pub unsafe extern "C" fn fmi2SetContinuousStates(c: fmi2Component, x: *const fmi
 /// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetDerivatives(c: fmi2Component, derivatives: *mut fmi2Real, nx: usize) -> fmi2Status {
-    boundary!(c, F::GetDerivatives, |inst| {
+    boundary!(c, F::GetDerivatives, args("derivatives = {}", show(derivatives, nx)), |inst| {
         let dx = try_slice_mut!(inst, derivatives, nx, "derivatives");
         inst.get_derivatives(dx)
     })
@@ -678,7 +713,7 @@ pub unsafe extern "C" fn fmi2GetDerivatives(c: fmi2Component, derivatives: *mut 
 /// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetEventIndicators(c: fmi2Component, indicators: *mut fmi2Real, ni: usize) -> fmi2Status {
-    boundary!(c, F::GetEventIndicators, |inst| {
+    boundary!(c, F::GetEventIndicators, args("eventIndicators = {}", show(indicators, ni)), |inst| {
         let z = try_slice_mut!(inst, indicators, ni, "eventIndicators");
         inst.get_event_indicators(z)
     })
@@ -688,7 +723,7 @@ pub unsafe extern "C" fn fmi2GetEventIndicators(c: fmi2Component, indicators: *m
 /// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetContinuousStates(c: fmi2Component, x: *mut fmi2Real, nx: usize) -> fmi2Status {
-    boundary!(c, F::GetContinuousStates, |inst| {
+    boundary!(c, F::GetContinuousStates, args("x = {}", show(x, nx)), |inst| {
         let states = try_slice_mut!(inst, x, nx, "x");
         inst.get_continuous_states(states)
     })

@@ -12,7 +12,7 @@ use std::ffi::{CStr, CString, c_char};
 
 use super::state_machine::Fmi3Function as F;
 use super::types::*;
-use crate::fmi::boundary::{boundary, no_instance, try_out, try_slice, try_slice_mut};
+use crate::fmi::boundary::{boundary, no_instance, show, try_out, try_slice, try_slice_mut};
 use crate::fmi::instance::{CoSimulationOptions, FmuStateHandle, Instance};
 use crate::fmi::log::{Callback, Logger, log_without_instance};
 use crate::fmi::{FmiVersion, InterfaceType, Status, library};
@@ -43,7 +43,7 @@ pub unsafe extern "C" fn fmi3SetDebugLogging(
     n_categories: usize,
     categories: *const fmi3String,
 ) -> fmi3Status {
-    boundary!(instance, F::SetDebugLogging, |inst| {
+    boundary!(instance, F::SetDebugLogging, args("loggingOn = {logging_on}, nCategories = {n_categories}"), |inst| {
         let list = try_slice!(inst, categories, n_categories, "categories");
         // SAFETY: each entry is NULL or a NUL-terminated string.
         let names: Vec<Option<String>> = list.iter().map(|&p| unsafe { c_str(p) }).collect();
@@ -221,7 +221,7 @@ pub unsafe extern "C" fn fmi3FreeInstance(instance: fmi3Instance) {
         // SAFETY: NULL, or an instance from fmi3Instantiate* not yet freed (magic checked).
         if let Some(inst) = unsafe { Instance::from_handle(instance, FmiVersion::Fmi3) } {
             inst.begin("fmi3FreeInstance");
-            inst.log_call(Status::Ok);
+            inst.log_call(Status::Ok, String::new);
             // SAFETY: checked above to be one of our live instances.
             unsafe { Instance::free(instance) };
         }
@@ -239,17 +239,24 @@ pub unsafe extern "C" fn fmi3EnterInitializationMode(
     stop_time_defined: fmi3Boolean,
     stop_time: fmi3Float64,
 ) -> fmi3Status {
-    boundary!(instance, F::EnterInitializationMode, |inst| {
-        let status = inst.setup_experiment(
-            (tolerance_defined != fmi3False).then_some(tolerance),
-            start_time,
-            (stop_time_defined != fmi3False).then_some(stop_time),
-        );
-        if status != Status::Ok {
-            return status;
+    boundary!(
+        instance,
+        F::EnterInitializationMode,
+        args(
+            "toleranceDefined = {tolerance_defined}, tolerance = {tolerance}, startTime = {start_time}, stopTimeDefined = {stop_time_defined}, stopTime = {stop_time}"
+        ),
+        |inst| {
+            let status = inst.setup_experiment(
+                (tolerance_defined != fmi3False).then_some(tolerance),
+                start_time,
+                (stop_time_defined != fmi3False).then_some(stop_time),
+            );
+            if status != Status::Ok {
+                return status;
+            }
+            inst.enter_initialization_mode()
         }
-        inst.enter_initialization_mode()
-    })
+    )
 }
 
 /// # Safety
@@ -297,11 +304,16 @@ pub unsafe extern "C" fn fmi3GetFloat64(
     values: *mut fmi3Float64,
     n_values: usize,
 ) -> fmi3Status {
-    boundary!(instance, F::GetFloat64, |inst| {
-        let vrs = try_slice!(inst, vrs, n_vrs, "valueReferences");
-        let values = try_slice_mut!(inst, values, n_values, "values");
-        inst.get_real(vrs, values)
-    })
+    boundary!(
+        instance,
+        F::GetFloat64,
+        args("valueReferences = {}, values = {}", show(vrs, n_vrs), show(values, n_values)),
+        |inst| {
+            let vrs = try_slice!(inst, vrs, n_vrs, "valueReferences");
+            let values = try_slice_mut!(inst, values, n_values, "values");
+            inst.get_real(vrs, values)
+        }
+    )
 }
 
 /// # Safety
@@ -314,11 +326,16 @@ pub unsafe extern "C" fn fmi3SetFloat64(
     values: *const fmi3Float64,
     n_values: usize,
 ) -> fmi3Status {
-    boundary!(instance, F::SetFloat64, |inst| {
-        let vrs = try_slice!(inst, vrs, n_vrs, "valueReferences");
-        let values = try_slice!(inst, values, n_values, "values");
-        inst.set_real(vrs, values)
-    })
+    boundary!(
+        instance,
+        F::SetFloat64,
+        args("valueReferences = {}, values = {}", show(vrs, n_vrs), show(values, n_values)),
+        |inst| {
+            let vrs = try_slice!(inst, vrs, n_vrs, "valueReferences");
+            let values = try_slice!(inst, values, n_values, "values");
+            inst.set_real(vrs, values)
+        }
+    )
 }
 
 /// # Safety
@@ -331,11 +348,16 @@ pub unsafe extern "C" fn fmi3GetInt32(
     values: *mut fmi3Int32,
     n_values: usize,
 ) -> fmi3Status {
-    boundary!(instance, F::GetInt32, |inst| {
-        let vrs = try_slice!(inst, vrs, n_vrs, "valueReferences");
-        let values = try_slice_mut!(inst, values, n_values, "values");
-        inst.get_integer(vrs, values)
-    })
+    boundary!(
+        instance,
+        F::GetInt32,
+        args("valueReferences = {}, values = {}", show(vrs, n_vrs), show(values, n_values)),
+        |inst| {
+            let vrs = try_slice!(inst, vrs, n_vrs, "valueReferences");
+            let values = try_slice_mut!(inst, values, n_values, "values");
+            inst.get_integer(vrs, values)
+        }
+    )
 }
 
 /// # Safety
@@ -348,11 +370,16 @@ pub unsafe extern "C" fn fmi3SetInt32(
     values: *const fmi3Int32,
     n_values: usize,
 ) -> fmi3Status {
-    boundary!(instance, F::SetInt32, |inst| {
-        let vrs = try_slice!(inst, vrs, n_vrs, "valueReferences");
-        let values = try_slice!(inst, values, n_values, "values");
-        inst.set_integer(vrs, values)
-    })
+    boundary!(
+        instance,
+        F::SetInt32,
+        args("valueReferences = {}, values = {}", show(vrs, n_vrs), show(values, n_values)),
+        |inst| {
+            let vrs = try_slice!(inst, vrs, n_vrs, "valueReferences");
+            let values = try_slice!(inst, values, n_values, "values");
+            inst.set_integer(vrs, values)
+        }
+    )
 }
 
 /// # Safety
@@ -365,18 +392,23 @@ pub unsafe extern "C" fn fmi3GetBoolean(
     values: *mut fmi3Boolean,
     n_values: usize,
 ) -> fmi3Status {
-    boundary!(instance, F::GetBoolean, |inst| {
-        let vrs = try_slice!(inst, vrs, n_vrs, "valueReferences");
-        let values = try_slice_mut!(inst, values, n_values, "values");
-        let mut flags = vec![false; values.len()];
-        let status = inst.get_boolean(vrs, &mut flags);
-        if status == Status::Ok {
-            for (v, f) in values.iter_mut().zip(flags) {
-                *v = f as fmi3Boolean;
+    boundary!(
+        instance,
+        F::GetBoolean,
+        args("valueReferences = {}, values = {}", show(vrs, n_vrs), show(values, n_values)),
+        |inst| {
+            let vrs = try_slice!(inst, vrs, n_vrs, "valueReferences");
+            let values = try_slice_mut!(inst, values, n_values, "values");
+            let mut flags = vec![false; values.len()];
+            let status = inst.get_boolean(vrs, &mut flags);
+            if status == Status::Ok {
+                for (v, f) in values.iter_mut().zip(flags) {
+                    *v = f as fmi3Boolean;
+                }
             }
+            status
         }
-        status
-    })
+    )
 }
 
 /// # Safety
@@ -389,12 +421,17 @@ pub unsafe extern "C" fn fmi3SetBoolean(
     values: *const fmi3Boolean,
     n_values: usize,
 ) -> fmi3Status {
-    boundary!(instance, F::SetBoolean, |inst| {
-        let vrs = try_slice!(inst, vrs, n_vrs, "valueReferences");
-        let values = try_slice!(inst, values, n_values, "values");
-        let flags: Vec<bool> = values.iter().map(|&v| v != fmi3False).collect();
-        inst.set_boolean(vrs, &flags)
-    })
+    boundary!(
+        instance,
+        F::SetBoolean,
+        args("valueReferences = {}, values = {}", show(vrs, n_vrs), show(values, n_values)),
+        |inst| {
+            let vrs = try_slice!(inst, vrs, n_vrs, "valueReferences");
+            let values = try_slice!(inst, values, n_values, "values");
+            let flags: Vec<bool> = values.iter().map(|&v| v != fmi3False).collect();
+            inst.set_boolean(vrs, &flags)
+        }
+    )
 }
 
 /// Get and set functions of the types this FMU has no variables of: any value reference is
@@ -411,7 +448,7 @@ macro_rules! no_variables_of_type {
             values: *mut $t,
             n_values: usize,
         ) -> fmi3Status {
-            boundary!(instance, F::GetOther, |inst| {
+            boundary!(instance, F::GetOther(stringify!($get)), |inst| {
                 let vrs = try_slice!(inst, vrs, n_vrs, "valueReferences");
                 let _ = try_slice_mut!(inst, values, n_values, "values");
                 inst.no_variables_of_type(vrs, $name)
@@ -428,7 +465,7 @@ macro_rules! no_variables_of_type {
             values: *const $t,
             n_values: usize,
         ) -> fmi3Status {
-            boundary!(instance, F::SetOther, |inst| {
+            boundary!(instance, F::SetOther(stringify!($set)), |inst| {
                 let vrs = try_slice!(inst, vrs, n_vrs, "valueReferences");
                 let _ = try_slice!(inst, values, n_values, "values");
                 inst.no_variables_of_type(vrs, $name)
@@ -458,7 +495,7 @@ pub unsafe extern "C" fn fmi3GetBinary(
     values: *mut fmi3Binary,
     n_values: usize,
 ) -> fmi3Status {
-    boundary!(instance, F::GetOther, |inst| {
+    boundary!(instance, F::GetOther("fmi3GetBinary"), |inst| {
         let vrs = try_slice!(inst, vrs, n_vrs, "valueReferences");
         let _ = try_slice_mut!(inst, value_sizes, n_values, "valueSizes");
         let _ = try_slice_mut!(inst, values, n_values, "values");
@@ -477,7 +514,7 @@ pub unsafe extern "C" fn fmi3SetBinary(
     values: *const fmi3Binary,
     n_values: usize,
 ) -> fmi3Status {
-    boundary!(instance, F::SetOther, |inst| {
+    boundary!(instance, F::SetOther("fmi3SetBinary"), |inst| {
         let vrs = try_slice!(inst, vrs, n_vrs, "valueReferences");
         let _ = try_slice!(inst, value_sizes, n_values, "valueSizes");
         let _ = try_slice!(inst, values, n_values, "values");
@@ -571,7 +608,7 @@ pub unsafe extern "C" fn fmi3GetNumberOfVariableDependencies(
     vr: fmi3ValueReference,
     n_dependencies: *mut usize,
 ) -> fmi3Status {
-    boundary!(instance, F::GetNumberOfVariableDependencies, |inst| {
+    boundary!(instance, F::GetNumberOfVariableDependencies, args("valueReference = {vr}"), |inst| {
         let out = try_out!(inst, n_dependencies, "nDependencies");
         match dependencies_of(inst, vr) {
             Ok(d) => {
@@ -595,32 +632,37 @@ pub unsafe extern "C" fn fmi3GetVariableDependencies(
     dependency_kinds: *mut fmi3DependencyKind,
     n_dependencies: usize,
 ) -> fmi3Status {
-    boundary!(instance, F::GetVariableDependencies, |inst| {
-        let dependents =
-            try_slice_mut!(inst, element_indices_of_dependent, n_dependencies, "elementIndicesOfDependent");
-        let knowns = try_slice_mut!(inst, independents, n_dependencies, "independents");
-        let known_elements =
-            try_slice_mut!(inst, element_indices_of_independents, n_dependencies, "elementIndicesOfIndependents");
-        let kinds = try_slice_mut!(inst, dependency_kinds, n_dependencies, "dependencyKinds");
-        let entries = match dependencies_of(inst, dependent) {
-            Ok(d) => d,
-            Err(m) => return inst.error(&m),
-        };
-        if entries.len() != n_dependencies {
-            return inst.error(&format!(
-                "variable {dependent} has {} dependencies (fmi3GetNumberOfVariableDependencies), nDependencies = \
+    boundary!(
+        instance,
+        F::GetVariableDependencies,
+        args("dependent = {dependent}, nDependencies = {n_dependencies}"),
+        |inst| {
+            let dependents =
+                try_slice_mut!(inst, element_indices_of_dependent, n_dependencies, "elementIndicesOfDependent");
+            let knowns = try_slice_mut!(inst, independents, n_dependencies, "independents");
+            let known_elements =
+                try_slice_mut!(inst, element_indices_of_independents, n_dependencies, "elementIndicesOfIndependents");
+            let kinds = try_slice_mut!(inst, dependency_kinds, n_dependencies, "dependencyKinds");
+            let entries = match dependencies_of(inst, dependent) {
+                Ok(d) => d,
+                Err(m) => return inst.error(&m),
+            };
+            if entries.len() != n_dependencies {
+                return inst.error(&format!(
+                    "variable {dependent} has {} dependencies (fmi3GetNumberOfVariableDependencies), nDependencies = \
                  {n_dependencies}",
-                entries.len()
-            ));
+                    entries.len()
+                ));
+            }
+            for (i, (e, vr, k)) in entries.into_iter().enumerate() {
+                dependents[i] = e;
+                knowns[i] = vr;
+                known_elements[i] = k;
+                kinds[i] = fmi3Dependent;
+            }
+            Status::Ok
         }
-        for (i, (e, vr, k)) in entries.into_iter().enumerate() {
-            dependents[i] = e;
-            knowns[i] = vr;
-            known_elements[i] = k;
-            kinds[i] = fmi3Dependent;
-        }
-        Status::Ok
-    })
+    )
 }
 
 // ----- FMU states -----------------------------------------------------------------------------
@@ -629,7 +671,7 @@ pub unsafe extern "C" fn fmi3GetVariableDependencies(
 /// See the module documentation. `*state` must be NULL or a state from this library.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3GetFMUState(instance: fmi3Instance, state: *mut fmi3FMUState) -> fmi3Status {
-    boundary!(instance, F::GetFMUState, |inst| {
+    boundary!(instance, F::GetFMUState, args("FMUState = {state:?}"), |inst| {
         let slot = try_out!(inst, state, "FMUState");
         let bytes = inst.serialize();
         if slot.is_null() {
@@ -651,7 +693,7 @@ pub unsafe extern "C" fn fmi3GetFMUState(instance: fmi3Instance, state: *mut fmi
 /// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3SetFMUState(instance: fmi3Instance, state: fmi3FMUState) -> fmi3Status {
-    boundary!(instance, F::SetFMUState, |inst| {
+    boundary!(instance, F::SetFMUState, args("FMUState = {state:?}"), |inst| {
         // SAFETY: NULL or one of our handles (magic checked).
         let Some(h) = (unsafe { FmuStateHandle::from_handle(state) }) else {
             return inst.error("FMUState is NULL or not a state of this FMU");
@@ -667,7 +709,7 @@ pub unsafe extern "C" fn fmi3SetFMUState(instance: fmi3Instance, state: fmi3FMUS
 /// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3FreeFMUState(instance: fmi3Instance, state: *mut fmi3FMUState) -> fmi3Status {
-    boundary!(instance, F::FreeFMUState, |inst| {
+    boundary!(instance, F::FreeFMUState, args("FMUState = {state:?}"), |inst| {
         let slot = try_out!(inst, state, "FMUState");
         if slot.is_null() {
             return Status::Ok;
@@ -691,7 +733,7 @@ pub unsafe extern "C" fn fmi3SerializedFMUStateSize(
     state: fmi3FMUState,
     size: *mut usize,
 ) -> fmi3Status {
-    boundary!(instance, F::SerializedFMUStateSize, |inst| {
+    boundary!(instance, F::SerializedFMUStateSize, args("FMUState = {state:?}"), |inst| {
         let out = try_out!(inst, size, "size");
         // SAFETY: NULL or one of our handles (magic checked).
         let Some(h) = (unsafe { FmuStateHandle::from_handle(state) }) else {
@@ -711,7 +753,7 @@ pub unsafe extern "C" fn fmi3SerializeFMUState(
     serialized: *mut fmi3Byte,
     size: usize,
 ) -> fmi3Status {
-    boundary!(instance, F::SerializeFMUState, |inst| {
+    boundary!(instance, F::SerializeFMUState, args("FMUState = {state:?}, size = {size}"), |inst| {
         // SAFETY: NULL or one of our handles (magic checked).
         let Some(h) = (unsafe { FmuStateHandle::from_handle(state) }) else {
             return inst.error("FMUState is NULL or not a state of this FMU");
@@ -735,7 +777,7 @@ pub unsafe extern "C" fn fmi3DeserializeFMUState(
     size: usize,
     state: *mut fmi3FMUState,
 ) -> fmi3Status {
-    boundary!(instance, F::DeserializeFMUState, |inst| {
+    boundary!(instance, F::DeserializeFMUState, args("size = {size}"), |inst| {
         let bytes = try_slice!(inst, serialized, size, "serializedState");
         let slot = try_out!(inst, state, "FMUState");
         if let Err(e) = inst.validate_state_bytes(bytes) {
@@ -772,13 +814,24 @@ pub unsafe extern "C" fn fmi3GetDirectionalDerivative(
     sensitivity: *mut fmi3Float64,
     n_sensitivity: usize,
 ) -> fmi3Status {
-    boundary!(instance, F::GetDirectionalDerivative, |inst| {
-        let unknowns = try_slice!(inst, unknowns, n_unknowns, "unknowns");
-        let knowns = try_slice!(inst, knowns, n_knowns, "knowns");
-        let seeds = try_slice!(inst, seed, n_seed, "seed");
-        let out = try_slice_mut!(inst, sensitivity, n_sensitivity, "sensitivity");
-        inst.get_directional_derivative(unknowns, knowns, seeds, out)
-    })
+    boundary!(
+        instance,
+        F::GetDirectionalDerivative,
+        args(
+            "unknowns = {}, knowns = {}, seed = {}, sensitivity = {}",
+            show(unknowns, n_unknowns),
+            show(knowns, n_knowns),
+            show(seed, n_seed),
+            show(sensitivity, n_sensitivity)
+        ),
+        |inst| {
+            let unknowns = try_slice!(inst, unknowns, n_unknowns, "unknowns");
+            let knowns = try_slice!(inst, knowns, n_knowns, "knowns");
+            let seeds = try_slice!(inst, seed, n_seed, "seed");
+            let out = try_slice_mut!(inst, sensitivity, n_sensitivity, "sensitivity");
+            inst.get_directional_derivative(unknowns, knowns, seeds, out)
+        }
+    )
 }
 
 /// # Safety
@@ -795,13 +848,24 @@ pub unsafe extern "C" fn fmi3GetAdjointDerivative(
     sensitivity: *mut fmi3Float64,
     n_sensitivity: usize,
 ) -> fmi3Status {
-    boundary!(instance, F::GetAdjointDerivative, |inst| {
-        let unknowns = try_slice!(inst, unknowns, n_unknowns, "unknowns");
-        let knowns = try_slice!(inst, knowns, n_knowns, "knowns");
-        let seeds = try_slice!(inst, seed, n_seed, "seed");
-        let out = try_slice_mut!(inst, sensitivity, n_sensitivity, "sensitivity");
-        inst.get_adjoint_derivative(unknowns, knowns, seeds, out)
-    })
+    boundary!(
+        instance,
+        F::GetAdjointDerivative,
+        args(
+            "unknowns = {}, knowns = {}, seed = {}, sensitivity = {}",
+            show(unknowns, n_unknowns),
+            show(knowns, n_knowns),
+            show(seed, n_seed),
+            show(sensitivity, n_sensitivity)
+        ),
+        |inst| {
+            let unknowns = try_slice!(inst, unknowns, n_unknowns, "unknowns");
+            let knowns = try_slice!(inst, knowns, n_knowns, "knowns");
+            let seeds = try_slice!(inst, seed, n_seed, "seed");
+            let out = try_slice_mut!(inst, sensitivity, n_sensitivity, "sensitivity");
+            inst.get_adjoint_derivative(unknowns, knowns, seeds, out)
+        }
+    )
 }
 
 // ----- configuration, clocks, discrete states -------------------------------------------------
@@ -830,7 +894,7 @@ macro_rules! no_clocks {
         #[unsafe(no_mangle)]
         pub unsafe extern "C" fn $name(instance: fmi3Instance, $( $arg: $t ),*) -> fmi3Status {
             let _ = ($( $arg ),*);
-            boundary!(instance, F::ClockTiming, |inst| inst.error("this FMU has no clocks"))
+            boundary!(instance, F::ClockTiming(stringify!($name)), |inst| inst.error("this FMU has no clocks"))
         }
     };
 }
@@ -914,7 +978,7 @@ pub unsafe extern "C" fn fmi3CompletedIntegratorStep(
 /// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3SetTime(instance: fmi3Instance, time: fmi3Float64) -> fmi3Status {
-    boundary!(instance, F::SetTime, |inst| inst.set_time(time))
+    boundary!(instance, F::SetTime, args("time = {time}"), |inst| inst.set_time(time))
 }
 
 /// # Safety
@@ -925,10 +989,15 @@ pub unsafe extern "C" fn fmi3SetContinuousStates(
     continuous_states: *const fmi3Float64,
     n_continuous_states: usize,
 ) -> fmi3Status {
-    boundary!(instance, F::SetContinuousStates, |inst| {
-        let x = try_slice!(inst, continuous_states, n_continuous_states, "continuousStates");
-        inst.set_continuous_states(x)
-    })
+    boundary!(
+        instance,
+        F::SetContinuousStates,
+        args("continuousStates = {}", show(continuous_states, n_continuous_states)),
+        |inst| {
+            let x = try_slice!(inst, continuous_states, n_continuous_states, "continuousStates");
+            inst.set_continuous_states(x)
+        }
+    )
 }
 
 /// # Safety
@@ -939,10 +1008,15 @@ pub unsafe extern "C" fn fmi3GetContinuousStateDerivatives(
     derivatives: *mut fmi3Float64,
     n_continuous_states: usize,
 ) -> fmi3Status {
-    boundary!(instance, F::GetContinuousStateDerivatives, |inst| {
-        let dx = try_slice_mut!(inst, derivatives, n_continuous_states, "derivatives");
-        inst.get_derivatives(dx)
-    })
+    boundary!(
+        instance,
+        F::GetContinuousStateDerivatives,
+        args("derivatives = {}", show(derivatives, n_continuous_states)),
+        |inst| {
+            let dx = try_slice_mut!(inst, derivatives, n_continuous_states, "derivatives");
+            inst.get_derivatives(dx)
+        }
+    )
 }
 
 /// # Safety
@@ -953,10 +1027,15 @@ pub unsafe extern "C" fn fmi3GetEventIndicators(
     event_indicators: *mut fmi3Float64,
     n_event_indicators: usize,
 ) -> fmi3Status {
-    boundary!(instance, F::GetEventIndicators, |inst| {
-        let z = try_slice_mut!(inst, event_indicators, n_event_indicators, "eventIndicators");
-        inst.get_event_indicators(z)
-    })
+    boundary!(
+        instance,
+        F::GetEventIndicators,
+        args("eventIndicators = {}", show(event_indicators, n_event_indicators)),
+        |inst| {
+            let z = try_slice_mut!(inst, event_indicators, n_event_indicators, "eventIndicators");
+            inst.get_event_indicators(z)
+        }
+    )
 }
 
 /// # Safety
@@ -967,10 +1046,15 @@ pub unsafe extern "C" fn fmi3GetContinuousStates(
     continuous_states: *mut fmi3Float64,
     n_continuous_states: usize,
 ) -> fmi3Status {
-    boundary!(instance, F::GetContinuousStates, |inst| {
-        let x = try_slice_mut!(inst, continuous_states, n_continuous_states, "continuousStates");
-        inst.get_continuous_states(x)
-    })
+    boundary!(
+        instance,
+        F::GetContinuousStates,
+        args("continuousStates = {}", show(continuous_states, n_continuous_states)),
+        |inst| {
+            let x = try_slice_mut!(inst, continuous_states, n_continuous_states, "continuousStates");
+            inst.get_continuous_states(x)
+        }
+    )
 }
 
 /// # Safety
@@ -1035,12 +1119,22 @@ pub unsafe extern "C" fn fmi3GetOutputDerivatives(
     values: *mut fmi3Float64,
     n_values: usize,
 ) -> fmi3Status {
-    boundary!(instance, F::GetOutputDerivatives, |inst| {
-        let vrs = try_slice!(inst, vrs, n_vrs, "valueReferences");
-        let orders = try_slice!(inst, orders, n_vrs, "orders");
-        let values = try_slice_mut!(inst, values, n_values, "values");
-        inst.get_output_derivatives(vrs, orders, values)
-    })
+    boundary!(
+        instance,
+        F::GetOutputDerivatives,
+        args(
+            "valueReferences = {}, orders = {}, values = {}",
+            show(vrs, n_vrs),
+            show(orders, n_vrs),
+            show(values, n_values)
+        ),
+        |inst| {
+            let vrs = try_slice!(inst, vrs, n_vrs, "valueReferences");
+            let orders = try_slice!(inst, orders, n_vrs, "orders");
+            let values = try_slice_mut!(inst, values, n_values, "values");
+            inst.get_output_derivatives(vrs, orders, values)
+        }
+    )
 }
 
 /// # Safety
@@ -1056,18 +1150,25 @@ pub unsafe extern "C" fn fmi3DoStep(
     early_return: *mut fmi3Boolean,
     last_successful_time: *mut fmi3Float64,
 ) -> fmi3Status {
-    boundary!(instance, F::DoStep, |inst| {
-        let event = try_out!(inst, event_handling_needed, "eventHandlingNeeded");
-        let terminate = try_out!(inst, terminate_simulation, "terminateSimulation");
-        let early = try_out!(inst, early_return, "earlyReturn");
-        let last = try_out!(inst, last_successful_time, "lastSuccessfulTime");
-        let (status, outcome) = inst.do_step(current_communication_point, communication_step_size);
-        *event = outcome.event_handling_needed as fmi3Boolean;
-        *terminate = outcome.terminate_simulation as fmi3Boolean;
-        *early = outcome.early_return as fmi3Boolean;
-        *last = outcome.last_successful_time;
-        status
-    })
+    boundary!(
+        instance,
+        F::DoStep,
+        args(
+            "currentCommunicationPoint = {current_communication_point}, communicationStepSize = {communication_step_size}"
+        ),
+        |inst| {
+            let event = try_out!(inst, event_handling_needed, "eventHandlingNeeded");
+            let terminate = try_out!(inst, terminate_simulation, "terminateSimulation");
+            let early = try_out!(inst, early_return, "earlyReturn");
+            let last = try_out!(inst, last_successful_time, "lastSuccessfulTime");
+            let (status, outcome) = inst.do_step(current_communication_point, communication_step_size);
+            *event = outcome.event_handling_needed as fmi3Boolean;
+            *terminate = outcome.terminate_simulation as fmi3Boolean;
+            *early = outcome.early_return as fmi3Boolean;
+            *last = outcome.last_successful_time;
+            status
+        }
+    )
 }
 
 /// # Safety

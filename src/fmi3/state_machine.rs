@@ -23,13 +23,13 @@ pub enum Fmi3Function {
     GetInt32,
     GetBoolean,
     /// Get functions of the types without variables here (Float32, Int8 ... UInt64 but Int32,
-    /// String, Binary).
-    GetOther,
+    /// String, Binary), with the C name.
+    GetOther(&'static str),
     GetClock,
     SetFloat64,
     SetInt32,
     SetBoolean,
-    SetOther,
+    SetOther(&'static str),
     SetClock,
     GetNumberOfVariableDependencies,
     GetVariableDependencies,
@@ -43,8 +43,8 @@ pub enum Fmi3Function {
     GetAdjointDerivative,
     EnterConfigurationMode,
     ExitConfigurationMode,
-    /// `fmi3Get/SetInterval*`, `fmi3Get/SetShift*`.
-    ClockTiming,
+    /// `fmi3Get/SetInterval*`, `fmi3Get/SetShift*`, with the C name.
+    ClockTiming(&'static str),
     EvaluateDiscreteStates,
     UpdateDiscreteStates,
     // Model Exchange
@@ -78,8 +78,10 @@ const CONTINUOUS: u16 = S::ContinuousTimeMode.bit();
 const INTERMEDIATE: u16 = S::IntermediateUpdateMode.bit();
 const CONFIGURATION: u16 = S::ConfigurationMode.bit();
 /// Every state but fatal.
-const ANY: u16 =
-    INST | INIT | STEP | DISCARDED | TERMINATED | ERROR | EVENT | CONTINUOUS | INTERMEDIATE | CONFIGURATION;
+/// Every state but `Error`: after an error only freeing, resetting and restoring a saved
+/// FMU state are meaningful (FMI 3.0, section 2.2.3, status `fmi3Error`).
+const ANY: u16 = INST | INIT | STEP | DISCARDED | TERMINATED | EVENT | CONTINUOUS | INTERMEDIATE | CONFIGURATION;
+const AFTER_ERROR: u16 = ANY | ERROR;
 
 /// The states FMI 3 has, for the walk over the table.
 pub const FMI3_STATES: [ModelState; 11] = [
@@ -110,12 +112,12 @@ impl Fmi3Function {
             GetFloat64,
             GetInt32,
             GetBoolean,
-            GetOther,
+            GetOther("fmi3GetFloat32"),
             GetClock,
             SetFloat64,
             SetInt32,
             SetBoolean,
-            SetOther,
+            SetOther("fmi3SetFloat32"),
             SetClock,
             GetNumberOfVariableDependencies,
             GetVariableDependencies,
@@ -129,7 +131,7 @@ impl Fmi3Function {
             GetAdjointDerivative,
             EnterConfigurationMode,
             ExitConfigurationMode,
-            ClockTiming,
+            ClockTiming("fmi3GetIntervalDecimal"),
             EvaluateDiscreteStates,
             UpdateDiscreteStates,
             EnterContinuousTimeMode,
@@ -149,7 +151,7 @@ impl Fmi3Function {
         ]
     };
 
-    /// The C name (for the grouped entries, the family), for log messages.
+    /// The C name, for log messages.
     pub fn name(self) -> &'static str {
         use Fmi3Function::*;
         match self {
@@ -163,12 +165,11 @@ impl Fmi3Function {
             GetFloat64 => "fmi3GetFloat64",
             GetInt32 => "fmi3GetInt32",
             GetBoolean => "fmi3GetBoolean",
-            GetOther => "fmi3Get (a type without variables here)",
+            GetOther(name) | SetOther(name) | ClockTiming(name) => name,
             GetClock => "fmi3GetClock",
             SetFloat64 => "fmi3SetFloat64",
             SetInt32 => "fmi3SetInt32",
             SetBoolean => "fmi3SetBoolean",
-            SetOther => "fmi3Set (a type without variables here)",
             SetClock => "fmi3SetClock",
             GetNumberOfVariableDependencies => "fmi3GetNumberOfVariableDependencies",
             GetVariableDependencies => "fmi3GetVariableDependencies",
@@ -182,7 +183,6 @@ impl Fmi3Function {
             GetAdjointDerivative => "fmi3GetAdjointDerivative",
             EnterConfigurationMode => "fmi3EnterConfigurationMode",
             ExitConfigurationMode => "fmi3ExitConfigurationMode",
-            ClockTiming => "fmi3Get/SetInterval/Shift",
             EvaluateDiscreteStates => "fmi3EvaluateDiscreteStates",
             UpdateDiscreteStates => "fmi3UpdateDiscreteStates",
             EnterContinuousTimeMode => "fmi3EnterContinuousTimeMode",
@@ -208,7 +208,7 @@ impl Fmi3Function {
         use Fmi3Function::*;
         let me = matches!(interface, InterfaceType::ModelExchange);
         match self {
-            SetDebugLogging | FreeInstance | Reset => ANY,
+            SetDebugLogging | FreeInstance | Reset => AFTER_ERROR,
             EnterInitializationMode => INST,
             ExitInitializationMode => INIT,
             EnterEventMode => {
@@ -219,19 +219,15 @@ impl Fmi3Function {
                 }
             }
             Terminate => EVENT | CONTINUOUS | STEP | DISCARDED,
-            GetFloat64 | GetInt32 | GetBoolean | GetOther => {
+            GetFloat64 | GetInt32 | GetBoolean | GetOther(_) => {
                 INST | INIT | EVENT | CONTINUOUS | STEP | DISCARDED | INTERMEDIATE | TERMINATED | CONFIGURATION
             }
             SetFloat64 => INST | INIT | EVENT | CONTINUOUS | STEP | INTERMEDIATE | CONFIGURATION,
-            SetInt32 | SetBoolean | SetOther => INST | INIT | EVENT | STEP | CONFIGURATION,
-            GetClock | SetClock | ClockTiming => EVENT,
+            SetInt32 | SetBoolean | SetOther(_) => INST | INIT | EVENT | STEP | CONFIGURATION,
+            GetClock | SetClock | ClockTiming(_) => EVENT,
             GetNumberOfVariableDependencies | GetVariableDependencies => ANY,
-            GetFMUState
-            | SetFMUState
-            | FreeFMUState
-            | SerializedFMUStateSize
-            | SerializeFMUState
-            | DeserializeFMUState => ANY,
+            GetFMUState | SerializedFMUStateSize | SerializeFMUState => ANY,
+            SetFMUState | FreeFMUState | DeserializeFMUState => AFTER_ERROR,
             GetDirectionalDerivative | GetAdjointDerivative => INIT | EVENT | CONTINUOUS | STEP | TERMINATED,
             EnterConfigurationMode => INST | EVENT | STEP,
             ExitConfigurationMode => CONFIGURATION,
@@ -249,7 +245,9 @@ impl Fmi3Function {
                 INIT | EVENT | CONTINUOUS | TERMINATED
             }
             GetNumberOfEventIndicators | GetNumberOfContinuousStates => ANY,
-            EnterStepMode if !me => INIT | EVENT,
+            // Step Mode is entered from Event Mode; from Initialization Mode only through
+            // fmi3ExitInitializationMode.
+            EnterStepMode if !me => EVENT,
             GetOutputDerivatives if !me => STEP | DISCARDED | TERMINATED,
             DoStep if !me => STEP,
             _ => 0,

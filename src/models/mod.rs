@@ -1,6 +1,7 @@
 //! The FMU models in safe Rust: what each variable means, how parameters become a
-//! simulation, what a co-simulation step does. The FMI boundary ([`crate::fmi2`]) handles
-//! pointers, call sequences and logging and calls into these.
+//! simulation, what a co-simulation step does. Nothing here knows an FMI version: the shared
+//! instance ([`crate::fmi`]) and the two C boundaries ([`crate::fmi2`], [`crate::fmi3`])
+//! handle pointers, call sequences and logging and call into these.
 //!
 //! | module | what it holds |
 //! |---|---|
@@ -11,8 +12,9 @@
 //! | [`controller`] | the `StewartController` model (programme, direct problem, feedback) |
 //! | [`trivial`] | `TrivialPlatform`, the benchmarks' no-physics floor |
 //!
-//! One binary serves every model: `fmi2Instantiate` picks the model by the GUID the importer
-//! passes (each FMU's `modelDescription.xml` carries its own).
+//! One binary serves every model: `fmi2Instantiate`/`fmi3Instantiate*` pick the model by the
+//! GUID or instantiation token the importer passes (each FMU's `modelDescription.xml` carries
+//! its own; see [`crate::fmi::description`]).
 
 pub mod controller;
 pub mod platform;

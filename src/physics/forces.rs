@@ -62,7 +62,7 @@ impl LegForceLaw for HeldForces {
 }
 
 /// Legs replaced by linear springs: `u_k = -c (l_k - L_k0)`. A conservative system (the
-/// textbook's energy check, SPEC §5): potential `c/2 sum_k (l_k - L_k0)²`.
+/// textbook's energy check, docs/model.md §7): potential `c/2 sum_k (l_k - L_k0)²`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SpringLegs {
     /// Spring stiffness `c`, N/m.

@@ -1,7 +1,7 @@
 //! Projection of a state back onto the constraint manifold `e_a . e_b = delta_ab` and its
 //! tangent space (velocities of a rigid rotation). The exact solution stays on the manifold;
 //! an integrator drifts off it by its truncation error each step, so the FMU projects after
-//! every internal step (SPEC §1).
+//! every internal step (docs/model.md §1).
 
 use nalgebra::Matrix3;
 

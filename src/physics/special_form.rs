@@ -1,4 +1,4 @@
-//! The special form of the rigid-body equations (paper eqs. 1.4-1.6, SPEC §1):
+//! The special form of the rigid-body equations (paper eqs. 1.4-1.6, docs/model.md §1):
 //!
 //! ```text
 //! M r''  = sum_k F_k - M g ez

@@ -1,4 +1,4 @@
-//! The stand: mass, inertia, gravity and the twelve joint positions (SPEC §1, §2).
+//! The stand: mass, inertia, gravity and the twelve joint positions (docs/model.md §1, §3).
 
 use nalgebra::Vector3;
 
@@ -18,9 +18,9 @@ pub const DEFAULT_JOINT_DEPTH: f64 = 0.5;
 pub const DEFAULT_NEUTRAL_JOINT_HEIGHT: f64 = 1.4589244164161732;
 /// Non-dimensional equilibrium leg force of the paper (units of `M g`).
 pub const PAPER_EQUILIBRIUM_LEG_FORCE: f64 = 0.2005;
-/// Base joint azimuths of the default stand, degrees (SPEC §2).
+/// Base joint azimuths of the default stand, degrees (docs/model.md §3).
 pub const DEFAULT_BASE_AZIMUTHS_DEG: [f64; LEG_COUNT] = [-10.0, 10.0, 110.0, 130.0, 230.0, 250.0];
-/// Platform joint azimuths of the default stand, degrees (SPEC §2).
+/// Platform joint azimuths of the default stand, degrees (docs/model.md §3).
 pub const DEFAULT_PLATFORM_AZIMUTHS_DEG: [f64; LEG_COUNT] = [-50.0, 50.0, 70.0, 170.0, 190.0, 290.0];
 
 /// Relative size (against the stand's characteristic length) below which two joints count as
@@ -49,14 +49,14 @@ pub struct Stand {
 }
 
 impl Default for Stand {
-    /// The truck-cabin motion stand of SPEC §2.
+    /// The truck-cabin motion stand of docs/model.md §3.
     fn default() -> Self {
         Self::truck_cabin()
     }
 }
 
 impl Stand {
-    /// The truck-cabin motion stand of SPEC §2: `M = 3000 kg`, `J = (1500, 1500, 2200) kg m²`,
+    /// The truck-cabin motion stand of docs/model.md §3: `M = 3000 kg`, `J = (1500, 1500, 2200) kg m²`,
     /// base joints on a 1.5 m circle, platform joints on a 1.0 m circle 0.5 m below the
     /// centre of mass.
     pub fn truck_cabin() -> Self {
@@ -172,7 +172,7 @@ mod tests {
     fn default_stand_neutral_pose_matches_spec_numbers() {
         let stand = Stand::truck_cabin();
         stand.validate().unwrap();
-        // Horizontal leg projection d and neutral leg length from SPEC §2.
+        // Horizontal leg projection d and neutral leg length from docs/model.md §3.
         let a = stand.platform_joints[0] + Vector3::new(0.0, 0.0, DEFAULT_NEUTRAL_JOINT_HEIGHT + DEFAULT_JOINT_DEPTH);
         let d = (a - stand.base_joints[0]).xy().norm();
         assert!((d - 0.9756365463855202).abs() < 1e-15, "d = {d}");

@@ -1,5 +1,5 @@
 """Helpers shared by the Python tests and the demonstration: where the packaged FMU is, the
-paper's non-dimensional stand computed from SPEC §2 (independently of the Rust code), and a
+paper's non-dimensional stand computed from docs/model.md §3 (independently of the Rust code), and a
 thin driver around fmpy's FMU2Slave."""
 
 import math
@@ -13,7 +13,7 @@ from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
 ROOT = Path(__file__).resolve().parents[2]
 PLATFORM_FMU = Path(os.environ.get("STEWART_PLATFORM_FMU", ROOT / "target" / "fmu" / "StewartPlatform.fmu"))
 
-# SPEC §2: the truck-cabin stand.
+# docs/model.md §3: the truck-cabin stand.
 R_B, R_P, H_C = 1.5, 1.0, 0.5
 BASE_AZIMUTHS = [-10, 10, 110, 130, 230, 250]
 PLATFORM_AZIMUTHS = [-50, 50, 70, 170, 190, 290]

@@ -34,7 +34,7 @@ def test_model_description_declares_the_capabilities(platform_fmu):
 def test_simulate_with_defaults_holds_the_neutral_equilibrium(platform_fmu):
     result = simulate_fmu(platform_fmu, output=["r[3]", "angles[1]", "angles[2]", "l[1]", "E", "constraintError"])
     assert result["time"][-1] == 3.0
-    # SPEC §2: every leg carries 0.2005 M g in the neutral pose: the platform stays put
+    # docs/model.md §3: every leg carries 0.2005 M g in the neutral pose: the platform stays put
     # (round-off seeds the unstable tilt, still below 1e-9 rad after 3 s).
     assert np.max(np.abs(result["r[3]"] - NEUTRAL_Z)) < 1e-9
     assert np.max(np.abs(result["angles[1]"])) < 1e-9

@@ -113,7 +113,7 @@ def test_fmi_sim_runs_the_fmu_like_fmpy(tmp_path):
 
 def rest_height_on_stops(force, lower):
     """Pure-heave rest of the default stand with every leg pushing `force` (N) and resting on
-    its lower (or upper) stops, from the SPEC geometry and the FMU's stop defaults:
+    its lower (or upper) stops, from the default stand's geometry (docs/model.md §3) and the FMU's stop defaults:
     6 (force +- k_s delta) H / l = M g."""
     from workspace import stop_defaults
     from test_workspace import horizontal_leg_projection

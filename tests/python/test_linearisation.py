@@ -26,7 +26,7 @@ def test_open_loop_eigenvalues_are_saddle_pairs_and_include_the_heave():
     assert lin["equilibrium_residual"] < 1e-12
     heave = [v.real for v, n in table if n == "heave z" and v.real > 0]
     assert len(heave) == 1
-    # The fastest mode involves tilt (SPEC: a lateral + tilt mode, not the heave).
+    # The fastest mode involves tilt (docs/model.md §6: a lateral + tilt mode, not the heave).
     fastest = table[0][1]
     assert "roll" in fastest or "pitch" in fastest
 

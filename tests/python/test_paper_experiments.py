@@ -1,4 +1,4 @@
-"""The paper's experiments (SPEC §4) through the packaged FMU, in non-dimensional units.
+"""The paper's experiments (docs/model.md §6) through the packaged FMU, in non-dimensional units.
 Forces and programme motions are computed here in Python, independently of the Rust code."""
 
 import math
@@ -160,7 +160,7 @@ def test_5_feedback_tracks_above_the_critical_gain(h):
     above, below, damped = track(2 * critical), track(0.5 * critical), track(2 * critical, damping=0.5)
     print(f"experiment 5 (h = {h}): critical gain G_c = {critical:.3f}; max leg-length error over 0..40: "
           f"{above:.2e} at 2 G_c, {damped:.2e} at 2 G_c with D = 0.5, {below:.2e} at G_c / 2")
-    assert 0.9 < critical < 1.1  # SPEC §4: about G = 1 for the default stand
+    assert 0.9 < critical < 1.1  # docs/model.md §6: about G = 1 for the default stand
     assert above < 1e-3
     assert damped < above
     assert below > 1e-2

@@ -101,7 +101,7 @@ def test_actuator_failure_tilts_the_platform_onto_its_stops_and_no_host_step_is_
 
 def newton_euler_held(forces_of_t, t_end, h):
     """Independent reference: centre-of-mass theorem + Euler's equations in body axes, unit
-    quaternion, scipy DOP853 over each step with the forces held; SPEC §2 geometry."""
+    quaternion, scipy DOP853 over each step with the forces held; docs/model.md §3 geometry."""
     base = [np.array([R_B * math.cos(math.radians(a)), R_B * math.sin(math.radians(a)), 0.0]) for a in BASE_AZIMUTHS]
     plat = [np.array([R_P * math.cos(math.radians(a)), R_P * math.sin(math.radians(a)), -H_C])
             for a in PLATFORM_AZIMUTHS]

@@ -41,7 +41,7 @@ def stop_defaults():
 
 def static_rest_height(stiffness, lmin):
     """The default platform at rest on its six lower stops, solved independently of the FMU's
-    code from the SPEC geometry: pure heave by the stand's symmetry, `6 k_s (lmin - l) (H/l) =
+    code from the default stand's geometry (docs/model.md §3): pure heave by the stand's symmetry, `6 k_s (lmin - l) (H/l) =
     M g` with `l = sqrt(d² + H²)`. Returns (centre-of-mass height, leg length)."""
     pb, pp = math.radians(BASE_AZIMUTHS[0]), math.radians(PLATFORM_AZIMUTHS[0])
     d = math.hypot(R_P * math.cos(pp) - R_B * math.cos(pb), R_P * math.sin(pp) - R_B * math.sin(pb))

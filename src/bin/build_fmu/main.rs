@@ -149,7 +149,7 @@ fn build_one_fmi3(kind: ModelKind, root: &Path, library: &Path, out_dir: &Path, 
             summary.token
         ));
     }
-    binary_check::check_fmi3(library, &token).map_err(|e| format!("{}: {e}", library.display()))?;
+    binary_check::check_fmi3(library, token).map_err(|e| format!("{}: {e}", library.display()))?;
     std::fs::create_dir_all(out_dir).map_err(|e| format!("cannot create {}: {e}", out_dir.display()))?;
     let fmu = out_dir.join(format!("{id}.fmu"));
     let binary = format!("binaries/x86_64-linux/{id}.so");

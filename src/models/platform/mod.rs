@@ -1,5 +1,5 @@
 //! The `StewartPlatform` model: the stand's parameters and initial pose as FMI parameters,
-//! the six leg forces as inputs, the pose, legs and energy as outputs (SPEC §3).
+//! the six leg forces as inputs, the pose, legs and energy as outputs (docs/model.md §5).
 
 pub mod variables;
 
@@ -67,7 +67,7 @@ pub struct PlatformParameters {
 }
 
 impl Default for PlatformParameters {
-    /// The default stand at rest in its neutral pose (SPEC §2-3).
+    /// The default stand at rest in its neutral pose (docs/model.md §3, §5).
     fn default() -> Self {
         PlatformParameters {
             stand: Stand::truck_cabin(),

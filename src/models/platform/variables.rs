@@ -1,4 +1,4 @@
-//! The `StewartPlatform` variables (SPEC §3). Names, units and meanings are part of the
+//! The `StewartPlatform` variables (docs/model.md §5). Names, units and meanings are part of the
 //! contract with hosts and tests: keep them.
 
 use crate::models::variables::Dependency::{All, SameIndex};
