@@ -44,7 +44,7 @@ impl FmuModel for TrivialModel {
         if var.group == group::TIME {
             return self.time;
         }
-        if group::is_output_or_derivative(var.group) {
+        if super::platform::variables::is_output_or_derivative(var.group) {
             return self.storage.forces[var.index % 6];
         }
         self.storage.get_real(var)

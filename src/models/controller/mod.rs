@@ -475,25 +475,6 @@ mod tests {
     use super::*;
 
     #[test]
-    fn group_indices_match_the_table() {
-        let g = variables::GROUPS;
-        assert_eq!(g[group::L].name, "l");
-        assert_eq!(g[group::POSE_ANGLE_ACCELERATIONS].name, "pose.angleAccelerations");
-        assert_eq!(g[group::GAIN].name, "G");
-        assert_eq!(g[group::DAMPING].name, "D");
-        assert_eq!(g[group::PROGRAMME].name, "programme");
-        assert_eq!(g[group::SINE_TIME_CONSTANT].name, "sine.timeConstant");
-        assert_eq!(g[group::DISTURBANCE_TIME_CONSTANT].name, "disturbance.timeConstant");
-        assert_eq!(g[group::F].name, "F");
-        assert_eq!(g[group::ANGLESP].name, "anglesp");
-        assert_eq!(g[group::STARTUP_POSITION].name, "startup.position");
-        assert_eq!(g[group::STARTUP_DURATION].name, "startup.duration");
-        assert_eq!(g[group::FMIN].name, "Fmin");
-        assert_eq!(g[group::FMAX].name, "Fmax");
-        assert_eq!(g.len(), group::FMAX + 1);
-    }
-
-    #[test]
     fn default_outputs_hold_the_neutral_pose_at_t0() {
         let c = ControllerModel::default();
         let o = c.compute().unwrap();

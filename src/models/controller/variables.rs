@@ -3,52 +3,7 @@
 
 use crate::models::variables::Dependency::{All, SameIndex};
 use crate::models::variables::VariableGroup as V;
-
-/// Indices into [`GROUPS`], matched on by the model.
-pub mod group {
-    pub const TIME: usize = 0;
-    pub const L: usize = 1;
-    pub const LDOT: usize = 2;
-    pub const POSE_R: usize = 3;
-    pub const POSE_V: usize = 4;
-    pub const POSE_A: usize = 5;
-    pub const POSE_ANGLES: usize = 6;
-    pub const POSE_ANGLE_RATES: usize = 7;
-    pub const POSE_ANGLE_ACCELERATIONS: usize = 8;
-    pub const M: usize = 9;
-    pub const J: usize = 10;
-    pub const G_GRAVITY: usize = 11;
-    pub const B: usize = 12;
-    pub const A: usize = 13;
-    pub const GAIN: usize = 14;
-    pub const DAMPING: usize = 15;
-    pub const FEEDFORWARD: usize = 16;
-    pub const PROGRAMME: usize = 17;
-    pub const HEAVE_CENTRE: usize = 18;
-    pub const HEAVE_AMPLITUDE: usize = 19;
-    pub const HEAVE_FREQUENCY: usize = 20;
-    pub const HEAVE_TIME_CONSTANT: usize = 21;
-    pub const SINE_OFFSET: usize = 22;
-    pub const SINE_ANGLE_OFFSET: usize = 23;
-    pub const SINE_AMPLITUDE: usize = 24;
-    pub const SINE_ANGLE_AMPLITUDE: usize = 25;
-    pub const SINE_FREQUENCY: usize = 26;
-    pub const SINE_PHASE: usize = 27;
-    pub const SINE_TIME_CONSTANT: usize = 28;
-    pub const DISTURBANCE_AMPLITUDE: usize = 29;
-    pub const DISTURBANCE_FREQUENCY: usize = 30;
-    pub const DISTURBANCE_TIME_CONSTANT: usize = 31;
-    pub const F: usize = 32;
-    pub const FP: usize = 33;
-    pub const LP: usize = 34;
-    pub const LDOTP: usize = 35;
-    pub const RP: usize = 36;
-    pub const ANGLESP: usize = 37;
-    pub const STARTUP_POSITION: usize = 38;
-    pub const STARTUP_DURATION: usize = 39;
-    pub const FMIN: usize = 40;
-    pub const FMAX: usize = 41;
-}
+use crate::models::variables::model_variables;
 
 const POSE_INPUTS: &[crate::models::variables::Dependency] = &[
     All("pose.r"),
@@ -110,30 +65,30 @@ const ALL_KNOWNS: &[crate::models::variables::Dependency] = &[
     All("Fmax"),
 ];
 
-pub static GROUPS: &[V] = &[
-    V::time(0),
-    V::input("l", &[6], 1, Some("m"), "Measured leg length l_k (from the platform's output l)"),
-    V::input("ldot", &[6], 7, Some("m/s"), "Measured leg length rate (from the platform's output ldot)"),
-    V::input("pose.r", &[3], 13, Some("m"), "Programme 3 (external): centre of mass"),
-    V::input("pose.v", &[3], 16, Some("m/s"), "Programme 3 (external): velocity of the centre of mass"),
-    V::input("pose.a", &[3], 19, Some("m/s2"), "Programme 3 (external): acceleration of the centre of mass"),
-    V::input("pose.angles", &[3], 22, Some("rad"), "Programme 3 (external): roll, pitch, yaw (1-2-3)").display("deg"),
-    V::input("pose.angleRates", &[3], 25, Some("rad/s"), "Programme 3 (external): rates of roll, pitch, yaw"),
-    V::input(
+model_variables! {
+    TIME => V::time(0),
+    L => V::input("l", &[6], 1, Some("m"), "Measured leg length l_k (from the platform's output l)"),
+    LDOT => V::input("ldot", &[6], 7, Some("m/s"), "Measured leg length rate (from the platform's output ldot)"),
+    POSE_R => V::input("pose.r", &[3], 13, Some("m"), "Programme 3 (external): centre of mass"),
+    POSE_V => V::input("pose.v", &[3], 16, Some("m/s"), "Programme 3 (external): velocity of the centre of mass"),
+    POSE_A => V::input("pose.a", &[3], 19, Some("m/s2"), "Programme 3 (external): acceleration of the centre of mass"),
+    POSE_ANGLES => V::input("pose.angles", &[3], 22, Some("rad"), "Programme 3 (external): roll, pitch, yaw (1-2-3)").display("deg"),
+    POSE_ANGLE_RATES => V::input("pose.angleRates", &[3], 25, Some("rad/s"), "Programme 3 (external): rates of roll, pitch, yaw"),
+    POSE_ANGLE_ACCELERATIONS => V::input(
         "pose.angleAccelerations",
         &[3],
         28,
         Some("rad/s2"),
         "Programme 3 (external): second derivatives of roll, pitch, yaw",
     ),
-    V::parameter("M", &[], 40, Some("kg"), "Mass of the loaded platform"),
-    V::parameter("J", &[3], 41, Some("kg.m2"), "Principal central moments of inertia"),
-    V::parameter("g", &[], 44, Some("m/s2"), "Gravitational acceleration, along -z"),
-    V::parameter("B", &[6, 3], 50, Some("m"), "Base joint B_k, inertial frame"),
-    V::parameter("A", &[6, 3], 70, Some("m"), "Platform joint A_k, body frame from the centre of mass"),
-    V::parameter("G", &[], 90, Some("N/m"), "Feedback gain on the leg-length error l^p - l (tunable)").tunable(),
-    V::parameter("D", &[], 91, Some("N.s/m"), "Feedback gain on the leg-rate error ldot^p - ldot (tunable)").tunable(),
-    V::parameter(
+    M => V::parameter("M", &[], 40, Some("kg"), "Mass of the loaded platform"),
+    J => V::parameter("J", &[3], 41, Some("kg.m2"), "Principal central moments of inertia"),
+    G_GRAVITY => V::parameter("g", &[], 44, Some("m/s2"), "Gravitational acceleration, along -z"),
+    B => V::parameter("B", &[6, 3], 50, Some("m"), "Base joint B_k, inertial frame"),
+    A => V::parameter("A", &[6, 3], 70, Some("m"), "Platform joint A_k, body frame from the centre of mass"),
+    GAIN => V::parameter("G", &[], 90, Some("N/m"), "Feedback gain on the leg-length error l^p - l (tunable)").tunable(),
+    DAMPING => V::parameter("D", &[], 91, Some("N.s/m"), "Feedback gain on the leg-rate error ldot^p - ldot (tunable)").tunable(),
+    FEEDFORWARD => V::parameter(
         "feedforward",
         &[],
         92,
@@ -141,7 +96,7 @@ pub static GROUPS: &[V] = &[
         "1 = apply the programme forces F^p of the direct problem plus feedback; 0 = feedback only (F^p = 0)",
     )
     .integer(0, 1),
-    V::parameter(
+    PROGRAMME => V::parameter(
         "programme",
         &[],
         93,
@@ -152,25 +107,25 @@ pub static GROUPS: &[V] = &[
          heave.centre in startup.duration, then programme 1",
     )
     .integer(1, 4),
-    V::parameter("heave.centre", &[3], 94, Some("m"), "Programme 1: centre of mass about which the platform heaves"),
-    V::parameter("heave.amplitude", &[], 97, Some("m"), "Programme 1: heave amplitude a"),
-    V::parameter("heave.frequency", &[], 98, Some("rad/s"), "Programme 1: heave circular frequency Omega"),
-    V::parameter("heave.timeConstant", &[], 99, Some("s"), "Programme 1: soft-start time constant T"),
-    V::parameter("sine.offset", &[3], 100, Some("m"), "Programme 2: mean centre of mass x, y, z"),
-    V::parameter("sine.angleOffset", &[3], 103, Some("rad"), "Programme 2: mean roll, pitch, yaw").display("deg"),
-    V::parameter("sine.amplitude", &[3], 106, Some("m"), "Programme 2: amplitudes of x, y, z"),
-    V::parameter("sine.angleAmplitude", &[3], 109, Some("rad"), "Programme 2: amplitudes of roll, pitch, yaw")
+    HEAVE_CENTRE => V::parameter("heave.centre", &[3], 94, Some("m"), "Programme 1: centre of mass about which the platform heaves"),
+    HEAVE_AMPLITUDE => V::parameter("heave.amplitude", &[], 97, Some("m"), "Programme 1: heave amplitude a"),
+    HEAVE_FREQUENCY => V::parameter("heave.frequency", &[], 98, Some("rad/s"), "Programme 1: heave circular frequency Omega"),
+    HEAVE_TIME_CONSTANT => V::parameter("heave.timeConstant", &[], 99, Some("s"), "Programme 1: soft-start time constant T"),
+    SINE_OFFSET => V::parameter("sine.offset", &[3], 100, Some("m"), "Programme 2: mean centre of mass x, y, z"),
+    SINE_ANGLE_OFFSET => V::parameter("sine.angleOffset", &[3], 103, Some("rad"), "Programme 2: mean roll, pitch, yaw").display("deg"),
+    SINE_AMPLITUDE => V::parameter("sine.amplitude", &[3], 106, Some("m"), "Programme 2: amplitudes of x, y, z"),
+    SINE_ANGLE_AMPLITUDE => V::parameter("sine.angleAmplitude", &[3], 109, Some("rad"), "Programme 2: amplitudes of roll, pitch, yaw")
         .display("deg"),
-    V::parameter(
+    SINE_FREQUENCY => V::parameter(
         "sine.frequency",
         &[6],
         112,
         Some("rad/s"),
         "Programme 2: circular frequencies of x, y, z, roll, pitch, yaw",
     ),
-    V::parameter("sine.phase", &[6], 118, Some("rad"), "Programme 2: phases of x, y, z, roll, pitch, yaw"),
-    V::parameter("sine.timeConstant", &[], 124, Some("s"), "Programme 2: soft-start time constant"),
-    V::parameter(
+    SINE_PHASE => V::parameter("sine.phase", &[6], 118, Some("rad"), "Programme 2: phases of x, y, z, roll, pitch, yaw"),
+    SINE_TIME_CONSTANT => V::parameter("sine.timeConstant", &[], 124, Some("s"), "Programme 2: soft-start time constant"),
+    DISTURBANCE_AMPLITUDE => V::parameter(
         "disturbance.amplitude",
         &[],
         125,
@@ -179,9 +134,9 @@ pub static GROUPS: &[V] = &[
          paper's perturbation is 0.0001 M g (tunable)",
     )
     .tunable(),
-    V::parameter("disturbance.frequency", &[], 126, Some("rad/s"), "Circular frequency of the disturbance"),
-    V::parameter("disturbance.timeConstant", &[], 127, Some("s"), "Soft-start time constant of the disturbance"),
-    V::output(
+    DISTURBANCE_FREQUENCY => V::parameter("disturbance.frequency", &[], 126, Some("rad/s"), "Circular frequency of the disturbance"),
+    DISTURBANCE_TIME_CONSTANT => V::parameter("disturbance.timeConstant", &[], 127, Some("s"), "Soft-start time constant of the disturbance"),
+    F => V::output(
         "F",
         &[6],
         150,
@@ -190,17 +145,17 @@ pub static GROUPS: &[V] = &[
         ALL_KNOWNS,
     )
     .depends_on(FORCE_DEPENDENCIES),
-    V::output("Fp", &[6], 156, Some("N"), "Programme leg forces F^p from the direct problem", ALL_KNOWNS)
+    FP => V::output("Fp", &[6], 156, Some("N"), "Programme leg forces F^p from the direct problem", ALL_KNOWNS)
         .depends_on(POSE_INPUTS),
-    V::output("lp", &[6], 162, Some("m"), "Programme leg lengths l^p (inverse kinematics)", ALL_KNOWNS)
+    LP => V::output("lp", &[6], 162, Some("m"), "Programme leg lengths l^p (inverse kinematics)", ALL_KNOWNS)
         .depends_on(LENGTH_DEPENDENCIES),
-    V::output("ldotp", &[6], 168, Some("m/s"), "Programme leg length rates", ALL_KNOWNS)
+    LDOTP => V::output("ldotp", &[6], 168, Some("m/s"), "Programme leg length rates", ALL_KNOWNS)
         .depends_on(LENGTH_DEPENDENCIES),
-    V::output("rp", &[3], 174, Some("m"), "Programme centre of mass", ALL_KNOWNS).depends_on(&[All("pose.r")]),
-    V::output("anglesp", &[3], 177, Some("rad"), "Programme roll, pitch, yaw", ALL_KNOWNS)
+    RP => V::output("rp", &[3], 174, Some("m"), "Programme centre of mass", ALL_KNOWNS).depends_on(&[All("pose.r")]),
+    ANGLESP => V::output("anglesp", &[3], 177, Some("rad"), "Programme roll, pitch, yaw", ALL_KNOWNS)
         .display("deg")
         .depends_on(&[All("pose.angles")]),
-    V::parameter(
+    STARTUP_POSITION => V::parameter(
         "startup.position",
         &[3],
         128,
@@ -208,7 +163,7 @@ pub static GROUPS: &[V] = &[
         "Programme 4: centre of mass of the parked platform at t = 0 (default: the default stand at rest on its \
          lower end stops)",
     ),
-    V::parameter(
+    STARTUP_DURATION => V::parameter(
         "startup.duration",
         &[],
         131,
@@ -216,12 +171,12 @@ pub static GROUPS: &[V] = &[
         "Programme 4: duration of the lift to heave.centre (quintic rest-to-rest profile); the heave programme \
          starts at its end",
     ),
-    V::parameter(
+    FMIN => V::parameter(
         "Fmin",
         &[],
         132,
         Some("N"),
         "Actuator saturation: the force command F_k is limited to [Fmin, Fmax] (real drives saturate)",
     ),
-    V::parameter("Fmax", &[], 133, Some("N"), "Actuator saturation: largest force command (see Fmin)"),
-];
+    FMAX => V::parameter("Fmax", &[], 133, Some("N"), "Actuator saturation: largest force command (see Fmin)"),
+}

@@ -337,7 +337,7 @@ impl FmuModel for PlatformModel {
                 self.event_indicators(&mut z);
                 z.get(var.index).copied().unwrap_or(f64::NAN)
             }
-            g if group::is_output_or_derivative(g) => Self::output_value(self.outputs(), var),
+            g if variables::is_output_or_derivative(g) => Self::output_value(self.outputs(), var),
             _ => self.parameter_slot(var).map_or(f64::NAN, |slot| *slot),
         }
     }
@@ -651,7 +651,7 @@ impl FmuModel for PlatformModel {
                 group::DER_WORK_F => power.actuator,
                 group::DER_WORK_DISSIPATED => power.dissipation,
                 group::KAPPA => dkappa,
-                g if group::is_output_or_derivative(g) => Self::output_value(&doutputs, *u),
+                g if variables::is_output_or_derivative(g) => Self::output_value(&doutputs, *u),
                 _ => {
                     return Err(format!(
                         "unknown {} is not an output, state or derivative",
@@ -840,62 +840,4 @@ fn read_settings(r: &mut ByteReader) -> Result<SolverSettings, SnapshotError> {
 fn read_stabilisation(r: &mut ByteReader) -> Result<Stabilisation, SnapshotError> {
     let code = r.i32()?;
     Stabilisation::from_code(code).ok_or_else(|| SnapshotError(format!("invalid stabilisation {code}")))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn group_indices_match_the_table() {
-        let names = [
-            (group::TIME, "time"),
-            (group::F, "F"),
-            (group::M, "M"),
-            (group::J, "J"),
-            (group::G, "g"),
-            (group::B, "B"),
-            (group::A, "A"),
-            (group::R0, "r0"),
-            (group::ANGLES0, "angles0"),
-            (group::V0, "v0"),
-            (group::W0, "w0"),
-            (group::METHOD, "solver.method"),
-            (group::REL_TOL, "solver.relTol"),
-            (group::ABS_TOL, "solver.absTol"),
-            (group::MAX_STEP, "solver.maxStep"),
-            (group::FIXED_STEP, "solver.fixedStep"),
-            (group::STABILISATION, "solver.stabilisation"),
-            (group::R, "r"),
-            (group::V, "v"),
-            (group::ROT, "R"),
-            (group::ANGLES, "angles"),
-            (group::W, "w"),
-            (group::L, "l"),
-            (group::LDOT, "ldot"),
-            (group::E, "E"),
-            (group::CONSTRAINT_ERROR, "constraintError"),
-            (group::BAUMGARTE_RATE, "solver.baumgarteRate"),
-            (group::DER_V, "der(v)"),
-            (group::DER_R, "der(R)"),
-            (group::DER2_R, "der2(R)"),
-            (group::STOPS, "stops"),
-            (group::LMIN, "lmin"),
-            (group::LMAX, "lmax"),
-            (group::STOP_STIFFNESS, "stops.stiffness"),
-            (group::STOP_DAMPING, "stops.damping"),
-            (group::STOP_AT_SINGULARITY, "stopAtSingularity"),
-            (group::FSTOP, "Fstop"),
-            (group::KAPPA, "kappa"),
-            (group::WORK_F, "work.F"),
-            (group::WORK_DISSIPATED, "work.dissipated"),
-            (group::DER_WORK_F, "der(work.F)"),
-            (group::DER_WORK_DISSIPATED, "der(work.dissipated)"),
-            (group::EVENT_INDICATORS, "eventIndicators"),
-        ];
-        assert_eq!(names.len(), variables::GROUPS.len());
-        for (i, name) in names {
-            assert_eq!(variables::GROUPS[i].name, name);
-        }
-    }
 }

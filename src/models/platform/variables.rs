@@ -3,60 +3,7 @@
 
 use crate::models::variables::Dependency::{All, SameIndex};
 use crate::models::variables::VariableGroup as V;
-
-/// Indices into [`GROUPS`], matched on by the model.
-pub mod group {
-    pub const TIME: usize = 0;
-    pub const F: usize = 1;
-    pub const M: usize = 2;
-    pub const J: usize = 3;
-    pub const G: usize = 4;
-    pub const B: usize = 5;
-    pub const A: usize = 6;
-    pub const R0: usize = 7;
-    pub const ANGLES0: usize = 8;
-    pub const V0: usize = 9;
-    pub const W0: usize = 10;
-    pub const METHOD: usize = 11;
-    pub const REL_TOL: usize = 12;
-    pub const ABS_TOL: usize = 13;
-    pub const MAX_STEP: usize = 14;
-    pub const FIXED_STEP: usize = 15;
-    pub const STABILISATION: usize = 16;
-    pub const R: usize = 17;
-    pub const V: usize = 18;
-    pub const ROT: usize = 19;
-    pub const ANGLES: usize = 20;
-    pub const W: usize = 21;
-    pub const L: usize = 22;
-    pub const LDOT: usize = 23;
-    pub const E: usize = 24;
-    pub const CONSTRAINT_ERROR: usize = 25;
-    pub const BAUMGARTE_RATE: usize = 26;
-    pub const DER_V: usize = 27;
-    pub const DER_R: usize = 28;
-    pub const DER2_R: usize = 29;
-    pub const STOPS: usize = 30;
-    pub const LMIN: usize = 31;
-    pub const LMAX: usize = 32;
-    pub const STOP_STIFFNESS: usize = 33;
-    pub const STOP_DAMPING: usize = 34;
-    pub const STOP_AT_SINGULARITY: usize = 35;
-    pub const FSTOP: usize = 36;
-    pub const KAPPA: usize = 37;
-    pub const WORK_F: usize = 38;
-    pub const WORK_DISSIPATED: usize = 39;
-    pub const DER_WORK_F: usize = 40;
-    pub const DER_WORK_DISSIPATED: usize = 41;
-    pub const EVENT_INDICATORS: usize = 42;
-
-    /// Groups computed from the state (outputs and Model Exchange derivatives).
-    pub fn is_output_or_derivative(group: usize) -> bool {
-        (R..=CONSTRAINT_ERROR).contains(&group)
-            || (DER_V..=DER2_R).contains(&group)
-            || (FSTOP..=DER_WORK_DISSIPATED).contains(&group)
-    }
-}
+use crate::models::variables::model_variables;
 
 /// The 24 continuous states in the order of the special form's state vector
 /// `r, v, e1, e2, e3, e1', e2', e3'`: `e_b` is column `b` of `R` (elements `R[1,b], R[2,b],
@@ -128,9 +75,16 @@ const ALL_PARAMETERS: &[crate::models::variables::Dependency] = &[
     All("stops.damping"),
 ];
 
-pub static GROUPS: &[V] = &[
-    V::time(0),
-    V::input(
+/// Groups computed from the state (outputs and Model Exchange derivatives).
+pub fn is_output_or_derivative(g: usize) -> bool {
+    (group::R..=group::CONSTRAINT_ERROR).contains(&g)
+        || (group::DER_V..=group::DER2_R).contains(&g)
+        || (group::FSTOP..=group::DER_WORK_DISSIPATED).contains(&g)
+}
+
+model_variables! {
+    TIME => V::time(0),
+    F => V::input(
         "F",
         &[6],
         1,
@@ -139,29 +93,29 @@ pub static GROUPS: &[V] = &[
          base). Held over each communication step, or interpolated to first order when fmi2SetRealInputDerivatives \
          gave its derivative",
     ),
-    V::parameter("M", &[], 10, Some("kg"), "Mass of the loaded platform (platform plus payload)"),
-    V::parameter(
+    M => V::parameter("M", &[], 10, Some("kg"), "Mass of the loaded platform (platform plus payload)"),
+    J => V::parameter(
         "J",
         &[3],
         11,
         Some("kg.m2"),
         "Principal central moments of inertia about the body axes e1, e2, e3 (must satisfy the triangle inequality)",
     ),
-    V::parameter("g", &[], 14, Some("m/s2"), "Gravitational acceleration, acting along -z"),
-    V::parameter("B", &[6, 3], 20, Some("m"), "Base joint B_k (row k: x, y, z) in the inertial frame"),
-    V::parameter(
+    G => V::parameter("g", &[], 14, Some("m/s2"), "Gravitational acceleration, acting along -z"),
+    B => V::parameter("B", &[6, 3], 20, Some("m"), "Base joint B_k (row k: x, y, z) in the inertial frame"),
+    A => V::parameter(
         "A",
         &[6, 3],
         40,
         Some("m"),
         "Platform joint A_k (row k: components along e1, e2, e3) in the body frame, from the centre of mass",
     ),
-    V::parameter("r0", &[3], 60, Some("m"), "Initial position of the centre of mass"),
-    V::parameter("angles0", &[3], 63, Some("rad"), "Initial roll, pitch, yaw (1-2-3 sequence, R = Rx Ry Rz)")
+    R0 => V::parameter("r0", &[3], 60, Some("m"), "Initial position of the centre of mass"),
+    ANGLES0 => V::parameter("angles0", &[3], 63, Some("rad"), "Initial roll, pitch, yaw (1-2-3 sequence, R = Rx Ry Rz)")
         .display("deg"),
-    V::parameter("v0", &[3], 66, Some("m/s"), "Initial velocity of the centre of mass"),
-    V::parameter("w0", &[3], 69, Some("rad/s"), "Initial angular velocity, body components"),
-    V::parameter(
+    V0 => V::parameter("v0", &[3], 66, Some("m/s"), "Initial velocity of the centre of mass"),
+    W0 => V::parameter("w0", &[3], 69, Some("rad/s"), "Initial angular velocity, body components"),
+    METHOD => V::parameter(
         "solver.method",
         &[],
         80,
@@ -171,7 +125,7 @@ pub static GROUPS: &[V] = &[
          communication step for real time",
     )
     .integer(1, 2),
-    V::parameter(
+    REL_TOL => V::parameter(
         "solver.relTol",
         &[],
         81,
@@ -179,7 +133,7 @@ pub static GROUPS: &[V] = &[
         "Relative tolerance of the adaptive integrator's local error (replaced by the tolerance of \
          fmi2SetupExperiment when the importer defines one)",
     ),
-    V::parameter(
+    ABS_TOL => V::parameter(
         "solver.absTol",
         &[],
         82,
@@ -187,14 +141,14 @@ pub static GROUPS: &[V] = &[
         "Absolute tolerance of the adaptive integrator's local error, in the units of each state component \
          (m, m/s, unit-vector components and their rates)",
     ),
-    V::parameter(
+    MAX_STEP => V::parameter(
         "solver.maxStep",
         &[],
         83,
         Some("s"),
         "Largest internal step of the adaptive integrator; 0 = limited only by the communication step",
     ),
-    V::parameter(
+    FIXED_STEP => V::parameter(
         "solver.fixedStep",
         &[],
         84,
@@ -202,7 +156,7 @@ pub static GROUPS: &[V] = &[
         "Internal step bound of RungeKutta4: each communication step is split into the fewest equal steps not \
          longer than this; 0 = one step per communication step",
     ),
-    V::parameter(
+    STABILISATION => V::parameter(
         "solver.stabilisation",
         &[],
         85,
@@ -213,10 +167,10 @@ pub static GROUPS: &[V] = &[
          always uses Baumgarte terms unless this is 1",
     )
     .integer(1, 3),
-    V::output("r", &[3], 100, Some("m"), "Centre of mass S, inertial frame", &[SameIndex("r0")]),
-    V::output("v", &[3], 103, Some("m/s"), "Velocity of the centre of mass", &[SameIndex("v0")])
+    R => V::output("r", &[3], 100, Some("m"), "Centre of mass S, inertial frame", &[SameIndex("r0")]),
+    V => V::output("v", &[3], 103, Some("m/s"), "Velocity of the centre of mass", &[SameIndex("v0")])
         .derivative_named("r", &[SameIndex("v")]),
-    V::output(
+    ROT => V::output(
         "R",
         &[3, 3],
         106,
@@ -224,12 +178,12 @@ pub static GROUPS: &[V] = &[
         "Rotation matrix body -> inertial: R[a,b] is component a of the body axis e_b",
         &[All("angles0")],
     ),
-    V::output("angles", &[3], 115, Some("rad"), "Roll, pitch, yaw (1-2-3 sequence, R = Rx Ry Rz)", &[All("angles0")])
+    ANGLES => V::output("angles", &[3], 115, Some("rad"), "Roll, pitch, yaw (1-2-3 sequence, R = Rx Ry Rz)", &[All("angles0")])
         .display("deg")
         .depends_on(&[All("R")]),
-    V::output("w", &[3], 118, Some("rad/s"), "Angular velocity, body components", &[SameIndex("w0")])
+    W => V::output("w", &[3], 118, Some("rad/s"), "Angular velocity, body components", &[SameIndex("w0")])
         .depends_on(&[All("R"), All("der(R)")]),
-    V::output(
+    L => V::output(
         "l",
         &[6],
         121,
@@ -238,7 +192,7 @@ pub static GROUPS: &[V] = &[
         &[All("A"), All("B"), All("r0"), All("angles0")],
     )
     .depends_on(POSE_STATES),
-    V::output(
+    LDOT => V::output(
         "ldot",
         &[6],
         127,
@@ -247,7 +201,7 @@ pub static GROUPS: &[V] = &[
         &[All("A"), All("B"), All("r0"), All("angles0"), All("v0"), All("w0")],
     )
     .depends_on(ALL_STATES),
-    V::output(
+    E => V::output(
         "E",
         &[],
         133,
@@ -271,7 +225,7 @@ pub static GROUPS: &[V] = &[
         ],
     )
     .depends_on(ALL_STATES),
-    V::output(
+    CONSTRAINT_ERROR => V::output(
         "constraintError",
         &[],
         134,
@@ -280,7 +234,7 @@ pub static GROUPS: &[V] = &[
         &[All("angles0")],
     )
     .depends_on(&[All("R")]),
-    V::parameter(
+    BAUMGARTE_RATE => V::parameter(
         "solver.baumgarteRate",
         &[],
         86,
@@ -288,7 +242,7 @@ pub static GROUPS: &[V] = &[
         "Rate alpha of the Baumgarte stabilisation (constraint residual decays like exp(-alpha t)): used by \
          Model Exchange, and by Co-Simulation with solver.stabilisation = 3",
     ),
-    V::local(
+    DER_V => V::local(
         "der(v)",
         &[3],
         140,
@@ -297,7 +251,7 @@ pub static GROUPS: &[V] = &[
         ALL_PARAMETERS,
     )
     .derivative("v", "v", 1, MOTION_KNOWNS),
-    V::local(
+    DER_R => V::local(
         "der(R)",
         &[3, 3],
         143,
@@ -306,7 +260,7 @@ pub static GROUPS: &[V] = &[
         &[All("angles0"), All("w0")],
     )
     .derivative("R", "R", 1, &[SameIndex("der(R)")]),
-    V::local(
+    DER2_R => V::local(
         "der2(R)",
         &[3, 3],
         152,
@@ -315,7 +269,7 @@ pub static GROUPS: &[V] = &[
         ALL_PARAMETERS,
     )
     .derivative("der(R)", "R", 2, MOTION_KNOWNS),
-    V::parameter(
+    STOPS => V::parameter(
         "stops",
         &[],
         170,
@@ -324,28 +278,28 @@ pub static GROUPS: &[V] = &[
          with contact damping (Fstop). false = the paper's idealised legs of unlimited stroke",
     )
     .boolean(),
-    V::parameter(
+    LMIN => V::parameter(
         "lmin",
         &[6],
         171,
         Some("m"),
         "Shortest leg length (lower end stop) of leg k: below it the stop pushes the platform away from the base",
     ),
-    V::parameter(
+    LMAX => V::parameter(
         "lmax",
         &[6],
         177,
         Some("m"),
         "Longest leg length (upper end stop) of leg k: above it the stop pulls the platform towards the base",
     ),
-    V::parameter(
+    STOP_STIFFNESS => V::parameter(
         "stops.stiffness",
         &[],
         183,
         Some("N/m"),
         "End-stop stiffness k_s: the stop force is k_s times the penetration (potential V = k_s delta^2 / 2)",
     ),
-    V::parameter(
+    STOP_DAMPING => V::parameter(
         "stops.damping",
         &[],
         184,
@@ -353,7 +307,7 @@ pub static GROUPS: &[V] = &[
         "End-stop contact damping c_s: a damper force c_s d(delta)/dt in contact only, limited to the spring force \
          k_s delta so that the stop force is continuous at onset and never sticks (0 = elastic stops)",
     ),
-    V::parameter(
+    STOP_AT_SINGULARITY => V::parameter(
         "stopAtSingularity",
         &[],
         185,
@@ -362,7 +316,7 @@ pub static GROUPS: &[V] = &[
          determinant changes sign), located inside the step. false = pass it and report it (logEvents)",
     )
     .boolean(),
-    V::output(
+    FSTOP => V::output(
         "Fstop",
         &[6],
         200,
@@ -371,7 +325,7 @@ pub static GROUPS: &[V] = &[
         STOP_PARAMETERS,
     )
     .depends_on(ALL_STATES),
-    V::output(
+    KAPPA => V::output(
         "kappa",
         &[],
         206,
@@ -381,7 +335,7 @@ pub static GROUPS: &[V] = &[
         &[All("A"), All("B"), All("r0"), All("angles0")],
     )
     .depends_on(POSE_STATES),
-    V::output(
+    WORK_F => V::output(
         "work.F",
         &[],
         207,
@@ -389,7 +343,7 @@ pub static GROUPS: &[V] = &[
         "Work done by the leg forces F since the start, the integral of sum_k F_k ldot_k (Model Exchange state)",
         &[],
     ),
-    V::output(
+    WORK_DISSIPATED => V::output(
         "work.dissipated",
         &[],
         208,
@@ -397,7 +351,7 @@ pub static GROUPS: &[V] = &[
         "Energy taken by the end stops' damping since the start (>= 0; Model Exchange state)",
         &[],
     ),
-    V::local(
+    DER_WORK_F => V::local(
         "der(work.F)",
         &[],
         210,
@@ -406,7 +360,7 @@ pub static GROUPS: &[V] = &[
         ALL_PARAMETERS,
     )
     .derivative("work.F", "work.F", 1, MOTION_KNOWNS),
-    V::local(
+    DER_WORK_DISSIPATED => V::local(
         "der(work.dissipated)",
         &[],
         211,
@@ -415,7 +369,7 @@ pub static GROUPS: &[V] = &[
         STOP_PARAMETERS,
     )
     .derivative("work.dissipated", "work.dissipated", 1, ALL_STATES),
-    V::local(
+    EVENT_INDICATORS => V::local(
         "eventIndicators",
         &[13],
         220,
@@ -427,4 +381,4 @@ pub static GROUPS: &[V] = &[
         &[],
     )
     .fmi3_only(),
-];
+}
