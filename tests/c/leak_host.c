@@ -1,10 +1,13 @@
 /* A minimal FMI 2.0 Co-Simulation host in C for the leak check under valgrind:
  * loads the FMU binary with dlopen, runs many instantiate/step/free cycles (including the
- * error, discard and FMU-state paths), reloads the library now and then, and reports.
+ * error, discard and FMU-state paths), unloads and reloads the library every 100 cycles
+ * (checking that it really leaves the process), and reports. With a thread count, that many
+ * threads do it at once, each with its own handles, sharing the cycles.
  *
- *   leak_host <path/to/StewartPlatform.so> <GUID> [cycles]
+ *   leak_host <path/to/StewartPlatform.so> <GUID> [cycles] [threads]
  */
 #include <dlfcn.h>
+#include <pthread.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -25,7 +28,7 @@ typedef struct {
     void *componentEnvironment;
 } fmi2CallbackFunctions;
 
-static unsigned long messages = 0;
+static unsigned long messages = 0; /* approximate with threads: only counted */
 
 static void logger(void *env, fmi2String name, fmi2Status status, fmi2String category, fmi2String message, ...) {
     char buffer[4096];
@@ -34,7 +37,7 @@ static void logger(void *env, fmi2String name, fmi2Status status, fmi2String cat
     vsnprintf(buffer, sizeof buffer, message, args); /* what FMPy and FMI Library do */
     va_end(args);
     (void)env; (void)name; (void)status; (void)category;
-    messages++;
+    __atomic_fetch_add(&messages, 1, __ATOMIC_RELAXED);
 }
 
 #define LOAD(name) name##_t name = (name##_t)dlsym(lib, #name); if (!name) { fprintf(stderr, "missing %s\n", #name); return 2; }
@@ -58,12 +61,19 @@ typedef fmi2Status (*fmi2SerializeFMUstate_t)(fmi2Component, fmi2FMUstate, char 
 typedef fmi2Status (*fmi2DeSerializeFMUstate_t)(fmi2Component, const char *, size_t, fmi2FMUstate *);
 typedef fmi2Status (*fmi2SetDebugLogging_t)(fmi2Component, fmi2Boolean, size_t, const fmi2String *);
 
-int main(int argc, char **argv) {
-    if (argc < 3) {
-        fprintf(stderr, "usage: %s library guid [cycles]\n", argv[0]);
-        return 2;
-    }
-    int cycles = argc > 3 ? atoi(argv[3]) : 1000;
+typedef struct {
+    const char *library, *guid;
+    int cycles, first;
+    long ok, discard, error, states, reloads, still_loaded;
+    int failed;
+} Work;
+
+#define FAIL(...) do { fprintf(stderr, __VA_ARGS__); w->failed = 1; return NULL; } while (0)
+#undef LOAD
+#define LOAD(name) name##_t name = (name##_t)dlsym(lib, #name); if (!name) FAIL("missing %s\n", #name);
+
+static void *worker(void *arg) {
+    Work *w = arg;
     fmi2CallbackFunctions callbacks = {logger, NULL, NULL, NULL, NULL};
     const fmi2ValueReference forces[6] = {1, 2, 3, 4, 5, 6};
     const fmi2ValueReference mass = 10;
@@ -71,14 +81,13 @@ int main(int argc, char **argv) {
     const fmi2Boolean off = 0;
     const fmi2ValueReference outputs[4] = {102, 115, 121, 133}; /* r[3], angles[1], l[1], E */
     double values[6], out[4];
-    long ok = 0, discard = 0, error = 0, states = 0, reloads = 0;
     void *lib = NULL;
 
-    for (int cycle = 0; cycle < cycles; cycle++) {
-        if (cycle % 100 == 0) { /* load/unload cycles */
-            if (lib) { dlclose(lib); reloads++; }
-            lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
-            if (!lib) { fprintf(stderr, "dlopen: %s\n", dlerror()); return 2; }
+    for (int cycle = w->first; cycle < w->first + w->cycles; cycle++) {
+        if ((cycle - w->first) % 100 == 0) { /* load/unload cycles */
+            if (lib) { dlclose(lib); w->reloads++; }
+            lib = dlopen(w->library, RTLD_NOW | RTLD_LOCAL);
+            if (!lib) FAIL("dlopen: %s\n", dlerror());
         }
         LOAD(fmi2Instantiate) LOAD(fmi2FreeInstance) LOAD(fmi2SetupExperiment) LOAD(fmi2EnterInitializationMode)
         LOAD(fmi2ExitInitializationMode) LOAD(fmi2Terminate) LOAD(fmi2Reset) LOAD(fmi2SetReal) LOAD(fmi2GetReal)
@@ -88,15 +97,15 @@ int main(int argc, char **argv) {
 
         char name[32];
         snprintf(name, sizeof name, "leak%d", cycle);
-        fmi2Component c = fmi2Instantiate(name, 1, argv[2], "file:///tmp", &callbacks, 0, cycle % 7 == 0);
-        if (!c) { fprintf(stderr, "instantiate failed\n"); return 1; }
+        fmi2Component c = fmi2Instantiate(name, 1, w->guid, "file:///tmp", &callbacks, 0, cycle % 7 == 0);
+        if (!c) FAIL("instantiate failed\n");
         fmi2SetDebugLogging(c, cycle % 7 == 0, 0, NULL);
         fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0);
         fmi2EnterInitializationMode(c);
         if (cycle % 10 == 3) { /* the error path: a bad mass, then reset */
             double m = -1.0;
             fmi2SetReal(c, &mass, 1, &m);
-            if (fmi2ExitInitializationMode(c) == 3) error++;
+            if (fmi2ExitInitializationMode(c) == 3) w->error++;
             fmi2Reset(c);
             fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0);
             fmi2EnterInitializationMode(c);
@@ -111,8 +120,8 @@ int main(int argc, char **argv) {
             fmi2SetReal(c, forces, 6, values);
             double h = pull ? 0.5 : 1e-3;
             fmi2Status s = fmi2DoStep(c, t, h, 1);
-            if (s == 0) { ok++; t += h; }
-            else if (s == 2) { discard++; break; } /* the discard path */
+            if (s == 0) { w->ok++; t += h; }
+            else if (s == 2) { w->discard++; break; } /* the discard path */
             fmi2GetReal(c, outputs, 4, out);
         }
         /* FMU state: get, serialize, deserialize, set, free. */
@@ -126,7 +135,7 @@ int main(int argc, char **argv) {
             if (fmi2DeSerializeFMUstate(c, bytes, size, &back) == 0) {
                 fmi2SetFMUstate(c, back);
                 fmi2FreeFMUstate(c, &back);
-                states++;
+                w->states++;
             }
             fmi2GetFMUstate(c, &st); /* reuse of an existing state */
             fmi2FreeFMUstate(c, &st);
@@ -137,7 +146,38 @@ int main(int argc, char **argv) {
         fmi2FreeInstance(NULL);
     }
     dlclose(lib);
-    printf("cycles %d: steps ok %ld, discarded %ld, refused parameter sets %ld, state round trips %ld, reloads %ld, "
-           "log messages %lu\n", cycles, ok, discard, error, states, reloads, messages);
-    return 0;
+    /* Alone, the last dlclose must unload the library (with other threads it may still be in use). */
+    void *still = dlopen(w->library, RTLD_NOW | RTLD_NOLOAD);
+    if (still) { w->still_loaded = 1; dlclose(still); }
+    return NULL;
+}
+
+int main(int argc, char **argv) {
+    if (argc < 3) {
+        fprintf(stderr, "usage: %s library guid [cycles] [threads]\n", argv[0]);
+        return 2;
+    }
+    int cycles = argc > 3 ? atoi(argv[3]) : 1000;
+    int threads = argc > 4 ? atoi(argv[4]) : 1;
+    if (threads < 1 || threads > 64) threads = 1;
+    Work work[64];
+    pthread_t ids[64];
+    for (int i = 0; i < threads; i++) {
+        work[i] = (Work){argv[1], argv[2], cycles / threads, i * (cycles / threads), 0, 0, 0, 0, 0, 0, 0};
+        if (threads == 1) worker(&work[i]);
+        else pthread_create(&ids[i], NULL, worker, &work[i]);
+    }
+    long ok = 0, discard = 0, error = 0, states = 0, reloads = 0;
+    int failed = 0;
+    for (int i = 0; i < threads; i++) {
+        if (threads > 1) pthread_join(ids[i], NULL);
+        ok += work[i].ok; discard += work[i].discard; error += work[i].error; states += work[i].states;
+        reloads += work[i].reloads; failed |= work[i].failed;
+    }
+    void *still = dlopen(argv[1], RTLD_NOW | RTLD_NOLOAD);
+    if (still) dlclose(still);
+    printf("cycles %d in %d threads: steps ok %ld, discarded %ld, refused parameter sets %ld, state round trips %ld, "
+           "reloads %ld, log messages %lu, library unloaded at the end: %s\n", cycles, threads, ok, discard, error,
+           states, reloads, messages, still ? "no" : "yes");
+    return failed ? 1 : (still ? 3 : 0);
 }

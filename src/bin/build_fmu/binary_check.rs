@@ -125,10 +125,25 @@ pub fn check(library: &Path, guid: &str) -> Result<(), String> {
             return Err("fmi2Instantiate accepted a foreign GUID".into());
         }
     }
-    // The library is linked with -z nodelete; closing only drops our reference.
     // SAFETY: handle from dlopen above.
     unsafe { libc::dlclose(handle) };
-    Ok(())
+    unloads(&path)
+}
+
+/// The library really leaves the process when its last handle is closed: nothing in it keeps
+/// it resident (no `-z nodelete`, no thread-local destructor or exit handler registered by a
+/// plain instantiate/free), so a host that loads it from many unpacked copies keeps its memory.
+fn unloads(path: &std::ffi::CStr) -> Result<(), String> {
+    // SAFETY: RTLD_NOLOAD only looks the library up; a handle it returns is closed at once.
+    let still = unsafe { libc::dlopen(path.as_ptr(), libc::RTLD_NOW | libc::RTLD_NOLOAD) };
+    if still.is_null() {
+        return Ok(());
+    }
+    // SAFETY: handle from dlopen above.
+    unsafe { libc::dlclose(still) };
+    Err("the library stays loaded after its last dlclose (linked with -z nodelete, or a thread-local destructor \
+         or exit handler was registered)"
+        .into())
 }
 
 /// Every FMI 3.0 function (an FMU exports them all, implemented or answering with an error).
@@ -292,5 +307,5 @@ pub fn check_fmi3(library: &Path, token: &str) -> Result<(), String> {
     }
     // SAFETY: handle from dlopen above.
     unsafe { libc::dlclose(handle) };
-    Ok(())
+    unloads(&path)
 }
