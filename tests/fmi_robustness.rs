@@ -355,3 +355,39 @@ fn foreign_state_handles_and_bytes_are_refused() {
     let mut fake_ptr = fake.as_mut_ptr() as fmi2FMUstate;
     assert_eq!(unsafe { fmi2FreeFMUstate(h.c, &mut fake_ptr) }, fmi2Error);
 }
+
+/// Handles are recognised by address, never by reading through them: a state is freed only by
+/// the instance that made it (the controller cannot free the platform's), a stale instance
+/// handle is refused, and states left over are freed with their instance.
+#[test]
+fn states_belong_to_their_instance_and_stale_handles_are_refused() {
+    let mut platform = Host::platform("owner");
+    assert_eq!(platform.initialise(&[]), fmi2OK);
+    let controller = Host::new("thief", stewart_fmu::models::ModelKind::Controller);
+    let mut st: fmi2FMUstate = std::ptr::null_mut();
+    assert_eq!(unsafe { fmi2GetFMUstate(platform.c, &mut st) }, fmi2OK);
+    let kept = st;
+    assert_eq!(unsafe { fmi2FreeFMUstate(controller.c, &mut st) }, fmi2Error);
+    assert_eq!(st, kept, "the refused call leaves the handle alone");
+    assert!(
+        controller.last_message().contains("not a live FMU state of this instance"),
+        "{}",
+        controller.last_message()
+    );
+    assert_eq!(unsafe { fmi2SetFMUstate(controller.c, st) }, fmi2Error);
+    // The owner can use and free it; afterwards the handle is stale for the owner too.
+    assert_eq!(unsafe { fmi2SetFMUstate(platform.c, st) }, fmi2OK);
+    assert_eq!(unsafe { fmi2FreeFMUstate(platform.c, &mut st) }, fmi2OK);
+    assert!(st.is_null());
+    assert_eq!(unsafe { fmi2SetFMUstate(platform.c, kept) }, fmi2Error);
+    // A state not freed by the importer goes with its instance; the instance handle is then
+    // stale: refused by every function, and freeing it again does nothing.
+    let mut left: fmi2FMUstate = std::ptr::null_mut();
+    assert_eq!(unsafe { fmi2GetFMUstate(platform.c, &mut left) }, fmi2OK);
+    let c = platform.c;
+    unsafe { fmi2FreeInstance(c) };
+    assert_eq!(unsafe { fmi2DoStep(c, 0.0, 0.01, fmi2True) }, fmi2Error);
+    assert_eq!(unsafe { fmi2SetFMUstate(c, left) }, fmi2Error);
+    unsafe { fmi2FreeInstance(c) };
+    drop(platform); // frees the handle a third time: nothing happens
+}

@@ -9,6 +9,7 @@ use std::ffi::c_void;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
 use super::instance::Instance;
+use super::registry::{self, Access};
 use super::{FmiFunction, Status};
 
 /// A panic's message, if it carried one.
@@ -24,27 +25,31 @@ pub fn panic_message(payload: &(dyn Any + Send)) -> String {
 
 /// Runs an exported function's body on a valid instance.
 ///
-/// - `c` NULL or not one of ours: error (there is no logger to tell).
+/// - `c` not a live instance of this FMI version (NULL, freed, foreign, the other version),
+///   or busy with another call (a call from the importer's callback, or from a second thread
+///   at the same time): error, without touching the memory behind `c` (there is no logger
+///   to tell).
 /// - instance poisoned by an earlier panic, or `func` not allowed in its state: logged,
 ///   error, nothing changes.
 /// - body panics: the instance is poisoned, the panic is logged, error.
+/// - the instance was freed during the call (from the importer's callback): dropped when the
+///   call returns.
 ///
 /// # Safety
-/// `c` must be NULL or a pointer from this library's instantiation function that has not
-/// been freed (the FMI calling convention); the magic number catches most foreign pointers but
-/// not all.
+/// `c` may be any pointer: it is dereferenced only if the registry knows it as a live
+/// instance of this version.
 pub unsafe fn call<F: FmiFunction>(
     c: *mut c_void,
     func: F,
     args: impl FnOnce() -> String,
     body: impl FnOnce(&mut Instance) -> Status,
 ) -> Status {
+    if registry::acquire(c, F::VERSION) != Access::Granted {
+        return Status::Error;
+    }
     let outcome = catch_unwind(AssertUnwindSafe(|| {
-        // SAFETY: `from_handle` checks for NULL, our magic number and the FMI version; the
-        // caller guarantees a pointer from our instantiation that has not been freed.
-        let Some(instance) = (unsafe { Instance::from_handle(c, F::VERSION) }) else {
-            return Status::Error;
-        };
+        // SAFETY: the registry granted `c`: a live Box<Instance> no other call is using.
+        let instance = unsafe { &mut *(c as *mut Instance) };
         instance.begin(func.name());
         if let Err(status) = instance.check_call(func) {
             return status;
@@ -60,6 +65,11 @@ pub unsafe fn call<F: FmiFunction>(
             }
         }
     }));
+    if registry::release(c) {
+        // SAFETY: freed by the importer during the call and now unregistered: nothing else
+        // refers to it.
+        unsafe { Instance::drop_handle(c) };
+    }
     outcome.unwrap_or(Status::Error)
 }
 

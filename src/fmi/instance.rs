@@ -22,19 +22,13 @@
 use std::ffi::c_void;
 
 use super::log::{LogCategory, Logger};
+use super::registry;
 use super::{FmiFunction, FmiVersion, InterfaceType, ModelState, Status};
 use crate::models::snapshot::{self, ByteReader, ByteWriter, SnapshotError, fnv1a64};
 use crate::models::variables::{
     Causality, Initial, Variability, VariableGroup, VariableRef, VariableTable, VariableType,
 };
 use crate::models::{AnyModel, EventUpdate, ModelKind, StepReport};
-
-/// First field of every instance, one per FMI version: a handle of the other version (or a
-/// freed or foreign pointer) is refused.
-const INSTANCE_MAGIC_FMI2: u64 = 0x5354_4557_4152_5449; // "STEWARTI"
-const INSTANCE_MAGIC_FMI3: u64 = 0x5354_4557_4152_5433; // "STEWART3"
-/// First field of every FMU state handle.
-const FMU_STATE_MAGIC: u64 = 0x5354_4557_4152_5453; // "STEWARTS"
 
 /// Relative tolerance on `currentCommunicationPoint`: masters that accumulate `t += h`
 /// (FMPy's SSP loop) drift from the FMU's `t + h` by a few ulps per step.
@@ -69,47 +63,11 @@ impl BaseType {
     }
 }
 
-/// An FMU state (`fmi2FMUstate`, `fmi3FMUState`): the serialized bytes of an instance.
-pub struct FmuStateHandle {
-    magic: u64,
+/// An FMU state (`fmi2FMUstate`, `fmi3FMUState`): the serialized bytes of an instance. The
+/// instance that made it owns it; the importer's handle is its address, recognised by
+/// comparison with the instance's own states, never by reading through it.
+pub struct FmuState {
     bytes: Vec<u8>,
-}
-
-impl FmuStateHandle {
-    /// # Safety
-    /// `p` must be NULL or a pointer the importer got from this library (magic checked).
-    pub unsafe fn from_handle<'a>(p: *mut c_void) -> Option<&'a mut FmuStateHandle> {
-        let h = p as *mut FmuStateHandle;
-        // SAFETY: non-NULL pointers handed out by this library point to a live FmuStateHandle
-        // (the importer must not pass freed ones); the magic check catches foreign pointers.
-        let h = unsafe { h.as_mut()? };
-        (h.magic == FMU_STATE_MAGIC).then_some(h)
-    }
-
-    pub fn new(bytes: Vec<u8>) -> Self {
-        FmuStateHandle { magic: FMU_STATE_MAGIC, bytes }
-    }
-
-    pub fn into_handle(self) -> *mut c_void {
-        Box::into_raw(Box::new(self)) as *mut c_void
-    }
-
-    /// # Safety
-    /// `p` must have come from [`FmuStateHandle::into_handle`] and not have been freed.
-    pub unsafe fn free(p: *mut c_void) {
-        // SAFETY: per the contract, `p` is a live Box<FmuStateHandle>.
-        let mut b = unsafe { Box::from_raw(p as *mut FmuStateHandle) };
-        b.magic = 0;
-        drop(b);
-    }
-
-    pub fn bytes(&self) -> &[u8] {
-        &self.bytes
-    }
-
-    pub fn replace_bytes(&mut self, bytes: Vec<u8>) {
-        self.bytes = bytes;
-    }
 }
 
 /// FMI 3's intermediate update callback: `(instanceEnvironment, intermediateUpdateTime,
@@ -187,7 +145,6 @@ struct Snapshot {
 }
 
 pub struct Instance {
-    magic: u64,
     pub version: FmiVersion,
     pub kind: ModelKind,
     pub interface: InterfaceType,
@@ -213,6 +170,11 @@ pub struct Instance {
     /// the model's state vector (the identity in FMI 2; FMI 3 lists whole array variables).
     state_order: Vec<usize>,
     pub co_simulation: CoSimulationOptions,
+    /// The FMU states this instance made and the importer has not freed yet (freed with the
+    /// instance at the latest). Boxed: a handle is a state's address, which must not move
+    /// when the vector grows.
+    #[allow(clippy::vec_box)]
+    fmu_states: Vec<Box<FmuState>>,
 }
 
 fn option_f64(w: &mut ByteWriter, x: Option<f64>) {
@@ -240,10 +202,6 @@ impl Instance {
             FmiVersion::Fmi3 => super::description::fmi3_state_order(info),
         };
         Instance {
-            magic: match version {
-                FmiVersion::Fmi2 => INSTANCE_MAGIC_FMI2,
-                FmiVersion::Fmi3 => INSTANCE_MAGIC_FMI3,
-            },
             version,
             kind,
             interface,
@@ -262,33 +220,25 @@ impl Instance {
             current: "",
             state_order,
             co_simulation: CoSimulationOptions::default(),
+            fmu_states: Vec::new(),
         }
     }
 
-    /// # Safety
-    /// `c` must be NULL or a pointer from this library's instantiation that has not been freed.
-    pub unsafe fn from_handle<'a>(c: *mut c_void, version: FmiVersion) -> Option<&'a mut Instance> {
-        // SAFETY: see the function's contract; the magic number rejects foreign pointers and
-        // handles of the other FMI version.
-        let inst = unsafe { (c as *mut Instance).as_mut()? };
-        let magic = match version {
-            FmiVersion::Fmi2 => INSTANCE_MAGIC_FMI2,
-            FmiVersion::Fmi3 => INSTANCE_MAGIC_FMI3,
-        };
-        (inst.magic == magic).then_some(inst)
-    }
-
+    /// The instance as the importer's handle, registered as live.
     pub fn into_handle(self) -> *mut c_void {
-        Box::into_raw(Box::new(self)) as *mut c_void
+        let version = self.version;
+        let c = Box::into_raw(Box::new(self)) as *mut c_void;
+        registry::register(c, version);
+        c
     }
 
     /// # Safety
-    /// `c` must be a pointer from this library's instantiation that has not been freed.
-    pub unsafe fn free(c: *mut c_void) {
-        // SAFETY: per the contract `c` is a live Box<Instance>.
-        let mut b = unsafe { Box::from_raw(c as *mut Instance) };
-        b.magic = 0;
-        drop(b);
+    /// `c` must come from [`Instance::into_handle`], and the registry must have handed it
+    /// over for dropping ([`registry::request_free`] or [`registry::release`]), so that no
+    /// other reference to it exists.
+    pub unsafe fn drop_handle(c: *mut c_void) {
+        // SAFETY: per the contract, a live Box<Instance> that nothing else refers to.
+        drop(unsafe { Box::from_raw(c as *mut Instance) });
     }
 
     // ----- context, logging and checks -----------------------------------------------------
@@ -1095,5 +1045,93 @@ impl Instance {
             &format!("FMU state restored: t = {}, state {}", self.time, self.state_name()),
         );
         Ok(())
+    }
+
+    /// Index of the state behind an importer's handle among this instance's own states.
+    fn own_state(&self, handle: *mut c_void) -> Option<usize> {
+        self.fmu_states.iter().position(|s| std::ptr::eq(&**s, handle as *const FmuState))
+    }
+
+    fn state_refused(&self, handle: *mut c_void, what: &str) -> Status {
+        if handle.is_null() {
+            self.error(&format!("{what} is NULL"))
+        } else {
+            self.error(&format!(
+                "{what} {handle:?} is not a live FMU state of this instance (freed already, made by another \
+                 instance, or not an FMU state; to move a state between instances, serialize it)"
+            ))
+        }
+    }
+
+    /// `fmi2GetFMUstate`/`fmi3GetFMUState`: a new state in `*slot` if it is NULL, else the
+    /// instance's state `*slot` overwritten.
+    pub fn get_fmu_state(&mut self, slot: &mut *mut c_void) -> Status {
+        let bytes = self.serialize();
+        self.store_fmu_state(slot, bytes)
+    }
+
+    fn store_fmu_state(&mut self, slot: &mut *mut c_void, bytes: Vec<u8>) -> Status {
+        if slot.is_null() {
+            let state = Box::new(FmuState { bytes });
+            *slot = &*state as *const FmuState as *mut c_void;
+            self.fmu_states.push(state);
+            return Status::Ok;
+        }
+        match self.own_state(*slot) {
+            Some(i) => {
+                if let Some(s) = self.fmu_states.get_mut(i) {
+                    s.bytes = bytes;
+                }
+                Status::Ok
+            }
+            None => self.state_refused(*slot, "*FMUstate"),
+        }
+    }
+
+    /// `fmi2SetFMUstate`/`fmi3SetFMUState`.
+    pub fn set_fmu_state(&mut self, handle: *mut c_void) -> Status {
+        let Some(i) = self.own_state(handle) else { return self.state_refused(handle, "FMUstate") };
+        // Taken out while the instance restores from it (no copy), then put back.
+        let bytes = self.fmu_states.get_mut(i).map(|s| std::mem::take(&mut s.bytes)).unwrap_or_default();
+        let result = self.restore(&bytes);
+        if let Some(s) = self.fmu_states.get_mut(i) {
+            s.bytes = bytes;
+        }
+        match result {
+            Ok(()) => Status::Ok,
+            Err(e) => self.error(&format!("state refused: {e}")),
+        }
+    }
+
+    /// `fmi2FreeFMUstate`/`fmi3FreeFMUState`: NULL is fine; only this instance's own states.
+    pub fn free_fmu_state(&mut self, slot: &mut *mut c_void) -> Status {
+        if slot.is_null() {
+            return Status::Ok;
+        }
+        match self.own_state(*slot) {
+            Some(i) => {
+                self.fmu_states.swap_remove(i);
+                *slot = std::ptr::null_mut();
+                Status::Ok
+            }
+            None => self.state_refused(*slot, "*FMUstate"),
+        }
+    }
+
+    /// The bytes of one of this instance's states.
+    pub fn fmu_state_bytes(&self, handle: *mut c_void) -> Result<&[u8], Status> {
+        match self.own_state(handle).and_then(|i| self.fmu_states.get(i)) {
+            Some(s) => Ok(&s.bytes),
+            None => Err(self.state_refused(handle, "FMUstate")),
+        }
+    }
+
+    /// `fmi2DeSerializeFMUstate`/`fmi3DeserializeFMUState`: checked bytes into a new state
+    /// (`*slot` NULL) or into one of this instance's states.
+    pub fn deserialize_fmu_state(&mut self, bytes: &[u8], slot: &mut *mut c_void) -> Status {
+        if let Err(e) = self.validate_state_bytes(bytes) {
+            return self.error(&format!("serialized state refused: {e}"));
+        }
+        self.store_fmu_state(slot, bytes.to_vec())
     }
 }

@@ -11,12 +11,14 @@
 //! | [`log`] | log categories and messages to the importer's FMI 2 or FMI 3 logger |
 //! | [`description`] | `modelDescription.xml` of both versions, the instantiation tokens, the documentation page |
 //! | [`library`] | which model a token selects in this binary |
+//! | [`registry`] | the live instance handles, recognised by address (stale, foreign, busy) |
 
 pub mod boundary;
 pub mod description;
 pub mod instance;
 pub mod library;
 pub mod log;
+pub mod registry;
 
 use std::ffi::c_int;
 

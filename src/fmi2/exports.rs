@@ -3,18 +3,21 @@
 //! panics and enforces the state table. Signatures follow `fmi2FunctionTypes.h` exactly.
 //!
 //! # Safety (all functions)
-//! The importer must follow the FMI 2.0 calling conventions: `c` is NULL or an instance from
-//! `fmi2Instantiate` not yet freed; array arguments point to at least `n` elements (or are
-//! NULL when `n == 0`); strings are NUL-terminated. NULL where a value is required is
-//! detected and answered with `fmi2Error`.
+//! The importer must follow the FMI 2.0 calling conventions for arrays and strings: array
+//! arguments point to at least `n` elements (or are NULL when `n == 0`); strings are
+//! NUL-terminated. NULL where a value is required is detected and answered with `fmi2Error`.
+//! Instance and FMU-state handles may be anything: they are looked up by address
+//! ([`crate::fmi::registry`], the instance's own states) before any use, so freed, foreign and
+//! other-version handles are refused without being read.
 
 use std::ffi::{CStr, CString, c_char};
 
 use super::state_machine::Fmi2Function as F;
 use super::types::*;
 use crate::fmi::boundary::{boundary, no_instance, show, try_out, try_slice, try_slice_mut};
-use crate::fmi::instance::{FmuStateHandle, Instance};
+use crate::fmi::instance::Instance;
 use crate::fmi::log::{Callback, Logger, log_without_instance};
+use crate::fmi::registry::{self, Free};
 use crate::fmi::{FmiVersion, InterfaceType, Status, library};
 
 /// # Safety
@@ -118,14 +121,18 @@ pub unsafe extern "C" fn fmi2Instantiate(
 /// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
-    no_instance((), || {
-        // SAFETY: NULL, or an instance from fmi2Instantiate not yet freed (magic checked).
-        if let Some(inst) = unsafe { Instance::from_handle(c, FmiVersion::Fmi2) } {
+    no_instance((), || match registry::request_free(c, FmiVersion::Fmi2) {
+        Free::Now => {
+            // SAFETY: the registry handed the live, idle instance over for dropping.
+            let inst = unsafe { &mut *(c as *mut Instance) };
             inst.begin("fmi2FreeInstance");
             inst.log_call(Status::Ok, String::new);
-            // SAFETY: checked above to be one of our live instances.
-            unsafe { Instance::free(c) };
+            // SAFETY: as above; no reference to it remains.
+            unsafe { Instance::drop_handle(c) };
         }
+        // A call on it is running (the importer frees it from its callback): dropped when
+        // that call returns. NULL, freed or foreign handles: nothing to free.
+        Free::Deferred | Free::Unknown => {}
     })
 }
 
@@ -321,24 +328,12 @@ pub unsafe extern "C" fn fmi2SetString(
 }
 
 /// # Safety
-/// See the module documentation. `*state` must be NULL or a state from this library.
+/// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
     boundary!(c, F::GetFMUstate, args("FMUstate = {state:?}"), |inst| {
         let slot = try_out!(inst, state, "FMUstate");
-        let bytes = inst.serialize();
-        if slot.is_null() {
-            *slot = FmuStateHandle::new(bytes).into_handle();
-            return Status::Ok;
-        }
-        // SAFETY: non-NULL *state must be one of our handles (magic checked).
-        match unsafe { FmuStateHandle::from_handle(*slot) } {
-            Some(h) => {
-                h.replace_bytes(bytes);
-                Status::Ok
-            }
-            None => inst.error("*FMUstate is neither NULL nor a state of this FMU"),
-        }
+        inst.get_fmu_state(slot)
     })
 }
 
@@ -346,16 +341,7 @@ pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, state: *mut fmi2FMUst
 /// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, state: fmi2FMUstate) -> fmi2Status {
-    boundary!(c, F::SetFMUstate, args("FMUstate = {state:?}"), |inst| {
-        // SAFETY: NULL or one of our handles (magic checked).
-        let Some(h) = (unsafe { FmuStateHandle::from_handle(state) }) else {
-            return inst.error("FMUstate is NULL or not a state of this FMU");
-        };
-        match inst.restore(h.bytes()) {
-            Ok(()) => Status::Ok,
-            Err(e) => inst.error(&format!("state refused: {e}")),
-        }
-    })
+    boundary!(c, F::SetFMUstate, args("FMUstate = {state:?}"), |inst| { inst.set_fmu_state(state) })
 }
 
 /// # Safety
@@ -364,17 +350,7 @@ pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, state: fmi2FMUstate) 
 pub unsafe extern "C" fn fmi2FreeFMUstate(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
     boundary!(c, F::FreeFMUstate, args("FMUstate = {state:?}"), |inst| {
         let slot = try_out!(inst, state, "FMUstate");
-        if slot.is_null() {
-            return Status::Ok;
-        }
-        // SAFETY: non-NULL *state must be one of our handles (magic checked).
-        if unsafe { FmuStateHandle::from_handle(*slot) }.is_none() {
-            return inst.error("*FMUstate is not a state of this FMU");
-        }
-        // SAFETY: checked to be one of our live handles.
-        unsafe { FmuStateHandle::free(*slot) };
-        *slot = std::ptr::null_mut();
-        Status::Ok
+        inst.free_fmu_state(slot)
     })
 }
 
@@ -388,12 +364,13 @@ pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
 ) -> fmi2Status {
     boundary!(c, F::SerializedFMUstateSize, args("FMUstate = {state:?}"), |inst| {
         let out = try_out!(inst, size, "size");
-        // SAFETY: NULL or one of our handles (magic checked).
-        let Some(h) = (unsafe { FmuStateHandle::from_handle(state) }) else {
-            return inst.error("FMUstate is NULL or not a state of this FMU");
-        };
-        *out = h.bytes().len();
-        Status::Ok
+        match inst.fmu_state_bytes(state) {
+            Ok(bytes) => {
+                *out = bytes.len();
+                Status::Ok
+            }
+            Err(status) => status,
+        }
     })
 }
 
@@ -407,17 +384,21 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
     size: usize,
 ) -> fmi2Status {
     boundary!(c, F::SerializeFMUstate, args("FMUstate = {state:?}, size = {size}"), |inst| {
-        // SAFETY: NULL or one of our handles (magic checked).
-        let Some(h) = (unsafe { FmuStateHandle::from_handle(state) }) else {
-            return inst.error("FMUstate is NULL or not a state of this FMU");
+        let needed = match inst.fmu_state_bytes(state) {
+            Ok(bytes) => bytes.len(),
+            Err(status) => return status,
         };
-        let needed = h.bytes().len();
         if size < needed {
             return inst.error(&format!("buffer of {size} bytes is too small, the state needs {needed}"));
         }
         let out = try_slice_mut!(inst, serialized as *mut u8, needed, "serializedState");
-        out.copy_from_slice(h.bytes());
-        Status::Ok
+        match inst.fmu_state_bytes(state) {
+            Ok(bytes) => {
+                out.copy_from_slice(bytes);
+                Status::Ok
+            }
+            Err(status) => status,
+        }
     })
 }
 
@@ -433,21 +414,7 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
     boundary!(c, F::DeSerializeFMUstate, args("size = {size}"), |inst| {
         let bytes = try_slice!(inst, serialized as *const u8, size, "serializedState");
         let slot = try_out!(inst, state, "FMUstate");
-        if let Err(e) = inst.validate_state_bytes(bytes) {
-            return inst.error(&format!("serialized state refused: {e}"));
-        }
-        if slot.is_null() {
-            *slot = FmuStateHandle::new(bytes.to_vec()).into_handle();
-            return Status::Ok;
-        }
-        // SAFETY: non-NULL *state must be one of our handles (magic checked).
-        match unsafe { FmuStateHandle::from_handle(*slot) } {
-            Some(h) => {
-                h.replace_bytes(bytes.to_vec());
-                Status::Ok
-            }
-            None => inst.error("*FMUstate is neither NULL nor a state of this FMU"),
-        }
+        inst.deserialize_fmu_state(bytes, slot)
     })
 }
 

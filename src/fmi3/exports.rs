@@ -3,18 +3,21 @@
 //! catches panics and enforces the FMI 3 state table. Signatures follow `fmi3FunctionTypes.h`.
 //!
 //! # Safety (all functions)
-//! The importer must follow the FMI 3.0 calling conventions: `instance` is NULL or an instance
-//! from `fmi3Instantiate*` not yet freed; array arguments point to at least as many elements
-//! as their count says (or are NULL when it is 0); strings are NUL-terminated. NULL where a
-//! value is required is detected and answered with `fmi3Error`.
+//! The importer must follow the FMI 3.0 calling conventions for arrays and strings: array
+//! arguments point to at least as many elements as their count says (or are NULL when it is
+//! 0); strings are NUL-terminated. NULL where a value is required is detected and answered
+//! with `fmi3Error`. Instance and FMU-state handles may be anything: they are looked up by
+//! address ([`crate::fmi::registry`], the instance's own states) before any use, so freed,
+//! foreign and other-version handles are refused without being read.
 
 use std::ffi::{CStr, CString, c_char};
 
 use super::state_machine::Fmi3Function as F;
 use super::types::*;
 use crate::fmi::boundary::{boundary, no_instance, show, try_out, try_slice, try_slice_mut};
-use crate::fmi::instance::{CoSimulationOptions, FmuStateHandle, Instance};
+use crate::fmi::instance::{CoSimulationOptions, Instance};
 use crate::fmi::log::{Callback, Logger, log_without_instance};
+use crate::fmi::registry::{self, Free};
 use crate::fmi::{FmiVersion, InterfaceType, Status, library};
 use crate::models::variables::{Causality, Dependency};
 
@@ -217,14 +220,18 @@ pub unsafe extern "C" fn fmi3InstantiateScheduledExecution(
 /// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3FreeInstance(instance: fmi3Instance) {
-    no_instance((), || {
-        // SAFETY: NULL, or an instance from fmi3Instantiate* not yet freed (magic checked).
-        if let Some(inst) = unsafe { Instance::from_handle(instance, FmiVersion::Fmi3) } {
+    no_instance((), || match registry::request_free(instance, FmiVersion::Fmi3) {
+        Free::Now => {
+            // SAFETY: the registry handed the live, idle instance over for dropping.
+            let inst = unsafe { &mut *(instance as *mut Instance) };
             inst.begin("fmi3FreeInstance");
             inst.log_call(Status::Ok, String::new);
-            // SAFETY: checked above to be one of our live instances.
-            unsafe { Instance::free(instance) };
+            // SAFETY: as above; no reference to it remains.
+            unsafe { Instance::drop_handle(instance) };
         }
+        // A call on it is running (the importer frees it from its callback): dropped when
+        // that call returns. NULL, freed or foreign handles: nothing to free.
+        Free::Deferred | Free::Unknown => {}
     })
 }
 
@@ -668,24 +675,12 @@ pub unsafe extern "C" fn fmi3GetVariableDependencies(
 // ----- FMU states -----------------------------------------------------------------------------
 
 /// # Safety
-/// See the module documentation. `*state` must be NULL or a state from this library.
+/// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3GetFMUState(instance: fmi3Instance, state: *mut fmi3FMUState) -> fmi3Status {
     boundary!(instance, F::GetFMUState, args("FMUState = {state:?}"), |inst| {
         let slot = try_out!(inst, state, "FMUState");
-        let bytes = inst.serialize();
-        if slot.is_null() {
-            *slot = FmuStateHandle::new(bytes).into_handle();
-            return Status::Ok;
-        }
-        // SAFETY: non-NULL *state must be one of our handles (magic checked).
-        match unsafe { FmuStateHandle::from_handle(*slot) } {
-            Some(h) => {
-                h.replace_bytes(bytes);
-                Status::Ok
-            }
-            None => inst.error("*FMUState is neither NULL nor a state of this FMU"),
-        }
+        inst.get_fmu_state(slot)
     })
 }
 
@@ -693,16 +688,7 @@ pub unsafe extern "C" fn fmi3GetFMUState(instance: fmi3Instance, state: *mut fmi
 /// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3SetFMUState(instance: fmi3Instance, state: fmi3FMUState) -> fmi3Status {
-    boundary!(instance, F::SetFMUState, args("FMUState = {state:?}"), |inst| {
-        // SAFETY: NULL or one of our handles (magic checked).
-        let Some(h) = (unsafe { FmuStateHandle::from_handle(state) }) else {
-            return inst.error("FMUState is NULL or not a state of this FMU");
-        };
-        match inst.restore(h.bytes()) {
-            Ok(()) => Status::Ok,
-            Err(e) => inst.error(&format!("state refused: {e}")),
-        }
-    })
+    boundary!(instance, F::SetFMUState, args("FMUState = {state:?}"), |inst| { inst.set_fmu_state(state) })
 }
 
 /// # Safety
@@ -711,17 +697,7 @@ pub unsafe extern "C" fn fmi3SetFMUState(instance: fmi3Instance, state: fmi3FMUS
 pub unsafe extern "C" fn fmi3FreeFMUState(instance: fmi3Instance, state: *mut fmi3FMUState) -> fmi3Status {
     boundary!(instance, F::FreeFMUState, args("FMUState = {state:?}"), |inst| {
         let slot = try_out!(inst, state, "FMUState");
-        if slot.is_null() {
-            return Status::Ok;
-        }
-        // SAFETY: non-NULL *state must be one of our handles (magic checked).
-        if unsafe { FmuStateHandle::from_handle(*slot) }.is_none() {
-            return inst.error("*FMUState is not a state of this FMU");
-        }
-        // SAFETY: checked to be one of our live handles.
-        unsafe { FmuStateHandle::free(*slot) };
-        *slot = std::ptr::null_mut();
-        Status::Ok
+        inst.free_fmu_state(slot)
     })
 }
 
@@ -735,12 +711,13 @@ pub unsafe extern "C" fn fmi3SerializedFMUStateSize(
 ) -> fmi3Status {
     boundary!(instance, F::SerializedFMUStateSize, args("FMUState = {state:?}"), |inst| {
         let out = try_out!(inst, size, "size");
-        // SAFETY: NULL or one of our handles (magic checked).
-        let Some(h) = (unsafe { FmuStateHandle::from_handle(state) }) else {
-            return inst.error("FMUState is NULL or not a state of this FMU");
-        };
-        *out = h.bytes().len();
-        Status::Ok
+        match inst.fmu_state_bytes(state) {
+            Ok(bytes) => {
+                *out = bytes.len();
+                Status::Ok
+            }
+            Err(status) => status,
+        }
     })
 }
 
@@ -754,17 +731,21 @@ pub unsafe extern "C" fn fmi3SerializeFMUState(
     size: usize,
 ) -> fmi3Status {
     boundary!(instance, F::SerializeFMUState, args("FMUState = {state:?}, size = {size}"), |inst| {
-        // SAFETY: NULL or one of our handles (magic checked).
-        let Some(h) = (unsafe { FmuStateHandle::from_handle(state) }) else {
-            return inst.error("FMUState is NULL or not a state of this FMU");
+        let needed = match inst.fmu_state_bytes(state) {
+            Ok(bytes) => bytes.len(),
+            Err(status) => return status,
         };
-        let needed = h.bytes().len();
         if size < needed {
             return inst.error(&format!("buffer of {size} bytes is too small, the state needs {needed}"));
         }
         let out = try_slice_mut!(inst, serialized, needed, "serializedState");
-        out.copy_from_slice(h.bytes());
-        Status::Ok
+        match inst.fmu_state_bytes(state) {
+            Ok(bytes) => {
+                out.copy_from_slice(bytes);
+                Status::Ok
+            }
+            Err(status) => status,
+        }
     })
 }
 
@@ -780,21 +761,7 @@ pub unsafe extern "C" fn fmi3DeserializeFMUState(
     boundary!(instance, F::DeserializeFMUState, args("size = {size}"), |inst| {
         let bytes = try_slice!(inst, serialized, size, "serializedState");
         let slot = try_out!(inst, state, "FMUState");
-        if let Err(e) = inst.validate_state_bytes(bytes) {
-            return inst.error(&format!("serialized state refused: {e}"));
-        }
-        if slot.is_null() {
-            *slot = FmuStateHandle::new(bytes.to_vec()).into_handle();
-            return Status::Ok;
-        }
-        // SAFETY: non-NULL *state must be one of our handles (magic checked).
-        match unsafe { FmuStateHandle::from_handle(*slot) } {
-            Some(h) => {
-                h.replace_bytes(bytes.to_vec());
-                Status::Ok
-            }
-            None => inst.error("*FMUState is neither NULL nor a state of this FMU"),
-        }
+        inst.deserialize_fmu_state(bytes, slot)
     })
 }
 

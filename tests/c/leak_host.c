@@ -30,14 +30,27 @@ typedef struct {
 
 static unsigned long messages = 0; /* approximate with threads: only counted */
 
+/* The component environment: when armed, the logger frees the instance from inside the
+ * callback on the next error message (a host tearing down on error). */
+typedef struct {
+    void (*free_instance)(void *);
+    void *component;
+    int armed;
+} Environment;
+
 static void logger(void *env, fmi2String name, fmi2Status status, fmi2String category, fmi2String message, ...) {
     char buffer[4096];
     va_list args;
     va_start(args, message);
     vsnprintf(buffer, sizeof buffer, message, args); /* what FMPy and FMI Library do */
     va_end(args);
-    (void)env; (void)name; (void)status; (void)category;
+    (void)name; (void)category;
     __atomic_fetch_add(&messages, 1, __ATOMIC_RELAXED);
+    Environment *e = env;
+    if (e && e->armed && status == 3) {
+        e->armed = 0;
+        e->free_instance(e->component);
+    }
 }
 
 #define LOAD(name) name##_t name = (name##_t)dlsym(lib, #name); if (!name) { fprintf(stderr, "missing %s\n", #name); return 2; }
@@ -64,7 +77,7 @@ typedef fmi2Status (*fmi2SetDebugLogging_t)(fmi2Component, fmi2Boolean, size_t, 
 typedef struct {
     const char *library, *guid;
     int cycles, first;
-    long ok, discard, error, states, reloads, still_loaded;
+    long ok, discard, error, states, reloads, still_loaded, stale_refused, freed_in_callback, foreign_free_refused;
     int failed;
 } Work;
 
@@ -74,7 +87,8 @@ typedef struct {
 
 static void *worker(void *arg) {
     Work *w = arg;
-    fmi2CallbackFunctions callbacks = {logger, NULL, NULL, NULL, NULL};
+    Environment env = {NULL, NULL, 0};
+    fmi2CallbackFunctions callbacks = {logger, NULL, NULL, NULL, &env};
     const fmi2ValueReference forces[6] = {1, 2, 3, 4, 5, 6};
     const fmi2ValueReference mass = 10;
     const fmi2ValueReference stops = 170; /* Boolean "stops" */
@@ -99,6 +113,8 @@ static void *worker(void *arg) {
         snprintf(name, sizeof name, "leak%d", cycle);
         fmi2Component c = fmi2Instantiate(name, 1, w->guid, "file:///tmp", &callbacks, 0, cycle % 7 == 0);
         if (!c) FAIL("instantiate failed\n");
+        env.free_instance = fmi2FreeInstance;
+        env.component = c;
         fmi2SetDebugLogging(c, cycle % 7 == 0, 0, NULL);
         fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0);
         fmi2EnterInitializationMode(c);
@@ -113,6 +129,13 @@ static void *worker(void *arg) {
         /* Without end stops a strong pull takes the platform through the base: the discard path. */
         if (cycle % 10 == 5) fmi2SetBoolean(c, &stops, 1, &off);
         fmi2ExitInitializationMode(c);
+        if (cycle % 10 == 9) { /* the host frees the instance from its logger during a call */
+            env.armed = 1;
+            fmi2Status s = fmi2DoStep(c, 123.0, 1e-3, 1); /* wrong communication point: an error message */
+            if (s == 3 && !env.armed && fmi2DoStep(c, 0.0, 1e-3, 1) == 3) w->freed_in_callback++;
+            fmi2FreeInstance(c); /* freed already: nothing happens */
+            continue;
+        }
         double t = 0.0;
         for (int i = 0; i < 10; i++) {
             int pull = cycle % 10 == 5 && i == 5; /* pull the platform through the base */
@@ -141,9 +164,21 @@ static void *worker(void *arg) {
             fmi2FreeFMUstate(c, &st);
             free(bytes);
         }
+        if (cycle % 10 == 8) { /* a state may only be freed by the instance that made it */
+            fmi2Component other = fmi2Instantiate("other", 1, w->guid, "file:///tmp", &callbacks, 0, 0);
+            fmi2FMUstate mine = NULL;
+            fmi2GetFMUstate(c, &mine);
+            if (other && fmi2FreeFMUstate(other, &mine) == 3 && mine && fmi2FreeFMUstate(c, &mine) == 0 && !mine)
+                w->foreign_free_refused++;
+            fmi2FreeInstance(other);
+        }
         fmi2Terminate(c);
         fmi2FreeInstance(c);
         fmi2FreeInstance(NULL);
+        /* The handle is stale now: refused without touching the freed memory, and freeing it
+         * again does nothing. */
+        if (fmi2DoStep(c, t, 1e-3, 1) == 3 && fmi2Terminate(c) == 3) w->stale_refused++;
+        fmi2FreeInstance(c);
     }
     dlclose(lib);
     /* Alone, the last dlclose must unload the library (with other threads it may still be in use). */
@@ -163,21 +198,24 @@ int main(int argc, char **argv) {
     Work work[64];
     pthread_t ids[64];
     for (int i = 0; i < threads; i++) {
-        work[i] = (Work){argv[1], argv[2], cycles / threads, i * (cycles / threads), 0, 0, 0, 0, 0, 0, 0};
+        work[i] = (Work){argv[1], argv[2], cycles / threads, i * (cycles / threads), 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
         if (threads == 1) worker(&work[i]);
         else pthread_create(&ids[i], NULL, worker, &work[i]);
     }
-    long ok = 0, discard = 0, error = 0, states = 0, reloads = 0;
+    long ok = 0, discard = 0, error = 0, states = 0, reloads = 0, stale = 0, in_callback = 0, foreign = 0;
     int failed = 0;
     for (int i = 0; i < threads; i++) {
         if (threads > 1) pthread_join(ids[i], NULL);
         ok += work[i].ok; discard += work[i].discard; error += work[i].error; states += work[i].states;
-        reloads += work[i].reloads; failed |= work[i].failed;
+        reloads += work[i].reloads; failed |= work[i].failed; stale += work[i].stale_refused;
+        in_callback += work[i].freed_in_callback; foreign += work[i].foreign_free_refused;
     }
     void *still = dlopen(argv[1], RTLD_NOW | RTLD_NOLOAD);
     if (still) dlclose(still);
     printf("cycles %d in %d threads: steps ok %ld, discarded %ld, refused parameter sets %ld, state round trips %ld, "
-           "reloads %ld, log messages %lu, library unloaded at the end: %s\n", cycles, threads, ok, discard, error,
-           states, reloads, messages, still ? "no" : "yes");
+           "reloads %ld, log messages %lu, library unloaded at the end: %s\n"
+           "stale handles refused %ld, freed from the logger during a call %ld, states freed by another instance "
+           "refused %ld\n", cycles, threads, ok, discard, error, states, reloads, messages, still ? "no" : "yes", stale,
+           in_callback, foreign);
     return failed ? 1 : (still ? 3 : 0);
 }

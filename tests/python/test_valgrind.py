@@ -1,7 +1,9 @@
 """Leaks and memory errors: a C host (tests/c/leak_host.c) runs 1000 instantiate/step/free
 cycles with the error, discard and FMU-state paths and unloads and reloads the library every
 100 cycles, under valgrind's memcheck, against the binary from the packaged FMU, first in one
-thread, then in four threads at once; the library must leave the process at the end. And
+thread, then in four threads at once; the library must leave the process at the end. Stale
+instance handles, an instance freed from the host's logger callback during a call and FMU
+states freed through the wrong instance are refused without reading freed memory. And
 FMPy loads, instantiates, frees and unloads the FMU hundreds of times in one process."""
 
 import re
@@ -37,6 +39,10 @@ def test_valgrind_reports_no_leaks_and_no_invalid_accesses(tmp_path, threads):
     assert run.returncode == 0, report[-3000:]
     assert f"cycles 1000 in {threads} threads:" in run.stdout and "discarded 100" in run.stdout
     assert "library unloaded at the end: yes" in run.stdout
+    # Stale handles after a free, an instance freed from the host's logger during a call, and
+    # a state freed through another instance: each refused, and (below) no invalid read.
+    assert ("stale handles refused 900, freed from the logger during a call 100, states freed by another instance "
+            "refused 100") in run.stdout
     # Unloaded, the library leaves nothing behind: every heap block is freed.
     assert re.search(r"All heap blocks were freed -- no leaks are possible", report), report[-3000:]
     assert re.search(r"ERROR SUMMARY: 0 errors", report), report[-3000:]
