@@ -98,6 +98,11 @@ fn bad_arguments_are_refused_and_change_nothing() {
             "currentCommunicationPoint 0.3 does not match the FMU's time 0.1",
         ),
         (
+            "communication point a millionth of a step off",
+            Box::new(|h: &mut Host| unsafe { fmi2DoStep(h.c, 0.1 + 1e-8, 0.01, 1) }),
+            "more than the round-off tolerance",
+        ),
+        (
             "NaN communication point",
             Box::new(|h: &mut Host| unsafe { fmi2DoStep(h.c, f64::NAN, 0.01, 1) }),
             "currentCommunicationPoint must be finite",
@@ -191,12 +196,17 @@ fn bad_parameter_sets_are_refused_at_exit_initialization_mode() {
         (
             "triangle inequality",
             vec![("J[3]", 3100.0)],
-            "parameter J[3]: moments of inertia violate the triangle inequality",
+            "parameter J[3]: moments of inertia violate the strict triangle inequality",
+        ),
+        (
+            "thin plate J3 = J1 + J2",
+            vec![("J[3]", 3000.0)],
+            "a thin plate) has exactly these moments, but then the paper's second moment I3",
         ),
         (
             "triangle inequality, other axis",
             vec![("J[1]", 3700.0)],
-            "parameter J[1]: moments of inertia violate the triangle inequality",
+            "parameter J[1]: moments of inertia violate the strict triangle inequality",
         ),
         ("negative gravity", vec![("g", -9.81)], "parameter g: gravity must be >= 0"),
         (
@@ -240,10 +250,16 @@ fn bad_parameter_sets_are_refused_at_exit_initialization_mode() {
             "on or across the base plane",
         ),
         ("zero relative tolerance", vec![("solver.relTol", 0.0)], "parameter solver.relTol: must be in (0, 1)"),
-        ("tolerance below precision", vec![("solver.relTol", 1e-17)], "below double precision"),
-        ("negative absolute tolerance", vec![("solver.absTol", -1e-9)], "parameter solver.absTol"),
+        ("tolerance below precision", vec![("solver.relTol", 1e-17)], "below what double precision can meet"),
+        ("negative absolute tolerance", vec![("solver.absTol", -1e-9)], "parameter solver.absTol: must be > 0"),
+        ("zero absolute tolerance", vec![("solver.absTol", 0.0)], "exactly zero (the neutral pose has several)"),
         ("negative maximum step", vec![("solver.maxStep", -0.1)], "parameter solver.maxStep"),
         ("negative RK4 step", vec![("solver.fixedStep", -1e-3)], "parameter solver.fixedStep"),
+        (
+            "RK4 step below a nanosecond",
+            vec![("solver.fixedStep", 1e-300)],
+            "parameter solver.fixedStep: must be 0 (one RK4 step per communication step) or at least 1e-9 s, got 1e-300",
+        ),
     ];
     for (name, values, fragment) in table {
         let mut h = Host::platform("params");
@@ -390,4 +406,101 @@ fn states_belong_to_their_instance_and_stale_handles_are_refused() {
     assert_eq!(unsafe { fmi2SetFMUstate(c, left) }, fmi2Error);
     unsafe { fmi2FreeInstance(c) };
     drop(platform); // frees the handle a third time: nothing happens
+}
+
+/// The instance name reaches the logger unchanged in every message (it is an argument, not part
+/// of the `%`-escaped format string), from instantiation failures to step messages.
+#[test]
+fn the_instance_name_is_passed_verbatim_in_every_message() {
+    let name = "cab%d 100%";
+    let mut h = Host::platform(name);
+    h.setup(None);
+    h.enter();
+    h.set("M", -1.0);
+    assert_eq!(h.exit(), fmi2Error);
+    unsafe { fmi2SetDebugLogging(h.c, fmi2True, 0, std::ptr::null()) };
+    assert_eq!(unsafe { fmi2Reset(h.c) }, fmi2OK);
+    let sink = std::sync::Mutex::new(vec![]);
+    let cb = common::fmi_host::callbacks(&sink);
+    let cname = std::ffi::CString::new(name).unwrap();
+    let c =
+        unsafe { fmi2Instantiate(cname.as_ptr(), fmi2CoSimulation, c"{wrong}".as_ptr(), std::ptr::null(), &cb, 0, 1) };
+    assert!(c.is_null());
+    let mut lines = h.messages();
+    lines.extend(sink.lock().unwrap().iter().cloned());
+    assert!(lines.len() >= 3, "{lines:?}");
+    for line in &lines {
+        assert_eq!(line.instance, name, "{line:?}");
+    }
+}
+
+/// Solver limits are stated with the real numbers: a tolerance the importer passes is named as
+/// such; an RK4 step so small that a communication step needs more internal steps than the
+/// limit per call is refused before anything is computed, as a discard the importer can
+/// recover from with shorter steps.
+#[test]
+fn solver_limits_are_reported_with_their_numbers_and_are_recoverable() {
+    let mut h = Host::platform("tolerance");
+    unsafe { fmi2SetupExperiment(h.c, fmi2True, 1e-17, 0.0, fmi2False, 0.0) };
+    h.enter();
+    h.clear_log();
+    assert_eq!(h.exit(), fmi2Error);
+    let message = h.last_message();
+    assert!(message.contains("the importer's tolerance") && message.contains("1e-17"), "{message}");
+    assert!(!message.contains("parameter solver.relTol"), "{message}");
+
+    let mut h = Host::platform("rk4");
+    assert_eq!(h.initialise(&[("solver.method", 2.0), ("solver.fixedStep", 2e-9)]), fmi2OK);
+    assert_eq!(h.step(0.001), fmi2OK, "5e5 RK4 steps: within the limit");
+    h.clear_log();
+    assert_eq!(h.step(0.01), fmi2Discard);
+    let message = h.last_message();
+    println!("{message}");
+    assert!(
+        message.contains("needs 5.000e6 steps, more than the limit of 1000000 internal steps per call"),
+        "{message}"
+    );
+    assert!(message.contains("nothing was computed") && message.contains("retry from t = 0.001"), "{message}");
+    let mut terminated = fmi2True;
+    unsafe { fmi2GetBooleanStatus(h.c, fmi2Terminated, &mut terminated) };
+    assert_eq!(terminated, fmi2False, "shorter steps can go on");
+}
+
+/// `currentCommunicationPoint` is compared with the FMU's time to round-off of the time and the
+/// step: at t = 1e-12 a communication point of 9e-10 is a jump of the clock, refused.
+#[test]
+fn the_communication_point_tolerance_scales_with_time_and_step() {
+    let mut h = Host::platform("clock");
+    assert_eq!(h.initialise(&[]), fmi2OK);
+    assert_eq!(h.step(1e-12), fmi2OK);
+    assert_eq!(unsafe { fmi2DoStep(h.c, 9e-10, 1e-12, fmi2True) }, fmi2Error);
+    assert!(
+        h.last_message().contains("(difference 8.99e-10, more than the round-off tolerance"),
+        "{}",
+        h.last_message()
+    );
+    // A master that multiplies (t = n h) instead of adding meets the FMU's time to an ulp.
+    let mut h = Host::platform("multiplying");
+    assert_eq!(h.initialise(&[]), fmi2OK);
+    for n in 0..1000 {
+        let t = n as f64 * 0.001;
+        assert_eq!(unsafe { fmi2DoStep(h.c, t, 0.001, fmi2True) }, fmi2OK, "n = {n}: {}", h.last_message());
+    }
+}
+
+/// A platform whose joints all start below the base hangs under it: legal (a suspended
+/// hexapod), but with the default stand a mistyped height, so the importer gets a warning.
+#[test]
+fn a_platform_starting_below_its_base_is_warned_about() {
+    let mut h = Host::platform("below");
+    h.setup(None);
+    h.enter();
+    h.set("stops", 0.0);
+    h.set("r0[3]", 0.25);
+    h.clear_log();
+    assert_eq!(h.exit(), fmi2Warning);
+    let warning = h.last_message();
+    assert!(warning.contains("all platform joints start below the base plane") && warning.contains("r0[3] = 0.25"));
+    assert_eq!(h.messages().last().map(|l| l.category.clone()), Some("logStatusWarning".into()));
+    assert_eq!(h.step(0.01), fmi2OK, "the instance is usable");
 }

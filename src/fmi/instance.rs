@@ -30,9 +30,14 @@ use crate::models::variables::{
 };
 use crate::models::{AnyModel, EventUpdate, ModelKind, StepReport};
 
-/// Relative tolerance on `currentCommunicationPoint`: masters that accumulate `t += h`
-/// (FMPy's SSP loop) drift from the FMU's `t + h` by a few ulps per step.
-pub const COMMUNICATION_POINT_TOLERANCE: f64 = 1e-9;
+/// How far `currentCommunicationPoint` may be from the FMU's time, and a step's end past
+/// `stopTime`: round-off only. The FMU's time after a step is the importer's `t + h`, so an
+/// importer that adds up its steps meets it exactly and one that multiplies (`t = n h`) within
+/// a few units in the last place; the bound is 16 of those at the time's magnitude plus 1e-9
+/// of the step (for times near 0). A larger difference is a jump of the clock and refused.
+pub fn communication_point_tolerance(t: f64, other: f64, h: f64) -> f64 {
+    16.0 * f64::EPSILON * t.abs().max(other.abs()) + 1e-9 * h.abs()
+}
 
 /// The base type a get/set function works on (FMI 2 Real/Integer/Boolean, FMI 3
 /// Float64/Int32/Boolean).
@@ -459,8 +464,8 @@ impl Instance {
     pub fn exit_initialization_mode(&mut self) -> Status {
         let model_exchange = self.interface == InterfaceType::ModelExchange;
         match self.model.exit_initialization(self.start_time, self.tolerance, model_exchange) {
-            Ok(summary) => {
-                self.logger.log(Status::Ok, LogCategory::Events, &summary);
+            Ok(done) => {
+                self.logger.log(Status::Ok, LogCategory::Events, &done.summary);
                 self.state = match (self.interface, self.version) {
                     (InterfaceType::CoSimulation, FmiVersion::Fmi3) if self.co_simulation.event_mode_used => {
                         ModelState::EventMode
@@ -468,7 +473,13 @@ impl Instance {
                     (InterfaceType::CoSimulation, _) => ModelState::StepComplete,
                     (InterfaceType::ModelExchange, _) => ModelState::EventMode,
                 };
-                Status::Ok
+                match done.warning {
+                    Some(warning) => {
+                        self.log(Status::Warning, &format!("{}: {warning}", self.current));
+                        Status::Warning
+                    }
+                    None => Status::Ok,
+                }
             }
             Err(message) => {
                 self.state = ModelState::Error;
@@ -609,10 +620,11 @@ impl Instance {
         if !tc.is_finite() {
             return (self.error(&format!("currentCommunicationPoint must be finite, got {tc}")), outcome);
         }
-        let tol = COMMUNICATION_POINT_TOLERANCE * self.time.abs().max(1.0);
+        let tol = communication_point_tolerance(self.time, tc, h);
         if (tc - self.time).abs() > tol {
             let message = format!(
-                "currentCommunicationPoint {tc} does not match the FMU's time {} (difference {:e})",
+                "currentCommunicationPoint {tc} does not match the FMU's time {} (difference {:e}, more than the \
+                 round-off tolerance {tol:e} s)",
                 self.time,
                 tc - self.time
             );
@@ -620,7 +632,7 @@ impl Instance {
         }
         let t_end = tc + h;
         if let Some(stop) = self.stop_time
-            && t_end > stop + COMMUNICATION_POINT_TOLERANCE * stop.abs().max(1.0)
+            && t_end > stop + communication_point_tolerance(stop, t_end, h)
         {
             let message = format!("step to t = {t_end} goes past the stopTime {stop}");
             return (self.error(&message), outcome);
@@ -655,8 +667,10 @@ impl Instance {
                 }
                 Err(e) => {
                     self.state = ModelState::StepFailed;
-                    self.terminated = true;
-                    outcome.terminate_simulation = true;
+                    // Only the limit of internal steps stopped it: the importer can restore a
+                    // state (or reset) and go on with shorter steps.
+                    self.terminated = !e.retry_shorter;
+                    outcome.terminate_simulation = !e.retry_shorter;
                     outcome.last_successful_time = self.time;
                     self.last_successful_time = self.time;
                     self.log(Status::Discard, &format!("{}: {}", self.current, e.message));

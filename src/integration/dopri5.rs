@@ -224,7 +224,7 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
 
     loop {
         if steps >= s.max_steps_per_call {
-            return Err(IntegrationError::TooManySteps { t, steps });
+            return Err(IntegrationError::TooManySteps { t, t_end: t1, steps });
         }
         // Land exactly on t1: stretch or shorten the last step (Hairer's 1.01 rule); a
         // landing step ends where it was told to.

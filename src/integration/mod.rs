@@ -185,8 +185,20 @@ pub enum IntegrationError<F> {
     Fault { t: f64, fault: F },
     /// The adaptive step size fell below what the time's precision can resolve.
     StepSizeUnderflow { t: f64, h: f64 },
-    /// More internal steps than `SolverSettings::max_steps_per_call` were needed.
-    TooManySteps { t: f64, steps: u64 },
+    /// The adaptive method took `SolverSettings::max_steps_per_call` steps and stopped at
+    /// `t`, short of `t_end`.
+    TooManySteps { t: f64, t_end: f64, steps: u64 },
+    /// The fixed-step method would need `steps` steps of at most `fixed_step` for the
+    /// interval from `t` to `t_end`, more than `limit`; nothing was computed.
+    FixedStepsExceedLimit { t: f64, t_end: f64, fixed_step: f64, steps: f64, limit: u64 },
+}
+
+impl<F> IntegrationError<F> {
+    /// Whether the same integration split into shorter intervals can succeed (the limit of
+    /// internal steps per call was the only obstacle).
+    pub fn is_step_limit(&self) -> bool {
+        matches!(self, IntegrationError::TooManySteps { .. } | IntegrationError::FixedStepsExceedLimit { .. })
+    }
 }
 
 impl<F: std::fmt::Display> std::fmt::Display for IntegrationError<F> {
@@ -198,9 +210,16 @@ impl<F: std::fmt::Display> std::fmt::Display for IntegrationError<F> {
                 "at t = {t}: the adaptive step size fell to {h:e} without meeting the tolerance (the solution is \
                  not smooth or diverges)"
             ),
-            IntegrationError::TooManySteps { t, steps } => {
-                write!(f, "at t = {t}: {steps} internal steps were not enough to finish the step")
-            }
+            IntegrationError::TooManySteps { t, t_end, steps } => write!(
+                f,
+                "the adaptive integrator took {steps} internal steps, the limit per call, and reached t = {t}, short \
+                 of t = {t_end} (the motion needs very small steps there)"
+            ),
+            IntegrationError::FixedStepsExceedLimit { t, t_end, fixed_step, steps, limit } => write!(
+                f,
+                "from t = {t} to {t_end} RK4 with solver.fixedStep = {fixed_step:e} s needs {steps:.3e} steps, more \
+                 than the limit of {limit} internal steps per call; nothing was computed"
+            ),
         }
     }
 }

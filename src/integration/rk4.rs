@@ -29,7 +29,13 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
     // that multiple.
     let steps = if s.fixed_step > 0.0 { ((span / s.fixed_step) * (1.0 - 1e-9)).ceil().max(1.0) } else { 1.0 };
     if steps > s.max_steps_per_call as f64 {
-        return Err(IntegrationError::TooManySteps { t: t0, steps: steps as u64 });
+        return Err(IntegrationError::FixedStepsExceedLimit {
+            t: t0,
+            t_end: t1,
+            fixed_step: s.fixed_step,
+            steps,
+            limit: s.max_steps_per_call,
+        });
     }
     let n = steps as u64;
     let h = span / steps;

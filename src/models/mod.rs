@@ -88,6 +88,24 @@ pub struct StepReport {
 pub struct StepError {
     /// What happened, when and to which leg.
     pub message: String,
+    /// Shorter communication steps from the same point can succeed (the limit of internal
+    /// steps per call was reached); otherwise the simulation cannot go on from here.
+    pub retry_shorter: bool,
+}
+
+/// A model that left Initialization Mode.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Initialised {
+    /// The parameters in use, for `logEvents`.
+    pub summary: String,
+    /// A setting that works but is probably not what the user meant (status Warning).
+    pub warning: Option<String>,
+}
+
+impl From<String> for Initialised {
+    fn from(summary: String) -> Self {
+        Initialised { summary, warning: None }
+    }
 }
 
 /// What an event update (`fmi2NewDiscreteStates`) found.
@@ -116,14 +134,14 @@ pub trait FmuModel {
         Err("not a settable Boolean variable".into())
     }
     /// Validates the parameters and builds the simulation at `start_time`. `tolerance` is
-    /// the importer's `fmi2SetupExperiment` tolerance, if defined. Returns a summary for the
-    /// log.
+    /// the importer's tolerance, if defined. Returns a summary for the log and, for a usable
+    /// but probably unintended setting, a warning.
     fn exit_initialization(
         &mut self,
         start_time: f64,
         tolerance: Option<f64>,
         model_exchange: bool,
-    ) -> Result<String, String>;
+    ) -> Result<Initialised, String>;
     /// Advances from the communication point `t` to exactly `t + h`, or with `stop_at_event`
     /// to the first event before it.
     fn do_step(&mut self, t: f64, h: f64, stop_at_event: bool) -> Result<StepReport, StepError>;
@@ -286,7 +304,7 @@ impl AnyModel {
         start_time: f64,
         tolerance: Option<f64>,
         model_exchange: bool,
-    ) -> Result<String, String> {
+    ) -> Result<Initialised, String> {
         dispatch!(self, m => m.exit_initialization(start_time, tolerance, model_exchange))
     }
     pub fn set_time(&mut self, t: f64) {

@@ -7,6 +7,7 @@ use super::platform::{PlatformModel, variables::group};
 use super::snapshot::{ByteReader, ByteWriter, SnapshotError};
 use super::variables::VariableRef;
 use super::{DefaultExperiment, FmuModel, ModelInfo, StepError, StepReport};
+use crate::models::Initialised;
 
 pub static INFO: ModelInfo = ModelInfo {
     model_name: "TrivialPlatform",
@@ -69,9 +70,9 @@ impl FmuModel for TrivialModel {
         start_time: f64,
         _tolerance: Option<f64>,
         _model_exchange: bool,
-    ) -> Result<String, String> {
+    ) -> Result<Initialised, String> {
         self.time = start_time;
-        Ok("trivial model: no physics".into())
+        Ok(String::from("trivial model: no physics").into())
     }
     fn do_step(&mut self, t: f64, h: f64, _stop_at_event: bool) -> Result<StepReport, StepError> {
         self.time = t + h;

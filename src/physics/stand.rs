@@ -113,14 +113,24 @@ impl Stand {
         for (a, (ja, jb, jc)) in [(j1, j2, j3), (j2, j3, j1), (j3, j1, j2)].into_iter().enumerate() {
             if ja >= jb + jc {
                 let (b, c) = ((a + 1) % 3 + 1, (a + 2) % 3 + 1);
+                let why = if ja == jb + jc {
+                    "a body with all its mass in one plane (a thin plate) has exactly these moments, but then the \
+                     paper's second moment I{n} = (J[{b}] + J[{c}] - J[{n}])/2 is 0 and the special form has no \
+                     equation for e{n}; give the plate a small thickness"
+                } else {
+                    "no rigid body has such moments (the paper's second moment I{n} would be negative)"
+                };
+                let why = why
+                    .replace("{n}", &(a + 1).to_string())
+                    .replace("{b}", &b.to_string())
+                    .replace("{c}", &c.to_string());
                 return Err(ParameterError::new(
                     format!("J[{}]", a + 1),
                     format!(
-                        "moments of inertia violate the triangle inequality: J[{}] = {ja} must be less than \
-                         J[{b}] + J[{c}] = {} (no rigid body has them; the paper's second moment I{} would be <= 0)",
+                        "moments of inertia violate the strict triangle inequality: J[{}] = {ja} must be less than \
+                         J[{b}] + J[{c}] = {}: {why}",
                         a + 1,
                         jb + jc,
-                        a + 1
                     ),
                 ));
             }

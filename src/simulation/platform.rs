@@ -178,6 +178,14 @@ pub enum StepFailure {
     Solver(IntegrationError<PhysicsFault>),
 }
 
+impl StepFailure {
+    /// Whether shorter communication steps can get past it (only the limit of internal steps
+    /// per call stopped the integrator).
+    pub fn is_step_limit(&self) -> bool {
+        matches!(self, StepFailure::Solver(e) if e.is_step_limit())
+    }
+}
+
 impl std::fmt::Display for StepFailure {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {

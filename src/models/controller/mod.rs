@@ -7,6 +7,7 @@
 
 pub mod variables;
 
+use crate::models::Initialised;
 use nalgebra::Vector3;
 
 use super::snapshot::{ByteReader, ByteWriter, SnapshotError};
@@ -355,7 +356,7 @@ impl FmuModel for ControllerModel {
         start_time: f64,
         _tolerance: Option<f64>,
         _model_exchange: bool,
-    ) -> Result<String, String> {
+    ) -> Result<Initialised, String> {
         let before = self.time;
         self.time = start_time;
         self.outputs = None;
@@ -367,7 +368,8 @@ impl FmuModel for ControllerModel {
         Ok(format!(
             "initialised at t = {start_time}: programme {:?}, G = {} N/m, D = {} N.s/m, feedforward {}",
             p.programme, p.feedback.gain, p.feedback.damping, p.feedback.feedforward
-        ))
+        )
+        .into())
     }
 
     fn do_step(&mut self, t: f64, h: f64, _stop_at_event: bool) -> Result<StepReport, StepError> {
@@ -381,7 +383,10 @@ impl FmuModel for ControllerModel {
             }
             Err(message) => {
                 (self.time, self.outputs) = before;
-                Err(StepError { message: format!("step from t = {t} to {} rolled back: {message}", t + h) })
+                Err(StepError {
+                    message: format!("step from t = {t} to {} rolled back: {message}", t + h),
+                    retry_shorter: false,
+                })
             }
         }
     }

@@ -3,6 +3,7 @@
 
 pub mod variables;
 
+use crate::models::Initialised;
 use nalgebra::Vector3;
 
 use super::snapshot::{ByteReader, ByteWriter, SnapshotError};
@@ -109,23 +110,39 @@ impl PlatformParameters {
         y
     }
 
-    fn validate_settings(&self) -> Result<(), String> {
+    /// `importer_tolerance`: `solver.relTol` was replaced by the importer's tolerance
+    /// (`fmi2SetupExperiment`, `fmi3EnterInitializationMode`), so messages name that instead.
+    fn validate_settings(&self, importer_tolerance: bool) -> Result<(), String> {
         let s = &self.settings;
+        let rel_tol = if importer_tolerance {
+            "the importer's tolerance (fmi2SetupExperiment / fmi3EnterInitializationMode, which replaces solver.relTol)"
+        } else {
+            "parameter solver.relTol"
+        };
         if !(s.rel_tol > 0.0 && s.rel_tol < 1.0) {
-            return Err(format!("parameter solver.relTol: must be in (0, 1), got {}", s.rel_tol));
+            return Err(format!("{rel_tol}: must be in (0, 1), got {:e}", s.rel_tol));
         }
-        if s.rel_tol < 1e-15 {
-            return Err(format!("parameter solver.relTol: {} is below double precision (minimum 1e-15)", s.rel_tol));
+        if s.rel_tol < MIN_REL_TOL {
+            return Err(format!(
+                "{rel_tol}: {:e} is below what double precision can meet (minimum {MIN_REL_TOL:e})",
+                s.rel_tol
+            ));
         }
-        if !(s.abs_tol >= 0.0) {
-            return Err(format!("parameter solver.absTol: must be >= 0, got {}", s.abs_tol));
+        if !(s.abs_tol > 0.0) || !s.abs_tol.is_finite() {
+            return Err(format!(
+                "parameter solver.absTol: must be > 0, got {:e}: with pure relative error control a state component \
+                 that is exactly zero (the neutral pose has several) admits no error at all, so no step could be \
+                 accepted",
+                s.abs_tol
+            ));
         }
         if !(s.max_step >= 0.0) {
             return Err(format!("parameter solver.maxStep: must be >= 0 s (0 = no limit), got {}", s.max_step));
         }
-        if !(s.fixed_step >= 0.0) {
+        if !(s.fixed_step == 0.0 || (s.fixed_step >= MIN_FIXED_STEP && s.fixed_step.is_finite())) {
             return Err(format!(
-                "parameter solver.fixedStep: must be >= 0 s (0 = one step per communication step), got {}",
+                "parameter solver.fixedStep: must be 0 (one RK4 step per communication step) or at least \
+                 {MIN_FIXED_STEP:e} s, got {:e} s",
                 s.fixed_step
             ));
         }
@@ -135,6 +152,13 @@ impl PlatformParameters {
         Ok(())
     }
 }
+
+/// Smallest `solver.relTol` (or importer tolerance): below it the error estimate is round-off.
+pub const MIN_REL_TOL: f64 = 1e-15;
+/// Smallest nonzero `solver.fixedStep`, s: a nanosecond, far below any mechanical time scale
+/// of a stand; with the limit of internal steps per call it still allows 1 ms communication
+/// steps.
+pub const MIN_FIXED_STEP: f64 = 1e-9;
 
 /// Default Baumgarte rate, 1/s: the constraint residual decays with a 0.1 s time constant,
 /// faster than the stand's own motion (sqrt(R_b/g) = 0.39 s) and slow enough not to make the
@@ -401,12 +425,12 @@ impl FmuModel for PlatformModel {
         start_time: f64,
         tolerance: Option<f64>,
         model_exchange: bool,
-    ) -> Result<String, String> {
+    ) -> Result<Initialised, String> {
         let mut p = self.parameters.clone();
         if let Some(tol) = tolerance {
             p.settings.rel_tol = tol;
         }
-        p.validate_settings()?;
+        p.validate_settings(tolerance.is_some())?;
         let mut sim =
             PlatformSimulation::new(p.stand.clone(), p.initial_state(), p.settings, p.stabilisation, start_time)
                 .and_then(|sim| sim.with_end_stops(p.end_stops()))
@@ -452,22 +476,33 @@ impl FmuModel for PlatformModel {
             p.stop_at_singularity,
             p.settings.method,
             p.settings.rel_tol,
-            if tolerance.is_some() { " (from fmi2SetupExperiment)" } else { "" },
+            if tolerance.is_some() { " (the importer's tolerance)" } else { "" },
             if sim.form.baumgarte_rate > 0.0 {
                 format!("Baumgarte {} 1/s", sim.form.baumgarte_rate)
             } else {
                 format!("{:?}", p.stabilisation)
             }
         );
+        let (sim_guard_side, sim_guard_plane) = (sim.guard.side, sim.guard.base_plane);
         self.simulation = Some(sim);
         self.invalidate_outputs();
-        Ok(summary)
+        // Legal (a suspended hexapod hangs under its base), but with the default stand it is
+        // a mistyped height, and the pushing legs and gravity take the platform away.
+        let warning = (sim_guard_side < 0.0).then(|| {
+            format!(
+                "all platform joints start below the base plane (z = {sim_guard_plane} m; r0[3] = {} m): the \
+                 platform hangs under its base like a suspended hexapod, and legs that push (F > 0) drive it \
+                 further down; raise r0[3] if it should stand on its legs",
+                p.r0[2]
+            )
+        });
+        Ok(Initialised { summary, warning })
     }
 
     fn do_step(&mut self, t: f64, h: f64, stop_at_event: bool) -> Result<StepReport, StepError> {
         let law = self.held_forces(t);
         let Some(sim) = self.simulation.as_mut() else {
-            return Err(StepError { message: "the model is not initialised".into() });
+            return Err(StepError { message: "the model is not initialised".into(), retry_shorter: false });
         };
         let t_end = t + h;
         let result = if t_end > sim.time {
@@ -485,7 +520,15 @@ impl FmuModel for PlatformModel {
                 Ok(StepReport { reached, event })
             }
             Err(failure) => Err(StepError {
-                message: format!("step from t = {t} to {t_end} rolled back: {failure}; leg forces {:?} N", self.forces),
+                message: if failure.is_step_limit() {
+                    format!(
+                        "step from t = {t} to {t_end} rolled back: {failure}; retry from t = {t} with shorter \
+                         communication steps"
+                    )
+                } else {
+                    format!("step from t = {t} to {t_end} rolled back: {failure}; leg forces {:?} N", self.forces)
+                },
+                retry_shorter: failure.is_step_limit(),
             }),
         }
     }
@@ -600,9 +643,10 @@ impl FmuModel for PlatformModel {
 
     fn completed_integrator_step(&mut self) -> Result<(), StepError> {
         let Some(sim) = &self.simulation else { return Ok(()) };
-        sim.guard
-            .check(sim.stand(), &sim.body_state())
-            .map_err(|f| StepError { message: format!("at t = {}: {f}; the simulation cannot go on", sim.time) })
+        sim.guard.check(sim.stand(), &sim.body_state()).map_err(|f| StepError {
+            message: format!("at t = {}: {f}; the simulation cannot go on", sim.time),
+            retry_shorter: false,
+        })
     }
 
     fn directional_derivative(
