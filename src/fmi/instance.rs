@@ -68,6 +68,68 @@ impl BaseType {
     }
 }
 
+/// What a value reference addresses, precomputed per instance so that a get or set checks a
+/// reference with one table read: the element (FMI 2) or the variable's first element and its
+/// number of values (FMI 3), its base type, and the states in which it may be set.
+#[derive(Clone, Copy, Debug)]
+struct Access {
+    group: usize,
+    index: usize,
+    width: usize,
+    base: BaseType,
+    /// Bit set over [`ModelState`]: where `fmi2Set*`/`fmi3Set*` may change it.
+    settable_in: u16,
+}
+
+fn base_type(t: VariableType) -> BaseType {
+    if t.is_real() {
+        BaseType::Real
+    } else if t.is_boolean() {
+        BaseType::Boolean
+    } else {
+        BaseType::Integer
+    }
+}
+
+/// The access table of a model for one FMI version, indexed by value reference.
+fn access_table(table: &VariableTable, version: FmiVersion) -> Vec<Option<Access>> {
+    let max_vr = table.groups.iter().map(|g| g.vr(g.len().saturating_sub(1))).max().unwrap_or(0);
+    (0..=max_vr)
+        .map(|vr| {
+            let (g, r) = match version {
+                FmiVersion::Fmi2 => table.lookup(vr).filter(|(g, _)| !g.fmi3_only)?,
+                FmiVersion::Fmi3 => table.lookup_variable(vr)?,
+            };
+            let settable_in =
+                ModelState::ALL.iter().filter(|&&s| settable_in_state(g, s)).fold(0u16, |m, s| m | s.bit());
+            let width = match version {
+                FmiVersion::Fmi2 => 1,
+                FmiVersion::Fmi3 => g.len(),
+            };
+            Some(Access { group: r.group, index: r.index, width, base: base_type(g.var_type), settable_in })
+        })
+        .collect()
+}
+
+/// Whether a variable may be set in a state (FMI 2.0 conditions 1, 3, 6 of the CS table; 1, 3,
+/// 4, 5 of the ME table; the same rules in FMI 3).
+fn settable_in_state(g: &VariableGroup, state: ModelState) -> bool {
+    if g.variability == Variability::Constant || g.causality == Causality::Independent {
+        return false;
+    }
+    let exact_or_approx = matches!(g.initial, Some(Initial::Exact | Initial::Approx));
+    match state {
+        ModelState::Instantiated => exact_or_approx || g.causality == Causality::Input,
+        ModelState::InitializationMode => g.initial == Some(Initial::Exact) || g.causality == Causality::Input,
+        ModelState::StepComplete | ModelState::EventMode => {
+            g.causality == Causality::Input
+                || (g.causality == Causality::Parameter && g.variability == Variability::Tunable)
+        }
+        ModelState::ContinuousTimeMode => g.causality == Causality::Input && g.variability == Variability::Continuous,
+        _ => false,
+    }
+}
+
 /// An FMU state (`fmi2FMUstate`, `fmi3FMUState`): the serialized bytes of an instance. The
 /// instance that made it owns it; the importer's handle is its address, recognised by
 /// comparison with the instance's own states, never by reading through it.
@@ -175,6 +237,8 @@ pub struct Instance {
     /// the model's state vector (the identity in FMI 2; FMI 3 lists whole array variables).
     state_order: Vec<usize>,
     pub co_simulation: CoSimulationOptions,
+    /// What each value reference addresses (built once per instance).
+    access: Vec<Option<Access>>,
     /// The FMU states this instance made and the importer has not freed yet (freed with the
     /// instance at the latest). Boxed: a handle is a state's address, which must not move
     /// when the vector grows.
@@ -202,6 +266,7 @@ impl Instance {
     pub fn new(kind: ModelKind, token: &str, version: FmiVersion, interface: InterfaceType, logger: Logger) -> Self {
         let info = kind.info();
         let table = VariableTable::new(info.groups);
+        let access = access_table(&table, version);
         let state_order = match version {
             FmiVersion::Fmi2 => (0..info.states.len()).collect(),
             FmiVersion::Fmi3 => super::description::fmi3_state_order(info),
@@ -226,15 +291,22 @@ impl Instance {
             state_order,
             co_simulation: CoSimulationOptions::default(),
             fmu_states: Vec::new(),
+            access,
         }
     }
 
-    /// The instance as the importer's handle, registered as live.
+    /// The instance as the importer's handle, registered as live; NULL (logged) if the
+    /// registry is full.
     pub fn into_handle(self) -> *mut c_void {
         let version = self.version;
         let c = Box::into_raw(Box::new(self)) as *mut c_void;
-        registry::register(c, version);
-        c
+        if registry::register(c, version) {
+            return c;
+        }
+        // SAFETY: just made from a Box and never handed out.
+        let inst = unsafe { Box::from_raw(c as *mut Instance) };
+        inst.error(&format!("more than {} instances are live in this process; free some first", registry::CAPACITY));
+        std::ptr::null_mut()
     }
 
     /// # Safety
@@ -379,25 +451,41 @@ impl Instance {
         Ok(())
     }
 
-    /// Whether a variable may be set in the current state (FMI 2.0 conditions 1, 3, 6 of the
-    /// CS table; 1, 3, 4, 5 of the ME table; the same rules in FMI 3).
     fn settable(&self, g: &VariableGroup) -> bool {
-        if g.variability == Variability::Constant || g.causality == Causality::Independent {
-            return false;
+        settable_in_state(g, self.state)
+    }
+
+    /// A reference's access entry if it has the wanted base type; else the error, logged.
+    #[inline]
+    fn access(&self, vr: u32, want: BaseType) -> Result<Access, Status> {
+        match self.access.get(vr as usize).copied().flatten() {
+            Some(a) if a.base == want => Ok(a),
+            _ => Err(self.lookup_error(vr, want)),
         }
-        let exact_or_approx = matches!(g.initial, Some(Initial::Exact | Initial::Approx));
-        match self.state {
-            ModelState::Instantiated => exact_or_approx || g.causality == Causality::Input,
-            ModelState::InitializationMode => g.initial == Some(Initial::Exact) || g.causality == Causality::Input,
-            ModelState::StepComplete | ModelState::EventMode => {
-                g.causality == Causality::Input
-                    || (g.causality == Causality::Parameter && g.variability == Variability::Tunable)
-            }
-            ModelState::ContinuousTimeMode => {
-                g.causality == Causality::Input && g.variability == Variability::Continuous
-            }
-            _ => false,
+    }
+
+    #[cold]
+    fn lookup_error(&self, vr: u32, want: BaseType) -> Status {
+        match self.lookup(vr, want) {
+            Err(status) => status,
+            Ok(_) => self.error(&format!("value reference {vr} cannot be accessed")),
         }
+    }
+
+    #[cold]
+    fn not_settable(&self, a: Access) -> Status {
+        let r = VariableRef { group: a.group, index: a.index };
+        match self.table.groups.get(a.group) {
+            Some(g) => self.check_settable(g, r).err().unwrap_or(Status::Error),
+            None => Status::Error,
+        }
+    }
+
+    #[cold]
+    fn count_mismatch(&self, vrs: &[u32], n_values: usize) -> Status {
+        let count: usize =
+            vrs.iter().filter_map(|&vr| self.access.get(vr as usize).copied().flatten()).map(|a| a.width).sum();
+        self.error(&format!("the value references address {count} values, but nValues = {n_values}"))
     }
 
     fn check_settable(&self, g: &VariableGroup, r: VariableRef) -> Result<(), Status> {
@@ -510,33 +598,81 @@ impl Instance {
     // ----- get/set ------------------------------------------------------------------------
 
     pub fn get_real(&mut self, vrs: &[u32], values: &mut [f64]) -> Status {
-        // Two passes, no allocation: validate every reference, then read (all or nothing).
-        if let Err(s) = self.check_values(vrs, BaseType::Real, values.len(), false) {
-            return s;
-        }
-        for ((g, r), slot) in elements(&self.table, self.version, vrs).zip(values.iter_mut()) {
-            let x = self.model.get_real(r);
-            if x.is_nan() {
-                return self.error(&format!("{} is not a number with the current parameters", g.element_name(r.index)));
+        // One pass, no allocation: on an error the values are undefined (FMI), nothing changes.
+        let mut k = 0;
+        for &vr in vrs {
+            let a = match self.access(vr, BaseType::Real) {
+                Ok(a) => a,
+                Err(s) => return s,
+            };
+            for i in 0..a.width {
+                let r = VariableRef { group: a.group, index: a.index + i };
+                let x = self.model.get_real(r);
+                let Some(slot) = values.get_mut(k) else { return self.count_mismatch(vrs, values.len()) };
+                if x.is_nan() {
+                    return self.not_a_number(r);
+                }
+                *slot = x;
+                k += 1;
             }
-            *slot = x;
+        }
+        if k != values.len() {
+            return self.count_mismatch(vrs, values.len());
         }
         Status::Ok
     }
 
+    #[cold]
+    fn not_finite(&self, a: Access, chunk: &[f64]) -> Status {
+        let (i, x) = chunk.iter().enumerate().find(|(_, x)| !x.is_finite()).unwrap_or((0, &f64::NAN));
+        let name = self.table.groups.get(a.group).map_or_else(String::new, |g| g.element_name(a.index + i));
+        self.error(&format!("{name} = {x} refused: values must be finite"))
+    }
+
+    #[cold]
+    fn not_a_number(&self, r: VariableRef) -> Status {
+        let name = self.table.groups.get(r.group).map_or_else(String::new, |g| g.element_name(r.index));
+        self.error(&format!("{name} is not a number with the current parameters"))
+    }
+
     pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Status {
         // Two passes, no allocation: validate every reference and value, then store.
-        if let Err(s) = self.check_values(vrs, BaseType::Real, values.len(), true) {
-            return s;
-        }
-        for ((g, r), &x) in elements(&self.table, self.version, vrs).zip(values) {
-            if !x.is_finite() {
-                return self.error(&format!("{} = {x} refused: values must be finite", g.element_name(r.index)));
+        let mut k = 0;
+        for &vr in vrs {
+            let a = match self.access(vr, BaseType::Real) {
+                Ok(a) => a,
+                Err(s) => return s,
+            };
+            if a.settable_in & self.state.bit() == 0 {
+                return self.not_settable(a);
             }
+            let Some(chunk) = values.get(k..k + a.width) else { return self.count_mismatch(vrs, values.len()) };
+            if !chunk.iter().all(|x| x.is_finite()) {
+                return self.not_finite(a, chunk);
+            }
+            k += a.width;
         }
-        for ((_, r), &x) in elements(&self.table, self.version, vrs).zip(values) {
-            if let Err(m) = self.model.set_real(r, x) {
-                return self.error(&m);
+        if k != values.len() {
+            return self.count_mismatch(vrs, values.len());
+        }
+        let mut k = 0;
+        for &vr in vrs {
+            // Validated above: every reference has an entry.
+            let Some(a) = self.access.get(vr as usize).copied().flatten() else { continue };
+            if a.width == 1 {
+                let x = values.get(k).copied().unwrap_or(f64::NAN);
+                if let Err(m) = self.model.set_real(VariableRef { group: a.group, index: a.index }, x) {
+                    return self.error(&m);
+                }
+                k += 1;
+                continue;
+            }
+            for i in 0..a.width {
+                let x = values.get(k).copied().unwrap_or(f64::NAN);
+                if let Err(m) = self.model.set_real(VariableRef { group: a.group, index: a.index + i }, x) {
+                    return self.error(&m);
+                }
+                k += 1;
             }
         }
         Status::Ok

@@ -5,41 +5,80 @@
 //! alone, without reading the memory behind it.
 //!
 //! This is the crate's one piece of process-wide mutable state (a handle is all the context
-//! the C functions get). It holds no heap memory while no instance is live, so unloading the
-//! library leaves nothing behind.
+//! the C functions get). It is a fixed open-addressing table of atomics in static memory, so
+//! that every call checks its handle with a few instructions and no lock, and unloading the
+//! library leaves no heap memory behind. It holds up to [`CAPACITY`] live instances.
 
 use std::ffi::c_void;
-use std::sync::{Mutex, MutexGuard};
+use std::sync::atomic::{AtomicU8, AtomicUsize, Ordering};
 
 use super::FmiVersion;
 
-struct Entry {
-    address: usize,
-    version: FmiVersion,
-    /// A call on the instance is running (the boundary holds a `&mut Instance`).
-    busy: bool,
-    /// `fmi2FreeInstance`/`fmi3FreeInstance` came while busy: free when the call returns.
-    free_requested: bool,
+/// Live instances at most (per process and library).
+pub const CAPACITY: usize = 1 << 16;
+const BITS: u32 = CAPACITY.trailing_zeros();
+
+// Slot states. A live slot is LIVE | version bit, plus BUSY while a call runs on it and
+// FREEING once the importer freed it during that call.
+const EMPTY: u8 = 0;
+const TOMBSTONE: u8 = 1;
+const RESERVED: u8 = 2;
+const LIVE: u8 = 4;
+const FMI3: u8 = 8;
+const BUSY: u8 = 16;
+const FREEING: u8 = 32;
+
+struct Slot {
+    address: AtomicUsize,
+    state: AtomicU8,
 }
 
-/// Sorted by address.
-static LIVE: Mutex<Vec<Entry>> = Mutex::new(Vec::new());
+static SLOTS: [Slot; CAPACITY] =
+    [const { Slot { address: AtomicUsize::new(0), state: AtomicU8::new(EMPTY) } }; CAPACITY];
 
-fn live() -> MutexGuard<'static, Vec<Entry>> {
-    // Nothing panics while the lock is held; a poisoned lock still holds consistent entries.
-    LIVE.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
-}
-
-fn find(entries: &[Entry], p: *mut c_void) -> Result<usize, usize> {
-    entries.binary_search_by_key(&(p as usize), |e| e.address)
-}
-
-/// Records a new instance.
-pub fn register(p: *mut c_void, version: FmiVersion) {
-    let mut entries = live();
-    if let Err(at) = find(&entries, p) {
-        entries.insert(at, Entry { address: p as usize, version, busy: false, free_requested: false });
+fn live_state(version: FmiVersion) -> u8 {
+    match version {
+        FmiVersion::Fmi2 => LIVE,
+        FmiVersion::Fmi3 => LIVE | FMI3,
     }
+}
+
+/// The probe sequence of an address: its hash, then the following slots.
+fn probe(p: *mut c_void) -> impl Iterator<Item = &'static Slot> {
+    // Box addresses are 16-byte aligned: drop those bits, then Fibonacci hashing.
+    let start = ((p as usize as u64 >> 4).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> (64 - BITS)) as usize;
+    (0..CAPACITY).filter_map(move |i| SLOTS.get((start + i) & (CAPACITY - 1)))
+}
+
+/// The live slot of `p`, if any.
+fn find(p: *mut c_void) -> Option<&'static Slot> {
+    if p.is_null() {
+        return None;
+    }
+    for slot in probe(p) {
+        let state = slot.state.load(Ordering::Acquire);
+        if state == EMPTY {
+            return None;
+        }
+        if state & LIVE != 0 && slot.address.load(Ordering::Acquire) == p as usize {
+            return Some(slot);
+        }
+    }
+    None
+}
+
+/// Records a new instance; `false` if [`CAPACITY`] instances are live already.
+pub fn register(p: *mut c_void, version: FmiVersion) -> bool {
+    for slot in probe(p) {
+        for free in [EMPTY, TOMBSTONE] {
+            if slot.state.compare_exchange(free, RESERVED, Ordering::AcqRel, Ordering::Acquire).is_ok() {
+                slot.address.store(p as usize, Ordering::Release);
+                slot.state.store(live_state(version), Ordering::Release);
+                return true;
+            }
+        }
+    }
+    false
 }
 
 /// Whether a call may use the instance behind a handle.
@@ -55,34 +94,33 @@ pub enum Access {
 }
 
 /// Marks a live, idle instance of `version` busy for one call.
+#[inline]
 pub fn acquire(p: *mut c_void, version: FmiVersion) -> Access {
-    let mut entries = live();
-    match find(&entries, p) {
-        Ok(i) => match entries.get_mut(i) {
-            Some(e) if e.version != version || e.free_requested => Access::Unknown,
-            Some(e) if e.busy => Access::Busy,
-            Some(e) => {
-                e.busy = true;
-                Access::Granted
-            }
-            None => Access::Unknown,
-        },
+    let Some(slot) = find(p) else { return Access::Unknown };
+    let idle = live_state(version);
+    match slot.state.compare_exchange(idle, idle | BUSY, Ordering::AcqRel, Ordering::Acquire) {
+        Ok(_) => Access::Granted,
+        Err(now) if now & BUSY != 0 && now & FREEING == 0 && now & FMI3 == idle & FMI3 => Access::Busy,
         Err(_) => Access::Unknown,
     }
 }
 
 /// Ends a call; `true` if the instance was freed during it and must be dropped now (it is no
 /// longer registered).
+#[inline]
 pub fn release(p: *mut c_void) -> bool {
-    let mut entries = live();
-    let Ok(i) = find(&entries, p) else { return false };
-    let free_now = entries.get(i).is_some_and(|e| e.free_requested);
-    if free_now {
-        remove_at(&mut entries, i);
-    } else if let Some(e) = entries.get_mut(i) {
-        e.busy = false;
+    let Some(slot) = find(p) else { return false };
+    let mut state = slot.state.load(Ordering::Acquire);
+    loop {
+        if state & FREEING != 0 {
+            slot.state.store(TOMBSTONE, Ordering::Release);
+            return true;
+        }
+        match slot.state.compare_exchange(state, state & !BUSY, Ordering::AcqRel, Ordering::Acquire) {
+            Ok(_) => return false,
+            Err(now) => state = now,
+        }
     }
-    free_now
 }
 
 /// What to do with an instance the importer frees.
@@ -97,27 +135,21 @@ pub enum Free {
 }
 
 pub fn request_free(p: *mut c_void, version: FmiVersion) -> Free {
-    let mut entries = live();
-    let Ok(i) = find(&entries, p) else { return Free::Unknown };
-    match entries.get_mut(i) {
-        Some(e) if e.version != version || e.free_requested => Free::Unknown,
-        Some(e) if e.busy => {
-            e.free_requested = true;
-            Free::Deferred
+    let Some(slot) = find(p) else { return Free::Unknown };
+    let idle = live_state(version);
+    let mut state = slot.state.load(Ordering::Acquire);
+    loop {
+        let (next, outcome) = if state == idle {
+            (TOMBSTONE, Free::Now)
+        } else if state == idle | BUSY {
+            (idle | BUSY | FREEING, Free::Deferred)
+        } else {
+            return Free::Unknown; // the other version, or being freed already
+        };
+        match slot.state.compare_exchange(state, next, Ordering::AcqRel, Ordering::Acquire) {
+            Ok(_) => return outcome,
+            Err(now) => state = now,
         }
-        Some(_) => {
-            remove_at(&mut entries, i);
-            Free::Now
-        }
-        None => Free::Unknown,
-    }
-}
-
-fn remove_at(entries: &mut Vec<Entry>, i: usize) {
-    entries.remove(i);
-    if entries.is_empty() {
-        // Give the buffer back: an unloaded library must leave no heap block behind.
-        *entries = Vec::new();
     }
 }
 
@@ -129,8 +161,8 @@ mod tests {
     fn handles_are_recognised_by_address_alone() {
         let a = 0x1000 as *mut c_void;
         let b = 0x2000 as *mut c_void;
-        register(a, FmiVersion::Fmi2);
-        register(b, FmiVersion::Fmi3);
+        assert!(register(a, FmiVersion::Fmi2));
+        assert!(register(b, FmiVersion::Fmi3));
         assert_eq!(acquire(a, FmiVersion::Fmi3), Access::Unknown, "other version");
         assert_eq!(acquire(a, FmiVersion::Fmi2), Access::Granted);
         assert_eq!(acquire(a, FmiVersion::Fmi2), Access::Busy, "re-entrant");
@@ -141,5 +173,10 @@ mod tests {
         assert_eq!(request_free(a, FmiVersion::Fmi2), Free::Unknown, "double free");
         assert_eq!(request_free(b, FmiVersion::Fmi3), Free::Now);
         assert_eq!(acquire(std::ptr::null_mut(), FmiVersion::Fmi2), Access::Unknown);
+        // A freed slot is reused.
+        assert!(register(a, FmiVersion::Fmi3));
+        assert_eq!(acquire(a, FmiVersion::Fmi3), Access::Granted);
+        assert!(!release(a));
+        assert_eq!(request_free(a, FmiVersion::Fmi3), Free::Now);
     }
 }

@@ -10,5 +10,5 @@
 pub mod outputs;
 pub mod platform;
 
-pub use outputs::PlatformOutputs;
+pub use outputs::{LegOutputs, PlatformOutputs};
 pub use platform::{PlatformDynamics, PlatformSimulation, SIMULATION_DIM, SimulationState, Stabilisation, StepFailure};

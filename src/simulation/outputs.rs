@@ -43,6 +43,21 @@ pub struct PlatformOutputs {
     pub dissipated_energy: f64,
 }
 
+/// Leg lengths and rates alone (a subset of [`PlatformOutputs`], the same numbers).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LegOutputs {
+    pub l: [f64; LEG_COUNT],
+    pub ldot: [f64; LEG_COUNT],
+}
+
+impl LegOutputs {
+    pub fn compute(form: &SpecialForm, y: &SimulationState) -> Self {
+        let state = BodyState::from_vector(body(y));
+        let legs = LegGeometry::new(&form.stand, &state);
+        LegOutputs { ldot: legs.length_rates(&form.stand, &state), l: legs.length }
+    }
+}
+
 impl PlatformOutputs {
     pub fn compute(form: &SpecialForm, y: &SimulationState) -> Self {
         let stand = &form.stand;

@@ -23,7 +23,7 @@ use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::{LEG_COUNT, PAPER_EQUILIBRIUM_LEG_FORCE, Stand};
 use crate::simulation::outputs::{condition_number, condition_number_tangent};
 use crate::simulation::platform::{SIMULATION_DIM, SimulationState, body, quadrature, switching};
-use crate::simulation::{PlatformOutputs, PlatformSimulation, Stabilisation};
+use crate::simulation::{LegOutputs, PlatformOutputs, PlatformSimulation, Stabilisation};
 use variables::group;
 
 pub static INFO: ModelInfo = ModelInfo {
@@ -183,6 +183,9 @@ pub struct PlatformModel {
     pub simulation: Option<PlatformSimulation>,
     /// Outputs of the current state, computed on the first read after a change.
     outputs: Option<PlatformOutputs>,
+    /// Leg lengths and rates of the current state: what a controller reads every step, so
+    /// they are computed alone (the leg geometry) rather than with every other output.
+    legs: Option<LegOutputs>,
     /// `kappa` of the current state, computed on its first read after a change.
     kappa: Option<f64>,
 }
@@ -195,6 +198,7 @@ impl Default for PlatformModel {
             force_rates: [0.0; LEG_COUNT],
             simulation: None,
             outputs: None,
+            legs: None,
             kappa: None,
         }
     }
@@ -222,7 +226,17 @@ impl PlatformModel {
     /// The current state changed: the cached outputs are stale.
     fn invalidate_outputs(&mut self) {
         self.outputs = None;
+        self.legs = None;
         self.kappa = None;
+    }
+
+    fn leg_outputs(&mut self) -> &LegOutputs {
+        let (simulation, parameters, outputs) = (&self.simulation, &self.parameters, &self.outputs);
+        self.legs.get_or_insert_with(|| match (outputs, simulation) {
+            (Some(o), _) => LegOutputs { l: o.l, ldot: o.ldot },
+            (None, Some(sim)) => LegOutputs::compute(&sim.form, &sim.state),
+            (None, None) => LegOutputs::compute(&parameters.special_form(), &parameters.initial_simulation_state()),
+        })
     }
 
     fn held_forces(&self, t0: f64) -> HeldForces {
@@ -361,6 +375,8 @@ impl FmuModel for PlatformModel {
                 self.event_indicators(&mut z);
                 z.get(var.index).copied().unwrap_or(f64::NAN)
             }
+            group::L => self.leg_outputs().l.get(var.index).copied().unwrap_or(f64::NAN),
+            group::LDOT => self.leg_outputs().ldot.get(var.index).copied().unwrap_or(f64::NAN),
             g if variables::is_output_or_derivative(g) => Self::output_value(self.outputs(), var),
             _ => self.parameter_slot(var).map_or(f64::NAN, |slot| *slot),
         }
@@ -817,6 +833,7 @@ impl FmuModel for PlatformModel {
             force_rates,
             simulation,
             outputs: None,
+            legs: None,
             kappa: None,
         })
     }

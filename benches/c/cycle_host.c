@@ -1,0 +1,206 @@
+/* The whole co-simulation cycle from a plain C host, as a simulator drives the platform FMU:
+ * set the six leg forces, step 1 ms, read the twelve leg lengths and rates, with a leg-length
+ * feedback around the neutral legs (so the platform stays near its pose for any run length).
+ *
+ *   cycle_host fmi2|fmi3 <binary.so> <GUID or token> rk4|dopri5 count   <cycles>
+ *   cycle_host ...                                              latency <cycles>
+ *   cycle_host ...                                              threads <cycles> <threads>
+ *   cycle_host ...                                              instantiate <count>
+ *
+ * count: no clock in the loop, for callgrind; set_forces, do_step and get_outputs are separate
+ * non-inlined functions so that their inclusive instruction counts split the cycle.
+ * latency: clock_gettime around every cycle; prints percentiles in microseconds.
+ * threads: that many threads, each with its own instance, run the cycles at once; prints
+ * steps per second.
+ */
+#define _GNU_SOURCE
+#include <dlfcn.h>
+#include <pthread.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+typedef void *Instance;
+typedef int (*Status1)(Instance);
+static int fmi3;
+static void *lib;
+static const char *guid;
+static int method;
+
+/* FMI 2 */
+typedef struct {
+    void *logger, *allocate, *free, *step_finished, *environment;
+} Callbacks2;
+static Instance (*fmi2Instantiate)(const char *, int, const char *, const char *, const Callbacks2 *, int, int);
+static int (*fmi2SetupExperiment)(Instance, int, double, double, int, double);
+static int (*fmi2SetReal)(Instance, const unsigned *, size_t, const double *);
+static int (*fmi2GetReal)(Instance, const unsigned *, size_t, double *);
+static int (*fmi2SetInteger)(Instance, const unsigned *, size_t, const int *);
+static int (*fmi2DoStep)(Instance, double, double, int);
+static void (*fmi2FreeInstance)(Instance);
+static Status1 fmi2EnterInitializationMode, fmi2ExitInitializationMode;
+/* FMI 3 */
+static Instance (*fmi3InstantiateCoSimulation)(const char *, const char *, const char *, int, int, int, int,
+                                               const unsigned *, size_t, void *, void *, void *);
+static int (*fmi3EnterInitializationMode)(Instance, int, double, double, int, double);
+static int (*fmi3SetFloat64)(Instance, const unsigned *, size_t, const double *, size_t);
+static int (*fmi3GetFloat64)(Instance, const unsigned *, size_t, double *, size_t);
+static int (*fmi3SetInt32)(Instance, const unsigned *, size_t, const int *, size_t);
+static int (*fmi3DoStep)(Instance, double, double, int, int *, int *, int *, double *);
+static void (*fmi3FreeInstance)(Instance);
+static Status1 fmi3ExitInitializationMode;
+
+#define LOAD(f) do { *(void **)&f = dlsym(lib, #f); if (!f) { fprintf(stderr, "missing %s\n", #f); exit(2); } } while (0)
+
+static const double H = 1e-3, U0 = 5900.715, L0 = 1.7550860729486566, G = 2e5, D = 2e4;
+static const unsigned FORCES2[6] = {1, 2, 3, 4, 5, 6};
+static const unsigned LEGS2[12] = {121, 122, 123, 124, 125, 126, 127, 128, 129, 130, 131, 132};
+static const unsigned FORCES3[1] = {1};
+static const unsigned LEGS3[2] = {121, 127};
+static const unsigned METHOD_VR = 80;
+
+static Instance make(void) {
+    Instance c;
+    if (fmi3) {
+        c = fmi3InstantiateCoSimulation("cycle", guid, NULL, 0, 0, 0, 0, NULL, 0, NULL, NULL, NULL);
+        if (!c || fmi3EnterInitializationMode(c, 0, 0.0, 0.0, 0, 0.0)) exit(3);
+        fmi3SetInt32(c, &METHOD_VR, 1, &method, 1);
+        if (fmi3ExitInitializationMode(c)) exit(3);
+    } else {
+        static const Callbacks2 callbacks = {0};
+        c = fmi2Instantiate("cycle", 1, guid, NULL, &callbacks, 0, 0);
+        if (!c || fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0) || fmi2EnterInitializationMode(c)) exit(3);
+        fmi2SetInteger(c, &METHOD_VR, 1, &method);
+        if (fmi2ExitInitializationMode(c)) exit(3);
+    }
+    return c;
+}
+
+static void release(Instance c) {
+    if (fmi3) fmi3FreeInstance(c); else fmi2FreeInstance(c);
+}
+
+__attribute__((noinline)) static void set_forces(Instance c, const double *legs) {
+    double f[6];
+    for (int k = 0; k < 6; k++) f[k] = U0 + G * (L0 - legs[k]) - D * legs[6 + k];
+    int s = fmi3 ? fmi3SetFloat64(c, FORCES3, 1, f, 6) : fmi2SetReal(c, FORCES2, 6, f);
+    if (s) exit(4);
+}
+
+__attribute__((noinline)) static void do_step(Instance c, double t) {
+    int event, terminate, early;
+    double last;
+    int s = fmi3 ? fmi3DoStep(c, t, H, 1, &event, &terminate, &early, &last) : fmi2DoStep(c, t, H, 1);
+    if (s) exit(5);
+}
+
+__attribute__((noinline)) static void get_outputs(Instance c, double *legs) {
+    int s = fmi3 ? fmi3GetFloat64(c, LEGS3, 2, legs, 12) : fmi2GetReal(c, LEGS2, 12, legs);
+    if (s) exit(6);
+}
+
+__attribute__((noinline)) static void run_cycles(Instance c, long n, double *legs) {
+    for (long i = 0; i < n; i++) {
+        set_forces(c, legs);
+        do_step(c, i * H);
+        get_outputs(c, legs);
+    }
+}
+
+static double now(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+static int compare(const void *a, const void *b) {
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+typedef struct { long n; double seconds; } Job;
+
+static void *thread_job(void *arg) {
+    Job *job = arg;
+    Instance c = make();
+    double legs[12];
+    get_outputs(c, legs);
+    double t0 = now();
+    run_cycles(c, job->n, legs);
+    job->seconds = now() - t0;
+    release(c);
+    return NULL;
+}
+
+int main(int argc, char **argv) {
+    if (argc < 7) {
+        fprintf(stderr, "usage: %s fmi2|fmi3 binary guid rk4|dopri5 count|latency|threads|instantiate n [threads]\n", argv[0]);
+        return 2;
+    }
+    fmi3 = strcmp(argv[1], "fmi3") == 0;
+    lib = dlopen(argv[2], RTLD_NOW | RTLD_LOCAL);
+    if (!lib) { fprintf(stderr, "dlopen: %s\n", dlerror()); return 2; }
+    guid = argv[3];
+    method = strcmp(argv[4], "rk4") == 0 ? 2 : 1;
+    const char *mode = argv[5];
+    long n = atol(argv[6]);
+    if (fmi3) {
+        LOAD(fmi3InstantiateCoSimulation); LOAD(fmi3EnterInitializationMode); LOAD(fmi3ExitInitializationMode);
+        LOAD(fmi3SetFloat64); LOAD(fmi3GetFloat64); LOAD(fmi3SetInt32); LOAD(fmi3DoStep); LOAD(fmi3FreeInstance);
+    } else {
+        LOAD(fmi2Instantiate); LOAD(fmi2SetupExperiment); LOAD(fmi2EnterInitializationMode);
+        LOAD(fmi2ExitInitializationMode); LOAD(fmi2SetReal); LOAD(fmi2GetReal); LOAD(fmi2SetInteger);
+        LOAD(fmi2DoStep); LOAD(fmi2FreeInstance);
+    }
+    if (strcmp(mode, "instantiate") == 0) {
+        double t0 = now();
+        for (long i = 0; i < n; i++) release(make());
+        printf("instantiate+initialise+free: %.2f us each (%ld)\n", 1e6 * (now() - t0) / n, n);
+        return 0;
+    }
+    if (strcmp(mode, "threads") == 0) {
+        int threads = argc > 7 ? atoi(argv[7]) : 1;
+        pthread_t ids[64];
+        Job jobs[64];
+        double t0 = now();
+        for (int i = 0; i < threads && i < 64; i++) {
+            jobs[i].n = n;
+            pthread_create(&ids[i], NULL, thread_job, &jobs[i]);
+        }
+        for (int i = 0; i < threads && i < 64; i++) pthread_join(ids[i], NULL);
+        double wall = now() - t0;
+        printf("threads %d: %ld cycles each, %.0f cycles/s in total, %.3f us per cycle per thread\n", threads, n,
+               threads * n / wall, 1e6 * jobs[0].seconds / n);
+        return 0;
+    }
+    Instance c = make();
+    double legs[12];
+    get_outputs(c, legs);
+    if (strcmp(mode, "count") == 0) {
+        run_cycles(c, n, legs);
+    } else {
+        double *dt = malloc(n * sizeof *dt);
+        double clock0 = now(), clock1 = now();
+        for (long i = 0; i < n; i++) {
+            double t0 = now();
+            set_forces(c, legs);
+            do_step(c, i * H);
+            get_outputs(c, legs);
+            dt[i] = now() - t0;
+        }
+        (void)clock0;
+        double overhead = now() - clock1;
+        double sum = 0;
+        for (long i = 0; i < n; i++) sum += dt[i];
+        qsort(dt, n, sizeof *dt, compare);
+        printf("latency over %ld cycles (us): mean %.3f p50 %.3f p99 %.3f p99.9 %.3f max %.1f; loop %.2f s\n", n,
+               1e6 * sum / n, 1e6 * dt[n / 2], 1e6 * dt[(long)(n * 0.99)], 1e6 * dt[(long)(n * 0.999)],
+               1e6 * dt[n - 1], overhead);
+        free(dt);
+    }
+    printf("final leg 1: %.12f m\n", legs[0]);
+    release(c);
+    return 0;
+}

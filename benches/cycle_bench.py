@@ -1,0 +1,135 @@
+"""The whole co-simulation cycle, measured fairly: a plain C host (benches/c/cycle_host.c) sets
+the six leg forces (leg feedback around the neutral legs), steps 1 ms and reads the twelve leg
+lengths and rates, through the packaged FMI 2 and FMI 3 platform FMUs. Prints one table:
+
+- instructions per cycle and its split (set, step, get), from callgrind over 5000 cycles
+  (repeatable; wall times on this shared machine vary up to 2x between runs);
+- wall-clock latency over 10^6 cycles (mean, p50, p99, p99.9, max), one run;
+- throughput with 1 and 2 threads, each with its own instance;
+- instantiate + initialise + free;
+- MuJoCo 4's RK4 `mj_step` on the same stand (examples/compare_performance.py's model), in its
+  own C loop (`mj_step(model, data, nstep=N)`) and per call from Python, if `mujoco` is
+  installed (`pip install mujoco`); the ratios to ours use the C-loop figure.
+
+    .venv/bin/python benches/cycle_bench.py [output-folder]   # after cargo run --release --bin build-fmu
+"""
+
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+import zipfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+OUT = Path(sys.argv[1] if len(sys.argv) > 1 else ROOT / "benches" / "results")
+FMUS = {"fmi2": ROOT / "target" / "fmu" / "StewartPlatform.fmu",
+        "fmi3": ROOT / "target" / "fmu" / "fmi3" / "StewartPlatform.fmu"}
+COUNT_CYCLES = 5000
+LATENCY_CYCLES = 1_000_000
+
+
+def unpack(version, folder):
+    with zipfile.ZipFile(FMUS[version]) as z:
+        z.extractall(folder / version)
+    md = (folder / version / "modelDescription.xml").read_text()
+    token = re.search(r'(?:guid|instantiationToken)="([^"]+)"', md).group(1)
+    binary = next((folder / version / "binaries").rglob("StewartPlatform.so"))
+    return str(binary), token
+
+
+def instructions(host, version, binary, token, method, folder):
+    """Inclusive instruction counts of the host's cycle functions, per cycle."""
+    out = folder / f"cg.{version}.{method}"
+    subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", host, version, binary, token,
+                    method, "count", str(COUNT_CYCLES)], check=True, capture_output=True)
+    report = subprocess.run(["callgrind_annotate", "--inclusive=yes", str(out)], check=True, capture_output=True,
+                            text=True).stdout
+    counts = {}
+    for name in ("run_cycles", "set_forces", "do_step", "get_outputs"):
+        m = re.search(r"^\s*([\d,]+) \([^)]*\)\s+\S*cycle_host\.c:" + name + r" \[", report, re.M)
+        counts[name] = int(m.group(1).replace(",", "")) / COUNT_CYCLES
+    return counts
+
+
+def run(host, *args):
+    return subprocess.run([host, *map(str, args)], check=True, capture_output=True, text=True).stdout
+
+
+def mujoco_step_us():
+    try:
+        import mujoco
+    except ImportError:
+        return None
+    sys.path.insert(0, str(ROOT / "examples"))
+    from compare_performance import mjcf
+    model = mujoco.MjModel.from_xml_string(mjcf("RK4", 1e-3))
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    n = 5000
+    start = time.perf_counter()
+    mujoco.mj_step(model, data, nstep=n)
+    c_loop = (time.perf_counter() - start) / n * 1e6
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    start = time.perf_counter()
+    for _ in range(n):
+        mujoco.mj_step(model, data)
+    per_call = (time.perf_counter() - start) / n * 1e6
+    return c_loop, per_call
+
+
+def main():
+    if not shutil.which("valgrind") or not shutil.which("gcc"):
+        sys.exit("cycle_bench: valgrind and gcc are needed")
+    OUT.mkdir(parents=True, exist_ok=True)
+    folder = Path(tempfile.mkdtemp(prefix="cycle_bench_"))
+    host = str(folder / "cycle_host")
+    subprocess.run(["gcc", "-O2", "-g", "-Wall", "-Wextra", "-Werror", "-o", host,
+                    str(ROOT / "benches" / "c" / "cycle_host.c"), "-ldl", "-lpthread"], check=True)
+    lines = [f"cycle_bench: {time.strftime('%Y-%m-%d %H:%M')}, {os.cpu_count()} cores, "
+             f"{open('/proc/cpuinfo').read().split('model name')[1].split(':')[1].splitlines()[0].strip()}", ""]
+    lines.append("Instructions per cycle (callgrind, 5000 cycles): set 6 forces + fmi2DoStep/fmi3DoStep 1 ms + get 12 values")
+    lines.append(f"{'FMU':6} {'method':7} {'cycle':>8} {'set':>7} {'step':>8} {'get':>7}")
+    cycles = {}
+    for version in ("fmi2", "fmi3"):
+        binary, token = unpack(version, folder)
+        for method in ("rk4", "dopri5"):
+            c = instructions(host, version, binary, token, method, folder)
+            cycles[(version, method)] = c
+            lines.append(f"{version:6} {method:7} {c['run_cycles']:8.0f} {c['set_forces']:7.0f} {c['do_step']:8.0f} "
+                         f"{c['get_outputs']:7.0f}")
+    lines.append("")
+    binary, token = unpack("fmi2", folder)
+    latency = {}
+    for method in ("rk4", "dopri5"):
+        text = run(host, "fmi2", binary, token, method, "latency", LATENCY_CYCLES)
+        latency[method] = text.splitlines()[0]
+        lines.append(f"FMI 2 {method}: {latency[method]}")
+    for threads in (1, 2):
+        lines.append(f"FMI 2 rk4, {run(host, 'fmi2', binary, token, 'rk4', 'threads', 200_000, threads).strip()}")
+    lines.append(f"FMI 2: {run(host, 'fmi2', binary, token, 'rk4', 'instantiate', 2000).strip()}")
+    binary3, token3 = unpack("fmi3", folder)
+    lines.append(f"FMI 3: {run(host, 'fmi3', binary3, token3, 'rk4', 'instantiate', 2000).strip()}")
+    lines.append("")
+    mj = mujoco_step_us()
+    if mj is None:
+        lines.append("MuJoCo: not installed (pip install mujoco), no comparison")
+    else:
+        c_loop, per_call = mj
+        ours = {m: float(re.search(r"mean ([\d.]+)", latency[m]).group(1)) for m in latency}
+        lines.append(f"MuJoCo RK4 mj_step, same stand, 1 ms: {c_loop:.1f} us per step in its C loop (nstep), "
+                     f"{per_call:.1f} us per call from Python")
+        lines.append(f"ratio MuJoCo C loop / our full cycle: RK4 {c_loop / ours['rk4']:.0f}x, "
+                     f"adaptive default {c_loop / ours['dopri5']:.0f}x (wall clock, this run)")
+    text = "\n".join(lines)
+    print(text)
+    (OUT / "cycle.txt").write_text(text + "\n")
+    shutil.rmtree(folder, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    main()
