@@ -64,8 +64,11 @@ def mujoco_step_us():
         import mujoco
     except ImportError:
         return None
-    sys.path.insert(0, str(ROOT / "examples"))
-    from compare_performance import mjcf
+    import importlib.util
+    spec = importlib.util.spec_from_file_location("compare_performance", ROOT / "examples" / "compare_performance.py")
+    comparison = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(comparison)
+    mjcf = comparison.mjcf
     model = mujoco.MjModel.from_xml_string(mjcf("RK4", 1e-3))
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)

@@ -37,8 +37,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests" / "python"))
-from stewart import (BASE_AZIMUTHS, GRAVITY, H_C, INERTIA, MASS, NEUTRAL_Z, PLATFORM_AZIMUTHS, PLATFORM_FMU,  # noqa: E402
+from stewart_fmu import (BASE_AZIMUTHS, GRAVITY, H_C, INERTIA, MASS, NEUTRAL_Z, PLATFORM_AZIMUTHS, PLATFORM_FMU,
                      R_B, R_P, Platform)
 
 OUT = Path(sys.argv[1] if len(sys.argv) > 1 else "output")

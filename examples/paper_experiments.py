@@ -13,14 +13,13 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from fmpy import simulate_fmu  # noqa: E402
-from fmpy.fmi1 import FMICallException  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+from fmpy import simulate_fmu
+from fmpy.fmi1 import FMICallException
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "python"))
-from cosim import closed_loop  # noqa: E402
-from stewart import (EQUILIBRIUM_FORCE, PLATFORM_FMU, Platform, heave_forces, heave_programme,  # noqa: E402
+from stewart_fmu.cosim import closed_loop
+from stewart_fmu import (EQUILIBRIUM_FORCE, PLATFORM_FMU, Platform, heave_forces, heave_programme,
                      stand_parameters)
 
 OUT = Path(sys.argv[1] if len(sys.argv) > 1 else "output")

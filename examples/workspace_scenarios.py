@@ -13,11 +13,10 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "python"))
-import workspace as ws  # noqa: E402
+from stewart_fmu import workspace as ws
 
 OUT = Path(sys.argv[1] if len(sys.argv) > 1 else "output")
 LEGS = list(ws.LEGS)

@@ -26,6 +26,7 @@ if [ ! -x .venv/bin/python ]; then
     python3 -m venv .venv
 fi
 .venv/bin/python -m pip install --quiet --disable-pip-version-check -r tests/requirements.txt
+.venv/bin/python -m pip install --quiet --disable-pip-version-check --no-deps -e python
 
 export FMI_SIM="$PWD/target/tools/bin/fmi-sim"
 if [ ! -x "$FMI_SIM" ]; then

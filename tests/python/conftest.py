@@ -1,13 +1,6 @@
-import sys
-from pathlib import Path
-
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-# The linearisation command (examples/linearise.py) is also a library for the tests.
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "examples"))
-
-from stewart import PLATFORM_FMU  # noqa: E402
+from stewart_fmu import PLATFORM_FMU
 
 
 @pytest.fixture(scope="session")

@@ -8,8 +8,8 @@ import numpy as np
 from fmpy.ssp.simulation import simulate_ssp
 from fmpy.validation import validate_fmu
 
-from cosim import CONTROLLER_FMU, SYSTEM_SSP, closed_loop
-from stewart import bisect_boundary, stand_parameters
+from stewart_fmu.cosim import CONTROLLER_FMU, SYSTEM_SSP, closed_loop
+from stewart_fmu import bisect_boundary, stand_parameters
 
 P = stand_parameters(nondimensional=True)
 Z0 = P["r0[3]"]

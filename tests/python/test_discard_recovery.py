@@ -13,7 +13,7 @@ from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave, fmi2Discard, fmi2LastSuccessfulTime, fmi2Terminated
 
-from stewart import PLATFORM_FMU, ROOT, recording_callbacks
+from stewart_fmu import PLATFORM_FMU, ROOT, recording_callbacks
 
 
 def readme_recipe():

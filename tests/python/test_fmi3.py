@@ -13,7 +13,7 @@ from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.fmi3 import FMU3Model, FMU3Slave
 from fmpy.validation import validate_fmu
 
-from stewart import PLATFORM_FMU, Platform, recording_callbacks
+from stewart_fmu import PLATFORM_FMU, Platform, recording_callbacks
 
 FMI3_DIR = Path(PLATFORM_FMU).parent / "fmi3"
 PLATFORM3 = FMI3_DIR / "StewartPlatform.fmu"
@@ -319,7 +319,7 @@ def test_fmi3_controller_closes_the_loop_like_fmi2():
         if fmi3:
             c = Fmu3(controller, name="c")
         else:
-            from cosim import Component
+            from stewart_fmu.cosim import Component
             c = Component(controller, "c")
         errors = []
         for i in range(2000):

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from stewart import EQUILIBRIUM_FORCE, Platform, stand_parameters
+from stewart_fmu import EQUILIBRIUM_FORCE, Platform, stand_parameters
 
 P = stand_parameters(nondimensional=True)
 OUTPUTS = [f"r[{i}]" for i in (1, 2, 3)] + [f"R[{a},{b}]" for a in (1, 2, 3) for b in (1, 2, 3)] + \
@@ -70,7 +70,7 @@ CONTINUE_SCRIPT = r"""
 import json, sys
 sys.path.insert(0, {tests!r})
 import numpy as np
-from stewart import Platform, stand_parameters
+from stewart_fmu import Platform, stand_parameters
 from test_fmu_state import drive
 pl = Platform(parameters=stand_parameters(nondimensional=True), name="fresh")
 state = pl.slave.deSerializeFMUstate(open({path!r}, "rb").read())

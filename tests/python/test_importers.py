@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from stewart import PLATFORM_FMU, ROOT, Platform
+from stewart_fmu import PLATFORM_FMU, ROOT, Platform
 
 FORCE = 5900.715
 OUTPUTS = ["r[1]", "r[2]", "r[3]", "angles[1]", "angles[2]", "angles[3]", "l[1]", "l[4]", "E"]
@@ -115,7 +115,7 @@ def rest_height_on_stops(force, lower):
     """Pure-heave rest of the default stand with every leg pushing `force` (N) and resting on
     its lower (or upper) stops, from the default stand's geometry (docs/model.md §3) and the FMU's stop defaults:
     6 (force +- k_s delta) H / l = M g."""
-    from workspace import stop_defaults
+    from stewart_fmu.workspace import stop_defaults
     from test_workspace import horizontal_leg_projection
     lmin, lmax, k, _ = stop_defaults()
     d = horizontal_leg_projection()

@@ -7,8 +7,8 @@ import math
 
 import numpy as np
 
-from linearise import closed_loop, critical_gain, eigen_table, linearise, max_real_part
-from stewart import EQUILIBRIUM_FORCE, Platform, bisect_boundary, heave_forces, stand_parameters
+from stewart_fmu.linearise import closed_loop, critical_gain, eigen_table, linearise, max_real_part
+from stewart_fmu import EQUILIBRIUM_FORCE, Platform, bisect_boundary, heave_forces, stand_parameters
 
 P = stand_parameters(nondimensional=True)
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from fmpy import simulate_fmu
 
-from stewart import EQUILIBRIUM_FORCE, PLATFORM_FMU, Platform, heave_forces, heave_programme, stand_parameters
+from stewart_fmu import EQUILIBRIUM_FORCE, PLATFORM_FMU, Platform, heave_forces, heave_programme, stand_parameters
 
 P = stand_parameters(nondimensional=True)
 Z0 = P["r0[3]"]
@@ -80,7 +80,7 @@ def test_model_exchange_with_exact_forces_matches_co_simulation():
     at every right-hand-side time: the heave matches the programme and Co-Simulation (with
     first-order input interpolation) to 1e-5 for t <= 8."""
     from scipy.integrate import solve_ivp
-    from linearise import PlatformModel
+    from stewart_fmu.linearise import PlatformModel
     m = PlatformModel(P, [heave_forces(0.0)[0]] * 6)
 
     def rhs(t, x):
@@ -125,7 +125,7 @@ def test_directional_derivatives_match_central_differences():
     """At random states and forces: d(derivatives)/d(states, inputs) and d(outputs)/d(states)
     from fmi2GetDirectionalDerivative against central differences of fmi2GetDerivatives and
     fmi2GetReal: relative error <= 1e-6."""
-    from linearise import PlatformModel
+    from stewart_fmu.linearise import PlatformModel
     m = PlatformModel(P, [EQUILIBRIUM_FORCE] * 6)
     rng = np.random.default_rng(11)
     x0 = m.states()
@@ -177,7 +177,7 @@ def test_co_simulation_also_provides_directional_derivatives():
     dl = pl.slave.getDirectionalDerivative([pl.vr["l[1]"], pl.vr["r[3]"]], f, [1.0] * 6)
     da = pl.slave.getDirectionalDerivative([pl.vr["der(v[3])"]], f, [1.0] * 6)
     pl.free()
-    from linearise import PlatformModel
+    from stewart_fmu.linearise import PlatformModel
     m = PlatformModel(P, [EQUILIBRIUM_FORCE] * 6)
     da_me = m.fmu.getDirectionalDerivative([m.vr["der(v[3])"]], m.force_vrs, [1.0] * 6)
     m.free()

@@ -3,7 +3,7 @@
 import os
 import re
 
-from stewart import ROOT
+from stewart_fmu import ROOT
 
 
 def test_readme_python_blocks_run(platform_fmu):

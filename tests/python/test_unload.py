@@ -8,7 +8,7 @@ import re
 
 from fmpy import simulate_fmu
 
-from stewart import PLATFORM_FMU
+from stewart_fmu import PLATFORM_FMU
 
 
 def rss_mb():

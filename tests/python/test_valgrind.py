@@ -14,7 +14,7 @@ import zipfile
 import pytest
 from fmpy import read_model_description
 
-from stewart import PLATFORM_FMU, ROOT, Platform
+from stewart_fmu import PLATFORM_FMU, ROOT, Platform
 
 
 @pytest.mark.parametrize("threads", [1, 4])

@@ -19,9 +19,8 @@ import numpy as np
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
 
-from stewart import PLATFORM_FMU, recording_callbacks, set_values
+from .core import CONTROLLER_FMU, PLATFORM_FMU, recording_callbacks, set_values
 
-CONTROLLER_FMU = Path(PLATFORM_FMU).parent / "StewartController.fmu"
 SYSTEM_SSP = Path(PLATFORM_FMU).parent / "StewartSystem.ssp"
 LEGS = range(1, 7)
 _extracted = {}

@@ -1,6 +1,7 @@
-"""Helpers shared by the Python tests and the demonstration: where the packaged FMU is, the
-paper's non-dimensional stand computed from docs/model.md §3 (independently of the Rust code), and a
-thin driver around fmpy's FMU2Slave."""
+"""The basics the tests, the examples and users share: where the packaged FMUs are, the
+default stand (docs/model.md §3) in SI or the paper's non-dimensional units, computed here
+independently of the Rust code, the paper's heave programme and its direct problem, and a thin
+driver around FMPy's FMU2Slave."""
 
 import math
 import os
@@ -10,8 +11,11 @@ import numpy as np
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
 
+# The repository this package lives in (python/stewart_fmu/): the FMUs are built into its
+# target/fmu/; STEWART_PLATFORM_FMU points elsewhere.
 ROOT = Path(__file__).resolve().parents[2]
 PLATFORM_FMU = Path(os.environ.get("STEWART_PLATFORM_FMU", ROOT / "target" / "fmu" / "StewartPlatform.fmu"))
+CONTROLLER_FMU = PLATFORM_FMU.parent / "StewartController.fmu"
 
 # docs/model.md §3: the truck-cabin stand.
 R_B, R_P, H_C = 1.5, 1.0, 0.5

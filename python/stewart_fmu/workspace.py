@@ -20,8 +20,8 @@ import re
 import numpy as np
 from fmpy import read_model_description, simulate_fmu
 
-from cosim import closed_loop
-from stewart import BASE_AZIMUTHS, GRAVITY, H_C, MASS, PLATFORM_AZIMUTHS, PLATFORM_FMU, R_B, R_P, Platform
+from .cosim import closed_loop
+from .core import BASE_AZIMUTHS, GRAVITY, H_C, MASS, PLATFORM_AZIMUTHS, PLATFORM_FMU, R_B, R_P, Platform
 
 LEGS = range(1, 7)
 EQUILIBRIUM_FORCE_SI = 0.2005 * MASS * GRAVITY

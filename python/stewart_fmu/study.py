@@ -1,0 +1,301 @@
+"""Design studies: a study file (TOML) names the system, the fixed and varied parameters, the
+scenario and the plots; this module expands it into runs and executes one run, returning one
+row of metrics. `stewart_fmu.sweep` distributes the runs on Dask.
+
+A run is a dict of parameter values keyed by name:
+
+- `platform.<variable>` and `controller.<variable>`: FMU parameters by their FMI 2 names
+  (`platform.M`, `controller.G`, `platform.r0[3]`);
+- `platform.com_offset[i]` (m or R_b): the centre of mass moved by that much in the body frame
+  (the platform joints `A` move by minus it, `r0` by plus it, so the legs start unchanged);
+- `step`, `stop_time`: the communication step and the end of the run;
+- `scenario.power_loss_at` (platform alone): the leg forces fall to 0 at that time;
+  `scenario.failed_leg`, `scenario.failure_time` (closed loop): that leg's force falls to 0.
+
+A run's id is a hash of its parameter values, so a study can be resumed and a run is never
+executed twice. Results do not depend on where a run executes: a worker process unpacks each
+FMU once and reuses its instances with `fmi2Reset`, which restores them exactly.
+"""
+
+import hashlib
+import itertools
+import json
+import math
+import os
+import tempfile
+import tomllib
+import zipfile
+from pathlib import Path
+
+import numpy as np
+from fmpy import read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import FMU2Slave, fmi2Terminated
+
+from .core import CONTROLLER_FMU, PLATFORM_FMU, recording_callbacks, set_values, stand_parameters
+
+METRICS = ["max_leg_error", "max_pose_error", "stable", "discard_time", "min_kappa", "max_stop_force",
+           "energy_residual", "peak_deceleration", "final_z"]
+
+
+class StudyError(ValueError):
+    """A study file that cannot be run, with the reason."""
+
+
+def load(path):
+    """The study file as a dict, checked."""
+    path = Path(path)
+    try:
+        spec = tomllib.loads(path.read_text())
+    except (OSError, tomllib.TOMLDecodeError) as e:
+        raise StudyError(f"{path}: {e}") from e
+    study = spec.setdefault("study", {})
+    study.setdefault("name", path.stem)
+    system = study.setdefault("system", "closed-loop")
+    if system not in ("platform", "closed-loop"):
+        raise StudyError(f"{path}: study.system must be 'platform' or 'closed-loop', not {system!r}")
+    if study.setdefault("units", "si") not in ("si", "nondimensional"):
+        raise StudyError(f"{path}: study.units must be 'si' or 'nondimensional'")
+    for key in ("stop_time", "step"):
+        if not isinstance(study.get(key), (int, float)) or study[key] <= 0:
+            raise StudyError(f"{path}: study.{key} must be a positive number of seconds (or time units)")
+    for name, values in spec.get("grid", {}).items():
+        if not isinstance(values, list) or not values:
+            raise StudyError(f"{path}: grid.{name} must be a non-empty list")
+    random = spec.get("random", {})
+    for name, dist in random.items():
+        if name in ("samples", "seed"):
+            continue
+        if not (isinstance(dist, dict) and len(dist) == 1 and next(iter(dist)) in ("uniform", "normal")):
+            raise StudyError(f"{path}: random.{name} must be {{ uniform = [low, high] }} or {{ normal = [mean, sd] }}")
+    return spec
+
+
+def runs(spec):
+    """Every run of the study, in a fixed order: the grid's product, times the random samples
+    (drawn in a fixed order from the study's seed)."""
+    grid = spec.get("grid", {})
+    names = sorted(grid)
+    grid_points = [dict(zip(names, values)) for values in itertools.product(*(grid[n] for n in names))] or [{}]
+    random = dict(spec.get("random", {}))
+    samples = int(random.pop("samples", 0))
+    seed = int(random.pop("seed", 0))
+    if samples:
+        rng = np.random.default_rng(seed)
+        draws = {}
+        for name in sorted(random):
+            (kind, (a, b)), = random[name].items()
+            draws[name] = rng.uniform(a, b, samples) if kind == "uniform" else rng.normal(a, b, samples)
+        sample_points = [{n: float(draws[n][i]) for n in sorted(draws)} for i in range(samples)]
+    else:
+        sample_points = [{}]
+    fixed = spec.get("fixed", {})
+    return [dict(fixed, **g, **s) for g in grid_points for s in sample_points]
+
+
+def run_id(run):
+    """A short, stable id of a run's parameter values."""
+    text = json.dumps({k: run[k] for k in sorted(run)}, sort_keys=True, default=repr)
+    return hashlib.sha1(text.encode()).hexdigest()[:16]
+
+
+# ----- execution -------------------------------------------------------------------------------
+
+class _Component:
+    """One FMU2Slave kept for the life of the worker process, reset between runs."""
+
+    def __init__(self, unzipped, md, name):
+        self.md = md
+        self.vr = {v.name: v.valueReference for v in md.modelVariables}
+        self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.coSimulation.modelIdentifier,
+                             instanceName=name)
+        # The FMU's messages are kept, not printed: a failed run's row carries its message.
+        self.messages = []
+        self.fmu.instantiate(callbacks=recording_callbacks(self.messages))
+        self.fresh = True
+
+    def last_problem(self):
+        """The last discard or error message of the current run."""
+        return next((m for status, _, m in reversed(self.messages) if status >= 2), "")
+
+    def start(self, values):
+        self.messages.clear()
+        if not self.fresh:
+            self.fmu.reset()
+        self.fresh = False
+        self.fmu.setupExperiment(startTime=0.0)
+        self.fmu.enterInitializationMode()
+        unknown = [n for n in values if n not in self.vr]
+        if unknown:
+            raise StudyError(f"{self.md.coSimulation.modelIdentifier} has no variables {unknown}")
+        set_values(self.fmu, self.md, values)
+        self.fmu.exitInitializationMode()
+
+    def get(self, names):
+        return np.array(self.fmu.getReal([self.vr[n] for n in names]))
+
+    def set(self, names, values):
+        self.fmu.setReal([self.vr[n] for n in names], [float(v) for v in values])
+
+
+_PROCESS = {}  # per worker process: unpacked FMUs and their components, by content hash
+
+
+def _component(role, fmu):
+    """The worker process's instance of an FMU given as bytes or a path."""
+    data = fmu if isinstance(fmu, bytes) else Path(fmu).read_bytes()
+    key = (role, hashlib.sha256(data).hexdigest())
+    if key not in _PROCESS:
+        folder = tempfile.mkdtemp(prefix=f"stewart-{role}-")
+        path = Path(folder) / f"{role}.fmu"
+        path.write_bytes(data)
+        with zipfile.ZipFile(path) as z:
+            z.extractall(folder)
+        _PROCESS[key] = _Component(folder, read_model_description(str(path)), role)
+    return _PROCESS[key]
+
+
+def fmus_for(spec):
+    """The FMUs a study needs, as bytes (they travel to the workers; no shared file system)."""
+    fmus = {"platform": Path(PLATFORM_FMU).read_bytes()}
+    if spec["study"]["system"] == "closed-loop":
+        fmus["controller"] = Path(CONTROLLER_FMU).read_bytes()
+    return fmus
+
+
+LEGS = range(1, 7)
+L = [f"l[{k}]" for k in LEGS]
+LDOT = [f"ldot[{k}]" for k in LEGS]
+F = [f"F[{k}]" for k in LEGS]
+LP = [f"lp[{k}]" for k in LEGS]
+FSTOP = [f"Fstop[{k}]" for k in LEGS]
+ENERGY = ["E", "work.F", "work.dissipated", "kappa", "r[1]", "r[2]", "r[3]", "v[3]"]
+
+
+def _parameters(spec, run):
+    """The values for each FMU from the study's units and the run."""
+    study = spec["study"]
+    platform, controller = {}, {}
+    if study["units"] == "nondimensional":
+        stand = stand_parameters(nondimensional=True)
+        platform.update(stand)
+        controller.update({k: v for k, v in stand.items() if k in ("M", "g") or k[0] in "JAB"})
+    offset = [0.0, 0.0, 0.0]
+    for name, value in run.items():
+        role, _, variable = name.partition(".")
+        if role == "platform" and variable.startswith("com_offset["):
+            offset[int(variable[11]) - 1] = float(value)
+        elif role == "platform":
+            platform[variable] = value
+        elif role == "controller":
+            controller[variable] = value
+    if any(offset):
+        md_start = _start_values(PLATFORM_FMU)
+        for k in LEGS:
+            for i in range(3):
+                name = f"A[{k},{i + 1}]"
+                platform[name] = float(platform.get(name, md_start[name])) - offset[i]
+        for i in range(3):
+            name = f"r0[{i + 1}]"
+            platform[name] = float(platform.get(name, md_start[name])) + offset[i]
+    return platform, controller
+
+
+_STARTS = {}
+
+
+def _start_values(fmu):
+    if fmu not in _STARTS:
+        md = read_model_description(str(fmu))
+        _STARTS[fmu] = {v.name: float(v.start) for v in md.modelVariables
+                        if v.start is not None and v.type == "Real"}
+    return _STARTS[fmu]
+
+
+def execute(spec, run, fmus):
+    """Runs one point of the study; returns its row (parameters are added by the caller):
+    status "ok", "discard" or "error", the message, and the metrics. Never raises for a run
+    that fails: that is data."""
+    study = spec["study"]
+    h = float(run.get("step", study["step"]))
+    stop = float(run.get("stop_time", study["stop_time"]))
+    closed = study["system"] == "closed-loop"
+    row = {m: math.nan for m in METRICS}
+    row.update(status="ok", message="")
+    try:
+        platform_values, controller_values = _parameters(spec, run)
+        platform = _component("platform", fmus["platform"])
+        platform.start(platform_values)
+        controller = None
+        if closed:
+            controller = _component("controller", fmus["controller"])
+            controller.start(controller_values)
+    except (FMICallException, StudyError) as e:
+        problems = [c.last_problem() for c in _PROCESS.values() if c.last_problem()]
+        row.update(status="error", message=problems[-1] if problems else str(e), stable=False)
+        return row
+    power_loss = run.get("scenario.power_loss_at")
+    failed_leg = run.get("scenario.failed_leg")
+    failure_time = float(run.get("scenario.failure_time", 0.0))
+    n = int(round(stop / h))
+    t = 0.0
+    e0 = platform.get(["E"])[0]
+    leg_error = pose_error = stop_force = residual = deceleration = 0.0
+    kappa_min = math.inf
+    v_prev = None
+    values = None
+    try:
+        for i in range(n):
+            if closed:
+                legs = platform.get(L + LDOT)
+                controller.set(L + LDOT, legs)
+                forces = controller.get(F)
+                if failed_leg is not None and t >= failure_time:
+                    forces[int(failed_leg) - 1] = 0.0
+                platform.set(F, forces)
+            elif power_loss is not None and t >= float(power_loss):
+                platform.set(F, np.zeros(6))
+            platform.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+            if closed:
+                controller.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+            t = (i + 1) * h
+            values = platform.get(ENERGY)
+            energy, work, dissipated, kappa, z, vz = values[0], values[1], values[2], values[3], values[6], values[7]
+            residual = max(residual, abs(energy - e0 - (work - dissipated)))
+            kappa_min = min(kappa_min, kappa)
+            stop_force = max(stop_force, float(np.max(np.abs(platform.get(FSTOP)))))
+            if v_prev is not None:
+                deceleration = max(deceleration, (vz - v_prev) / h)
+            v_prev = vz
+            if closed:
+                leg_error = max(leg_error, float(np.max(np.abs(platform.get(L) - controller.get(LP)))))
+                rp = controller.get(["rp[1]", "rp[2]", "rp[3]"])
+                pose_error = max(pose_error, float(np.linalg.norm(values[4:7] - rp)))
+    except FMICallException as e:
+        terminated = _safe(lambda: platform.fmu.getBooleanStatus(fmi2Terminated), True)
+        problem = platform.last_problem() or (controller.last_problem() if controller else "") or str(e)
+        row.update(status="discard" if e.status == 2 else "error", discard_time=t,
+                   message=problem + ("" if terminated else " (recoverable with shorter steps)"))
+    row.update(max_stop_force=stop_force, energy_residual=residual, min_kappa=kappa_min if kappa_min < math.inf else math.nan,
+               peak_deceleration=deceleration, final_z=float(values[6]) if values is not None else math.nan)
+    if closed:
+        row.update(max_leg_error=leg_error, max_pose_error=pose_error)
+    threshold = float(study.get("stable_error", math.inf))
+    row["stable"] = bool(row["status"] == "ok" and (not closed or leg_error < threshold))
+    return row
+
+
+def _safe(f, default):
+    try:
+        return f()
+    except Exception:  # noqa: BLE001 - only for a diagnostic after a failed step
+        return default
+
+
+def worker_name():
+    """Where a run executed: the Dask worker's address, or this process."""
+    try:
+        from distributed import get_worker
+        return get_worker().address
+    except (ImportError, ValueError):
+        return f"pid {os.getpid()}"

@@ -1,0 +1,156 @@
+"""Design studies on a real Dask cluster on loopback (a `dask scheduler` and two `dask worker`
+processes started here, no mocks): a 40-run study through `stewart-sweep --scheduler` with one
+worker killed mid-study gives every row once, equal to the serial run's rows; an interrupted
+study resumes without running anything twice; the shipped stability study reproduces the
+README's communication-step limit."""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from stewart_fmu import ROOT
+from stewart_fmu.sweep import load_results
+
+SWEEP = str(Path(sys.executable).parent / "stewart-sweep")
+DASK = str(Path(sys.executable).parent / "dask")
+
+STUDY = """
+[study]
+name = "forty"
+system = "closed-loop"
+units = "nondimensional"
+stop_time = 20.0
+step = 0.01
+stable_error = 0.01
+
+[fixed]
+"controller.heave.centre[3]" = 1.3059496109441155
+"controller.heave.amplitude" = 0.2
+
+[grid]
+"controller.G" = [2.0, 5.0, 10.0, 20.0]
+
+[random]
+samples = 10
+seed = 7
+"controller.D" = { uniform = [0.0, 2.0] }
+"platform.M" = { normal = [1.0, 0.05] }
+"""
+
+
+def comparable(frame):
+    """The rows without where and how long they ran, in run-id order."""
+    return frame.drop(columns=["wall_time", "worker"]).sort_values("run_id").reset_index(drop=True)
+
+
+def rows_written(out):
+    return len(load_results(out))
+
+
+@pytest.fixture
+def study_file(tmp_path):
+    path = tmp_path / "forty.toml"
+    path.write_text(STUDY)
+    return path
+
+
+@pytest.fixture(scope="module")
+def serial_rows(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("serial")
+    path = folder / "forty.toml"
+    path.write_text(STUDY)
+    run = subprocess.run([SWEEP, str(path), "--out", str(folder / "out"), "--serial"], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr[-2000:]
+    rows = load_results(folder / "out")
+    assert len(rows) == 40 and rows["run_id"].is_unique
+    return comparable(rows)
+
+
+@pytest.fixture
+def cluster(tmp_path):
+    """A scheduler and two single-threaded worker processes on 127.0.0.1."""
+    scheduler_file = tmp_path / "scheduler.json"
+    env = dict(os.environ, DASK_DISTRIBUTED__WORKER__DAEMON="False")
+    scheduler = subprocess.Popen([DASK, "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
+                                  "--scheduler-file", str(scheduler_file)], stdout=subprocess.DEVNULL,
+                                 stderr=subprocess.DEVNULL, env=env)
+    for _ in range(300):
+        if scheduler_file.exists() and scheduler_file.stat().st_size > 0:
+            break
+        time.sleep(0.1)
+    import json
+    address = json.loads(scheduler_file.read_text())["address"]
+    workers = [subprocess.Popen([DASK, "worker", address, "--nworkers", "1", "--nthreads", "1", "--no-dashboard",
+                                 "--host", "127.0.0.1", "--name", f"w{i}"], stdout=subprocess.DEVNULL,
+                                stderr=subprocess.DEVNULL, env=env, start_new_session=True) for i in range(2)]
+    from distributed import Client
+    with Client(address, timeout=60) as client:
+        client.wait_for_workers(2, timeout=60)
+    yield address, workers
+    for p in workers + [scheduler]:
+        if p.poll() is None:
+            os.killpg(p.pid, signal.SIGKILL) if p in workers else p.kill()
+        p.wait()
+
+
+def test_a_killed_worker_loses_nothing_and_rows_equal_the_serial_run(study_file, tmp_path, cluster, serial_rows):
+    address, workers = cluster
+    out = tmp_path / "cluster"
+    sweep = subprocess.Popen([SWEEP, str(study_file), "--out", str(out), "--scheduler", address],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while rows_written(out) < 6 and sweep.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    written_at_kill = rows_written(out)
+    os.killpg(workers[0].pid, signal.SIGKILL)  # the worker process and its nanny
+    stdout, stderr = sweep.communicate(timeout=300)
+    assert sweep.returncode == 0, stderr[-3000:]
+    rows = load_results(out)
+    print(f"40-run study on 2 workers, one killed after {written_at_kill} rows were written: {len(rows)} rows, "
+          f"run ids unique {rows['run_id'].is_unique}, workers seen {sorted(rows['worker'].unique())}")
+    assert written_at_kill < 40, "the kill came after the study had finished: make the runs longer"
+    assert len(rows) == 40 and rows["run_id"].is_unique
+    pd.testing.assert_frame_equal(comparable(rows), serial_rows)
+
+
+def test_an_interrupted_study_resumes_without_running_anything_twice(study_file, tmp_path, serial_rows):
+    out = tmp_path / "resume"
+    first = subprocess.Popen([SWEEP, str(study_file), "--out", str(out), "--serial"], stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while rows_written(out) < 5 and first.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    first.kill()
+    first.wait()
+    done = rows_written(out)
+    second = subprocess.run([SWEEP, str(study_file), "--out", str(out), "--workers", "2"], capture_output=True,
+                            text=True)
+    assert second.returncode == 0, second.stderr[-3000:]
+    print(f"interrupted after {done} rows; the second call: {second.stdout.splitlines()[0]}")
+    assert 0 < done < 40
+    assert f"{done} done already, running {40 - done}" in second.stdout
+    rows = load_results(out)
+    assert len(rows) == 40 and rows["run_id"].is_unique
+    pd.testing.assert_frame_equal(comparable(rows), serial_rows)
+
+
+def test_the_stability_study_reproduces_the_communication_step_limit(tmp_path):
+    """studies/stability.toml, G = 10 and D = 1.58 only: stable at a step of 0.29, not at 0.30."""
+    out = tmp_path / "stability"
+    run = subprocess.run([SWEEP, str(ROOT / "studies" / "stability.toml"), "--out", str(out), "--workers", "2"],
+                         capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr[-3000:]
+    rows = load_results(out)
+    pick = rows[(rows["param:controller.G"] == 10.0) & (rows["param:controller.D"] == 1.58)].set_index("param:step")
+    print(f"stability study: {len(rows)} runs, {int(rows['stable'].sum())} stable; G = 10, D = 1.58: "
+          f"stable at steps {sorted(pick.index[pick['stable']])}")
+    assert len(rows) == 132
+    assert pick.loc[0.29, "stable"] and not pick.loc[0.30, "stable"]
+    assert pick.loc[0.30, "status"] == "discard" and "base plane" in pick.loc[0.30, "message"]
+    assert (out / "stability_map.png").stat().st_size > 10_000
