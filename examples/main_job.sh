@@ -18,6 +18,6 @@ cargo run --release --bin build-fmu
 .venv/bin/python examples/workspace_scenarios.py "$OUT"
 .venv/bin/python examples/linearise.py --output "$OUT"
 # Design studies on a local Dask cluster (one worker per core): results.parquet, summary, plots.
-for study in stability payload power_loss; do
+for study in stability payload power_loss workspace; do
     .venv/bin/stewart-sweep "studies/$study.toml" --out "$OUT/$study"
 done

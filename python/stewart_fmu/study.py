@@ -12,6 +12,9 @@ A run is a dict of parameter values keyed by name:
 - `scenario.power_loss_at` (platform alone): the leg forces fall to 0 at that time;
   `scenario.failed_leg`, `scenario.failure_time` (closed loop): that leg's force falls to 0.
 
+A run is stable when it completes, every leg stays within the study's `stable_error` of its
+programme (closed loop) and, with `stop_contact_unstable = true`, no leg touches an end stop.
+
 A run's id is a hash of its parameter values, so a study can be resumed and a run is never
 executed twice. Results do not depend on where a run executes: a worker process unpacks each
 FMU once and reuses its instances with `fmi2Reset`, which restores them exactly.
@@ -281,7 +284,8 @@ def execute(spec, run, fmus):
     if closed:
         row.update(max_leg_error=leg_error, max_pose_error=pose_error)
     threshold = float(study.get("stable_error", math.inf))
-    row["stable"] = bool(row["status"] == "ok" and (not closed or leg_error < threshold))
+    touched = bool(study.get("stop_contact_unstable", False)) and stop_force > 0.0
+    row["stable"] = bool(row["status"] == "ok" and (not closed or leg_error < threshold) and not touched)
     return row
 
 

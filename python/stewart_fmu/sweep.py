@@ -197,7 +197,7 @@ def plot(spec, results, out):
         title = p.get("title", f"{spec['study']['name']}: {value}")
         if kind == "map":
             facets = sorted(column(p["facet"]).unique()) if p.get("facet") else [None]
-            fig, axes = plt.subplots(1, len(facets), figsize=(4.2 * len(facets), 3.8), squeeze=False)
+            fig, axes = plt.subplots(1, len(facets), figsize=(max(6.5, 4.2 * len(facets)), 4.2), squeeze=False)
             for ax, facet in zip(axes[0], facets):
                 part = results if facet is None else results[column(p["facet"]) == facet]
                 xs, ys = sorted(column(p["x"])[part.index].unique()), sorted(column(p["y"])[part.index].unique())
