@@ -21,6 +21,11 @@ SPEC = {
 }
 
 
+def _rss_mb():
+    with open("/proc/self/status") as f:
+        return next(int(line.split()[1]) for line in f if line.startswith("VmRSS:")) / 1024
+
+
 def main():
     runs = st.runs(SPEC)
     fmus = st.fmus_for(SPEC)
@@ -46,6 +51,15 @@ def main():
             rates[workers] = len(runs) / (time.perf_counter() - start)
         lines.append(f"{f'Dask, {workers} local worker(s)':28} {rates[workers]:8.2f} "
                      f"{rates[workers] / (workers * serial):10.0%}")
+    # A worker's memory over a longer study: 5 rounds of the 60 runs on one worker.
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+            Client(cluster) as client:
+        shared = client.scatter(fmus, broadcast=True)
+        rss = []
+        for _ in range(5):
+            client.gather([client.submit(run_and_time, SPEC, r, shared, pure=False) for r in runs])
+            rss.append(next(iter(client.run(_rss_mb).values())))
+    lines.append(f"worker RSS after each 60 runs (MB): {', '.join(f'{x:.1f}' for x in rss)}")
     overhead = 1.0 / rates[1] - 1.0 / serial
     lines.append(f"mean run {per_run * 1e3:.1f} ms in-process; Dask's cost per run with one worker "
                  f"{overhead * 1e3:.1f} ms; N workers give about N x {1 / (per_run + max(overhead, 0)):.1f} runs/s "
