@@ -14,6 +14,8 @@ fi
 .venv/bin/python -m pip install --quiet --disable-pip-version-check --no-deps -e python
 
 cargo run --release --bin build-fmu
+# The 3-D viewer (three.js, built with vite from the committed lock file).
+(cd viewer && npm ci --no-audit --no-fund --loglevel=error && npm run build --silent)
 .venv/bin/python examples/paper_experiments.py "$OUT"
 .venv/bin/python examples/workspace_scenarios.py "$OUT"
 .venv/bin/python examples/linearise.py --output "$OUT"
@@ -21,3 +23,5 @@ cargo run --release --bin build-fmu
 for study in stability payload power_loss workspace; do
     .venv/bin/stewart-sweep "studies/$study.toml" --out "$OUT/$study"
 done
+# The viewer with four results (heave, power loss, actuator failure, start-up).
+.venv/bin/python examples/viewer_data.py "$OUT/viewer"

@@ -4,8 +4,9 @@
 # functions, fuzzing), then the Python tests that drive the packaged FMUs with FMPy,
 # libcosim and fmi-sim, and the valgrind leak check.
 #
-# Installs what it needs on a fresh Debian machine: valgrind and libclang (for building
-# fmi-sim) from Debian's packages, fmi-sim from crates.io (into target/tools), the Python
+# Installs what it needs on a fresh Debian machine: valgrind, libclang (for building fmi-sim)
+# and Chromium (for the viewer's browser test) from Debian's packages, the viewer's Node
+# packages with npm ci, fmi-sim from crates.io (into target/tools), the Python
 # packages from tests/requirements.txt (into .venv).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -16,6 +17,8 @@ need_apt=()
 command -v valgrind >/dev/null || need_apt+=(valgrind)
 command -v gcc >/dev/null || need_apt+=(gcc)
 ls /usr/lib/llvm-*/lib/libclang.so* >/dev/null 2>&1 || need_apt+=(libclang-dev)
+command -v chromium >/dev/null || need_apt+=(chromium)
+command -v npm >/dev/null || need_apt+=(nodejs npm)
 if [ ${#need_apt[@]} -gt 0 ]; then
     echo "run_all: installing ${need_apt[*]} from Debian's packages"
     $SUDO apt-get update -qq
@@ -35,6 +38,8 @@ if [ ! -x "$FMI_SIM" ]; then
 fi
 
 cargo run --release --bin build-fmu
+# The 3-D viewer: Node packages from the committed lock file, then the static build.
+(cd viewer && npm ci --no-audit --no-fund --loglevel=error && npm run build --silent)
 if cargo clippy --version >/dev/null 2>&1; then
     cargo clippy --release --all-targets -- -D warnings
 else

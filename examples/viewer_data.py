@@ -1,0 +1,64 @@
+"""The main job's 3-D viewer: writes the built page and four results into output/viewer/ (or the
+folder given), listed in its dataset menu, and prints how to serve it.
+
+- the default controller driving the heave programme (SI, 10 s at 1 ms);
+- power loss: the legs lose their force at 0.5 s and the platform drops onto its stops;
+- actuator failure: leg 1's force falls to 0 at 1 s under feedback;
+- start-up: the controller lifts the platform from its parked pose on the stops (programme 4).
+"""
+
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from stewart_fmu import Platform
+from stewart_fmu.cosim import closed_loop
+from stewart_fmu.viewer import VIEW_OUTPUTS, stand, view
+
+OUT = Path(sys.argv[1] if len(sys.argv) > 1 else "output/viewer")
+RECORD = [n for n in VIEW_OUTPUTS]
+
+
+def as_columns(times, rows):
+    columns = {"time": np.asarray(times)}
+    rows = np.asarray(rows)
+    for j, name in enumerate(RECORD):
+        columns[name] = rows[:, j]
+    return columns
+
+
+def loop(name, title, **kwargs):
+    t, rows, _, status = closed_loop(record=tuple(RECORD), **kwargs)
+    url = view(as_columns(t, rows), stand(), OUT, name, title)
+    print(f"viewer: {title}: {len(t)} rows ({status}) -> {url}")
+
+
+def power_loss():
+    pl = Platform(name="power-loss")
+    u0 = pl.get("F[1]")[0]
+    times, rows = [0.0], [pl.get(*RECORD)]
+    for i in range(3000):
+        pl.set_forces([u0 if pl.time < 0.5 else 0.0] * 6)
+        pl.step(1e-3)
+        times.append(pl.time)
+        rows.append(pl.get(*RECORD))
+    pl.free()
+    url = view(as_columns(times, rows), stand(), OUT, "power_loss", "power loss at 0.5 s (SI)")
+    print(f"viewer: power loss: {len(times)} rows -> {url}")
+
+
+def main():
+    loop("heave", "default controller, heave programme (SI)", t_end=10.0, h=1e-3)
+    power_loss()
+    loop("actuator_failure", "leg 1 fails at 1 s under feedback (SI)", t_end=5.0, h=1e-3,
+         force_hook=lambda t, f: np.where(np.arange(6) == 0, 0.0, f) if t >= 1.0 else f)
+    parked = {"r0[3]": 1.5717790024}
+    loop("start_up", "start-up from the parked pose (programme 4, SI)", t_end=6.0, h=1e-3, platform_reals=parked,
+         controller_integers={"programme": 4})
+    print(f"viewer: serve it with  .venv/bin/python -m http.server --directory {OUT} 8000  and open "
+          f"http://127.0.0.1:8000/")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,91 @@
+"""The 3-D viewer (`viewer/`, three.js) for any platform result: `view(result, stand)` writes
+the built page, the result as CSV and the stand as JSON into a folder, and returns the address
+to open once the folder is served (`python -m http.server`).
+
+A result is what `fmpy.simulate_fmu` returns (a structured array) or a dict of columns; it needs
+`time` and `r[1..3]` and either `R[a,b]` or `angles[1..3]`; `F[k]`, `Fstop[k]` and `l[k]`
+colour the legs and feed the plots when present (`VIEW_OUTPUTS` lists them all for
+`simulate_fmu(..., output=VIEW_OUTPUTS)`).
+"""
+
+import json
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+from fmpy import read_model_description
+
+from .core import PLATFORM_FMU, ROOT
+
+VIEWER = ROOT / "viewer"
+LEGS = range(1, 7)
+VIEW_OUTPUTS = ([f"r[{i}]" for i in (1, 2, 3)] + [f"R[{a},{b}]" for a in (1, 2, 3) for b in (1, 2, 3)]
+                + [f"angles[{i}]" for i in (1, 2, 3)] + [f"l[{k}]" for k in LEGS] + [f"F[{k}]" for k in LEGS]
+                + [f"Fstop[{k}]" for k in LEGS])
+
+
+def built_viewer():
+    """The built page (`viewer/dist/`), building it with npm if it is missing."""
+    dist = VIEWER / "dist"
+    if not (dist / "index.html").exists():
+        npm = shutil.which("npm")
+        if npm is None:
+            raise RuntimeError("viewer/dist is missing and npm is not installed: run `npm ci && npm run build` in viewer/")
+        subprocess.run([npm, "ci", "--no-audit", "--no-fund"], cwd=VIEWER, check=True, capture_output=True)
+        subprocess.run([npm, "run", "build"], cwd=VIEWER, check=True, capture_output=True)
+    return dist
+
+
+def stand(parameters=None, fmu=PLATFORM_FMU):
+    """The stand of a run for the viewer: the FMU's start values of `B`, `A`, `lmin`, `lmax`,
+    overridden by `parameters` (FMI names, as given to `simulate_fmu`'s `start_values`)."""
+    start = {v.name: float(v.start) for v in read_model_description(str(fmu)).modelVariables
+             if v.start is not None and v.type == "Real"}
+    start.update({k: float(v) for k, v in (parameters or {}).items() if isinstance(v, (int, float))})
+    return {
+        "B": [[start[f"B[{k},{i}]"] for i in (1, 2, 3)] for k in LEGS],
+        "A": [[start[f"A[{k},{i}]"] for i in (1, 2, 3)] for k in LEGS],
+        "lmin": [start[f"lmin[{k}]"] for k in LEGS],
+        "lmax": [start[f"lmax[{k}]"] for k in LEGS],
+        "source": f"{Path(fmu).name} start values" + (" with the run's parameters" if parameters else ""),
+    }
+
+
+def _columns(result):
+    if isinstance(result, np.ndarray) and result.dtype.names:
+        return {n: np.asarray(result[n], dtype=float) for n in result.dtype.names}
+    return {k: np.asarray(v, dtype=float) for k, v in result.items()}
+
+
+def write_csv(path, result):
+    """The result as a CSV the viewer reads (FMPy's layout: quoted names, full precision)."""
+    columns = _columns(result)
+    names = ["time"] + [n for n in columns if n != "time"]
+    missing = [n for n in ("time", "r[1]", "r[2]", "r[3]") if n not in columns]
+    if missing:
+        raise ValueError(f"not a platform result: missing columns {', '.join(missing)}")
+    rows = np.column_stack([columns[n] for n in names])
+    with open(path, "w") as f:
+        f.write(",".join(f'"{n}"' for n in names) + "\n")
+        for row in rows:
+            f.write(",".join(repr(float(x)) for x in row) + "\n")
+
+
+def view(result, stand_values=None, out="output/viewer", name="result", title=None):
+    """Writes the viewer page with `result` into `out` (data in `out/data/`, listed in
+    `out/data/index.json` beside earlier ones); returns the page's address relative to `out`."""
+    out = Path(out)
+    dist = built_viewer()
+    out.mkdir(parents=True, exist_ok=True)
+    shutil.copytree(dist, out, dirs_exist_ok=True)
+    data = out / "data"
+    data.mkdir(exist_ok=True)
+    write_csv(data / f"{name}.csv", result)
+    (data / f"{name}.stand.json").write_text(json.dumps(stand_values or stand(), indent=1))
+    index_path = data / "index.json"
+    index = json.loads(index_path.read_text()) if index_path.exists() else []
+    entry = {"title": title or name, "data": f"data/{name}.csv", "stand": f"data/{name}.stand.json"}
+    index = [d for d in index if d["data"] != entry["data"]] + [entry]
+    index_path.write_text(json.dumps(index, indent=1))
+    return f"index.html?data={entry['data']}&stand={entry['stand']}"

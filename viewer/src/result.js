@@ -1,0 +1,155 @@
+// A platform result and its stand, as plain numbers: parsing, checks and the geometry the
+// scene draws (no three.js here). Conventions as in docs/model.md §1: R is body -> inertial,
+// column b is e_b; the platform joint k is at a_k = r + R A_k; R = Rx(roll) Ry(pitch) Rz(yaw).
+
+const LEGS = [1, 2, 3, 4, 5, 6];
+const ROTATION = [1, 2, 3].flatMap((a) => [1, 2, 3].map((b) => `R[${a},${b}]`));
+const ANGLES = ["angles[1]", "angles[2]", "angles[3]"];
+
+/** The default stand of docs/model.md §3 (SI), used when no stand file is given. */
+export function defaultStand() {
+  const rad = Math.PI / 180;
+  const base = [-10, 10, 110, 130, 230, 250];
+  const platform = [-50, 50, 70, 170, 190, 290];
+  return {
+    B: base.map((a) => [1.5 * Math.cos(a * rad), 1.5 * Math.sin(a * rad), 0]),
+    A: platform.map((a) => [Math.cos(a * rad), Math.sin(a * rad), -0.5]),
+    lmin: Array(6).fill(1.45),
+    lmax: Array(6).fill(2.15),
+    units: "m",
+    source: "default stand (docs/model.md §3)",
+  };
+}
+
+/** Checks a stand object ({B: 6x3, A: 6x3, optional lmin, lmax}); returns it or throws. */
+export function checkStand(stand) {
+  const matrix = (m, name) => {
+    if (!Array.isArray(m) || m.length !== 6 || m.some((row) => !Array.isArray(row) || row.length !== 3 || row.some((x) => !Number.isFinite(x)))) {
+      throw new Error(`the stand file's ${name} must be 6 rows of 3 finite numbers`);
+    }
+  };
+  matrix(stand.B, "B");
+  matrix(stand.A, "A");
+  return stand;
+}
+
+/** Parses a result CSV (FMPy's write_csv: quoted names; or plain names). */
+export function parseCsv(text) {
+  const lines = text.split(/\r?\n/).filter((l) => l.trim().length > 0);
+  if (lines.length < 2) throw new Error("not a platform result: the file has no data rows");
+  // Names may be quoted and contain commas (FMPy writes "R[1,1]").
+  const names = [...lines[0].matchAll(/\s*(?:"([^"]*)"|([^,]*))\s*(?:,|$)/g)]
+    .filter((m) => m.index < lines[0].length)
+    .map((m) => (m[1] !== undefined ? m[1] : m[2]).trim());
+  const columns = {};
+  names.forEach((n) => (columns[n] = new Float64Array(lines.length - 1)));
+  for (let i = 1; i < lines.length; i++) {
+    const cells = lines[i].split(",");
+    for (let j = 0; j < names.length; j++) {
+      const v = cells[j] === undefined ? NaN : cells[j].trim() === "True" ? 1 : cells[j].trim() === "False" ? 0 : Number(cells[j]);
+      columns[names[j]][i - 1] = v;
+    }
+  }
+  return { names, columns, rows: lines.length - 1 };
+}
+
+/** Checks that a parsed CSV is a platform result; throws naming every missing column. */
+export function checkResult(csv) {
+  const has = (n) => n in csv.columns;
+  const missing = ["time", "r[1]", "r[2]", "r[3]"].filter((n) => !has(n));
+  const hasRotation = ROTATION.every(has);
+  const hasAngles = ANGLES.every(has);
+  if (!hasRotation && !hasAngles) missing.push(...ROTATION.filter((n) => !has(n)));
+  if (missing.length) {
+    throw new Error(`not a platform result: missing columns ${missing.join(", ")}${!hasRotation && !hasAngles ? " (or angles[1..3])" : ""}`);
+  }
+  return csv;
+}
+
+/** Rotation matrix (rows) from 1-2-3 angles: Rx(roll) Ry(pitch) Rz(yaw). */
+export function rotationFromAngles(roll, pitch, yaw) {
+  const [c1, s1, c2, s2, c3, s3] = [Math.cos(roll), Math.sin(roll), Math.cos(pitch), Math.sin(pitch), Math.cos(yaw), Math.sin(yaw)];
+  return [
+    [c2 * c3, -c2 * s3, s2],
+    [c1 * s3 + s1 * s2 * c3, c1 * c3 - s1 * s2 * s3, -s1 * c2],
+    [s1 * s3 - c1 * s2 * c3, s1 * c3 + c1 * s2 * s3, c1 * c2],
+  ];
+}
+
+/** A result ready to play: times, poses, forces, and the stand. */
+export class Result {
+  constructor(csv, stand) {
+    this.csv = checkResult(csv);
+    this.stand = checkStand(stand);
+    this.time = csv.columns["time"];
+    this.rows = csv.rows;
+    this.hasRotation = ROTATION.every((n) => n in csv.columns);
+    const col = (n) => csv.columns[n];
+    this.forces = LEGS.every((k) => `F[${k}]` in csv.columns) ? LEGS.map((k) => col(`F[${k}]`)) : null;
+    this.stopForces = LEGS.every((k) => `Fstop[${k}]` in csv.columns) ? LEGS.map((k) => col(`Fstop[${k}]`)) : null;
+    let lo = Infinity;
+    let hi = -Infinity;
+    for (const series of [...(this.forces || []), ...(this.stopForces || [])]) {
+      for (const x of series) {
+        if (Number.isFinite(x)) {
+          lo = Math.min(lo, x);
+          hi = Math.max(hi, x);
+        }
+      }
+    }
+    this.forceRange = lo <= hi ? [lo, hi] : [0, 1];
+  }
+
+  /** Index of the last row at or before time t (rows are not interpolated). */
+  indexAt(t) {
+    let lo = 0;
+    let hi = this.rows - 1;
+    if (t <= this.time[0]) return 0;
+    while (lo < hi) {
+      const mid = (lo + hi + 1) >> 1;
+      if (this.time[mid] <= t) lo = mid;
+      else hi = mid - 1;
+    }
+    return lo;
+  }
+
+  pose(i) {
+    const c = this.csv.columns;
+    const r = [c["r[1]"][i], c["r[2]"][i], c["r[3]"][i]];
+    const R = this.hasRotation
+      ? [1, 2, 3].map((a) => [1, 2, 3].map((b) => c[`R[${a},${b}]`][i]))
+      : rotationFromAngles(c["angles[1]"][i], c["angles[2]"][i], c["angles[3]"][i]);
+    return { r, R };
+  }
+
+  /** The twelve leg end points at row i: [B_k, a_k] for k = 1..6, metres (or the file's units). */
+  legEndpoints(i) {
+    const { r, R } = this.pose(i);
+    return this.stand.A.map((A, k) => {
+      const a = [0, 1, 2].map((row) => r[row] + R[row][0] * A[0] + R[row][1] * A[1] + R[row][2] * A[2]);
+      return [this.stand.B[k].slice(), a];
+    });
+  }
+
+  force(k, i) {
+    return this.forces ? this.forces[k][i] : NaN;
+  }
+
+  stopForce(k, i) {
+    return this.stopForces ? this.stopForces[k][i] : 0;
+  }
+
+  angles(i) {
+    const c = this.csv.columns;
+    if (ANGLES.every((n) => n in c)) return ANGLES.map((n) => c[n][i]);
+    const { R } = this.pose(i);
+    // Inverse of Rx Ry Rz: pitch from R[0][2], roll and yaw from the rest.
+    return [Math.atan2(-R[1][2], R[2][2]), Math.asin(Math.max(-1, Math.min(1, R[0][2]))), Math.atan2(-R[0][1], R[0][0])];
+  }
+
+  legLengths(i) {
+    const c = this.csv.columns;
+    if (LEGS.every((k) => `l[${k}]` in c)) return LEGS.map((k) => c[`l[${k}]`][i]);
+    return this.legEndpoints(i).map(([b, a]) => Math.hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]));
+  }
+}
