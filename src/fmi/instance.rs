@@ -912,6 +912,39 @@ impl Instance {
         Ok((u, k))
     }
 
+    /// The references of a directional (`adjoint` false: seeds per known, sensitivities per
+    /// unknown) or adjoint derivative (the other way round), with every size and seed checked.
+    fn derivative_arguments(
+        &self,
+        unknowns: &[u32],
+        knowns: &[u32],
+        seeds: &[f64],
+        out: &[f64],
+        adjoint: bool,
+    ) -> Result<(Vec<VariableRef>, Vec<VariableRef>), Status> {
+        let (u, k) = self.derivative_refs(unknowns, knowns)?;
+        let (from, to) = if adjoint {
+            (("unknowns", u.len()), ("knowns", k.len()))
+        } else {
+            (("knowns", k.len()), ("unknowns", u.len()))
+        };
+        if seeds.len() != from.1 || out.len() != to.1 {
+            return Err(self.error(&format!(
+                "the {} address {} values and the {} {}, but nSeed = {} and nSensitivity = {}",
+                from.0,
+                from.1,
+                to.0,
+                to.1,
+                seeds.len(),
+                out.len()
+            )));
+        }
+        if let Some(s) = seeds.iter().find(|s| !s.is_finite()) {
+            return Err(self.error(&format!("seed {s} is not finite")));
+        }
+        Ok((u, k))
+    }
+
     /// `sensitivity = J seed` for the Jacobian of `unknowns` with respect to `knowns`.
     pub fn get_directional_derivative(
         &mut self,
@@ -923,22 +956,10 @@ impl Instance {
         if !self.kind.info().capabilities.directional_derivatives {
             return self.error("not supported by this model (providesDirectionalDerivative=\"false\")");
         }
-        let (u, k) = match self.derivative_refs(unknowns, knowns) {
+        let (u, k) = match self.derivative_arguments(unknowns, knowns, seeds, out, false) {
             Ok(x) => x,
             Err(s) => return s,
         };
-        if seeds.len() != k.len() || out.len() != u.len() {
-            return self.error(&format!(
-                "the knowns address {} values and the unknowns {}, but nSeed = {} and nSensitivity = {}",
-                k.len(),
-                u.len(),
-                seeds.len(),
-                out.len()
-            ));
-        }
-        if let Some(s) = seeds.iter().find(|s| !s.is_finite()) {
-            return self.error(&format!("seed {s} is not finite"));
-        }
         match self.model.directional_derivative(&u, &k, seeds, out) {
             Ok(()) => Status::Ok,
             Err(m) => self.error(&m),
@@ -957,22 +978,10 @@ impl Instance {
         if !self.kind.info().capabilities.adjoint_derivatives {
             return self.error("not supported by this model (providesAdjointDerivatives=\"false\")");
         }
-        let (u, k) = match self.derivative_refs(unknowns, knowns) {
+        let (u, k) = match self.derivative_arguments(unknowns, knowns, seeds, out, true) {
             Ok(x) => x,
             Err(s) => return s,
         };
-        if seeds.len() != u.len() || out.len() != k.len() {
-            return self.error(&format!(
-                "the unknowns address {} values and the knowns {}, but nSeed = {} and nSensitivity = {}",
-                u.len(),
-                k.len(),
-                seeds.len(),
-                out.len()
-            ));
-        }
-        if let Some(s) = seeds.iter().find(|s| !s.is_finite()) {
-            return self.error(&format!("seed {s} is not finite"));
-        }
         let mut column = vec![0.0; u.len()];
         for (j, known) in k.iter().enumerate() {
             if let Err(m) = self.model.directional_derivative(&u, std::slice::from_ref(known), &[1.0], &mut column) {
