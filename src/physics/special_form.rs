@@ -43,6 +43,15 @@ pub struct SpecialForm {
     /// residual obeys `C'' + 2 alpha C' + alpha² C = 0` near the manifold (critically damped
     /// decay). 0 = off (the default: the co-simulation projects instead).
     pub baumgarte_rate: f64,
+    /// The joints' coordinates as arrays over the legs (`[component][leg]`), so that the six
+    /// legs of a right-hand side are computed side by side in vector registers.
+    platform_joints: [[f64; LEG_COUNT]; 3],
+    base_joints: [[f64; LEG_COUNT]; 3],
+}
+
+/// `[component][leg]` arrays of six joint positions.
+fn by_component(points: &[Vector3<f64>; LEG_COUNT]) -> [[f64; LEG_COUNT]; 3] {
+    std::array::from_fn(|c| std::array::from_fn(|k| points[k][c]))
 }
 
 impl SpecialForm {
@@ -58,6 +67,8 @@ impl SpecialForm {
             c31: (2.0 * i1 / (i3 + i1), 2.0 * i3 / (i3 + i1)),
             baumgarte_rate: 0.0,
             stops: None,
+            platform_joints: by_component(&stand.platform_joints),
+            base_joints: by_component(&stand.base_joints),
             stand,
         }
     }
@@ -263,15 +274,60 @@ impl SpecialForm {
         }
     }
 
-    /// The legs' resultant for actuator forces `u` in one pass over the legs (geometry not
-    /// kept).
+    /// The legs' resultant for actuator forces `u` (geometry not kept). The same arithmetic as
+    /// [`SpecialForm::add_leg`] leg by leg, in the same order, so the result is identical to
+    /// the bit; only arranged as arrays over the legs so that the compiler computes two legs
+    /// per instruction.
     #[inline(always)]
     fn wrench_of(&self, state: &BodyState, u: &[f64; LEG_COUNT]) -> LegWrench {
+        let (a, b) = (&self.platform_joints, &self.base_joints);
+        let [e1, e2, e3] = &state.e;
+        let mut arm = [[0.0; LEG_COUNT]; 3];
+        let mut leg = [[0.0; LEG_COUNT]; 3];
+        for c in 0..3 {
+            for k in 0..LEG_COUNT {
+                arm[c][k] = e1[c] * a[0][k] + e2[c] * a[1][k] + e3[c] * a[2][k];
+                leg[c][k] = state.r[c] + arm[c][k] - b[c][k];
+            }
+        }
+        let mut length = [0.0; LEG_COUNT];
+        let mut inverse_length = [0.0; LEG_COUNT];
+        for k in 0..LEG_COUNT {
+            length[k] = (leg[0][k] * leg[0][k] + leg[1][k] * leg[1][k] + leg[2][k] * leg[2][k]).sqrt();
+            inverse_length[k] = 1.0 / length[k];
+        }
+        let mut f = [[0.0; LEG_COUNT]; 3];
+        for c in 0..3 {
+            for k in 0..LEG_COUNT {
+                f[c][k] = leg[c][k] * (u[k] * inverse_length[k]);
+            }
+        }
+        let mut moment = [[0.0; LEG_COUNT]; 3];
+        for k in 0..LEG_COUNT {
+            moment[0][k] = arm[1][k] * f[2][k] - arm[2][k] * f[1][k];
+            moment[1][k] = arm[2][k] * f[0][k] - arm[0][k] * f[2][k];
+            moment[2][k] = arm[0][k] * f[1][k] - arm[1][k] * f[0][k];
+        }
         let mut w = LegWrench::default();
         for k in 0..LEG_COUNT {
-            let arm = state.body_vector(&self.stand.platform_joints[k]);
-            let leg = state.r + arm - self.stand.base_joints[k];
-            self.add_leg(state, k, &arm, &leg, u[k], &mut w);
+            // A collapsed (or non-finite) leg carries nothing, as in `add_leg`.
+            if !(length[k] > 0.0) {
+                continue;
+            }
+            w.force += Vector3::new(f[0][k], f[1][k], f[2][k]);
+            w.moment += Vector3::new(moment[0][k], moment[1][k], moment[2][k]);
+            if let Some(stops) = &self.stops
+                && stops.is_outside(k, length[k])
+            {
+                let arm_k = Vector3::new(arm[0][k], arm[1][k], arm[2][k]);
+                let n = Vector3::new(leg[0][k], leg[1][k], leg[2][k]) * inverse_length[k];
+                let ldot = n.dot(&(state.v + state.body_vector_rate(&self.stand.platform_joints[k])));
+                let c = stops.contact(k, length[k], ldot);
+                let fs = n * c.force;
+                w.stop_force += fs;
+                w.stop_moment += arm_k.cross(&fs);
+                w.dissipation += c.dissipation;
+            }
         }
         w
     }
@@ -343,4 +399,51 @@ fn ds_angular_velocity_inertial(s: &BodyState, ds: &BodyState) -> Vector3<f64> {
         d += ds.e[a].cross(&s.e_dot[a]) + s.e[a].cross(&ds.e_dot[a]);
     }
     d * 0.5
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::Vector3;
+
+    use super::*;
+    use crate::physics::end_stops::EndStops;
+    use crate::physics::forces::HeldForces;
+    use crate::physics::kinematics::rotation_from_angles;
+
+    /// The same held forces seen as a law that depends on the state: the right-hand side then
+    /// takes the leg-by-leg path (`LegGeometry`, `add_leg`).
+    struct ThroughGeometry(HeldForces);
+
+    impl LegForceLaw for ThroughGeometry {
+        fn leg_forces(&self, t: f64, _state: &BodyState, _legs: &LegGeometry) -> [f64; LEG_COUNT] {
+            self.0.leg_forces_at(t)
+        }
+    }
+
+    #[test]
+    fn the_array_pass_over_the_legs_equals_the_leg_by_leg_pass_to_the_bit() {
+        let stand = Stand::truck_cabin();
+        let stops = EndStops::default();
+        let form = SpecialForm::new(stand.clone()).with_end_stops(Some(stops));
+        let law = HeldForces { value: [5900.0, -1200.0, 8000.0, 0.0, 3.5e4, 6100.0], slope: [10.0; 6], t0: 0.0 };
+        // Inside the strokes, and deep enough into the lower and the upper stops.
+        let mut contacts = 0;
+        for (dz, roll, w) in [(0.0, 0.0, 0.0), (0.02, 0.05, 0.3), (-0.45, 0.1, -1.0), (0.45, -0.2, 2.0)] {
+            let state = BodyState::from_pose(
+                Stand::truck_cabin_neutral_position() + Vector3::new(0.01, -0.02, dz),
+                Vector3::new(0.1, -0.3, 0.7),
+                &rotation_from_angles(&Vector3::new(roll, -0.04, 0.02)),
+                &Vector3::new(w, 0.2, -0.1),
+            );
+            let y = state.to_vector();
+            let legs = LegGeometry::new(&stand, &state);
+            contacts += (0..LEG_COUNT).filter(|&k| stops.is_outside(k, legs.length[k])).count();
+            let (mut fast, mut reference) = ([0.0; 24], [0.0; 24]);
+            let p1 = form.derivative(0.3, &y, &law, &mut fast);
+            let p2 = form.derivative(0.3, &y, &ThroughGeometry(law), &mut reference);
+            assert_eq!(fast.map(f64::to_bits), reference.map(f64::to_bits), "dz = {dz}");
+            assert_eq!(p1, p2);
+        }
+        assert!(contacts >= 6, "the end-stop branch was exercised ({contacts} legs in contact)");
+    }
 }
