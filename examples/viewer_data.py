@@ -17,7 +17,7 @@ from stewart_fmu.cosim import closed_loop
 from stewart_fmu.viewer import VIEW_OUTPUTS, stand, view
 
 OUT = Path(sys.argv[1] if len(sys.argv) > 1 else "output/viewer")
-RECORD = [n for n in VIEW_OUTPUTS]
+RECORD = VIEW_OUTPUTS
 
 
 def as_columns(times, rows):

@@ -22,7 +22,6 @@ in the paper's non-dimensional units) it
 
 import argparse
 import json
-import sys
 from pathlib import Path
 
 import numpy as np

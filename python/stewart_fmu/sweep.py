@@ -84,7 +84,7 @@ class Progress:
         sys.stderr.write("\n")
 
 
-def make_row(spec, run, metrics, seconds, worker):
+def make_row(run, metrics, seconds, worker):
     row = {"run_id": st.run_id(run)}
     row.update({f"param:{k}": v for k, v in sorted(run.items())})
     row.update(metrics)
@@ -96,7 +96,7 @@ def run_and_time(spec, run, fmus):
     """What a worker executes for one run: the row with the run's wall time and worker."""
     start = time.perf_counter()
     metrics = st.execute(spec, run, fmus)
-    return make_row(spec, run, metrics, time.perf_counter() - start, st.worker_name())
+    return make_row(run, metrics, time.perf_counter() - start, st.worker_name())
 
 
 def main(argv=None):

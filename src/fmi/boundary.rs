@@ -73,6 +73,26 @@ pub unsafe fn call<F: FmiFunction>(
     outcome.unwrap_or(Status::Error)
 }
 
+/// `fmi2FreeInstance`/`fmi3FreeInstance` (`func` names it): a live, idle instance is dropped
+/// now; one a call is running on (freed from the importer's callback) when that call returns;
+/// NULL, freed or foreign handles are left alone.
+///
+/// # Safety
+/// `c` may be any pointer: it is dereferenced only if the registry knows it as a live, idle
+/// instance of this version.
+pub unsafe fn free_instance<F: FmiFunction>(c: *mut c_void, func: F) {
+    no_instance((), || {
+        if registry::request_free(c, F::VERSION) == registry::Free::Now {
+            // SAFETY: the registry handed the live, idle instance over for dropping.
+            let instance = unsafe { &mut *(c as *mut Instance) };
+            instance.begin(func.name());
+            instance.log_call(Status::Ok, String::new);
+            // SAFETY: as above; no reference to it remains.
+            unsafe { Instance::drop_handle(c) };
+        }
+    })
+}
+
 /// Fixes the signature of an export's body closure (for type inference in `boundary!`).
 pub fn instance_body<F: FnOnce(&mut Instance) -> Status>(body: F) -> F {
     body

@@ -130,6 +130,25 @@ fn settable_in_state(g: &VariableGroup, state: ModelState) -> bool {
     }
 }
 
+/// The elements addressed by `vrs` in order: one per reference in FMI 2, every element of
+/// each referenced variable in FMI 3. Unknown references are skipped (callers check first).
+fn elements<'a>(access: &'a [Option<Access>], vrs: &'a [u32]) -> impl Iterator<Item = VariableRef> + 'a {
+    // A plain state machine rather than `flat_map`: this runs on every get and set.
+    let mut refs = vrs.iter();
+    let mut current: Option<(Access, usize)> = None;
+    std::iter::from_fn(move || {
+        loop {
+            if let Some((a, i)) = current.as_mut()
+                && *i < a.width
+            {
+                *i += 1;
+                return Some(VariableRef { group: a.group, index: a.index + *i - 1 });
+            }
+            current = access.get(*refs.next()? as usize).copied().flatten().map(|a| (a, 0));
+        }
+    })
+}
+
 /// An FMU state (`fmi2FMUstate`, `fmi3FMUState`): the serialized bytes of an instance. The
 /// instance that made it owns it; the importer's handle is its address, recognised by
 /// comparison with the instance's own states, never by reading through it.
@@ -182,21 +201,6 @@ pub struct EventInfo {
     pub nominals_changed: bool,
     pub values_changed: bool,
     pub next_event_time: Option<f64>,
-}
-
-/// The elements addressed by `vrs` in order: one per reference in FMI 2, every element of
-/// each referenced variable in FMI 3. Unknown references are skipped (callers check first).
-fn elements<'a>(
-    table: &'a VariableTable,
-    version: FmiVersion,
-    vrs: &'a [u32],
-) -> impl Iterator<Item = (&'static VariableGroup, VariableRef)> + 'a {
-    vrs.iter()
-        .filter_map(move |&vr| match version {
-            FmiVersion::Fmi2 => table.lookup(vr).filter(|(g, _)| !g.fmi3_only).map(|(g, r)| (g, r, 1)),
-            FmiVersion::Fmi3 => table.lookup_variable(vr).map(|(g, r)| (g, r, g.len())),
-        })
-        .flat_map(|(g, first, n)| (0..n).map(move |i| (g, VariableRef { group: first.group, index: first.index + i })))
 }
 
 /// A restorable picture of an instance, parsed and validated.
@@ -425,25 +429,17 @@ impl Instance {
         }
     }
 
-    /// Number of values a reference addresses.
-    fn width(&self, g: &VariableGroup) -> usize {
-        match self.version {
-            FmiVersion::Fmi2 => 1,
-            FmiVersion::Fmi3 => g.len(),
-        }
-    }
-
-    /// Checks `vrs` against a base type and counts the values they address, which must be
-    /// `n_values`; the first pass of every get/set (nothing is read or written before all is
-    /// known to be valid).
+    /// Checks `vrs` against a base type (and, when `setting`, the current state) and counts
+    /// the values they address, which must be `n_values`; the first pass of every get/set
+    /// (nothing is read or written before all is known to be valid).
     fn check_values(&self, vrs: &[u32], want: BaseType, n_values: usize, setting: bool) -> Result<(), Status> {
         let mut count = 0usize;
         for &vr in vrs {
-            let (g, r) = self.lookup(vr, want)?;
-            if setting {
-                self.check_settable(g, r)?;
+            let a = self.access(vr, want)?;
+            if setting && a.settable_in & self.state.bit() == 0 {
+                return Err(self.not_settable(a));
             }
-            count += self.width(g);
+            count += a.width;
         }
         if count != n_values {
             return Err(self.error(&format!("the value references address {count} values, but nValues = {n_values}")));
@@ -451,8 +447,8 @@ impl Instance {
         Ok(())
     }
 
-    fn settable(&self, g: &VariableGroup) -> bool {
-        settable_in_state(g, self.state)
+    fn element_name(&self, r: VariableRef) -> String {
+        self.table.groups.get(r.group).map_or_else(String::new, |g| g.element_name(r.index))
     }
 
     /// A reference's access entry if it has the wanted base type; else the error, logged.
@@ -474,31 +470,14 @@ impl Instance {
 
     #[cold]
     fn not_settable(&self, a: Access) -> Status {
-        let r = VariableRef { group: a.group, index: a.index };
-        match self.table.groups.get(a.group) {
-            Some(g) => self.check_settable(g, r).err().unwrap_or(Status::Error),
-            None => Status::Error,
-        }
-    }
-
-    #[cold]
-    fn count_mismatch(&self, vrs: &[u32], n_values: usize) -> Status {
-        let count: usize =
-            vrs.iter().filter_map(|&vr| self.access.get(vr as usize).copied().flatten()).map(|a| a.width).sum();
-        self.error(&format!("the value references address {count} values, but nValues = {n_values}"))
-    }
-
-    fn check_settable(&self, g: &VariableGroup, r: VariableRef) -> Result<(), Status> {
-        if self.settable(g) {
-            return Ok(());
-        }
-        Err(self.error(&format!(
+        let Some(g) = self.table.groups.get(a.group) else { return Status::Error };
+        self.error(&format!(
             "{} ({} {}) may not be set in state {}",
-            self.variable_name(g, r),
+            self.variable_name(g, VariableRef { group: a.group, index: a.index }),
             g.variability.xml(),
             g.causality.xml(),
             self.state_name()
-        )))
+        ))
     }
 
     // ----- common functions -----------------------------------------------------------------
@@ -598,81 +577,31 @@ impl Instance {
     // ----- get/set ------------------------------------------------------------------------
 
     pub fn get_real(&mut self, vrs: &[u32], values: &mut [f64]) -> Status {
-        // One pass, no allocation: on an error the values are undefined (FMI), nothing changes.
-        let mut k = 0;
-        for &vr in vrs {
-            let a = match self.access(vr, BaseType::Real) {
-                Ok(a) => a,
-                Err(s) => return s,
-            };
-            for i in 0..a.width {
-                let r = VariableRef { group: a.group, index: a.index + i };
-                let x = self.model.get_real(r);
-                let Some(slot) = values.get_mut(k) else { return self.count_mismatch(vrs, values.len()) };
-                if x.is_nan() {
-                    return self.not_a_number(r);
-                }
-                *slot = x;
-                k += 1;
-            }
+        // Two passes, no allocation: validate every reference, then read.
+        if let Err(s) = self.check_values(vrs, BaseType::Real, values.len(), false) {
+            return s;
         }
-        if k != values.len() {
-            return self.count_mismatch(vrs, values.len());
+        for (slot, r) in values.iter_mut().zip(elements(&self.access, vrs)) {
+            let x = self.model.get_real(r);
+            if x.is_nan() {
+                return self.error(&format!("{} is not a number with the current parameters", self.element_name(r)));
+            }
+            *slot = x;
         }
         Status::Ok
     }
 
-    #[cold]
-    fn not_finite(&self, a: Access, chunk: &[f64]) -> Status {
-        let (i, x) = chunk.iter().enumerate().find(|(_, x)| !x.is_finite()).unwrap_or((0, &f64::NAN));
-        let name = self.table.groups.get(a.group).map_or_else(String::new, |g| g.element_name(a.index + i));
-        self.error(&format!("{name} = {x} refused: values must be finite"))
-    }
-
-    #[cold]
-    fn not_a_number(&self, r: VariableRef) -> Status {
-        let name = self.table.groups.get(r.group).map_or_else(String::new, |g| g.element_name(r.index));
-        self.error(&format!("{name} is not a number with the current parameters"))
-    }
-
     pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Status {
         // Two passes, no allocation: validate every reference and value, then store.
-        let mut k = 0;
-        for &vr in vrs {
-            let a = match self.access(vr, BaseType::Real) {
-                Ok(a) => a,
-                Err(s) => return s,
-            };
-            if a.settable_in & self.state.bit() == 0 {
-                return self.not_settable(a);
-            }
-            let Some(chunk) = values.get(k..k + a.width) else { return self.count_mismatch(vrs, values.len()) };
-            if !chunk.iter().all(|x| x.is_finite()) {
-                return self.not_finite(a, chunk);
-            }
-            k += a.width;
+        if let Err(s) = self.check_values(vrs, BaseType::Real, values.len(), true) {
+            return s;
         }
-        if k != values.len() {
-            return self.count_mismatch(vrs, values.len());
+        if let Some((r, x)) = elements(&self.access, vrs).zip(values).find(|(_, x)| !x.is_finite()) {
+            return self.error(&format!("{} = {x} refused: values must be finite", self.element_name(r)));
         }
-        let mut k = 0;
-        for &vr in vrs {
-            // Validated above: every reference has an entry.
-            let Some(a) = self.access.get(vr as usize).copied().flatten() else { continue };
-            if a.width == 1 {
-                let x = values.get(k).copied().unwrap_or(f64::NAN);
-                if let Err(m) = self.model.set_real(VariableRef { group: a.group, index: a.index }, x) {
-                    return self.error(&m);
-                }
-                k += 1;
-                continue;
-            }
-            for i in 0..a.width {
-                let x = values.get(k).copied().unwrap_or(f64::NAN);
-                if let Err(m) = self.model.set_real(VariableRef { group: a.group, index: a.index + i }, x) {
-                    return self.error(&m);
-                }
-                k += 1;
+        for (r, &x) in elements(&self.access, vrs).zip(values) {
+            if let Err(m) = self.model.set_real(r, x) {
+                return self.error(&m);
             }
         }
         Status::Ok
@@ -682,7 +611,7 @@ impl Instance {
         if let Err(s) = self.check_values(vrs, BaseType::Integer, values.len(), false) {
             return s;
         }
-        for (slot, (_, r)) in values.iter_mut().zip(elements(&self.table, self.version, vrs)) {
+        for (slot, r) in values.iter_mut().zip(elements(&self.access, vrs)) {
             *slot = self.model.get_integer(r);
         }
         Status::Ok
@@ -692,12 +621,11 @@ impl Instance {
         if let Err(s) = self.check_values(vrs, BaseType::Integer, values.len(), true) {
             return s;
         }
-        let refs: Vec<(&'static VariableGroup, VariableRef)> = elements(&self.table, self.version, vrs).collect();
         // Validate every value on a copy first: all or nothing.
         let mut trial = self.copy_model();
-        for ((g, r), &x) in refs.iter().zip(values) {
-            if let Err(m) = trial.set_integer(*r, x) {
-                return self.error(&format!("{} = {x} refused: {m}", g.element_name(r.index)));
+        for (r, &x) in elements(&self.access, vrs).zip(values) {
+            if let Err(m) = trial.set_integer(r, x) {
+                return self.error(&format!("{} = {x} refused: {m}", self.element_name(r)));
             }
         }
         self.model = trial;
@@ -708,7 +636,7 @@ impl Instance {
         if let Err(s) = self.check_values(vrs, BaseType::Boolean, values.len(), false) {
             return s;
         }
-        for (slot, (_, r)) in values.iter_mut().zip(elements(&self.table, self.version, vrs)) {
+        for (slot, r) in values.iter_mut().zip(elements(&self.access, vrs)) {
             *slot = self.model.get_boolean(r);
         }
         Status::Ok
@@ -718,7 +646,7 @@ impl Instance {
         if let Err(s) = self.check_values(vrs, BaseType::Boolean, values.len(), true) {
             return s;
         }
-        for ((_, r), &x) in elements(&self.table, self.version, vrs).zip(values) {
+        for (r, &x) in elements(&self.access, vrs).zip(values) {
             if let Err(m) = self.model.set_boolean(r, x) {
                 return self.error(&m);
             }
@@ -887,7 +815,7 @@ impl Instance {
                 ));
             }
         }
-        for (slot, (_, r)) in values.iter_mut().zip(elements(&self.table, self.version, vrs)) {
+        for (slot, r) in values.iter_mut().zip(elements(&self.access, vrs)) {
             *slot = self.model.output_derivative(r);
         }
         Status::Ok
@@ -903,9 +831,9 @@ impl Instance {
     ) -> Result<(Vec<VariableRef>, Vec<VariableRef>), Status> {
         let resolve = |vrs: &[u32]| -> Result<Vec<VariableRef>, Status> {
             for &vr in vrs {
-                self.lookup(vr, BaseType::Real)?;
+                self.access(vr, BaseType::Real)?;
             }
-            Ok(elements(&self.table, self.version, vrs).map(|(_, r)| r).collect())
+            Ok(elements(&self.access, vrs).collect())
         };
         let u = resolve(unknowns)?;
         let k = resolve(knowns)?;

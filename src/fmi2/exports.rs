@@ -14,10 +14,9 @@ use std::ffi::{CStr, CString, c_char};
 
 use super::state_machine::Fmi2Function as F;
 use super::types::*;
-use crate::fmi::boundary::{boundary, no_instance, show, try_out, try_slice, try_slice_mut};
+use crate::fmi::boundary::{boundary, free_instance, no_instance, show, try_out, try_slice, try_slice_mut};
 use crate::fmi::instance::Instance;
 use crate::fmi::log::{Callback, Logger, log_without_instance};
-use crate::fmi::registry::{self, Free};
 use crate::fmi::{FmiVersion, InterfaceType, Status, library};
 
 /// # Safety
@@ -121,19 +120,8 @@ pub unsafe extern "C" fn fmi2Instantiate(
 /// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
-    no_instance((), || match registry::request_free(c, FmiVersion::Fmi2) {
-        Free::Now => {
-            // SAFETY: the registry handed the live, idle instance over for dropping.
-            let inst = unsafe { &mut *(c as *mut Instance) };
-            inst.begin("fmi2FreeInstance");
-            inst.log_call(Status::Ok, String::new);
-            // SAFETY: as above; no reference to it remains.
-            unsafe { Instance::drop_handle(c) };
-        }
-        // A call on it is running (the importer frees it from its callback): dropped when
-        // that call returns. NULL, freed or foreign handles: nothing to free.
-        Free::Deferred | Free::Unknown => {}
-    })
+    // SAFETY: the handle is looked up in the registry before any use.
+    unsafe { free_instance(c, F::FreeInstance) };
 }
 
 /// # Safety

@@ -14,10 +14,9 @@ use std::ffi::{CStr, CString, c_char};
 
 use super::state_machine::Fmi3Function as F;
 use super::types::*;
-use crate::fmi::boundary::{boundary, no_instance, show, try_out, try_slice, try_slice_mut};
+use crate::fmi::boundary::{boundary, free_instance, no_instance, show, try_out, try_slice, try_slice_mut};
 use crate::fmi::instance::{CoSimulationOptions, Instance};
 use crate::fmi::log::{Callback, Logger, log_without_instance};
-use crate::fmi::registry::{self, Free};
 use crate::fmi::{FmiVersion, InterfaceType, Status, library};
 use crate::models::variables::{Causality, Dependency};
 
@@ -220,19 +219,8 @@ pub unsafe extern "C" fn fmi3InstantiateScheduledExecution(
 /// See the module documentation.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3FreeInstance(instance: fmi3Instance) {
-    no_instance((), || match registry::request_free(instance, FmiVersion::Fmi3) {
-        Free::Now => {
-            // SAFETY: the registry handed the live, idle instance over for dropping.
-            let inst = unsafe { &mut *(instance as *mut Instance) };
-            inst.begin("fmi3FreeInstance");
-            inst.log_call(Status::Ok, String::new);
-            // SAFETY: as above; no reference to it remains.
-            unsafe { Instance::drop_handle(instance) };
-        }
-        // A call on it is running (the importer frees it from its callback): dropped when
-        // that call returns. NULL, freed or foreign handles: nothing to free.
-        Free::Deferred | Free::Unknown => {}
-    })
+    // SAFETY: the handle is looked up in the registry before any use.
+    unsafe { free_instance(instance, F::FreeInstance) };
 }
 
 /// # Safety

@@ -77,80 +77,12 @@ const EVENT: u16 = S::EventMode.bit();
 const CONTINUOUS: u16 = S::ContinuousTimeMode.bit();
 const INTERMEDIATE: u16 = S::IntermediateUpdateMode.bit();
 const CONFIGURATION: u16 = S::ConfigurationMode.bit();
-/// Every state but fatal.
 /// Every state but `Error`: after an error only freeing, resetting and restoring a saved
 /// FMU state are meaningful (FMI 3.0, section 2.2.3, status `fmi3Error`).
 const ANY: u16 = INST | INIT | STEP | DISCARDED | TERMINATED | EVENT | CONTINUOUS | INTERMEDIATE | CONFIGURATION;
 const AFTER_ERROR: u16 = ANY | ERROR;
 
-/// The states FMI 3 has, for the walk over the table.
-pub const FMI3_STATES: [ModelState; 11] = [
-    ModelState::Instantiated,
-    ModelState::ConfigurationMode,
-    ModelState::InitializationMode,
-    ModelState::EventMode,
-    ModelState::ContinuousTimeMode,
-    ModelState::StepComplete,
-    ModelState::IntermediateUpdateMode,
-    ModelState::StepFailed,
-    ModelState::Terminated,
-    ModelState::Error,
-    ModelState::Fatal,
-];
-
 impl Fmi3Function {
-    pub const ALL: [Fmi3Function; 46] = {
-        use Fmi3Function::*;
-        [
-            SetDebugLogging,
-            FreeInstance,
-            EnterInitializationMode,
-            ExitInitializationMode,
-            EnterEventMode,
-            Terminate,
-            Reset,
-            GetFloat64,
-            GetInt32,
-            GetBoolean,
-            GetOther("fmi3GetFloat32"),
-            GetClock,
-            SetFloat64,
-            SetInt32,
-            SetBoolean,
-            SetOther("fmi3SetFloat32"),
-            SetClock,
-            GetNumberOfVariableDependencies,
-            GetVariableDependencies,
-            GetFMUState,
-            SetFMUState,
-            FreeFMUState,
-            SerializedFMUStateSize,
-            SerializeFMUState,
-            DeserializeFMUState,
-            GetDirectionalDerivative,
-            GetAdjointDerivative,
-            EnterConfigurationMode,
-            ExitConfigurationMode,
-            ClockTiming("fmi3GetIntervalDecimal"),
-            EvaluateDiscreteStates,
-            UpdateDiscreteStates,
-            EnterContinuousTimeMode,
-            CompletedIntegratorStep,
-            SetTime,
-            SetContinuousStates,
-            GetContinuousStateDerivatives,
-            GetEventIndicators,
-            GetContinuousStates,
-            GetNominalsOfContinuousStates,
-            GetNumberOfEventIndicators,
-            GetNumberOfContinuousStates,
-            EnterStepMode,
-            GetOutputDerivatives,
-            DoStep,
-            ActivateModelPartition,
-        ]
-    };
-
     /// The C name, for log messages.
     pub fn name(self) -> &'static str {
         use Fmi3Function::*;

@@ -4,16 +4,14 @@ early return, adjoint against directional derivatives, variable dependencies, se
 states, and the controller closing the loop."""
 
 import math
-import shutil
 from pathlib import Path
 
 import numpy as np
-import pytest
 from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.fmi3 import FMU3Model, FMU3Slave
 from fmpy.validation import validate_fmu
 
-from stewart_fmu import PLATFORM_FMU, Platform, recording_callbacks
+from stewart_fmu import PLATFORM_FMU, Platform
 
 FMI3_DIR = Path(PLATFORM_FMU).parent / "fmi3"
 PLATFORM3 = FMI3_DIR / "StewartPlatform.fmu"

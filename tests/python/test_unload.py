@@ -3,7 +3,6 @@ in one process (FMPy unpacks each call into a new folder, loads the binary from 
 unloads it at the end) keeps its memory. Before, the binary was linked with `-z nodelete`, so
 every call left its copy mapped (about 0.76 MB each)."""
 
-import os
 import re
 
 from fmpy import simulate_fmu

@@ -135,7 +135,7 @@ function place(i) {
     leg.scale.set(1, dir.length(), 1);
     leg.quaternion.setFromUnitVectors(yUp, dir.clone().normalize());
     const atStop = result.stopForce(k, i) !== 0;
-    leg.material.color = forceColour(result.force(k, i) + (result.forces ? 0 : NaN), result.forceRange);
+    leg.material.color = forceColour(result.force(k, i), result.forceRange);
     leg.material.emissive = new THREE.Color(atStop ? 0x8a6d00 : 0x000000);
     parts.joints[k].position.copy(to);
   });

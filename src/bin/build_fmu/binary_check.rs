@@ -67,21 +67,8 @@ type Instantiate = unsafe extern "C" fn(
 type FreeInstance = unsafe extern "C" fn(fmi2Component);
 
 pub fn check(library: &Path, guid: &str) -> Result<(), String> {
-    let path = CString::new(library.to_string_lossy().as_bytes()).map_err(|_| "path contains NUL")?;
-    // SAFETY: dlopen of our own freshly built library; its initialisers are Rust's.
-    let handle = unsafe { libc::dlopen(path.as_ptr(), libc::RTLD_NOW | libc::RTLD_LOCAL) };
-    if handle.is_null() {
-        return Err("dlopen failed".into());
-    }
-    let symbol = |name: &str| -> Result<*mut c_void, String> {
-        let c = CString::new(name).map_err(|_| "bad symbol name")?;
-        // SAFETY: valid handle and NUL-terminated name.
-        let p = unsafe { libc::dlsym(handle, c.as_ptr()) };
-        if p.is_null() { Err(format!("symbol {name} is not exported")) } else { Ok(p) }
-    };
-    for name in REQUIRED_SYMBOLS {
-        symbol(name)?;
-    }
+    let lib = Loaded::open(library, &REQUIRED_SYMBOLS)?;
+    let symbol = |name: &str| lib.symbol(name);
     // SAFETY: the symbols have exactly these C signatures (fmi2FunctionTypes.h).
     let instantiate: Instantiate = unsafe { std::mem::transmute(symbol("fmi2Instantiate")?) };
     // SAFETY: as above.
@@ -125,25 +112,56 @@ pub fn check(library: &Path, guid: &str) -> Result<(), String> {
             return Err("fmi2Instantiate accepted a foreign GUID".into());
         }
     }
-    // SAFETY: handle from dlopen above.
-    unsafe { libc::dlclose(handle) };
-    unloads(&path)
+    lib.close()
 }
 
-/// The library really leaves the process when its last handle is closed: nothing in it keeps
-/// it resident (no `-z nodelete`, no thread-local destructor or exit handler registered by a
-/// plain instantiate/free), so a host that loads it from many unpacked copies keeps its memory.
-fn unloads(path: &std::ffi::CStr) -> Result<(), String> {
-    // SAFETY: RTLD_NOLOAD only looks the library up; a handle it returns is closed at once.
-    let still = unsafe { libc::dlopen(path.as_ptr(), libc::RTLD_NOW | libc::RTLD_NOLOAD) };
-    if still.is_null() {
-        return Ok(());
+/// The built library, loaded for the checks.
+struct Loaded {
+    path: CString,
+    handle: *mut c_void,
+}
+
+impl Loaded {
+    /// `dlopen`s the library and checks that it exports every `required` symbol.
+    fn open(library: &Path, required: &[&str]) -> Result<Self, String> {
+        let path = CString::new(library.to_string_lossy().as_bytes()).map_err(|_| "path contains NUL")?;
+        // SAFETY: dlopen of our own freshly built library; its initialisers are Rust's.
+        let handle = unsafe { libc::dlopen(path.as_ptr(), libc::RTLD_NOW | libc::RTLD_LOCAL) };
+        if handle.is_null() {
+            return Err("dlopen failed".into());
+        }
+        let lib = Loaded { path, handle };
+        for name in required {
+            lib.symbol(name)?;
+        }
+        Ok(lib)
     }
-    // SAFETY: handle from dlopen above.
-    unsafe { libc::dlclose(still) };
-    Err("the library stays loaded after its last dlclose (linked with -z nodelete, or a thread-local destructor \
-         or exit handler was registered)"
-        .into())
+
+    fn symbol(&self, name: &str) -> Result<*mut c_void, String> {
+        let c = CString::new(name).map_err(|_| "bad symbol name")?;
+        // SAFETY: valid handle and NUL-terminated name.
+        let p = unsafe { libc::dlsym(self.handle, c.as_ptr()) };
+        if p.is_null() { Err(format!("symbol {name} is not exported")) } else { Ok(p) }
+    }
+
+    /// Closes the library and checks that it really leaves the process at its last handle:
+    /// nothing in it keeps it resident (no `-z nodelete`, no thread-local destructor or exit
+    /// handler registered by a plain instantiate/free), so a host that loads it from many
+    /// unpacked copies keeps its memory.
+    fn close(self) -> Result<(), String> {
+        // SAFETY: handle from dlopen in `open`.
+        unsafe { libc::dlclose(self.handle) };
+        // SAFETY: RTLD_NOLOAD only looks the library up; a handle it returns is closed at once.
+        let still = unsafe { libc::dlopen(self.path.as_ptr(), libc::RTLD_NOW | libc::RTLD_NOLOAD) };
+        if still.is_null() {
+            return Ok(());
+        }
+        // SAFETY: handle from dlopen above.
+        unsafe { libc::dlclose(still) };
+        Err("the library stays loaded after its last dlclose (linked with -z nodelete, or a thread-local destructor \
+             or exit handler was registered)"
+            .into())
+    }
 }
 
 /// Every FMI 3.0 function (an FMU exports them all, implemented or answering with an error).
@@ -244,21 +262,8 @@ type FreeInstance3 = unsafe extern "C" fn(*mut c_void);
 /// The FMI 3 counterpart of [`check`]: every `fmi3*` symbol, and
 /// `fmi3InstantiateCoSimulation` accepting the description's token and refusing a wrong one.
 pub fn check_fmi3(library: &Path, token: &str) -> Result<(), String> {
-    let path = CString::new(library.to_string_lossy().as_bytes()).map_err(|_| "path contains NUL")?;
-    // SAFETY: dlopen of our own freshly built library; its initialisers are Rust's.
-    let handle = unsafe { libc::dlopen(path.as_ptr(), libc::RTLD_NOW | libc::RTLD_LOCAL) };
-    if handle.is_null() {
-        return Err("dlopen failed".into());
-    }
-    let symbol = |name: &str| -> Result<*mut c_void, String> {
-        let c = CString::new(name).map_err(|_| "bad symbol name")?;
-        // SAFETY: valid handle and NUL-terminated name.
-        let p = unsafe { libc::dlsym(handle, c.as_ptr()) };
-        if p.is_null() { Err(format!("symbol {name} is not exported")) } else { Ok(p) }
-    };
-    for name in REQUIRED_SYMBOLS_FMI3 {
-        symbol(name)?;
-    }
+    let lib = Loaded::open(library, &REQUIRED_SYMBOLS_FMI3)?;
+    let symbol = |name: &str| lib.symbol(name);
     // SAFETY: the symbols have exactly these C signatures (fmi3FunctionTypes.h).
     let instantiate: Instantiate3 = unsafe { std::mem::transmute(symbol("fmi3InstantiateCoSimulation")?) };
     // SAFETY: as above.
@@ -305,7 +310,5 @@ pub fn check_fmi3(library: &Path, token: &str) -> Result<(), String> {
             return Err("fmi3InstantiateCoSimulation accepted a foreign token".into());
         }
     }
-    // SAFETY: handle from dlopen above.
-    unsafe { libc::dlclose(handle) };
-    unloads(&path)
+    lib.close()
 }
