@@ -79,7 +79,12 @@ struct Access {
     base: BaseType,
     /// Bit set over [`ModelState`]: where `fmi2Set*`/`fmi3Set*` may change it.
     settable_in: u16,
+    /// The block of the value cache a Real variable is read through, or [`NO_CACHE`].
+    cache: u8,
 }
+
+/// [`Access::cache`] of a variable read through the model element by element.
+const NO_CACHE: u8 = u8::MAX;
 
 fn base_type(t: VariableType) -> BaseType {
     if t.is_real() {
@@ -92,7 +97,7 @@ fn base_type(t: VariableType) -> BaseType {
 }
 
 /// The access table of a model for one FMI version, indexed by value reference.
-fn access_table(table: &VariableTable, version: FmiVersion) -> Vec<Option<Access>> {
+fn access_table(table: &VariableTable, version: FmiVersion, model: &AnyModel) -> Vec<Option<Access>> {
     let max_vr = table.groups.iter().map(|g| g.vr(g.len().saturating_sub(1))).max().unwrap_or(0);
     (0..=max_vr)
         .map(|vr| {
@@ -106,7 +111,9 @@ fn access_table(table: &VariableTable, version: FmiVersion) -> Vec<Option<Access
                 FmiVersion::Fmi2 => 1,
                 FmiVersion::Fmi3 => g.len(),
             };
-            Some(Access { group: r.group, index: r.index, width, base: base_type(g.var_type), settable_in })
+            let base = base_type(g.var_type);
+            let cache = if base == BaseType::Real { model.cache_block(r.group) } else { None };
+            Some(Access { group: r.group, index: r.index, width, base, settable_in, cache: cache.unwrap_or(NO_CACHE) })
         })
         .collect()
 }
@@ -221,7 +228,14 @@ pub struct Instance {
     pub interface: InterfaceType,
     pub state: ModelState,
     pub logger: Logger,
-    pub model: AnyModel,
+    /// Private: every change goes through [`Instance::model_mut`], which invalidates the value
+    /// cache.
+    model: AnyModel,
+    /// Real values by value reference, for the cache blocks set in `fresh` (see
+    /// [`crate::models::FmuModel::cache_block`]).
+    value_cache: Vec<f64>,
+    /// Bit `b`: block `b` of `value_cache` holds the model's current values.
+    fresh: u32,
     pub table: VariableTable,
     /// Hash of the instantiation token, stamped into serialized states.
     token_hash: u64,
@@ -270,7 +284,8 @@ impl Instance {
     pub fn new(kind: ModelKind, token: &str, version: FmiVersion, interface: InterfaceType, logger: Logger) -> Self {
         let info = kind.info();
         let table = VariableTable::new(info.groups);
-        let access = access_table(&table, version);
+        let model = kind.instantiate();
+        let access = access_table(&table, version, &model);
         let state_order = match version {
             FmiVersion::Fmi2 => (0..info.states.len()).collect(),
             FmiVersion::Fmi3 => super::description::fmi3_state_order(info),
@@ -281,7 +296,9 @@ impl Instance {
             interface,
             state: ModelState::Instantiated,
             logger,
-            model: kind.instantiate(),
+            value_cache: vec![0.0; access.len()],
+            fresh: 0,
+            model,
             table,
             token_hash: fnv1a64(token.as_bytes()),
             start_time: 0.0,
@@ -530,7 +547,8 @@ impl Instance {
 
     pub fn exit_initialization_mode(&mut self) -> Status {
         let model_exchange = self.interface == InterfaceType::ModelExchange;
-        match self.model.exit_initialization(self.start_time, self.tolerance, model_exchange) {
+        let (start_time, tolerance) = (self.start_time, self.tolerance);
+        match self.model_mut().exit_initialization(start_time, tolerance, model_exchange) {
             Ok(done) => {
                 self.logger.log(Status::Ok, LogCategory::Events, &done.summary);
                 self.state = match (self.interface, self.version) {
@@ -561,7 +579,7 @@ impl Instance {
     }
 
     pub fn reset(&mut self) -> Status {
-        self.model = self.kind.instantiate();
+        *self.model_mut() = self.kind.instantiate();
         self.state = ModelState::Instantiated;
         self.start_time = 0.0;
         self.stop_time = None;
@@ -576,33 +594,117 @@ impl Instance {
 
     // ----- get/set ------------------------------------------------------------------------
 
+    /// The model, for a change: the value cache no longer holds its values.
+    fn model_mut(&mut self) -> &mut AnyModel {
+        self.fresh = 0;
+        &mut self.model
+    }
+
     pub fn get_real(&mut self, vrs: &[u32], values: &mut [f64]) -> Status {
-        // Two passes, no allocation: validate every reference, then read.
-        if let Err(s) = self.check_values(vrs, BaseType::Real, values.len(), false) {
-            return s;
+        // One pass: a get that fails leaves its values undefined (FMI 2.0 section 2.1.3,
+        // FMI 3.0 section 2.2.6), so nothing needs validating before the first is written.
+        // The loop holds only the fast path, a read from a fresh cache block; the rest is out
+        // of line so that the loop keeps its registers.
+        let mut filled = 0;
+        for &vr in vrs {
+            let fast = match self.access.get(vr as usize) {
+                Some(Some(a)) if a.base == BaseType::Real && self.fresh & 1u32.wrapping_shl(a.cache.into()) != 0 => {
+                    Some(a.width)
+                }
+                _ => None,
+            };
+            let width = match fast {
+                // FMI 2 reads one element per reference: no slice copy for it.
+                Some(1) => match (values.get_mut(filled), self.value_cache.get(vr as usize)) {
+                    (Some(slot), Some(&x)) => {
+                        *slot = x;
+                        1
+                    }
+                    _ => return self.count_error(vrs, BaseType::Real, values.len()),
+                },
+                _ => match self.read_real(vr, values, filled) {
+                    Ok(width) => width,
+                    Err(s) => return s,
+                },
+            };
+            filled += width;
         }
-        for (slot, r) in values.iter_mut().zip(elements(&self.access, vrs)) {
-            let x = self.model.get_real(r);
-            if x.is_nan() {
-                return self.error(&format!("{} is not a number with the current parameters", self.element_name(r)));
-            }
-            *slot = x;
+        if filled != values.len() {
+            return self.count_error(vrs, BaseType::Real, values.len());
+        }
+        if values.iter().any(|x| x.is_nan()) {
+            return self.nan_error(vrs, values);
         }
         Status::Ok
     }
 
+    /// Reads the values of one reference into `values[filled..]` by every path but the fast
+    /// one of [`Instance::get_real`]: filling a stale cache block, reading through the model,
+    /// and the errors. Returns the number of values read.
+    #[inline(never)]
+    fn read_real(&mut self, vr: u32, values: &mut [f64], filled: usize) -> Result<usize, Status> {
+        let a = self.access(vr, BaseType::Real)?;
+        let Some(out) = values.get_mut(filled..filled + a.width) else {
+            return Err(
+                self.error(&format!("the value references address more than nValues = {} values", values.len()))
+            );
+        };
+        if a.cache == NO_CACHE {
+            for (i, slot) in out.iter_mut().enumerate() {
+                *slot = self.model.get_real(VariableRef { group: a.group, index: a.index + i });
+            }
+            return Ok(a.width);
+        }
+        let bit = 1u32 << a.cache;
+        if self.fresh & bit == 0 {
+            self.model.fill_cache(a.cache, &mut self.value_cache);
+            self.fresh |= bit;
+        }
+        let first = vr as usize;
+        match self.value_cache.get(first..first + out.len()) {
+            Some(cached) => out.copy_from_slice(cached),
+            None => out.fill(f64::NAN),
+        }
+        Ok(a.width)
+    }
+
+    /// The error of a get whose references address more or fewer values than given.
+    #[cold]
+    fn count_error(&self, vrs: &[u32], want: BaseType, n_values: usize) -> Status {
+        match self.check_values(vrs, want, n_values, false) {
+            Err(s) => s,
+            Ok(()) => self.error("the value references and nValues disagree"),
+        }
+    }
+
+    /// The error of a get that read a NaN (an output undefined with the current parameters).
+    #[cold]
+    fn nan_error(&self, vrs: &[u32], values: &[f64]) -> Status {
+        let i = values.iter().position(|x| x.is_nan()).unwrap_or(0);
+        let r = elements(&self.access, vrs).nth(i).unwrap_or(VariableRef { group: usize::MAX, index: 0 });
+        self.error(&format!("{} is not a number with the current parameters", self.element_name(r)))
+    }
+
     pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Status {
-        // Two passes, no allocation: validate every reference and value, then store.
+        // Two passes, no allocation: validate every reference and value, then store (all or
+        // nothing).
         if let Err(s) = self.check_values(vrs, BaseType::Real, values.len(), true) {
             return s;
         }
-        if let Some((r, x)) = elements(&self.access, vrs).zip(values).find(|(_, x)| !x.is_finite()) {
-            return self.error(&format!("{} = {x} refused: values must be finite", self.element_name(r)));
+        if let Some(i) = values.iter().position(|x| !x.is_finite()) {
+            let r = elements(&self.access, vrs).nth(i).unwrap_or(VariableRef { group: usize::MAX, index: 0 });
+            return self.error(&format!("{} = {} refused: values must be finite", self.element_name(r), values[i]));
         }
-        for (r, &x) in elements(&self.access, vrs).zip(values) {
-            if let Err(m) = self.model.set_real(r, x) {
-                return self.error(&m);
+        self.fresh = 0;
+        let mut done = 0;
+        for &vr in vrs {
+            let Some(a) = self.access.get(vr as usize).copied().flatten() else { break };
+            for (i, &x) in values.iter().skip(done).take(a.width).enumerate() {
+                if let Err(m) = self.model.set_real(VariableRef { group: a.group, index: a.index + i }, x) {
+                    return self.error(&m);
+                }
             }
+            done += a.width;
         }
         Status::Ok
     }
@@ -628,7 +730,7 @@ impl Instance {
                 return self.error(&format!("{} = {x} refused: {m}", self.element_name(r)));
             }
         }
-        self.model = trial;
+        *self.model_mut() = trial;
         Status::Ok
     }
 
@@ -646,6 +748,7 @@ impl Instance {
         if let Err(s) = self.check_values(vrs, BaseType::Boolean, values.len(), true) {
             return s;
         }
+        self.fresh = 0;
         for (r, &x) in elements(&self.access, vrs).zip(values) {
             if let Err(m) = self.model.set_boolean(r, x) {
                 return self.error(&m);
@@ -705,7 +808,7 @@ impl Instance {
         let early = events && self.co_simulation.early_return_allowed;
         let mut t = tc;
         loop {
-            let result = self.model.do_step(t, t_end - t, early);
+            let result = self.model_mut().do_step(t, t_end - t, early);
             match result {
                 Ok(StepReport { reached, event }) => {
                     self.time = reached;
@@ -788,7 +891,7 @@ impl Instance {
             refs.push(r);
         }
         for (r, &x) in refs.into_iter().zip(values) {
-            self.model.set_input_derivative(r, x);
+            self.model_mut().set_input_derivative(r, x);
         }
         Status::Ok
     }
@@ -945,7 +1048,7 @@ impl Instance {
             return self.error(&format!("time must be finite, got {t}"));
         }
         self.time = t;
-        self.model.set_time(t);
+        self.model_mut().set_time(t);
         Status::Ok
     }
 
@@ -962,7 +1065,7 @@ impl Instance {
                 *slot = xi;
             }
         }
-        self.model.set_continuous_states(&internal);
+        self.model_mut().set_continuous_states(&internal);
         Status::Ok
     }
 
@@ -1039,6 +1142,7 @@ impl Instance {
     pub fn update_discrete_states(&mut self) -> EventInfo {
         let mut info = EventInfo::default();
         let logger = &self.logger;
+        self.fresh = 0;
         let update: EventUpdate = self.model.event_update(&mut |m| logger.log(Status::Ok, LogCategory::Events, m));
         if let Some(reason) = update.terminate {
             info.terminate_simulation = true;
@@ -1050,7 +1154,7 @@ impl Instance {
 
     /// Returns `(enterEventMode, terminateSimulation)`.
     pub fn completed_integrator_step(&mut self) -> (bool, bool) {
-        match self.model.completed_integrator_step() {
+        match self.model_mut().completed_integrator_step() {
             Ok(()) => (false, false),
             Err(e) => {
                 self.terminated = true;
@@ -1125,7 +1229,7 @@ impl Instance {
         self.tolerance = s.tolerance;
         self.terminated = s.terminated;
         self.last_successful_time = s.last_successful_time;
-        self.model = s.model;
+        *self.model_mut() = s.model;
         self.logger.log(
             Status::Ok,
             LogCategory::Events,

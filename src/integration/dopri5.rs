@@ -189,6 +189,7 @@ fn locate<S: OdeSystem<N>, const N: usize>(
 }
 
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
     system: &S,
     s: &SolverSettings,

@@ -11,6 +11,7 @@ use super::{
     Crossing, Events, IntegrationError, IntegratorStats, MAX_SWITCHING, OdeSystem, SolverSettings, SwitchingKind, bits,
 };
 
+#[inline(always)]
 pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
     system: &S,
     s: &SolverSettings,
@@ -66,10 +67,11 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
         stats.rhs_evaluations += 4;
         stats.accepted_steps += 1;
         system.after_step(y);
-        system.check(t_end, y).map_err(|fault| IntegrationError::Fault { t: t_end, fault })?;
+        system
+            .check_and_switching(t_end, y, (switching > 0).then_some(&mut g_end))
+            .map_err(|fault| IntegrationError::Fault { t: t_end, fault })?;
         let logged_before = events.log.as_slice().len();
         if switching > 0 {
-            system.switching(t_end, y, &mut g_end);
             let changed = events.sides.changed(&g_end, switching);
             if changed != 0 {
                 // Only now the start values are needed (rare: no cost in the hot path).

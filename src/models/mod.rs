@@ -122,6 +122,17 @@ pub trait FmuModel {
     /// Any Real variable's current value (outputs computed from the current state, or in
     /// Initialization Mode from the current parameters).
     fn get_real(&mut self, var: VariableRef) -> f64;
+    /// The block of the instance's value cache a Real group is read through: values computed
+    /// together, at most once per change of the model, and then read by value reference with
+    /// no call into the model (the fast path of `fmi2GetReal`/`fmi3GetFloat64`). `None`: read
+    /// element by element through [`FmuModel::get_real`] (parameters, values that are costly
+    /// or computed on request). At most [`CACHE_BLOCKS`] blocks.
+    fn cache_block(&self, _group: usize) -> Option<u8> {
+        None
+    }
+    /// Writes the current values of every element of the groups in cache block `block` into
+    /// `cache` at their value references.
+    fn fill_cache(&mut self, _block: u8, _cache: &mut [f64]) {}
     /// Stores a finite Real value of a parameter or input; may refuse a value outside the
     /// variable's domain.
     fn set_real(&mut self, var: VariableRef, value: f64) -> Result<(), String>;
@@ -189,6 +200,18 @@ pub trait FmuModel {
     fn restore(r: &mut ByteReader) -> Result<Self, SnapshotError>
     where
         Self: Sized;
+}
+
+/// Most blocks a model's value cache may have (see [`FmuModel::cache_block`]).
+pub const CACHE_BLOCKS: u8 = 31;
+
+/// Writes `values` into a value cache at the value references of `group`'s elements.
+#[inline]
+pub fn fill_group(cache: &mut [f64], group: &VariableGroup, values: &[f64]) {
+    let first = group.first_vr as usize;
+    if let Some(slots) = cache.get_mut(first..first + values.len()) {
+        slots.copy_from_slice(values);
+    }
 }
 
 /// Every model this binary implements.
@@ -277,6 +300,13 @@ impl AnyModel {
     }
     pub fn set_real(&mut self, var: VariableRef, value: f64) -> Result<(), String> {
         dispatch!(self, m => m.set_real(var, value))
+    }
+    pub fn cache_block(&self, group: usize) -> Option<u8> {
+        dispatch!(self, m => m.cache_block(group)).filter(|&b| b < CACHE_BLOCKS)
+    }
+    #[inline]
+    pub fn fill_cache(&mut self, block: u8, cache: &mut [f64]) {
+        dispatch!(self, m => m.fill_cache(block, cache))
     }
     pub fn get_integer(&mut self, var: VariableRef) -> i32 {
         dispatch!(self, m => m.get_integer(var))

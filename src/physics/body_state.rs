@@ -143,6 +143,7 @@ impl BodyState {
         worst
     }
 
+    #[inline(always)]
     pub fn is_finite(&self) -> bool {
         let finite3 = |v: &Vector3<f64>| v.x.is_finite() && v.y.is_finite() && v.z.is_finite();
         finite3(&self.r) && finite3(&self.v) && self.e.iter().all(finite3) && self.e_dot.iter().all(finite3)

@@ -7,7 +7,7 @@
 use super::body_state::BodyState;
 use super::direct_problem::ForceMomentMatrix;
 use super::error::{ParameterError, PhysicsFault};
-use super::legs::LegGeometry;
+use super::legs::{JointArrays, LegGeometry, LegKinematics};
 use super::stand::{COINCIDENCE_TOLERANCE, LEG_COUNT, Stand};
 
 /// The limits a stand's motion must respect, fixed when the simulation starts.
@@ -69,25 +69,46 @@ impl ConfigurationGuard {
     }
 
     /// Cheap checks for every internal step: finite state, legs not collapsed, platform
-    /// joints on their side of the base plane. Squared lengths, no square roots on the way.
-    #[inline]
-    pub fn check(&self, stand: &Stand, state: &BodyState) -> Result<(), PhysicsFault> {
+    /// joints on their side of the base plane.
+    #[inline(always)]
+    pub fn check(&self, joints: &JointArrays, state: &BodyState) -> Result<(), PhysicsFault> {
         if !state.is_finite() {
             return Err(PhysicsFault::NonFiniteState);
         }
+        self.check_legs(state, &joints.kinematics(state))
+    }
+
+    /// [`ConfigurationGuard::check`] of a finite state whose legs are computed already.
+    #[inline(always)]
+    pub fn check_legs(&self, state: &BodyState, legs: &LegKinematics) -> Result<(), PhysicsFault> {
+        let min_squared = self.min_leg_length * self.min_leg_length;
+        let mut bad = false;
+        for k in 0..LEG_COUNT {
+            let length_squared =
+                legs.leg[0][k] * legs.leg[0][k] + legs.leg[1][k] * legs.leg[1][k] + legs.leg[2][k] * legs.leg[2][k];
+            let height = state.r.z + legs.arm[2][k] - self.base_plane;
+            // No early exit: the six comparisons run side by side; the fault is named below.
+            bad |= !(length_squared > min_squared) | !(height * self.side > 0.0);
+        }
+        if bad { Err(self.fault(state, legs)) } else { Ok(()) }
+    }
+
+    /// The first leg that fails [`ConfigurationGuard::check_legs`].
+    #[cold]
+    fn fault(&self, state: &BodyState, legs: &LegKinematics) -> PhysicsFault {
         let min_squared = self.min_leg_length * self.min_leg_length;
         for k in 0..LEG_COUNT {
-            let arm = state.body_vector(&stand.platform_joints[k]);
-            let length_squared = (state.r + arm - stand.base_joints[k]).norm_squared();
+            let length_squared =
+                legs.leg[0][k] * legs.leg[0][k] + legs.leg[1][k] * legs.leg[1][k] + legs.leg[2][k] * legs.leg[2][k];
             if !(length_squared > min_squared) {
-                return Err(PhysicsFault::LegCollapsed { leg: k + 1, length: length_squared.sqrt() });
+                return PhysicsFault::LegCollapsed { leg: k + 1, length: length_squared.sqrt() };
             }
-            let height = state.r.z + arm.z - self.base_plane;
+            let height = state.r.z + legs.arm[2][k] - self.base_plane;
             if !(height * self.side > 0.0) {
-                return Err(PhysicsFault::JointBelowBase { leg: k + 1, height });
+                return PhysicsFault::JointBelowBase { leg: k + 1, height };
             }
         }
-        Ok(())
+        PhysicsFault::NonFiniteState
     }
 
     /// The condition number of the force/moment matrix of a state (the FMU output `kappa`;

@@ -14,7 +14,7 @@ use nalgebra::{Matrix6, Vector3, Vector6};
 
 use super::body_state::BodyState;
 use super::kinematics::PoseTrajectoryPoint;
-use super::legs::LegGeometry;
+use super::legs::{LegGeometry, LegKinematics};
 use super::stand::{LEG_COUNT, Stand};
 
 /// Condition number (of the dimensionless force/moment matrix) above which a configuration is
@@ -124,21 +124,26 @@ pub fn singular_legs(stand: &Stand, legs: &LegGeometry) -> [bool; LEG_COUNT] {
     out
 }
 
-/// Determinant of the dimensionless force/moment matrix straight from the leg geometry
+/// Determinant of the dimensionless force/moment matrix straight from the legs of a state
 /// (columns `[n_k; (R A_k) x n_k / ell]`), without building a nalgebra matrix: the
 /// once-per-step singularity check of the FMU.
-pub fn force_moment_determinant(legs: &LegGeometry, ell: f64) -> f64 {
+#[inline(always)]
+pub fn force_moment_determinant(legs: &LegKinematics, ell: f64) -> f64 {
     let mut a = [[0.0f64; 6]; 6];
     let inv_ell = 1.0 / ell;
+    // Row by row over the legs (vector registers), the arithmetic of `LegKinematics::direction`
+    // and of nalgebra's cross product.
+    for c in 0..3 {
+        for k in 0..LEG_COUNT {
+            a[c][k] = if legs.length[k] > 0.0 { legs.leg[c][k] * legs.inverse_length[k] } else { 0.0 };
+        }
+    }
+    let arm = &legs.arm;
     for k in 0..LEG_COUNT {
-        let n = legs.direction[k];
-        let m = legs.arm[k].cross(&n) * inv_ell;
-        a[0][k] = n.x;
-        a[1][k] = n.y;
-        a[2][k] = n.z;
-        a[3][k] = m.x;
-        a[4][k] = m.y;
-        a[5][k] = m.z;
+        let n = [a[0][k], a[1][k], a[2][k]];
+        a[3][k] = (arm[1][k] * n[2] - arm[2][k] * n[1]) * inv_ell;
+        a[4][k] = (arm[2][k] * n[0] - arm[0][k] * n[2]) * inv_ell;
+        a[5][k] = (arm[0][k] * n[1] - arm[1][k] * n[0]) * inv_ell;
     }
     determinant6(a)
 }
@@ -146,6 +151,7 @@ pub fn force_moment_determinant(legs: &LegGeometry, ell: f64) -> f64 {
 /// Determinant of a 6x6 matrix (rows) by Gaussian elimination with partial pivoting. Each
 /// elimination stage is a separate instance of [`eliminate`] with its column as a constant,
 /// so every loop has constant bounds and unrolls without bounds checks.
+#[inline(always)]
 pub fn determinant6(mut a: [[f64; 6]; 6]) -> f64 {
     let mut det = 1.0;
     eliminate::<0>(&mut a, &mut det);
@@ -233,6 +239,7 @@ pub fn solve_direct_problem(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::physics::legs::JointArrays;
     use crate::physics::stand::PAPER_EQUILIBRIUM_LEG_FORCE;
     use nalgebra::Matrix3;
 
@@ -256,7 +263,8 @@ mod tests {
         let m = ForceMomentMatrix::new(&stand, &LegGeometry::new(&stand, &state));
         let (ours, lu) = (m.determinant(), m.matrix.determinant());
         assert!((ours - lu).abs() < 1e-13 * lu.abs(), "{ours} vs {lu}");
-        let direct = force_moment_determinant(&LegGeometry::new(&stand, &state), stand.characteristic_length());
+        let direct =
+            force_moment_determinant(&JointArrays::new(&stand).kinematics(&state), stand.characteristic_length());
         assert!((direct - lu).abs() < 1e-13 * lu.abs(), "{direct} vs {lu}");
     }
 

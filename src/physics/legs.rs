@@ -58,3 +58,97 @@ impl LegGeometry {
         (force, moment)
     }
 }
+
+/// The stand's joint coordinates as arrays over the legs (`[component][leg]`), so that the six
+/// legs of a state are computed side by side in vector registers ([`LegKinematics`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JointArrays {
+    /// `A_k`, body frame, m.
+    pub platform: [[f64; LEG_COUNT]; 3],
+    /// `B_k`, inertial frame, m.
+    pub base: [[f64; LEG_COUNT]; 3],
+}
+
+impl JointArrays {
+    pub fn new(stand: &Stand) -> Self {
+        let by_component = |p: &[Vector3<f64>; LEG_COUNT]| std::array::from_fn(|c| std::array::from_fn(|k| p[k][c]));
+        JointArrays { platform: by_component(&stand.platform_joints), base: by_component(&stand.base_joints) }
+    }
+
+    /// The legs of a state. The same arithmetic in the same order as [`LegGeometry::new`], so
+    /// lengths, arms and directions are equal to the bit.
+    #[inline(always)]
+    pub fn kinematics(&self, state: &BodyState) -> LegKinematics {
+        let (a, b) = (&self.platform, &self.base);
+        let [e1, e2, e3] = &state.e;
+        let mut arm = [[0.0; LEG_COUNT]; 3];
+        let mut leg = [[0.0; LEG_COUNT]; 3];
+        for c in 0..3 {
+            for k in 0..LEG_COUNT {
+                arm[c][k] = e1[c] * a[0][k] + e2[c] * a[1][k] + e3[c] * a[2][k];
+                leg[c][k] = state.r[c] + arm[c][k] - b[c][k];
+            }
+        }
+        let mut length = [0.0; LEG_COUNT];
+        let mut inverse_length = [0.0; LEG_COUNT];
+        for k in 0..LEG_COUNT {
+            length[k] = (leg[0][k] * leg[0][k] + leg[1][k] * leg[1][k] + leg[2][k] * leg[2][k]).sqrt();
+            inverse_length[k] = 1.0 / length[k];
+        }
+        LegKinematics { arm, leg, length, inverse_length }
+    }
+
+    /// Leg length rates `dl_k/dt = n_k . (v + d(R A_k)/dt)`, m/s, as [`LegGeometry::length_rates`]
+    /// (the same arithmetic; 0 for a collapsed leg).
+    #[inline(always)]
+    pub fn length_rates(&self, state: &BodyState, legs: &LegKinematics) -> [f64; LEG_COUNT] {
+        let a = &self.platform;
+        let [d1, d2, d3] = &state.e_dot;
+        let mut velocity = [[0.0; LEG_COUNT]; 3];
+        for c in 0..3 {
+            for k in 0..LEG_COUNT {
+                velocity[c][k] = state.v[c] + (d1[c] * a[0][k] + d2[c] * a[1][k] + d3[c] * a[2][k]);
+            }
+        }
+        let mut rates = [0.0; LEG_COUNT];
+        for k in 0..LEG_COUNT {
+            let n = legs.direction(k);
+            rates[k] = n[0] * velocity[0][k] + n[1] * velocity[1][k] + n[2] * velocity[2][k];
+        }
+        rates
+    }
+}
+
+/// The legs of one state as arrays over the legs (`[component][leg]`): see
+/// [`JointArrays::kinematics`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LegKinematics {
+    /// Arms `R A_k`, inertial components, m.
+    pub arm: [[f64; LEG_COUNT]; 3],
+    /// Leg vectors `a_k - B_k = r + R A_k - B_k`, m.
+    pub leg: [[f64; LEG_COUNT]; 3],
+    /// `l_k`, m.
+    pub length: [f64; LEG_COUNT],
+    /// `1 / l_k`, 1/m (infinite for a collapsed leg).
+    pub inverse_length: [f64; LEG_COUNT],
+}
+
+impl LegKinematics {
+    /// Unit direction of leg `k` (zero for a collapsed leg, never NaN), as
+    /// [`LegGeometry::direction`].
+    #[inline(always)]
+    pub fn direction(&self, k: usize) -> [f64; 3] {
+        if self.length[k] > 0.0 {
+            let s = self.inverse_length[k];
+            [self.leg[0][k] * s, self.leg[1][k] * s, self.leg[2][k] * s]
+        } else {
+            [0.0; 3]
+        }
+    }
+
+    /// The arm of leg `k`.
+    #[inline(always)]
+    pub fn arm(&self, k: usize) -> Vector3<f64> {
+        Vector3::new(self.arm[0][k], self.arm[1][k], self.arm[2][k])
+    }
+}

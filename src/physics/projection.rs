@@ -20,6 +20,7 @@ fn defect(q: &Matrix3<f64>) -> f64 {
 /// Replaces `e1, e2, e3` by the nearest orthonormal frame (polar factor of `R`, no axis
 /// preferred, unlike Gram-Schmidt) and `e1', e2', e3'` by their projection on the tangent
 /// space at that frame: `R' <- R skew(R^T R')`.
+#[inline(always)]
 pub fn project_onto_constraints(y: &mut StateVector) {
     let mut q = Matrix3::from_column_slice(&y[layout::E..layout::E + 9]);
     let mut d = defect(&q);

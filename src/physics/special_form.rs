@@ -19,7 +19,7 @@ use nalgebra::Vector3;
 use super::body_state::{BodyState, STATE_DIM, StateVector, layout};
 use super::end_stops::EndStops;
 use super::forces::LegForceLaw;
-use super::legs::LegGeometry;
+use super::legs::{JointArrays, LegGeometry, LegKinematics};
 use super::stand::{LEG_COUNT, Stand};
 
 /// The stand-dependent coefficients of the special form, computed once per parameter set so
@@ -43,15 +43,9 @@ pub struct SpecialForm {
     /// residual obeys `C'' + 2 alpha C' + alpha² C = 0` near the manifold (critically damped
     /// decay). 0 = off (the default: the co-simulation projects instead).
     pub baumgarte_rate: f64,
-    /// The joints' coordinates as arrays over the legs (`[component][leg]`), so that the six
-    /// legs of a right-hand side are computed side by side in vector registers.
-    platform_joints: [[f64; LEG_COUNT]; 3],
-    base_joints: [[f64; LEG_COUNT]; 3],
-}
-
-/// `[component][leg]` arrays of six joint positions.
-fn by_component(points: &[Vector3<f64>; LEG_COUNT]) -> [[f64; LEG_COUNT]; 3] {
-    std::array::from_fn(|c| std::array::from_fn(|k| points[k][c]))
+    /// The joints as arrays over the legs, so that the six legs of a right-hand side are
+    /// computed side by side in vector registers.
+    pub joints: JointArrays,
 }
 
 impl SpecialForm {
@@ -67,8 +61,7 @@ impl SpecialForm {
             c31: (2.0 * i1 / (i3 + i1), 2.0 * i3 / (i3 + i1)),
             baumgarte_rate: 0.0,
             stops: None,
-            platform_joints: by_component(&stand.platform_joints),
-            base_joints: by_component(&stand.base_joints),
+            joints: JointArrays::new(&stand),
             stand,
         }
     }
@@ -280,22 +273,7 @@ impl SpecialForm {
     /// per instruction.
     #[inline(always)]
     fn wrench_of(&self, state: &BodyState, u: &[f64; LEG_COUNT]) -> LegWrench {
-        let (a, b) = (&self.platform_joints, &self.base_joints);
-        let [e1, e2, e3] = &state.e;
-        let mut arm = [[0.0; LEG_COUNT]; 3];
-        let mut leg = [[0.0; LEG_COUNT]; 3];
-        for c in 0..3 {
-            for k in 0..LEG_COUNT {
-                arm[c][k] = e1[c] * a[0][k] + e2[c] * a[1][k] + e3[c] * a[2][k];
-                leg[c][k] = state.r[c] + arm[c][k] - b[c][k];
-            }
-        }
-        let mut length = [0.0; LEG_COUNT];
-        let mut inverse_length = [0.0; LEG_COUNT];
-        for k in 0..LEG_COUNT {
-            length[k] = (leg[0][k] * leg[0][k] + leg[1][k] * leg[1][k] + leg[2][k] * leg[2][k]).sqrt();
-            inverse_length[k] = 1.0 / length[k];
-        }
+        let LegKinematics { arm, leg, length, inverse_length } = self.joints.kinematics(state);
         let mut f = [[0.0; LEG_COUNT]; 3];
         for c in 0..3 {
             for k in 0..LEG_COUNT {

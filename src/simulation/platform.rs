@@ -9,7 +9,7 @@ use crate::physics::direct_problem::{force_moment_determinant, singular_legs};
 use crate::physics::end_stops::{EndStops, STROKE_LIMITS};
 use crate::physics::error::{ParameterError, PhysicsFault};
 use crate::physics::forces::LegForceLaw;
-use crate::physics::legs::LegGeometry;
+use crate::physics::legs::{LegGeometry, LegKinematics};
 use crate::physics::projection::project_onto_constraints;
 use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::Stand;
@@ -95,8 +95,14 @@ pub struct PlatformDynamics<'a, L: ?Sized> {
 
 impl<L: LegForceLaw + ?Sized> PlatformDynamics<'_, L> {
     /// The switching function values of a body state (see [`switching`]).
+    #[inline(always)]
     pub fn switching_values(&self, y: &StateVector, g: &mut [f64]) {
-        let legs = LegGeometry::new(&self.form.stand, &BodyState::from_vector(y));
+        let legs = self.form.joints.kinematics(&BodyState::from_vector(y));
+        self.switching_of(&legs, g);
+    }
+
+    #[inline(always)]
+    fn switching_of(&self, legs: &LegKinematics, g: &mut [f64]) {
         match &self.form.stops {
             Some(stops) => stops.stroke_margins(&legs.length, g),
             None => {
@@ -106,7 +112,7 @@ impl<L: LegForceLaw + ?Sized> PlatformDynamics<'_, L> {
             }
         }
         if let Some(x) = g.get_mut(switching::DETERMINANT) {
-            *x = force_moment_determinant(&legs, self.guard.characteristic_length);
+            *x = force_moment_determinant(legs, self.guard.characteristic_length);
         }
     }
 }
@@ -125,7 +131,7 @@ impl<L: LegForceLaw + ?Sized> OdeSystem<SIMULATION_DIM> for PlatformDynamics<'_,
         }
     }
 
-    #[inline]
+    #[inline(always)]
     fn after_step(&self, y: &mut SimulationState) {
         if self.stabilisation == Stabilisation::Projection
             && let Some(b) = y.first_chunk_mut::<STATE_DIM>()
@@ -138,16 +144,36 @@ impl<L: LegForceLaw + ?Sized> OdeSystem<SIMULATION_DIM> for PlatformDynamics<'_,
         self.stabilisation == Stabilisation::Projection
     }
 
-    #[inline]
+    #[inline(always)]
     fn check(&self, _t: f64, y: &SimulationState) -> Result<(), PhysicsFault> {
-        self.guard.check(&self.form.stand, &BodyState::from_vector(body(y)))
+        self.guard.check(&self.form.joints, &BodyState::from_vector(body(y)))
+    }
+
+    /// The guard and the switching functions from one computation of the legs.
+    #[inline(always)]
+    fn check_and_switching(
+        &self,
+        _t: f64,
+        y: &SimulationState,
+        g: Option<&mut [f64; MAX_SWITCHING]>,
+    ) -> Result<(), PhysicsFault> {
+        let state = BodyState::from_vector(body(y));
+        if !state.is_finite() {
+            return Err(PhysicsFault::NonFiniteState);
+        }
+        let legs = self.form.joints.kinematics(&state);
+        self.guard.check_legs(&state, &legs)?;
+        if let Some(g) = g {
+            self.switching_of(&legs, g);
+        }
+        Ok(())
     }
 
     fn switching_count(&self) -> usize {
         switching::COUNT
     }
 
-    #[inline]
+    #[inline(always)]
     fn switching(&self, _t: f64, y: &SimulationState, g: &mut [f64; MAX_SWITCHING]) {
         self.switching_values(body(y), g);
     }

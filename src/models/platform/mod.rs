@@ -8,7 +8,7 @@ use nalgebra::Vector3;
 
 use super::snapshot::{ByteReader, ByteWriter, SnapshotError};
 use super::variables::VariableRef;
-use super::{DefaultExperiment, EventUpdate, FmuModel, ModelInfo, StepError, StepReport};
+use super::{DefaultExperiment, EventUpdate, FmuModel, ModelInfo, StepError, StepReport, fill_group};
 use crate::integration::dopri5::Dopri5Memory;
 use crate::integration::{Crossing, Integrator, IntegratorStats, Method, SolverSettings, SwitchingSides};
 use crate::physics::body_state::{BodyState, STATE_DIM, layout};
@@ -170,6 +170,28 @@ pub fn default_leg_force() -> f64 {
     let s = Stand::truck_cabin();
     PAPER_EQUILIBRIUM_LEG_FORCE * s.mass * s.gravity
 }
+
+/// The blocks of the platform's value cache ([`FmuModel::cache_block`]).
+mod cache_block {
+    /// `l`, `ldot`: what a controller reads every step, computed alone.
+    pub const LEGS: u8 = 0;
+    /// Every other output of [`super::PlatformOutputs`].
+    pub const OUTPUTS: u8 = 1;
+}
+
+/// The outputs read through [`cache_block::OUTPUTS`] (all of [`PlatformOutputs`] but the legs).
+const OUTPUT_GROUPS: [usize; 10] = [
+    group::R,
+    group::V,
+    group::ROT,
+    group::ANGLES,
+    group::W,
+    group::E,
+    group::CONSTRAINT_ERROR,
+    group::FSTOP,
+    group::WORK_F,
+    group::WORK_DISSIPATED,
+];
 
 /// The platform FMU model.
 #[derive(Clone, Debug)]
@@ -379,6 +401,32 @@ impl FmuModel for PlatformModel {
             group::LDOT => self.leg_outputs().ldot.get(var.index).copied().unwrap_or(f64::NAN),
             g if variables::is_output_or_derivative(g) => Self::output_value(self.outputs(), var),
             _ => self.parameter_slot(var).map_or(f64::NAN, |slot| *slot),
+        }
+    }
+
+    fn cache_block(&self, group: usize) -> Option<u8> {
+        match group {
+            group::L | group::LDOT => Some(cache_block::LEGS),
+            g if variables::is_output_or_derivative(g) && OUTPUT_GROUPS.contains(&g) => Some(cache_block::OUTPUTS),
+            _ => None,
+        }
+    }
+
+    fn fill_cache(&mut self, block: u8, cache: &mut [f64]) {
+        if block == cache_block::LEGS {
+            let legs = *self.leg_outputs();
+            fill_group(cache, &variables::GROUPS[group::L], &legs.l);
+            fill_group(cache, &variables::GROUPS[group::LDOT], &legs.ldot);
+        } else {
+            let outputs = *self.outputs();
+            for g in OUTPUT_GROUPS {
+                let first = variables::GROUPS[g].first_vr as usize;
+                for index in 0..variables::GROUPS[g].len() {
+                    if let Some(slot) = cache.get_mut(first + index) {
+                        *slot = Self::output_value(&outputs, VariableRef { group: g, index });
+                    }
+                }
+            }
         }
     }
 
@@ -659,7 +707,7 @@ impl FmuModel for PlatformModel {
 
     fn completed_integrator_step(&mut self) -> Result<(), StepError> {
         let Some(sim) = &self.simulation else { return Ok(()) };
-        sim.guard.check(sim.stand(), &sim.body_state()).map_err(|f| StepError {
+        sim.guard.check(&sim.form.joints, &sim.body_state()).map_err(|f| StepError {
             message: format!("at t = {}: {f}; the simulation cannot go on", sim.time),
             retry_shorter: false,
         })
@@ -807,7 +855,7 @@ impl FmuModel for PlatformModel {
                 guard,
                 stabilisation: sim_stabilisation,
                 stop_at_singularity: sim_stop_at_singularity,
-                integrator: Integrator { settings: sim_settings, dopri5, stats, sides },
+                integrator: Integrator { settings: sim_settings, dopri5, stats, sides, vector_extensions: true },
                 time,
                 state,
                 crossings: Default::default(),
