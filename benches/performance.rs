@@ -55,13 +55,7 @@ fn physics(c: &mut Criterion) {
         ("dopri5: one adaptive step of 1 ms (+projection, checks)", Method::DormandPrince45),
     ] {
         let settings = SolverSettings { method, max_step: 1e-3, fixed_step: 1e-3, ..SolverSettings::default() };
-        let dynamics = PlatformDynamics {
-            form: &form,
-            law: &law,
-            stabilisation: Stabilisation::Projection,
-            guard: &guard,
-            stop_at_singularity: false,
-        };
+        let dynamics = PlatformDynamics::new(&form, &law, Stabilisation::Projection, &guard, false);
         let mut integrator = Integrator::new(settings);
         integrator.dopri5.h_next = 1e-3;
         let mut crossings = CrossingLog::default();

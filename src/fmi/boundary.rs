@@ -44,9 +44,9 @@ pub unsafe fn call<F: FmiFunction>(
     args: impl FnOnce() -> String,
     body: impl FnOnce(&mut Instance) -> Status,
 ) -> Status {
-    if registry::acquire(c, F::VERSION) != Access::Granted {
+    let Access::Granted(busy) = registry::acquire(c, F::VERSION) else {
         return Status::Error;
-    }
+    };
     let outcome = catch_unwind(AssertUnwindSafe(|| {
         // SAFETY: the registry granted `c`: a live Box<Instance> no other call is using.
         let instance = unsafe { &mut *(c as *mut Instance) };
@@ -65,7 +65,7 @@ pub unsafe fn call<F: FmiFunction>(
             }
         }
     }));
-    if registry::release(c) {
+    if registry::release(busy) {
         // SAFETY: freed by the importer during the call and now unregistered: nothing else
         // refers to it.
         unsafe { Instance::drop_handle(c) };

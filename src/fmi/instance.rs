@@ -236,6 +236,9 @@ pub struct Instance {
     value_cache: Vec<f64>,
     /// Bit `b`: block `b` of `value_cache` holds the model's current values.
     fresh: u32,
+    /// By value reference: the cache block of a Real element read one per reference (FMI 2),
+    /// or [`NO_CACHE`] (the fast path's one-byte table).
+    cached_element: Vec<u8>,
     pub table: VariableTable,
     /// Hash of the instantiation token, stamped into serialized states.
     token_hash: u64,
@@ -298,6 +301,13 @@ impl Instance {
             logger,
             value_cache: vec![0.0; access.len()],
             fresh: 0,
+            cached_element: access
+                .iter()
+                .map(|a| match a {
+                    Some(a) if a.base == BaseType::Real && a.width == 1 => a.cache,
+                    _ => NO_CACHE,
+                })
+                .collect(),
             model,
             table,
             token_hash: fnv1a64(token.as_bytes()),
@@ -365,7 +375,18 @@ impl Instance {
         self.state.name(self.version)
     }
 
+    #[inline]
     pub fn check_call<F: FmiFunction>(&self, func: F) -> Result<(), Status> {
+        if self.poisoned.is_none() && func.allowed_in(self.interface, self.state) {
+            return Ok(());
+        }
+        self.refuse_call(func)
+    }
+
+    /// [`Instance::check_call`] of a call that is not plainly allowed: poisoned instance or a
+    /// state the function is not allowed in.
+    #[cold]
+    fn refuse_call<F: FmiFunction>(&self, func: F) -> Result<(), Status> {
         if let Some(reason) = &self.poisoned {
             if !func.name().ends_with("Reset") && !func.name().ends_with("FreeInstance") {
                 self.error(&format!(
@@ -388,21 +409,26 @@ impl Instance {
 
     /// The `logCalls` line of a finished call; `args` formats its arguments (only called when
     /// the category is on: no formatting in the hot path otherwise).
+    #[inline]
     pub fn log_call(&self, status: Status, args: impl FnOnce() -> String) {
         if self.logger.is_enabled(LogCategory::Calls) {
-            self.logger.log(
-                Status::Ok,
-                LogCategory::Calls,
-                &format!(
-                    "{}({}) -> {} (state {}, t = {})",
-                    self.current,
-                    args(),
-                    status.name(self.version),
-                    self.state_name(),
-                    self.time
-                ),
-            );
+            self.write_call(status, args());
         }
+    }
+
+    #[cold]
+    fn write_call(&self, status: Status, args: String) {
+        self.logger.log(
+            Status::Ok,
+            LogCategory::Calls,
+            &format!(
+                "{}({args}) -> {} (state {}, t = {})",
+                self.current,
+                status.name(self.version),
+                self.state_name(),
+                self.time
+            ),
+        );
     }
 
     pub fn poison(&mut self, message: &str) {
@@ -603,8 +629,43 @@ impl Instance {
     pub fn get_real(&mut self, vrs: &[u32], values: &mut [f64]) -> Status {
         // One pass: a get that fails leaves its values undefined (FMI 2.0 section 2.1.3,
         // FMI 3.0 section 2.2.6), so nothing needs validating before the first is written.
-        // The loop holds only the fast path, a read from a fresh cache block; the rest is out
-        // of line so that the loop keeps its registers.
+        // The loops hold only the fast path, a read from a fresh cache block; the rest is out
+        // of line so that the loops keep their registers.
+        if self.version == FmiVersion::Fmi2 && vrs.len() == values.len() {
+            // One element per reference: the cache block of each comes from one byte table.
+            // Loops without calls (so the tables stay in registers): which blocks the
+            // references need, fill the stale ones, copy. A reference outside the cache (or
+            // unknown) takes the element-by-element path.
+            let blocks = &self.cached_element;
+            let mut needed = 0u32;
+            for &vr in vrs {
+                let block = blocks.get(vr as usize).copied().unwrap_or(NO_CACHE);
+                needed |= 1u32.wrapping_shl(block.into());
+            }
+            let mut nan = false;
+            if needed & 1u32.wrapping_shl(NO_CACHE.into()) == 0 {
+                let mut stale = needed & !self.fresh;
+                while stale != 0 {
+                    let block = stale.trailing_zeros();
+                    self.model.fill_cache(block as u8, &mut self.value_cache);
+                    stale &= stale - 1;
+                }
+                self.fresh |= needed;
+                let cache = &self.value_cache;
+                for (slot, &vr) in values.iter_mut().zip(vrs) {
+                    *slot = cache.get(vr as usize).copied().unwrap_or(f64::NAN);
+                    nan |= slot.is_nan();
+                }
+            } else {
+                for (slot, &vr) in values.iter_mut().zip(vrs) {
+                    if let Err(s) = self.read_real(vrs, vr, std::slice::from_mut(slot), 0) {
+                        return s;
+                    }
+                    nan |= slot.is_nan();
+                }
+            }
+            return if nan { self.nan_error(vrs, values) } else { Status::Ok };
+        }
         let mut filled = 0;
         for &vr in vrs {
             let fast = match self.access.get(vr as usize) {
@@ -622,7 +683,7 @@ impl Instance {
                     }
                     _ => return self.count_error(vrs, BaseType::Real, values.len()),
                 },
-                _ => match self.read_real(vr, values, filled) {
+                _ => match self.read_real(vrs, vr, values, filled) {
                     Ok(width) => width,
                     Err(s) => return s,
                 },
@@ -642,12 +703,10 @@ impl Instance {
     /// one of [`Instance::get_real`]: filling a stale cache block, reading through the model,
     /// and the errors. Returns the number of values read.
     #[inline(never)]
-    fn read_real(&mut self, vr: u32, values: &mut [f64], filled: usize) -> Result<usize, Status> {
+    fn read_real(&mut self, vrs: &[u32], vr: u32, values: &mut [f64], filled: usize) -> Result<usize, Status> {
         let a = self.access(vr, BaseType::Real)?;
         let Some(out) = values.get_mut(filled..filled + a.width) else {
-            return Err(
-                self.error(&format!("the value references address more than nValues = {} values", values.len()))
-            );
+            return Err(self.count_error(vrs, BaseType::Real, values.len()));
         };
         if a.cache == NO_CACHE {
             for (i, slot) in out.iter_mut().enumerate() {
@@ -688,25 +747,54 @@ impl Instance {
     pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Status {
         // Two passes, no allocation: validate every reference and value, then store (all or
         // nothing).
-        if let Err(s) = self.check_values(vrs, BaseType::Real, values.len(), true) {
+        if let Err(s) = self.check_set_real(vrs, values) {
             return s;
         }
+        self.fresh = 0;
+        let access = &self.access;
+        let result = if self.version == FmiVersion::Fmi2 {
+            // One element per reference (checked above).
+            let element = |(&vr, &x): (&u32, &f64)| {
+                let a = access.get(vr as usize).copied().flatten()?;
+                Some((VariableRef { group: a.group, index: a.index }, x))
+            };
+            self.model.set_reals(vrs.iter().zip(values).map_while(element))
+        } else {
+            self.model.set_reals(elements(access, vrs).zip(values.iter().copied()))
+        };
+        match result {
+            Ok(()) => Status::Ok,
+            Err(m) => self.error(&m),
+        }
+    }
+
+    /// The first pass of [`Instance::set_real`]: references, states and values. FMI 2's
+    /// one element per reference is checked in one tight loop; anything else, or a failure,
+    /// takes the general check that names the problem.
+    #[inline]
+    fn check_set_real(&self, vrs: &[u32], values: &[f64]) -> Result<(), Status> {
+        let state = self.state.bit();
+        let plain = self.version == FmiVersion::Fmi2
+            && vrs.len() == values.len()
+            && vrs.iter().zip(values).all(|(&vr, x)| {
+                matches!(self.access.get(vr as usize), Some(Some(a))
+                    if a.base == BaseType::Real && a.settable_in & state != 0 && x.is_finite())
+            });
+        if plain { Ok(()) } else { self.check_set_real_slowly(vrs, values) }
+    }
+
+    #[cold]
+    fn check_set_real_slowly(&self, vrs: &[u32], values: &[f64]) -> Result<(), Status> {
+        self.check_values(vrs, BaseType::Real, values.len(), true)?;
         if let Some(i) = values.iter().position(|x| !x.is_finite()) {
             let r = elements(&self.access, vrs).nth(i).unwrap_or(VariableRef { group: usize::MAX, index: 0 });
-            return self.error(&format!("{} = {} refused: values must be finite", self.element_name(r), values[i]));
+            return Err(self.error(&format!(
+                "{} = {} refused: values must be finite",
+                self.element_name(r),
+                values[i]
+            )));
         }
-        self.fresh = 0;
-        let mut done = 0;
-        for &vr in vrs {
-            let Some(a) = self.access.get(vr as usize).copied().flatten() else { break };
-            for (i, &x) in values.iter().skip(done).take(a.width).enumerate() {
-                if let Err(m) = self.model.set_real(VariableRef { group: a.group, index: a.index + i }, x) {
-                    return self.error(&m);
-                }
-            }
-            done += a.width;
-        }
-        Status::Ok
+        Ok(())
     }
 
     pub fn get_integer(&mut self, vrs: &[u32], values: &mut [i32]) -> Status {

@@ -84,13 +84,33 @@ pub fn register(p: *mut c_void, version: FmiVersion) -> bool {
 /// Whether a call may use the instance behind a handle.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Access {
-    /// Live, of this FMI version and idle: now marked busy until [`release`].
-    Granted,
+    /// Live, of this FMI version and idle: now marked busy until [`release`] of this call's
+    /// [`Busy`] token.
+    Granted(Busy),
     /// NULL, freed, foreign, or an instance of the other FMI version.
     Unknown,
     /// A call on it is running (a call from the importer's callback during a call, or from a
     /// second thread at the same time).
-    Busy,
+    InUse,
+}
+
+/// The registry slot of an instance a call is running on: handed back to [`release`], so that
+/// ending the call needs no second search.
+#[derive(Clone, Copy)]
+pub struct Busy(&'static Slot);
+
+impl PartialEq for Busy {
+    fn eq(&self, other: &Self) -> bool {
+        std::ptr::eq(self.0, other.0)
+    }
+}
+
+impl Eq for Busy {}
+
+impl std::fmt::Debug for Busy {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Busy({:p})", self.0)
+    }
 }
 
 /// Marks a live, idle instance of `version` busy for one call.
@@ -99,8 +119,8 @@ pub fn acquire(p: *mut c_void, version: FmiVersion) -> Access {
     let Some(slot) = find(p) else { return Access::Unknown };
     let idle = live_state(version);
     match slot.state.compare_exchange(idle, idle | BUSY, Ordering::AcqRel, Ordering::Acquire) {
-        Ok(_) => Access::Granted,
-        Err(now) if now & BUSY != 0 && now & FREEING == 0 && now & FMI3 == idle & FMI3 => Access::Busy,
+        Ok(_) => Access::Granted(Busy(slot)),
+        Err(now) if now & BUSY != 0 && now & FREEING == 0 && now & FMI3 == idle & FMI3 => Access::InUse,
         Err(_) => Access::Unknown,
     }
 }
@@ -108,8 +128,8 @@ pub fn acquire(p: *mut c_void, version: FmiVersion) -> Access {
 /// Ends a call; `true` if the instance was freed during it and must be dropped now (it is no
 /// longer registered).
 #[inline]
-pub fn release(p: *mut c_void) -> bool {
-    let Some(slot) = find(p) else { return false };
+pub fn release(busy: Busy) -> bool {
+    let Busy(slot) = busy;
     let mut state = slot.state.load(Ordering::Acquire);
     loop {
         if state & FREEING != 0 {
@@ -164,19 +184,19 @@ mod tests {
         assert!(register(a, FmiVersion::Fmi2));
         assert!(register(b, FmiVersion::Fmi3));
         assert_eq!(acquire(a, FmiVersion::Fmi3), Access::Unknown, "other version");
-        assert_eq!(acquire(a, FmiVersion::Fmi2), Access::Granted);
-        assert_eq!(acquire(a, FmiVersion::Fmi2), Access::Busy, "re-entrant");
+        let Access::Granted(busy) = acquire(a, FmiVersion::Fmi2) else { panic!("not granted") };
+        assert_eq!(acquire(a, FmiVersion::Fmi2), Access::InUse, "re-entrant");
         assert_eq!(request_free(a, FmiVersion::Fmi2), Free::Deferred);
         assert_eq!(acquire(a, FmiVersion::Fmi2), Access::Unknown, "being freed");
-        assert!(release(a), "freed when the running call returns");
+        assert!(release(busy), "freed when the running call returns");
         assert_eq!(acquire(a, FmiVersion::Fmi2), Access::Unknown, "stale");
         assert_eq!(request_free(a, FmiVersion::Fmi2), Free::Unknown, "double free");
         assert_eq!(request_free(b, FmiVersion::Fmi3), Free::Now);
         assert_eq!(acquire(std::ptr::null_mut(), FmiVersion::Fmi2), Access::Unknown);
         // A freed slot is reused.
         assert!(register(a, FmiVersion::Fmi3));
-        assert_eq!(acquire(a, FmiVersion::Fmi3), Access::Granted);
-        assert!(!release(a));
+        let Access::Granted(busy) = acquire(a, FmiVersion::Fmi3) else { panic!("not granted") };
+        assert!(!release(busy));
         assert_eq!(request_free(a, FmiVersion::Fmi3), Free::Now);
     }
 }

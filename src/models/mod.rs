@@ -301,6 +301,16 @@ impl AnyModel {
     pub fn set_real(&mut self, var: VariableRef, value: f64) -> Result<(), String> {
         dispatch!(self, m => m.set_real(var, value))
     }
+    /// Sets several values, in order, stopping at the first refused (one dispatch for all).
+    #[inline]
+    pub fn set_reals(&mut self, values: impl Iterator<Item = (VariableRef, f64)>) -> Result<(), String> {
+        dispatch!(self, m => {
+            for (var, x) in values {
+                m.set_real(var, x)?;
+            }
+            Ok(())
+        })
+    }
     pub fn cache_block(&self, group: usize) -> Option<u8> {
         dispatch!(self, m => m.cache_block(group)).filter(|&b| b < CACHE_BLOCKS)
     }

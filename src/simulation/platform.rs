@@ -4,6 +4,9 @@ use crate::integration::{
     CrossingLog, IntegrationError, Integrator, MAX_SWITCHING, OdeSystem, SolverSettings, SwitchingKind, SwitchingSides,
 };
 use crate::physics::body_state::{BodyState, STATE_DIM, StateVector};
+use std::cell::Cell;
+
+use super::outputs::LegOutputs;
 use crate::physics::configuration::ConfigurationGuard;
 use crate::physics::direct_problem::{force_moment_determinant, singular_legs};
 use crate::physics::end_stops::{EndStops, STROKE_LIMITS};
@@ -91,6 +94,22 @@ pub struct PlatformDynamics<'a, L: ?Sized> {
     pub guard: &'a ConfigurationGuard,
     /// Whether a passage through a singular leg arrangement stops the integration.
     pub stop_at_singularity: bool,
+    /// Lengths and rates of the legs of the last state [`OdeSystem::check`] accepted: after an
+    /// integration, those of its end state (the check is the last thing a step does), so that
+    /// the outputs `l` and `ldot` cost no second computation of the legs.
+    pub checked_legs: Cell<Option<LegOutputs>>,
+}
+
+impl<'a, L: ?Sized> PlatformDynamics<'a, L> {
+    pub fn new(
+        form: &'a SpecialForm,
+        law: &'a L,
+        stabilisation: Stabilisation,
+        guard: &'a ConfigurationGuard,
+        stop_at_singularity: bool,
+    ) -> Self {
+        PlatformDynamics { form, law, stabilisation, guard, stop_at_singularity, checked_legs: Cell::new(None) }
+    }
 }
 
 impl<L: LegForceLaw + ?Sized> PlatformDynamics<'_, L> {
@@ -145,11 +164,12 @@ impl<L: LegForceLaw + ?Sized> OdeSystem<SIMULATION_DIM> for PlatformDynamics<'_,
     }
 
     #[inline(always)]
-    fn check(&self, _t: f64, y: &SimulationState) -> Result<(), PhysicsFault> {
-        self.guard.check(&self.form.joints, &BodyState::from_vector(body(y)))
+    fn check(&self, t: f64, y: &SimulationState) -> Result<(), PhysicsFault> {
+        self.check_and_switching(t, y, None)
     }
 
-    /// The guard and the switching functions from one computation of the legs.
+    /// The guard, the switching functions and the leg outputs from one computation of the
+    /// legs.
     #[inline(always)]
     fn check_and_switching(
         &self,
@@ -163,6 +183,8 @@ impl<L: LegForceLaw + ?Sized> OdeSystem<SIMULATION_DIM> for PlatformDynamics<'_,
         }
         let legs = self.form.joints.kinematics(&state);
         self.guard.check_legs(&state, &legs)?;
+        let ldot = self.form.joints.length_rates(&state, &legs);
+        self.checked_legs.set(Some(LegOutputs { l: legs.length, ldot }));
         if let Some(g) = g {
             self.switching_of(&legs, g);
         }
@@ -192,6 +214,16 @@ impl<L: LegForceLaw + ?Sized> OdeSystem<SIMULATION_DIM> for PlatformDynamics<'_,
             PhysicsFault::PassedSingularConfiguration { legs: singular_legs(&self.form.stand, &legs) }
         })
     }
+}
+
+/// Where [`PlatformSimulation::advance_until_event`] ended.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Reached {
+    /// The time reached, s.
+    pub t: f64,
+    /// Lengths and rates of the legs of the state reached, if the integration computed them
+    /// (it does whenever it took a step).
+    pub legs: Option<LegOutputs>,
 }
 
 /// Why [`PlatformSimulation::advance`] did not reach the requested time. The simulation is
@@ -298,13 +330,7 @@ impl PlatformSimulation {
 
     /// The ODE system for a force law.
     pub fn dynamics<'a, L: LegForceLaw + ?Sized>(&'a self, law: &'a L) -> PlatformDynamics<'a, L> {
-        PlatformDynamics {
-            form: &self.form,
-            law,
-            stabilisation: self.stabilisation,
-            guard: &self.guard,
-            stop_at_singularity: self.stop_at_singularity,
-        }
+        PlatformDynamics::new(&self.form, law, self.stabilisation, &self.guard, self.stop_at_singularity)
     }
 
     /// Integrates to `t1` (> current time) with leg forces from `law`. On failure nothing
@@ -316,23 +342,18 @@ impl PlatformSimulation {
 
     /// As [`PlatformSimulation::advance`]; with `stop_at_contact`, stops early at the first
     /// contact onset or release (located exactly by the adaptive method). Returns the time
-    /// reached.
+    /// reached and the legs there.
     pub fn advance_until_event<L: LegForceLaw + ?Sized>(
         &mut self,
         law: &L,
         t1: f64,
         stop_at_contact: bool,
-    ) -> Result<f64, StepFailure> {
+    ) -> Result<Reached, StepFailure> {
         let saved_state = self.state;
         let saved_integrator = self.integrator;
         self.crossings.clear();
-        let dynamics = PlatformDynamics {
-            form: &self.form,
-            law,
-            stabilisation: self.stabilisation,
-            guard: &self.guard,
-            stop_at_singularity: self.stop_at_singularity,
-        };
+        let dynamics =
+            PlatformDynamics::new(&self.form, law, self.stabilisation, &self.guard, self.stop_at_singularity);
         let result = self.integrator.integrate_until_event(
             &dynamics,
             self.time,
@@ -344,7 +365,7 @@ impl PlatformSimulation {
         match result {
             Ok(reached) => {
                 self.time = reached;
-                Ok(reached)
+                Ok(Reached { t: reached, legs: dynamics.checked_legs.get() })
             }
             Err(e) => {
                 self.state = saved_state;
@@ -367,5 +388,36 @@ impl PlatformSimulation {
     /// The switching function values at the current state (Model Exchange event indicators).
     pub fn switching_values<L: LegForceLaw + ?Sized>(&self, law: &L, g: &mut [f64]) {
         self.dynamics(law).switching_values(body(&self.state), g);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::integration::Method;
+    use crate::physics::forces::HeldForces;
+    use crate::physics::kinematics::rotation_from_angles;
+    use nalgebra::Vector3;
+
+    /// The legs a step reports for its end state are those computed from that state alone.
+    #[test]
+    fn the_legs_of_a_step_are_those_of_its_end_state() {
+        for method in [Method::RungeKutta4, Method::DormandPrince45] {
+            let stand = Stand::truck_cabin();
+            let start = BodyState::from_pose(
+                Stand::truck_cabin_neutral_position() + Vector3::new(0.02, -0.01, 0.03),
+                Vector3::new(0.1, 0.2, -0.3),
+                &rotation_from_angles(&Vector3::new(0.05, -0.02, 0.1)),
+                &Vector3::new(0.3, -0.2, 0.5),
+            );
+            let settings = SolverSettings { method, fixed_step: 2.5e-4, ..Default::default() };
+            let mut sim = PlatformSimulation::new(stand, start, settings, Stabilisation::Projection, 0.0)
+                .and_then(|s| s.with_end_stops(Some(EndStops::default())))
+                .expect("valid");
+            let law = HeldForces { value: [5000.0, 7000.0, 6000.0, 5500.0, 6500.0, 5900.0], slope: [1e3; 6], t0: 0.0 };
+            let reached = sim.advance_until_event(&law, 3e-3, false).expect("steps");
+            let legs = reached.legs.expect("the step computed the legs");
+            assert_eq!(legs, LegOutputs::compute(&sim.form, &sim.state), "{method:?}");
+        }
     }
 }

@@ -22,7 +22,7 @@ use crate::physics::legs::LegGeometry;
 use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::{LEG_COUNT, PAPER_EQUILIBRIUM_LEG_FORCE, Stand};
 use crate::simulation::outputs::{condition_number, condition_number_tangent};
-use crate::simulation::platform::{SIMULATION_DIM, SimulationState, body, quadrature, switching};
+use crate::simulation::platform::{Reached, SIMULATION_DIM, SimulationState, body, quadrature, switching};
 use crate::simulation::{LegOutputs, PlatformOutputs, PlatformSimulation, Stabilisation};
 use variables::group;
 
@@ -573,7 +573,7 @@ impl FmuModel for PlatformModel {
             sim.advance_until_event(&law, t_end, stop_at_event)
         } else {
             sim.crossings.clear();
-            Ok(t_end)
+            Ok(Reached { t: t_end, legs: None })
         };
         let event =
             sim.crossings.as_slice().iter().any(|c| c.index < switching::DETERMINANT) || sim.crossings.dropped > 0;
@@ -581,7 +581,9 @@ impl FmuModel for PlatformModel {
         match result {
             Ok(reached) => {
                 self.invalidate_outputs();
-                Ok(StepReport { reached, event })
+                // The step computed the legs of its end state already.
+                self.legs = reached.legs;
+                Ok(StepReport { reached: reached.t, event })
             }
             Err(failure) => Err(StepError {
                 message: if failure.is_step_limit() {
@@ -674,13 +676,8 @@ impl FmuModel for PlatformModel {
                     side: 1.0,
                     characteristic_length: form.stand.characteristic_length().max(f64::MIN_POSITIVE),
                 };
-                let dynamics = crate::simulation::PlatformDynamics {
-                    form: &form,
-                    law: &law,
-                    stabilisation: Stabilisation::Projection,
-                    guard: &guard,
-                    stop_at_singularity: false,
-                };
+                let dynamics =
+                    crate::simulation::PlatformDynamics::new(&form, &law, Stabilisation::Projection, &guard, false);
                 dynamics.switching_values(body(&y), z);
             }
         }
