@@ -3,13 +3,16 @@ the six leg forces (leg feedback around the neutral legs), steps 1 ms and reads 
 lengths and rates, through the packaged FMI 2 and FMI 3 platform FMUs. Prints one table:
 
 - instructions per cycle and its split (set, step, get), from callgrind over 5000 cycles
-  (repeatable; wall times on this shared machine vary up to 2x between runs);
+  (repeatable; wall times on this shared machine vary up to 2x between runs), in three
+  motions: hovering on the leg feedback (no stop touched), resting in contact with all six
+  lower stops (zero forces), and hovering with the end stops switched off;
 - wall-clock latency over 10^6 cycles (mean, p50, p99, p99.9, max), one run;
 - throughput with 1 and 2 threads, each with its own instance;
 - instantiate + initialise + free;
 - MuJoCo 4's RK4 `mj_step` on the same stand (examples/compare_performance.py's model), in its
-  own C loop (`mj_step(model, data, nstep=N)`) and per call from Python, if `mujoco` is
-  installed (`pip install mujoco`); the ratios to ours use the C-loop figure.
+  own C loop (`mj_step(model, data, nstep=N)`) and per call from Python, and its instructions
+  per step (callgrind, inclusive `mj_step` over 200 steps), if `mujoco` is installed (`pip
+  install mujoco`); the wall-clock ratios to ours use the C-loop figure.
 
     .venv/bin/python benches/cycle_bench.py [output-folder]   # after cargo run --release --bin build-fmu
 """
@@ -41,11 +44,12 @@ def unpack(version, folder):
     return str(binary), token
 
 
-def instructions(host, version, binary, token, method, folder):
+def instructions(host, version, binary, token, method, folder, scenario="hover"):
     """Inclusive instruction counts of the host's cycle functions, per cycle."""
-    out = folder / f"cg.{version}.{method}"
+    out = folder / f"cg.{version}.{method}.{scenario}"
     subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", host, version, binary, token,
-                    method, "count", str(COUNT_CYCLES)], check=True, capture_output=True)
+                    method, "count", str(COUNT_CYCLES)], check=True, capture_output=True,
+                   env=dict(os.environ, CYCLE_SCENARIO=scenario))
     report = subprocess.run(["callgrind_annotate", "--inclusive=yes", str(out)], check=True, capture_output=True,
                             text=True).stdout
     counts = {}
@@ -85,6 +89,31 @@ def mujoco_step_us():
     return c_loop, per_call
 
 
+MUJOCO_COUNT = """
+import importlib.util, sys
+import mujoco
+spec = importlib.util.spec_from_file_location("cp", sys.argv[1])
+cp = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(cp)
+model = mujoco.MjModel.from_xml_string(cp.mjcf("RK4", 1e-3))
+data = mujoco.MjData(model)
+mujoco.mj_forward(model, data)
+mujoco.mj_step(model, data, nstep=int(sys.argv[2]))
+"""
+
+
+def mujoco_instructions(folder, steps=200):
+    """Instructions per RK4 `mj_step`: callgrind's inclusive count of `mj_step` over `steps`."""
+    script, out = folder / "mj_count.py", folder / "cg.mujoco"
+    script.write_text(MUJOCO_COUNT)
+    subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", sys.executable, str(script),
+                    str(ROOT / "examples" / "compare_performance.py"), str(steps)], check=True, capture_output=True)
+    report = subprocess.run(["callgrind_annotate", "--inclusive=yes", str(out)], check=True, capture_output=True,
+                            text=True).stdout
+    m = re.search(r"^\s*([\d,]+) \([^)]*\)\s+\S*:mj_step \[", report, re.M)
+    return int(m.group(1).replace(",", "")) / steps
+
+
 def main():
     if not shutil.which("valgrind") or not shutil.which("gcc"):
         sys.exit("cycle_bench: valgrind and gcc are needed")
@@ -96,15 +125,18 @@ def main():
     lines = [f"cycle_bench: {time.strftime('%Y-%m-%d %H:%M')}, {os.cpu_count()} cores, "
              f"{open('/proc/cpuinfo').read().split('model name')[1].split(':')[1].splitlines()[0].strip()}", ""]
     lines.append("Instructions per cycle (callgrind, 5000 cycles): set 6 forces + fmi2DoStep/fmi3DoStep 1 ms + get 12 values")
-    lines.append(f"{'FMU':6} {'method':7} {'cycle':>8} {'set':>7} {'step':>8} {'get':>7}")
+    lines.append("(hover: leg feedback, no stop touched; contact: resting on all six lower stops; nostops: hover with "
+                 "stops = false)")
+    lines.append(f"{'FMU':6} {'method':7} {'motion':8} {'cycle':>8} {'set':>7} {'step':>8} {'get':>7}")
     cycles = {}
     for version in ("fmi2", "fmi3"):
         binary, token = unpack(version, folder)
         for method in ("rk4", "dopri5"):
-            c = instructions(host, version, binary, token, method, folder)
-            cycles[(version, method)] = c
-            lines.append(f"{version:6} {method:7} {c['run_cycles']:8.0f} {c['set_forces']:7.0f} {c['do_step']:8.0f} "
-                         f"{c['get_outputs']:7.0f}")
+            for scenario in ("hover", "contact", "nostops") if version == "fmi2" else ("hover", "contact"):
+                c = instructions(host, version, binary, token, method, folder, scenario)
+                cycles[(version, method, scenario)] = c
+                lines.append(f"{version:6} {method:7} {scenario:8} {c['run_cycles']:8.0f} {c['set_forces']:7.0f} "
+                             f"{c['do_step']:8.0f} {c['get_outputs']:7.0f}")
     lines.append("")
     binary, token = unpack("fmi2", folder)
     latency = {}
@@ -128,6 +160,12 @@ def main():
                      f"{per_call:.1f} us per call from Python")
         lines.append(f"ratio MuJoCo C loop / our full cycle: RK4 {c_loop / ours['rk4']:.0f}x, "
                      f"adaptive default {c_loop / ours['dopri5']:.0f}x (wall clock, this run)")
+        mj_instructions = mujoco_instructions(folder)
+        ours_rk4 = cycles[("fmi2", "rk4", "hover")]["run_cycles"]
+        ours_adaptive = cycles[("fmi2", "dopri5", "hover")]["run_cycles"]
+        lines.append(f"MuJoCo RK4 mj_step: {mj_instructions:,.0f} instructions per step (callgrind, 200 steps); ratio to "
+                     f"our full FMI 2 cycle: RK4 {mj_instructions / ours_rk4:.0f}x, adaptive default "
+                     f"{mj_instructions / ours_adaptive:.0f}x")
     text = "\n".join(lines)
     print(text)
     (OUT / "cycle.txt").write_text(text + "\n")

@@ -50,13 +50,18 @@ fn physics(c: &mut Criterion) {
     c.bench_function("rhs: special-form right-hand side (24 states)", |b| {
         b.iter(|| form.derivative(black_box(0.1), black_box(&y), &law, &mut dy))
     });
-    for (name, method) in [
-        ("rk4: one RK4 step of 1 ms (+projection, checks)", Method::RungeKutta4),
-        ("dopri5: one adaptive step of 1 ms (+projection, checks)", Method::DormandPrince45),
+    // Each with the AVX code the integrator picks on this processor, and with the baseline
+    // (SSE2) code (`Integrator::vector_extensions = false`; the same numbers to the bit).
+    for (name, method, vector_extensions) in [
+        ("rk4: one RK4 step of 1 ms (+projection, checks)", Method::RungeKutta4, true),
+        ("rk4 baseline code: one RK4 step of 1 ms", Method::RungeKutta4, false),
+        ("dopri5: one adaptive step of 1 ms (+projection, checks)", Method::DormandPrince45, true),
+        ("dopri5 baseline code: one adaptive step of 1 ms", Method::DormandPrince45, false),
     ] {
         let settings = SolverSettings { method, max_step: 1e-3, fixed_step: 1e-3, ..SolverSettings::default() };
         let dynamics = PlatformDynamics::new(&form, &law, Stabilisation::Projection, &guard, false);
         let mut integrator = Integrator::new(settings);
+        integrator.vector_extensions = vector_extensions;
         integrator.dopri5.h_next = 1e-3;
         let mut crossings = CrossingLog::default();
         let y_sim: SimulationState = std::array::from_fn(|i| if i < 24 { y[i] } else { 0.0 });

@@ -12,6 +12,11 @@
  * latency: clock_gettime around every cycle; prints percentiles in microseconds.
  * threads: that many threads, each with its own instance, run the cycles at once; prints
  * steps per second.
+ *
+ * CYCLE_SCENARIO (environment) picks the motion: hover (default: the leg feedback above, no
+ * stop touched), contact (power loss: zero forces; the platform falls onto its lower stops and
+ * rests on them; count mode first runs 1500 uncounted cycles, so that every counted cycle is in
+ * contact), nostops (hover with the end stops switched off: parameter stops = false).
  */
 #define _GNU_SOURCE
 #include <dlfcn.h>
@@ -38,6 +43,7 @@ static int (*fmi2SetupExperiment)(Instance, int, double, double, int, double);
 static int (*fmi2SetReal)(Instance, const unsigned *, size_t, const double *);
 static int (*fmi2GetReal)(Instance, const unsigned *, size_t, double *);
 static int (*fmi2SetInteger)(Instance, const unsigned *, size_t, const int *);
+static int (*fmi2SetBoolean)(Instance, const unsigned *, size_t, const int *);
 static int (*fmi2DoStep)(Instance, double, double, int);
 static void (*fmi2FreeInstance)(Instance);
 static Status1 fmi2EnterInitializationMode, fmi2ExitInitializationMode;
@@ -48,18 +54,21 @@ static int (*fmi3EnterInitializationMode)(Instance, int, double, double, int, do
 static int (*fmi3SetFloat64)(Instance, const unsigned *, size_t, const double *, size_t);
 static int (*fmi3GetFloat64)(Instance, const unsigned *, size_t, double *, size_t);
 static int (*fmi3SetInt32)(Instance, const unsigned *, size_t, const int *, size_t);
+static int (*fmi3SetBoolean)(Instance, const unsigned *, size_t, const _Bool *, size_t);
 static int (*fmi3DoStep)(Instance, double, double, int, int *, int *, int *, double *);
 static void (*fmi3FreeInstance)(Instance);
 static Status1 fmi3ExitInitializationMode;
 
 #define LOAD(f) do { *(void **)&f = dlsym(lib, #f); if (!f) { fprintf(stderr, "missing %s\n", #f); exit(2); } } while (0)
 
-static const double H = 1e-3, U0 = 5900.715, L0 = 1.7550860729486566, G = 2e5, D = 2e4;
+static const double H = 1e-3, L0 = 1.7550860729486566;
+static double U0 = 5900.715, G = 2e5, D = 2e4;
+static int stops_on = 1;
 static const unsigned FORCES2[6] = {1, 2, 3, 4, 5, 6};
 static const unsigned LEGS2[12] = {121, 122, 123, 124, 125, 126, 127, 128, 129, 130, 131, 132};
 static const unsigned FORCES3[1] = {1};
 static const unsigned LEGS3[2] = {121, 127};
-static const unsigned METHOD_VR = 80;
+static const unsigned METHOD_VR = 80, STOPS_VR = 170;
 
 static Instance make(void) {
     Instance c;
@@ -67,12 +76,15 @@ static Instance make(void) {
         c = fmi3InstantiateCoSimulation("cycle", guid, NULL, 0, 0, 0, 0, NULL, 0, NULL, NULL, NULL);
         if (!c || fmi3EnterInitializationMode(c, 0, 0.0, 0.0, 0, 0.0)) exit(3);
         fmi3SetInt32(c, &METHOD_VR, 1, &method, 1);
+        _Bool on = stops_on;
+        fmi3SetBoolean(c, &STOPS_VR, 1, &on, 1);
         if (fmi3ExitInitializationMode(c)) exit(3);
     } else {
         static const Callbacks2 callbacks = {0};
         c = fmi2Instantiate("cycle", 1, guid, NULL, &callbacks, 0, 0);
         if (!c || fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0) || fmi2EnterInitializationMode(c)) exit(3);
         fmi2SetInteger(c, &METHOD_VR, 1, &method);
+        fmi2SetBoolean(c, &STOPS_VR, 1, &stops_on);
         if (fmi2ExitInitializationMode(c)) exit(3);
     }
     return c;
@@ -101,8 +113,8 @@ __attribute__((noinline)) static void get_outputs(Instance c, double *legs) {
     if (s) exit(6);
 }
 
-__attribute__((noinline)) static void run_cycles(Instance c, long n, double *legs) {
-    for (long i = 0; i < n; i++) {
+__attribute__((noinline)) static void run_cycles(Instance c, long n, double *legs, long first) {
+    for (long i = first; i < first + n; i++) {
         set_forces(c, legs);
         do_step(c, i * H);
         get_outputs(c, legs);
@@ -128,7 +140,7 @@ static void *thread_job(void *arg) {
     double legs[12];
     get_outputs(c, legs);
     double t0 = now();
-    run_cycles(c, job->n, legs);
+    run_cycles(c, job->n, legs, 0);
     job->seconds = now() - t0;
     release(c);
     return NULL;
@@ -146,12 +158,25 @@ int main(int argc, char **argv) {
     method = strcmp(argv[4], "rk4") == 0 ? 2 : 1;
     const char *mode = argv[5];
     long n = atol(argv[6]);
+    const char *scenario = getenv("CYCLE_SCENARIO");
+    long warm_up = 0;
+    if (scenario && strcmp(scenario, "contact") == 0) {
+        U0 = G = D = 0.0;
+        warm_up = 1500;
+    } else if (scenario && strcmp(scenario, "nostops") == 0) {
+        stops_on = 0;
+    } else if (scenario && strcmp(scenario, "hover") != 0) {
+        fprintf(stderr, "CYCLE_SCENARIO must be hover, contact or nostops\n");
+        return 2;
+    }
     if (fmi3) {
         LOAD(fmi3InstantiateCoSimulation); LOAD(fmi3EnterInitializationMode); LOAD(fmi3ExitInitializationMode);
-        LOAD(fmi3SetFloat64); LOAD(fmi3GetFloat64); LOAD(fmi3SetInt32); LOAD(fmi3DoStep); LOAD(fmi3FreeInstance);
+        LOAD(fmi3SetFloat64); LOAD(fmi3GetFloat64); LOAD(fmi3SetInt32); LOAD(fmi3SetBoolean); LOAD(fmi3DoStep);
+        LOAD(fmi3FreeInstance);
     } else {
         LOAD(fmi2Instantiate); LOAD(fmi2SetupExperiment); LOAD(fmi2EnterInitializationMode);
         LOAD(fmi2ExitInitializationMode); LOAD(fmi2SetReal); LOAD(fmi2GetReal); LOAD(fmi2SetInteger);
+        LOAD(fmi2SetBoolean);
         LOAD(fmi2DoStep); LOAD(fmi2FreeInstance);
     }
     if (strcmp(mode, "instantiate") == 0) {
@@ -179,7 +204,17 @@ int main(int argc, char **argv) {
     double legs[12];
     get_outputs(c, legs);
     if (strcmp(mode, "count") == 0) {
-        run_cycles(c, n, legs);
+        /* Uncounted: the same calls, outside the counted functions. */
+        for (long i = 0; i < warm_up; i++) {
+            double f[6] = {0, 0, 0, 0, 0, 0};
+            int s = fmi3 ? fmi3SetFloat64(c, FORCES3, 1, f, 6) : fmi2SetReal(c, FORCES2, 6, f);
+            int event, terminate, early;
+            double last;
+            s |= fmi3 ? fmi3DoStep(c, i * H, H, 1, &event, &terminate, &early, &last) : fmi2DoStep(c, i * H, H, 1);
+            s |= fmi3 ? fmi3GetFloat64(c, LEGS3, 2, legs, 12) : fmi2GetReal(c, LEGS2, 12, legs);
+            if (s) exit(7);
+        }
+        run_cycles(c, n, legs, warm_up);
     } else {
         double *dt = malloc(n * sizeof *dt);
         double clock0 = now(), clock1 = now();
