@@ -59,19 +59,27 @@ impl LegGeometry {
     }
 }
 
-/// The stand's joint coordinates as arrays over the legs (`[component][leg]`), so that the six
-/// legs of a state are computed side by side in vector registers ([`LegKinematics`]).
+/// Lanes of the arrays over the legs: the six legs and two copies of the first, so that a row
+/// fills two 256-bit registers (or four 128-bit ones) with no remainder; the extra lanes are
+/// computed and never read.
+pub const LANES: usize = 8;
+
+/// The stand's joint coordinates as arrays over the legs (`[component][lane]`, see [`LANES`]),
+/// so that the six legs of a state are computed side by side in vector registers
+/// ([`LegKinematics`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct JointArrays {
     /// `A_k`, body frame, m.
-    pub platform: [[f64; LEG_COUNT]; 3],
+    pub platform: [[f64; LANES]; 3],
     /// `B_k`, inertial frame, m.
-    pub base: [[f64; LEG_COUNT]; 3],
+    pub base: [[f64; LANES]; 3],
 }
 
 impl JointArrays {
     pub fn new(stand: &Stand) -> Self {
-        let by_component = |p: &[Vector3<f64>; LEG_COUNT]| std::array::from_fn(|c| std::array::from_fn(|k| p[k][c]));
+        let by_component = |p: &[Vector3<f64>; LEG_COUNT]| {
+            std::array::from_fn(|c| std::array::from_fn(|k| p.get(k).unwrap_or(&p[0])[c]))
+        };
         JointArrays { platform: by_component(&stand.platform_joints), base: by_component(&stand.base_joints) }
     }
 
@@ -81,17 +89,17 @@ impl JointArrays {
     pub fn kinematics(&self, state: &BodyState) -> LegKinematics {
         let (a, b) = (&self.platform, &self.base);
         let [e1, e2, e3] = &state.e;
-        let mut arm = [[0.0; LEG_COUNT]; 3];
-        let mut leg = [[0.0; LEG_COUNT]; 3];
+        let mut arm = [[0.0; LANES]; 3];
+        let mut leg = [[0.0; LANES]; 3];
         for c in 0..3 {
-            for k in 0..LEG_COUNT {
+            for k in 0..LANES {
                 arm[c][k] = e1[c] * a[0][k] + e2[c] * a[1][k] + e3[c] * a[2][k];
                 leg[c][k] = state.r[c] + arm[c][k] - b[c][k];
             }
         }
-        let mut length = [0.0; LEG_COUNT];
-        let mut inverse_length = [0.0; LEG_COUNT];
-        for k in 0..LEG_COUNT {
+        let mut length = [0.0; LANES];
+        let mut inverse_length = [0.0; LANES];
+        for k in 0..LANES {
             length[k] = (leg[0][k] * leg[0][k] + leg[1][k] * leg[1][k] + leg[2][k] * leg[2][k]).sqrt();
             inverse_length[k] = 1.0 / length[k];
         }
@@ -104,36 +112,42 @@ impl JointArrays {
     pub fn length_rates(&self, state: &BodyState, legs: &LegKinematics) -> [f64; LEG_COUNT] {
         let a = &self.platform;
         let [d1, d2, d3] = &state.e_dot;
-        let mut velocity = [[0.0; LEG_COUNT]; 3];
-        for c in 0..3 {
-            for k in 0..LEG_COUNT {
-                velocity[c][k] = state.v[c] + (d1[c] * a[0][k] + d2[c] * a[1][k] + d3[c] * a[2][k]);
+        let mut rates = [0.0; LANES];
+        for k in 0..LANES {
+            let mut rate = 0.0;
+            let carried = legs.length[k] > 0.0;
+            for c in 0..3 {
+                let velocity = state.v[c] + (d1[c] * a[0][k] + d2[c] * a[1][k] + d3[c] * a[2][k]);
+                let n = if carried { legs.leg[c][k] * legs.inverse_length[k] } else { 0.0 };
+                rate = if c == 0 { n * velocity } else { rate + n * velocity };
             }
+            rates[k] = rate;
         }
-        let mut rates = [0.0; LEG_COUNT];
-        for k in 0..LEG_COUNT {
-            let n = legs.direction(k);
-            rates[k] = n[0] * velocity[0][k] + n[1] * velocity[1][k] + n[2] * velocity[2][k];
-        }
-        rates
+        std::array::from_fn(|k| rates[k])
     }
 }
 
-/// The legs of one state as arrays over the legs (`[component][leg]`): see
+/// The legs of one state as arrays over the legs (`[component][lane]`, see [`LANES`]): see
 /// [`JointArrays::kinematics`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LegKinematics {
     /// Arms `R A_k`, inertial components, m.
-    pub arm: [[f64; LEG_COUNT]; 3],
+    pub arm: [[f64; LANES]; 3],
     /// Leg vectors `a_k - B_k = r + R A_k - B_k`, m.
-    pub leg: [[f64; LEG_COUNT]; 3],
+    pub leg: [[f64; LANES]; 3],
     /// `l_k`, m.
-    pub length: [f64; LEG_COUNT],
+    pub length: [f64; LANES],
     /// `1 / l_k`, 1/m (infinite for a collapsed leg).
-    pub inverse_length: [f64; LEG_COUNT],
+    pub inverse_length: [f64; LANES],
 }
 
 impl LegKinematics {
+    /// The six leg lengths, m.
+    #[inline(always)]
+    pub fn lengths(&self) -> [f64; LEG_COUNT] {
+        std::array::from_fn(|k| self.length[k])
+    }
+
     /// Unit direction of leg `k` (zero for a collapsed leg, never NaN), as
     /// [`LegGeometry::direction`].
     #[inline(always)]

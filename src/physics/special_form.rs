@@ -19,7 +19,7 @@ use nalgebra::Vector3;
 use super::body_state::{BodyState, STATE_DIM, StateVector, layout};
 use super::end_stops::EndStops;
 use super::forces::LegForceLaw;
-use super::legs::{JointArrays, LegGeometry, LegKinematics};
+use super::legs::{JointArrays, LANES, LegGeometry, LegKinematics};
 use super::stand::{LEG_COUNT, Stand};
 
 /// The stand-dependent coefficients of the special form, computed once per parameter set so
@@ -274,14 +274,16 @@ impl SpecialForm {
     #[inline(always)]
     fn wrench_of(&self, state: &BodyState, u: &[f64; LEG_COUNT]) -> LegWrench {
         let LegKinematics { arm, leg, length, inverse_length } = self.joints.kinematics(state);
-        let mut f = [[0.0; LEG_COUNT]; 3];
+        // All lanes (the extra ones are never read), so that every row is whole registers.
+        let u: [f64; LANES] = std::array::from_fn(|k| u.get(k).copied().unwrap_or(0.0));
+        let mut f = [[0.0; LANES]; 3];
         for c in 0..3 {
-            for k in 0..LEG_COUNT {
+            for k in 0..LANES {
                 f[c][k] = leg[c][k] * (u[k] * inverse_length[k]);
             }
         }
-        let mut moment = [[0.0; LEG_COUNT]; 3];
-        for k in 0..LEG_COUNT {
+        let mut moment = [[0.0; LANES]; 3];
+        for k in 0..LANES {
             moment[0][k] = arm[1][k] * f[2][k] - arm[2][k] * f[1][k];
             moment[1][k] = arm[2][k] * f[0][k] - arm[0][k] * f[2][k];
             moment[2][k] = arm[0][k] * f[1][k] - arm[1][k] * f[0][k];

@@ -123,7 +123,7 @@ impl<L: LegForceLaw + ?Sized> PlatformDynamics<'_, L> {
     #[inline(always)]
     fn switching_of(&self, legs: &LegKinematics, g: &mut [f64]) {
         match &self.form.stops {
-            Some(stops) => stops.stroke_margins(&legs.length, g),
+            Some(stops) => stops.stroke_margins(&legs.lengths(), g),
             None => {
                 for x in g.iter_mut().take(STROKE_LIMITS) {
                     *x = 1.0;
@@ -184,7 +184,7 @@ impl<L: LegForceLaw + ?Sized> OdeSystem<SIMULATION_DIM> for PlatformDynamics<'_,
         let legs = self.form.joints.kinematics(&state);
         self.guard.check_legs(&state, &legs)?;
         let ldot = self.form.joints.length_rates(&state, &legs);
-        self.checked_legs.set(Some(LegOutputs { l: legs.length, ldot }));
+        self.checked_legs.set(Some(LegOutputs { l: legs.lengths(), ldot }));
         if let Some(g) = g {
             self.switching_of(&legs, g);
         }
