@@ -16,7 +16,11 @@ seconds). Measured:
   fmpy.simulate_fmu (replaying the reference's forces) and under a minimal FMU2Slave loop;
 - a MuJoCo model of the same stand (free body; legs as two light bodies with a slide joint and
   a force actuator on ball joints; upper ends closed with connect equality constraints,
-  solref 0.002 1, solimp near 1), with RK4 and Euler at 1 ms.
+  solref 0.002 1, solimp near 1), with RK4 and Euler at 1 ms. Its cost is taken two ways and
+  both are printed: per `mj_step` call from Python in the closed loop (the force law computed in
+  Python between calls, which is where its error comes from), and in MuJoCo's own C loop,
+  `mj_step(model, data, nstep=N)` with the forces held (the fair figure next to our native
+  loop; the work-precision plot uses it).
 
 Prints one table (medians of repeated runs, ratios) and writes work_precision.png and
 performance.csv to the output folder.
@@ -258,7 +262,14 @@ def mujoco_run(integrator, ref_positions, dt=H):
                     gap = max(gap, float(np.linalg.norm(data.site(f"tip{k}").xpos - data.site(f"joint{k}").xpos)))
         costs.append(step_time / STEPS * 1e6)
         final = data.qpos[0:3].copy()
-    return float(np.median(costs)), final, path_error, gap
+    # The same model in MuJoCo's own C loop: the equilibrium forces held, STEPS steps in one call.
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    data.ctrl[:] = U0
+    start = time.perf_counter()
+    mujoco.mj_step(model, data, nstep=STEPS * substeps)
+    c_loop = (time.perf_counter() - start) / STEPS * 1e6
+    return float(np.median(costs)), final, path_error, gap, c_loop
 
 
 def machine():
@@ -295,7 +306,8 @@ def main():
     for tol in (1e-4, 1e-6, 1e-8, 1e-10, 1e-12):
         jobs.append((f"ours, native, DOPRI5 relTol {tol:g}", "ours DOPRI5", lambda tol=tol: native("dopri5", rel_tol=tol)))
     for integrator in ("RK4", "Euler"):
-        jobs.append((f"MuJoCo {integrator}, 1 ms", "MuJoCo", lambda integrator=integrator: mujoco_run(integrator, ref_positions)))
+        jobs.append((f"MuJoCo {integrator}, 1 ms, per Python call", "MuJoCo",
+                     lambda integrator=integrator: mujoco_run(integrator, ref_positions)))
     jobs.append(("ours, FMU2Slave loop (default DOPRI5)", None, lambda: fmpy_loop(PLATFORM_FMU)))
     jobs.append(("trivial FMU, FMU2Slave loop", None, lambda: fmpy_loop(TRIVIAL_FMU, feedback=False)))
     jobs.append(("ours, fmpy.simulate_fmu (default DOPRI5)", None, lambda: (fmpy_simulate(PLATFORM_FMU, ref_forces), None)))
@@ -320,7 +332,11 @@ def main():
             note = f"path error {first[2]:.1e} m, constraint gap {first[3] * 1e3:.2f} mm"
         add(name, cost, final, note)
         if curve == "MuJoCo":
-            work_precision[curve].append((cost / H, rows[-1]["error_at_3s_m"], name.split()[1].rstrip(",")))
+            c_loop = float(np.median([r[4] for r in runs]))
+            error = rows[-1]["error_at_3s_m"]
+            add(name.replace("per Python call", "C loop (nstep)"), c_loop, first[1],
+                "mj_step(model, data, nstep) with the forces held; error of the closed loop above")
+            work_precision[curve].append((c_loop / H, error, name.split()[1].rstrip(","), cost / H))
         elif curve:
             work_precision[curve].append((cost / H, rows[-1]["error_at_3s_m"]))
     loop_ours = rows[[r["name"] for r in rows].index("ours, FMU2Slave loop (default DOPRI5)")]["us_per_step"]
@@ -328,14 +344,17 @@ def main():
     sim_ours = rows[[r["name"] for r in rows].index("ours, fmpy.simulate_fmu (default DOPRI5)")]["us_per_step"]
     sim_trivial = rows[[r["name"] for r in rows].index("trivial FMU, fmpy.simulate_fmu")]["us_per_step"]
 
-    mujoco_rk4 = next(r for r in rows if r["name"].startswith("MuJoCo RK4"))
+    mujoco_rk4 = next(r for r in rows if r["name"].startswith("MuJoCo RK4") and "C loop" in r["name"])
+    mujoco_rk4_call = next(r for r in rows if r["name"].startswith("MuJoCo RK4") and "Python call" in r["name"])
     ours_rk4 = rows[0]
     print()
     print(f"{'':44} {'us/step':>10} {'us per sim. s':>14} {'error at 3 s':>13}  notes")
     for r in rows:
         print(f"{r['name']:44} {r['us_per_step']:10.3f} {r['us_per_simulated_s']:14.0f} {r['error_at_3s_m']:13.2e}  {r['note']}")
     print()
-    print(f"MuJoCo RK4 / ours native RK4 (1 ms), cost per simulated second: {mujoco_rk4['us_per_step'] / ours_rk4['us_per_step']:.0f}x "
+    print(f"MuJoCo RK4 / ours native RK4 (1 ms), cost per simulated second, both in C loops: "
+          f"{mujoco_rk4['us_per_step'] / ours_rk4['us_per_step']:.0f}x; MuJoCo per Python call: "
+          f"{mujoco_rk4_call['us_per_step'] / ours_rk4['us_per_step']:.0f}x "
           f"(error {mujoco_rk4['error_at_3s_m']:.1e} m vs {ours_rk4['error_at_3s_m']:.1e} m)")
     print(f"under FMPy, ours / trivial FMU per step: FMU2Slave loop {loop_ours / loop_trivial:.2f}x, "
           f"simulate_fmu {sim_ours / sim_trivial:.2f}x")
@@ -353,8 +372,10 @@ def main():
     for name, marker in (("ours RK4", "o-"), ("ours DOPRI5", "s-")):
         pts = work_precision[name]
         ax.loglog([p[0] for p in pts], [max(p[1], floor) for p in pts], marker, label=name)
-    for cost, err, integrator in work_precision["MuJoCo"]:
-        ax.loglog([cost], [err], "^", markersize=9, label=f"MuJoCo {integrator}")
+    for cost, err, integrator, per_call in work_precision["MuJoCo"]:
+        line, = ax.loglog([cost], [err], "^", markersize=9, label=f"MuJoCo {integrator} (C loop)")
+        ax.loglog([per_call], [err], "^", markersize=9, markerfacecolor="none", color=line.get_color(),
+                  label=f"MuJoCo {integrator} (per Python call)")
     ax.set(xlabel="cost per simulated second (us)", ylabel="position error at 3 s (m)",
            title="Work-precision, 1 ms communication steps, default stand")
     ax.legend()

@@ -675,15 +675,20 @@ impl Instance {
                 _ => None,
             };
             let width = match fast {
-                // FMI 2 reads one element per reference: no slice copy for it.
-                Some(1) => match (values.get_mut(filled), self.value_cache.get(vr as usize)) {
-                    (Some(slot), Some(&x)) => {
-                        *slot = x;
-                        1
+                Some(width) => {
+                    let first = vr as usize;
+                    match (values.get_mut(filled..filled + width), self.value_cache.get(first..first + width)) {
+                        (Some(out), Some(cached)) => {
+                            // Element by element: a handful of values, no memcpy call.
+                            for (slot, &x) in out.iter_mut().zip(cached) {
+                                *slot = x;
+                            }
+                            width
+                        }
+                        _ => return self.count_error(vrs, BaseType::Real, values.len()),
                     }
-                    _ => return self.count_error(vrs, BaseType::Real, values.len()),
-                },
-                _ => match self.read_real(vrs, vr, values, filled) {
+                }
+                None => match self.read_real(vrs, vr, values, filled) {
                     Ok(width) => width,
                     Err(s) => return s,
                 },
