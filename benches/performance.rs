@@ -50,7 +50,7 @@ fn physics(c: &mut Criterion) {
     c.bench_function("rhs: special-form right-hand side (24 states)", |b| {
         b.iter(|| form.derivative(black_box(0.1), black_box(&y), &law, &mut dy))
     });
-    // Each with the AVX code the integrator picks on this processor, and with the baseline
+    // Each with the AVX2 code the integrator picks on this processor, and with the baseline
     // (SSE2) code (`Integrator::vector_extensions = false`; the same numbers to the bit).
     for (name, method, vector_extensions) in [
         ("rk4: one RK4 step of 1 ms (+projection, checks)", Method::RungeKutta4, true),
