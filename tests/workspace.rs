@@ -316,3 +316,62 @@ fn stop_at_singularity_finds_the_passage_inside_the_step() {
     assert!((t_small - t_large).abs() < 1e-6, "{t_small} vs {t_large}");
     assert!(message.contains("stopAtSingularity is on") && message.contains("rolled back"));
 }
+
+/// Passages through singular arrangements only get reported, so they are tracked only while
+/// they can be (`logEvents` reaches the importer, or `stopAtSingularity`): the motion is the
+/// same to the bit with or without tracking, and tracking switched on mid-run reports exactly
+/// the passages after that moment, none spurious at the switch.
+#[test]
+fn singular_passages_are_tracked_only_while_reported_and_the_motion_is_the_same() {
+    use common::fmi_host::Host;
+    use stewart_fmu::fmi2::exports::fmi2SetDebugLogging;
+    use stewart_fmu::fmi2::types::*;
+
+    let u = equilibrium_force();
+    let forces =
+        move |t: f64| -> [f64; 6] { std::array::from_fn(|k| u * (1.05 + 0.5 * (2.0 * t + 1.1 * k as f64).sin())) };
+    let category = std::ffi::CString::new("logEvents").unwrap();
+    // Returns the position bits of every step and the passage messages with their step index.
+    let run = |log_from_step: usize| -> (Vec<[u64; 3]>, Vec<(usize, String)>) {
+        let mut fmu = Host::platform("tracking");
+        let off = unsafe { fmi2SetDebugLogging(fmu.c, fmi2False, 1, &category.as_ptr()) };
+        assert_eq!(off, fmi2OK);
+        assert_eq!(fmu.initialise(&[("stops", 0.0)]), fmi2OK);
+        let (mut positions, mut passages) = (vec![], vec![]);
+        for i in 0..300 {
+            if i == log_from_step {
+                let on = unsafe { fmi2SetDebugLogging(fmu.c, fmi2True, 1, &category.as_ptr()) };
+                assert_eq!(on, fmi2OK);
+            }
+            let seen = fmu.messages().len();
+            assert_eq!(fmu.set_forces(forces(i as f64 * 0.01)), fmi2OK);
+            assert_eq!(fmu.step(0.01), fmi2OK, "{}", fmu.last_message());
+            let r = [fmu.get("r[1]"), fmu.get("r[2]"), fmu.get("r[3]")];
+            positions.push(r.map(f64::to_bits));
+            passages.extend(
+                fmu.messages()[seen..]
+                    .iter()
+                    .filter(|l| l.message.contains("singular arrangement"))
+                    .map(|l| (i, l.message.clone())),
+            );
+        }
+        (positions, passages)
+    };
+    let (always, all_passages) = run(0);
+    let (later, later_passages) = run(150);
+    let (never, no_passages) = run(usize::MAX);
+    let expected: Vec<_> = all_passages.iter().filter(|(i, _)| *i >= 150).cloned().collect();
+    println!(
+        "singular passages: {} with logEvents on throughout, {} of them after step 150, {} reported when switched on \
+         at step 150, {} with it off",
+        all_passages.len(),
+        expected.len(),
+        later_passages.len(),
+        no_passages.len()
+    );
+    assert!(all_passages.len() >= 3 && !expected.is_empty() && expected.len() < all_passages.len());
+    assert_eq!(later_passages, expected, "passages after the switch, and none at it");
+    assert!(no_passages.is_empty());
+    assert_eq!(always, later, "the motion does not depend on the tracking");
+    assert_eq!(always, never, "the motion does not depend on the tracking");
+}

@@ -285,6 +285,18 @@ fn read_option_f64(r: &mut ByteReader, what: &str) -> Result<Option<f64>, Snapsh
 impl Instance {
     /// `token` is the importer's instantiation token, already matched to `kind`.
     pub fn new(kind: ModelKind, token: &str, version: FmiVersion, interface: InterfaceType, logger: Logger) -> Self {
+        let mut instance = Self::unconfigured(kind, token, version, interface, logger);
+        instance.apply_event_reporting();
+        instance
+    }
+
+    fn unconfigured(
+        kind: ModelKind,
+        token: &str,
+        version: FmiVersion,
+        interface: InterfaceType,
+        logger: Logger,
+    ) -> Self {
         let info = kind.info();
         let table = VariableTable::new(info.groups);
         let model = kind.instantiate();
@@ -538,6 +550,7 @@ impl Instance {
             }
         }
         self.logger.set_debug_logging(logging_on, &categories);
+        self.apply_event_reporting();
         Status::Ok
     }
 
@@ -605,7 +618,7 @@ impl Instance {
     }
 
     pub fn reset(&mut self) -> Status {
-        *self.model_mut() = self.kind.instantiate();
+        self.replace_model(self.kind.instantiate());
         self.state = ModelState::Instantiated;
         self.start_time = 0.0;
         self.stop_time = None;
@@ -619,6 +632,20 @@ impl Instance {
     }
 
     // ----- get/set ------------------------------------------------------------------------
+
+    /// Tells the model whether reported-only events are wanted: when `logEvents` messages can
+    /// reach the importer, and always in Model Exchange (event indicators).
+    fn apply_event_reporting(&mut self) {
+        let on = self.interface == InterfaceType::ModelExchange || self.logger.is_enabled(LogCategory::Events);
+        self.model.set_event_reporting(on);
+    }
+
+    /// A new model in place of the current one (reset, restored state, validated copy), told
+    /// what the instance reports.
+    fn replace_model(&mut self, model: AnyModel) {
+        *self.model_mut() = model;
+        self.apply_event_reporting();
+    }
 
     /// The model, for a change: the value cache no longer holds its values.
     fn model_mut(&mut self) -> &mut AnyModel {
@@ -823,7 +850,7 @@ impl Instance {
                 return self.error(&format!("{} = {x} refused: {m}", self.element_name(r)));
             }
         }
-        *self.model_mut() = trial;
+        self.replace_model(trial);
         Status::Ok
     }
 
@@ -1322,7 +1349,7 @@ impl Instance {
         self.tolerance = s.tolerance;
         self.terminated = s.terminated;
         self.last_successful_time = s.last_successful_time;
-        *self.model_mut() = s.model;
+        self.replace_model(s.model);
         self.logger.log(
             Status::Ok,
             LogCategory::Events,

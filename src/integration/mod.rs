@@ -124,7 +124,8 @@ impl SwitchingSides {
     /// Bits of the functions whose side differs from `g`.
     #[inline]
     pub fn changed(&self, g: &[f64; MAX_SWITCHING], count: usize) -> u32 {
-        Self::of(g, count).bits ^ self.bits
+        // Functions past `count` are not evaluated: whatever side they had, they did not change.
+        (Self::of(g, count).bits ^ self.bits) & ((1u32 << count) - 1)
     }
 }
 

@@ -159,6 +159,11 @@ pub trait FmuModel {
     /// After a successful step: describes the events met during it (contacts, singular
     /// arrangements passed), one message each, for `logEvents`.
     fn report_events(&mut self, _sink: &mut dyn FnMut(&str)) {}
+    /// Whether events that only get reported (passages through singular arrangements) are
+    /// wanted: the instance says so whenever it can deliver `logEvents` messages, and always
+    /// in Model Exchange (the event indicators). Off, a model may skip the bookkeeping of
+    /// such events; nothing that changes the motion may depend on it.
+    fn set_event_reporting(&mut self, _on: bool) {}
     /// First derivative of a Real input for the next step (`fmi2SetRealInputDerivatives`).
     fn set_input_derivative(&mut self, var: VariableRef, value: f64);
     /// First time derivative of a Real output (`fmi2GetRealOutputDerivatives`).
@@ -332,6 +337,9 @@ impl AnyModel {
     }
     pub fn report_events(&mut self, sink: &mut dyn FnMut(&str)) {
         dispatch!(self, m => m.report_events(sink))
+    }
+    pub fn set_event_reporting(&mut self, on: bool) {
+        dispatch!(self, m => m.set_event_reporting(on))
     }
     pub fn event_indicators(&mut self, z: &mut [f64]) {
         dispatch!(self, m => m.event_indicators(z))

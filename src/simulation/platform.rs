@@ -11,11 +11,11 @@ use crate::physics::configuration::ConfigurationGuard;
 use crate::physics::direct_problem::{force_moment_determinant, singular_legs};
 use crate::physics::end_stops::{EndStops, STROKE_LIMITS};
 use crate::physics::error::{ParameterError, PhysicsFault};
-use crate::physics::forces::LegForceLaw;
+use crate::physics::forces::{HeldForces, LegForceLaw};
 use crate::physics::legs::{LegGeometry, LegKinematics};
 use crate::physics::projection::project_onto_constraints;
 use crate::physics::special_form::SpecialForm;
-use crate::physics::stand::Stand;
+use crate::physics::stand::{LEG_COUNT, Stand};
 
 /// Length of the simulation state: the 24 special-form coordinates, then the work of the
 /// actuator forces and the energy taken by the stops' damping (quadratures integrated with
@@ -94,6 +94,9 @@ pub struct PlatformDynamics<'a, L: ?Sized> {
     pub guard: &'a ConfigurationGuard,
     /// Whether a passage through a singular leg arrangement stops the integration.
     pub stop_at_singularity: bool,
+    /// Whether the determinant switching function is evaluated (see
+    /// [`PlatformSimulation::track_singularities`]); the stroke margins always are.
+    pub track_singularities: bool,
     /// Lengths and rates of the legs of the last state [`OdeSystem::check`] accepted: after an
     /// integration, those of its end state (the check is the last thing a step does), so that
     /// the outputs `l` and `ldot` cost no second computation of the legs.
@@ -101,6 +104,7 @@ pub struct PlatformDynamics<'a, L: ?Sized> {
 }
 
 impl<'a, L: ?Sized> PlatformDynamics<'a, L> {
+    /// Dynamics that evaluate every switching function (singular arrangements tracked).
     pub fn new(
         form: &'a SpecialForm,
         law: &'a L,
@@ -108,20 +112,33 @@ impl<'a, L: ?Sized> PlatformDynamics<'a, L> {
         guard: &'a ConfigurationGuard,
         stop_at_singularity: bool,
     ) -> Self {
-        PlatformDynamics { form, law, stabilisation, guard, stop_at_singularity, checked_legs: Cell::new(None) }
+        PlatformDynamics {
+            form,
+            law,
+            stabilisation,
+            guard,
+            stop_at_singularity,
+            track_singularities: true,
+            checked_legs: Cell::new(None),
+        }
+    }
+
+    fn tracks_singularities(&self) -> bool {
+        self.track_singularities || self.stop_at_singularity
     }
 }
 
 impl<L: LegForceLaw + ?Sized> PlatformDynamics<'_, L> {
-    /// The switching function values of a body state (see [`switching`]).
+    /// The values of all switching functions of a body state (see [`switching`]), the
+    /// determinant included whether it is tracked or not (Model Exchange event indicators).
     #[inline(always)]
     pub fn switching_values(&self, y: &StateVector, g: &mut [f64]) {
         let legs = self.form.joints.kinematics(&BodyState::from_vector(y));
-        self.switching_of(&legs, g);
+        self.switching_of(&legs, g, true);
     }
 
     #[inline(always)]
-    fn switching_of(&self, legs: &LegKinematics, g: &mut [f64]) {
+    fn switching_of(&self, legs: &LegKinematics, g: &mut [f64], with_determinant: bool) {
         match &self.form.stops {
             Some(stops) => stops.stroke_margins(&legs.lengths(), g),
             None => {
@@ -130,7 +147,7 @@ impl<L: LegForceLaw + ?Sized> PlatformDynamics<'_, L> {
                 }
             }
         }
-        if let Some(x) = g.get_mut(switching::DETERMINANT) {
+        if with_determinant && let Some(x) = g.get_mut(switching::DETERMINANT) {
             *x = force_moment_determinant(legs, self.guard.characteristic_length);
         }
     }
@@ -186,18 +203,19 @@ impl<L: LegForceLaw + ?Sized> OdeSystem<SIMULATION_DIM> for PlatformDynamics<'_,
         let ldot = self.form.joints.length_rates(&state, &legs);
         self.checked_legs.set(Some(LegOutputs { l: legs.lengths(), ldot }));
         if let Some(g) = g {
-            self.switching_of(&legs, g);
+            self.switching_of(&legs, g, self.tracks_singularities());
         }
         Ok(())
     }
 
     fn switching_count(&self) -> usize {
-        switching::COUNT
+        if self.tracks_singularities() { switching::COUNT } else { switching::DETERMINANT }
     }
 
     #[inline(always)]
     fn switching(&self, _t: f64, y: &SimulationState, g: &mut [f64; MAX_SWITCHING]) {
-        self.switching_values(body(y), g);
+        let legs = self.form.joints.kinematics(&BodyState::from_vector(body(y)));
+        self.switching_of(&legs, g, self.tracks_singularities());
     }
 
     fn switching_kind(&self, index: usize) -> SwitchingKind {
@@ -261,6 +279,11 @@ pub struct PlatformSimulation {
     pub stabilisation: Stabilisation,
     /// Discard a step that passes a singular leg arrangement (the FMU's `stopAtSingularity`).
     pub stop_at_singularity: bool,
+    /// Record passages through singular leg arrangements in [`PlatformSimulation::crossings`]
+    /// (default on). They change nothing in the motion; off (and `stop_at_singularity` off),
+    /// the steps skip the 6x6 determinant at every internal step's end. Changed with
+    /// [`PlatformSimulation::set_track_singularities`].
+    pub(crate) track_singularities: bool,
     pub integrator: Integrator,
     pub time: f64,
     pub state: SimulationState,
@@ -290,6 +313,7 @@ impl PlatformSimulation {
             guard,
             stabilisation,
             stop_at_singularity: false,
+            track_singularities: true,
             integrator: Integrator::new(settings),
             time: t0,
             state,
@@ -314,6 +338,25 @@ impl PlatformSimulation {
         &self.form.stand
     }
 
+    /// Whether passages through singular arrangements are recorded (see the field).
+    pub fn track_singularities(&self) -> bool {
+        self.track_singularities
+    }
+
+    /// Switches the recording of singular passages. Switched on, the determinant's side is
+    /// taken at the current state, so that only passages after now are recorded.
+    pub fn set_track_singularities(&mut self, on: bool) {
+        let was = self.track_singularities || self.stop_at_singularity;
+        self.track_singularities = on;
+        if on && !was && self.integrator.sides.known {
+            let mut g = [0.0; switching::COUNT];
+            self.dynamics(&HeldForces::constant([0.0; LEG_COUNT])).switching_values(body(&self.state), &mut g);
+            let bit = 1 << switching::DETERMINANT;
+            let side = if g[switching::DETERMINANT] > 0.0 { bit } else { 0 };
+            self.integrator.sides.bits = (self.integrator.sides.bits & !bit) | side;
+        }
+    }
+
     pub fn body_state(&self) -> BodyState {
         BodyState::from_vector(body(&self.state))
     }
@@ -330,7 +373,10 @@ impl PlatformSimulation {
 
     /// The ODE system for a force law.
     pub fn dynamics<'a, L: LegForceLaw + ?Sized>(&'a self, law: &'a L) -> PlatformDynamics<'a, L> {
-        PlatformDynamics::new(&self.form, law, self.stabilisation, &self.guard, self.stop_at_singularity)
+        PlatformDynamics {
+            track_singularities: self.track_singularities,
+            ..PlatformDynamics::new(&self.form, law, self.stabilisation, &self.guard, self.stop_at_singularity)
+        }
     }
 
     /// Integrates to `t1` (> current time) with leg forces from `law`. On failure nothing
@@ -352,8 +398,10 @@ impl PlatformSimulation {
         let saved_state = self.state;
         let saved_integrator = self.integrator;
         self.crossings.clear();
-        let dynamics =
-            PlatformDynamics::new(&self.form, law, self.stabilisation, &self.guard, self.stop_at_singularity);
+        let dynamics = PlatformDynamics {
+            track_singularities: self.track_singularities,
+            ..PlatformDynamics::new(&self.form, law, self.stabilisation, &self.guard, self.stop_at_singularity)
+        };
         let result = self.integrator.integrate_until_event(
             &dynamics,
             self.time,

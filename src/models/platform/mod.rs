@@ -210,6 +210,9 @@ pub struct PlatformModel {
     legs: Option<LegOutputs>,
     /// `kappa` of the current state, computed on its first read after a change.
     kappa: Option<f64>,
+    /// Whether passages through singular arrangements are reported (see
+    /// [`FmuModel::set_event_reporting`]).
+    events_reported: bool,
 }
 
 impl Default for PlatformModel {
@@ -222,6 +225,7 @@ impl Default for PlatformModel {
             outputs: None,
             legs: None,
             kappa: None,
+            events_reported: true,
         }
     }
 }
@@ -404,6 +408,13 @@ impl FmuModel for PlatformModel {
         }
     }
 
+    fn set_event_reporting(&mut self, on: bool) {
+        self.events_reported = on;
+        if let Some(sim) = self.simulation.as_mut() {
+            sim.set_track_singularities(on);
+        }
+    }
+
     fn cache_block(&self, group: usize) -> Option<u8> {
         match group {
             group::L | group::LDOT => Some(cache_block::LEGS),
@@ -500,6 +511,7 @@ impl FmuModel for PlatformModel {
                 .and_then(|sim| sim.with_end_stops(p.end_stops()))
                 .map_err(|e| e.to_string())?;
         sim.stop_at_singularity = p.stop_at_singularity;
+        sim.set_track_singularities(self.events_reported);
         let kappa = condition_number(sim.stand(), &sim.state);
         if p.stop_at_singularity && !(kappa < SINGULAR_CONDITION_NUMBER) {
             return Err(format!(
@@ -852,6 +864,9 @@ impl FmuModel for PlatformModel {
                 guard,
                 stabilisation: sim_stabilisation,
                 stop_at_singularity: sim_stop_at_singularity,
+                // Off until the instance says whether passages are reported: switching it on
+                // then takes the determinant's side afresh.
+                track_singularities: false,
                 integrator: Integrator { settings: sim_settings, dopri5, stats, sides, vector_extensions: true },
                 time,
                 state,
@@ -880,6 +895,7 @@ impl FmuModel for PlatformModel {
             outputs: None,
             legs: None,
             kappa: None,
+            events_reported: true,
         })
     }
 }
