@@ -5,7 +5,9 @@ lengths and rates, through the packaged FMI 2 and FMI 3 platform FMUs. Prints on
 - instructions per cycle and its split (set, step, get), from callgrind over 5000 cycles
   (repeatable; wall times on this shared machine vary up to 2x between runs), in three
   motions: hovering on the leg feedback (no stop touched), resting in contact with all six
-  lower stops (zero forces), and hovering with the end stops switched off;
+  lower stops (zero forces), hovering with the end stops switched off, and (FMI 2) hovering
+  with `logEvents` delivered to a logger that drops it, so that passages through singular
+  arrangements are tracked (skipped when nobody can be told);
 - wall-clock latency over 10^6 cycles (mean, p50, p99, p99.9, max), one run;
 - throughput with 1 and 2 threads, each with its own instance;
 - instantiate + initialise + free;
@@ -126,16 +128,17 @@ def main():
              f"{open('/proc/cpuinfo').read().split('model name')[1].split(':')[1].splitlines()[0].strip()}", ""]
     lines.append("Instructions per cycle (callgrind, 5000 cycles): set 6 forces + fmi2DoStep/fmi3DoStep 1 ms + get 12 values")
     lines.append("(hover: leg feedback, no stop touched; contact: resting on all six lower stops; nostops: hover with "
-                 "stops = false)")
-    lines.append(f"{'FMU':6} {'method':7} {'motion':8} {'cycle':>8} {'set':>7} {'step':>8} {'get':>7}")
+                 "stops = false; logevents: hover with logEvents delivered, singular passages tracked)")
+    lines.append(f"{'FMU':6} {'method':7} {'motion':9} {'cycle':>8} {'set':>7} {'step':>8} {'get':>7}")
     cycles = {}
     for version in ("fmi2", "fmi3"):
         binary, token = unpack(version, folder)
         for method in ("rk4", "dopri5"):
-            for scenario in ("hover", "contact", "nostops") if version == "fmi2" else ("hover", "contact"):
+            scenarios = ("hover", "contact", "nostops", "logevents") if version == "fmi2" else ("hover", "contact")
+            for scenario in scenarios:
                 c = instructions(host, version, binary, token, method, folder, scenario)
                 cycles[(version, method, scenario)] = c
-                lines.append(f"{version:6} {method:7} {scenario:8} {c['run_cycles']:8.0f} {c['set_forces']:7.0f} "
+                lines.append(f"{version:6} {method:7} {scenario:9} {c['run_cycles']:8.0f} {c['set_forces']:7.0f} "
                              f"{c['do_step']:8.0f} {c['get_outputs']:7.0f}")
     lines.append("")
     binary, token = unpack("fmi2", folder)

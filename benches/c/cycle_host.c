@@ -16,7 +16,9 @@
  * CYCLE_SCENARIO (environment) picks the motion: hover (default: the leg feedback above, no
  * stop touched), contact (power loss: zero forces; the platform falls onto its lower stops and
  * rests on them; count mode first runs 1500 uncounted cycles, so that every counted cycle is in
- * contact), nostops (hover with the end stops switched off: parameter stops = false).
+ * contact), nostops (hover with the end stops switched off: parameter stops = false),
+ * logevents (FMI 2: hover with a logger that drops messages and logEvents on, so that the FMU
+ * tracks passages through singular arrangements, which it skips when nobody can be told).
  */
 #define _GNU_SOURCE
 #include <dlfcn.h>
@@ -45,6 +47,7 @@ static int (*fmi2GetReal)(Instance, const unsigned *, size_t, double *);
 static int (*fmi2SetInteger)(Instance, const unsigned *, size_t, const int *);
 static int (*fmi2SetBoolean)(Instance, const unsigned *, size_t, const int *);
 static int (*fmi2DoStep)(Instance, double, double, int);
+static int (*fmi2SetDebugLogging)(Instance, int, size_t, const char *const *);
 static void (*fmi2FreeInstance)(Instance);
 static Status1 fmi2EnterInitializationMode, fmi2ExitInitializationMode;
 /* FMI 3 */
@@ -63,12 +66,17 @@ static Status1 fmi3ExitInitializationMode;
 
 static const double H = 1e-3, L0 = 1.7550860729486566;
 static double U0 = 5900.715, G = 2e5, D = 2e4;
-static int stops_on = 1;
+static int stops_on = 1, log_events = 0;
 static const unsigned FORCES2[6] = {1, 2, 3, 4, 5, 6};
 static const unsigned LEGS2[12] = {121, 122, 123, 124, 125, 126, 127, 128, 129, 130, 131, 132};
 static const unsigned FORCES3[1] = {1};
 static const unsigned LEGS3[2] = {121, 127};
 static const unsigned METHOD_VR = 80, STOPS_VR = 170;
+
+/* A logger that drops every message: the FMU can deliver logEvents, nothing is printed. */
+static void ignore_message(void *env, const char *name, int status, const char *category, const char *message, ...) {
+    (void)env; (void)name; (void)status; (void)category; (void)message;
+}
 
 static Instance make(void) {
     Instance c;
@@ -80,8 +88,13 @@ static Instance make(void) {
         fmi3SetBoolean(c, &STOPS_VR, 1, &on, 1);
         if (fmi3ExitInitializationMode(c)) exit(3);
     } else {
-        static const Callbacks2 callbacks = {0};
-        c = fmi2Instantiate("cycle", 1, guid, NULL, &callbacks, 0, 0);
+        static const Callbacks2 quiet = {0};
+        static const Callbacks2 logging = {.logger = (void *)ignore_message};
+        c = fmi2Instantiate("cycle", 1, guid, NULL, log_events ? &logging : &quiet, 0, 0);
+        if (c && log_events) {
+            const char *category = "logEvents";
+            if (fmi2SetDebugLogging(c, 1, 1, &category)) exit(3);
+        }
         if (!c || fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0) || fmi2EnterInitializationMode(c)) exit(3);
         fmi2SetInteger(c, &METHOD_VR, 1, &method);
         fmi2SetBoolean(c, &STOPS_VR, 1, &stops_on);
@@ -165,8 +178,11 @@ int main(int argc, char **argv) {
         warm_up = 1500;
     } else if (scenario && strcmp(scenario, "nostops") == 0) {
         stops_on = 0;
+    } else if (scenario && strcmp(scenario, "logevents") == 0) {
+        if (fmi3) { fprintf(stderr, "CYCLE_SCENARIO=logevents is for FMI 2\n"); return 2; }
+        log_events = 1;
     } else if (scenario && strcmp(scenario, "hover") != 0) {
-        fprintf(stderr, "CYCLE_SCENARIO must be hover, contact or nostops\n");
+        fprintf(stderr, "CYCLE_SCENARIO must be hover, contact, nostops or logevents\n");
         return 2;
     }
     if (fmi3) {
@@ -176,7 +192,7 @@ int main(int argc, char **argv) {
     } else {
         LOAD(fmi2Instantiate); LOAD(fmi2SetupExperiment); LOAD(fmi2EnterInitializationMode);
         LOAD(fmi2ExitInitializationMode); LOAD(fmi2SetReal); LOAD(fmi2GetReal); LOAD(fmi2SetInteger);
-        LOAD(fmi2SetBoolean);
+        LOAD(fmi2SetBoolean); LOAD(fmi2SetDebugLogging);
         LOAD(fmi2DoStep); LOAD(fmi2FreeInstance);
     }
     if (strcmp(mode, "instantiate") == 0) {
