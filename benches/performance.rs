@@ -89,13 +89,7 @@ struct Fmu {
 impl Fmu {
     fn new(method: i32) -> Fmu {
         let guid = std::ffi::CString::new(instantiation_token(ModelKind::Platform, FmiVersion::Fmi2)).unwrap();
-        let cb = fmi2CallbackFunctions {
-            logger: None,
-            allocateMemory: None,
-            freeMemory: None,
-            stepFinished: None,
-            componentEnvironment: std::ptr::null_mut(),
-        };
+        let cb = quiet_callbacks();
         unsafe {
             let c = fmi2Instantiate(c"bench".as_ptr(), fmi2CoSimulation, guid.as_ptr(), std::ptr::null(), &cb, 0, 0);
             fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0);
@@ -218,18 +212,23 @@ fn fmi_do_step(c: &mut Criterion) {
     }
 }
 
-/// `fmi2Instantiate` + `fmi2FreeInstance`, and the FMI 3 Co-Simulation counterpart: the
-/// token check and the model's start values.
-fn instantiation(c: &mut Criterion) {
-    let guid = std::ffi::CString::new(instantiation_token(ModelKind::Platform, FmiVersion::Fmi2)).unwrap();
-    let token = std::ffi::CString::new(instantiation_token(ModelKind::Platform, FmiVersion::Fmi3)).unwrap();
-    let cb = fmi2CallbackFunctions {
+/// FMI 2 callbacks without a logger: nothing is formatted or printed.
+fn quiet_callbacks() -> fmi2CallbackFunctions {
+    fmi2CallbackFunctions {
         logger: None,
         allocateMemory: None,
         freeMemory: None,
         stepFinished: None,
         componentEnvironment: std::ptr::null_mut(),
-    };
+    }
+}
+
+/// `fmi2Instantiate` + `fmi2FreeInstance`, and the FMI 3 Co-Simulation counterpart: the
+/// token check and the model's start values.
+fn instantiation(c: &mut Criterion) {
+    let guid = std::ffi::CString::new(instantiation_token(ModelKind::Platform, FmiVersion::Fmi2)).unwrap();
+    let token = std::ffi::CString::new(instantiation_token(ModelKind::Platform, FmiVersion::Fmi3)).unwrap();
+    let cb = quiet_callbacks();
     c.bench_function("instantiation token (platform, FMI 3)", |b| {
         b.iter(|| instantiation_token(ModelKind::Platform, FmiVersion::Fmi3))
     });

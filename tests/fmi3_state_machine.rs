@@ -9,6 +9,7 @@
 mod common;
 
 use common::fmi3_host::{Host3, Kind};
+use common::rng::Rng;
 use stewart_fmu::fmi3::exports::*;
 use stewart_fmu::fmi3::types::*;
 use stewart_fmu::models::ModelKind;
@@ -514,32 +515,8 @@ fn log_calls_carries_the_arguments() {
     );
 }
 
-/// xorshift64*: deterministic, no dependency.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545F4914F6CDD1D)
-    }
-    fn below(&mut self, n: u64) -> u64 {
-        self.next() % n
-    }
-    fn chance(&mut self, p: f64) -> bool {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64 <= p
-    }
-    fn real(&mut self) -> f64 {
-        match self.below(10) {
-            0 => f64::NAN,
-            1 => f64::INFINITY,
-            2 => -1e300,
-            3 => 0.0,
-            4 => 5900.715,
-            _ => self.below(20001) as f64 - 10000.0,
-        }
-    }
-}
+/// Values a fuzzed Float64 argument takes: the awkward ones half of the time.
+const SPECIALS: [f64; 5] = [f64::NAN, f64::INFINITY, -1e300, 0.0, 5900.715];
 
 #[test]
 fn hundred_thousand_random_fmi3_calls() {
@@ -596,7 +573,7 @@ fn invoke_fuzzed(h: &mut Host3, function: &str, rng: &mut Rng) -> fmi3Status {
     let vrs: Vec<u32> =
         (0..n).map(|_| if rng.chance(0.1) { rng.next() as u32 } else { rng.below(250) as u32 }).collect();
     let nv = if rng.chance(0.8) { rng.below(40) as usize } else { rng.below(4) as usize };
-    let values: Vec<f64> = (0..nv).map(|_| rng.real()).collect();
+    let values: Vec<f64> = (0..nv).map(|_| rng.real(&SPECIALS, 10)).collect();
     let mut out = vec![0.0f64; nv];
     let null = rng.chance(0.05);
     let vp = if null { std::ptr::null() } else { vrs.as_ptr() };
@@ -615,8 +592,8 @@ fn invoke_fuzzed(h: &mut Host3, function: &str, rng: &mut Rng) -> fmi3Status {
                 fmi3SetBoolean(c, vp, n, b.as_ptr(), nv)
             }
             "fmi3DoStep" => {
-                let t = if rng.chance(0.9) { h.time } else { rng.real() };
-                let step = if rng.chance(0.9) { (rng.below(100) + 1) as f64 * 1e-3 } else { rng.real() };
+                let t = if rng.chance(0.9) { h.time } else { rng.real(&SPECIALS, 10) };
+                let step = if rng.chance(0.9) { (rng.below(100) + 1) as f64 * 1e-3 } else { rng.real(&SPECIALS, 10) };
                 let (mut a, mut b, mut e, mut last) = (0u8, 0u8, 0u8, 0.0);
                 let s = fmi3DoStep(c, t, step, fmi3True, &mut a, &mut b, &mut e, &mut last);
                 if s == fmi3OK {
@@ -624,9 +601,9 @@ fn invoke_fuzzed(h: &mut Host3, function: &str, rng: &mut Rng) -> fmi3Status {
                 }
                 s
             }
-            "fmi3SetTime" => fmi3SetTime(c, rng.real()),
+            "fmi3SetTime" => fmi3SetTime(c, rng.real(&SPECIALS, 10)),
             "fmi3SetContinuousStates" | "fmi3GetContinuousStates" | "fmi3GetContinuousStateDerivatives" => {
-                let mut x: Vec<f64> = (0..NX).map(|_| rng.real() * 1e-3).collect();
+                let mut x: Vec<f64> = (0..NX).map(|_| rng.real(&SPECIALS, 10) * 1e-3).collect();
                 let m = if rng.chance(0.8) { NX } else { rng.below(30) as usize };
                 match function {
                     "fmi3SetContinuousStates" => fmi3SetContinuousStates(c, x.as_ptr(), m),

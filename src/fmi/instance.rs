@@ -228,8 +228,10 @@ pub struct Instance {
     pub interface: InterfaceType,
     pub state: ModelState,
     pub logger: Logger,
-    /// Private: every change goes through [`Instance::model_mut`], which invalidates the value
-    /// cache.
+    /// Private, so that every change invalidates the value cache: through
+    /// [`Instance::model_mut`] or [`Instance::replace_model`], or by clearing `fresh` where
+    /// another field is borrowed alongside (`set_real`, `set_boolean`,
+    /// `update_discrete_states`).
     model: AnyModel,
     /// Real values by value reference, for the cache blocks set in `fresh` (see
     /// [`crate::models::FmuModel::cache_block`]).
@@ -285,18 +287,6 @@ fn read_option_f64(r: &mut ByteReader, what: &str) -> Result<Option<f64>, Snapsh
 impl Instance {
     /// `token` is the importer's instantiation token, already matched to `kind`.
     pub fn new(kind: ModelKind, token: &str, version: FmiVersion, interface: InterfaceType, logger: Logger) -> Self {
-        let mut instance = Self::unconfigured(kind, token, version, interface, logger);
-        instance.apply_event_reporting();
-        instance
-    }
-
-    fn unconfigured(
-        kind: ModelKind,
-        token: &str,
-        version: FmiVersion,
-        interface: InterfaceType,
-        logger: Logger,
-    ) -> Self {
         let info = kind.info();
         let table = VariableTable::new(info.groups);
         let model = kind.instantiate();
@@ -305,7 +295,7 @@ impl Instance {
             FmiVersion::Fmi2 => (0..info.states.len()).collect(),
             FmiVersion::Fmi3 => super::description::fmi3_state_order(info),
         };
-        Instance {
+        let mut instance = Instance {
             version,
             kind,
             interface,
@@ -335,7 +325,9 @@ impl Instance {
             co_simulation: CoSimulationOptions::default(),
             fmu_states: Vec::new(),
             access,
-        }
+        };
+        instance.apply_event_reporting();
+        instance
     }
 
     /// The instance as the importer's handle, registered as live; NULL (logged) if the
@@ -656,8 +648,6 @@ impl Instance {
     pub fn get_real(&mut self, vrs: &[u32], values: &mut [f64]) -> Status {
         // One pass: a get that fails leaves its values undefined (FMI 2.0 section 2.1.3,
         // FMI 3.0 section 2.2.6), so nothing needs validating before the first is written.
-        // The loops hold only the fast path, a read from a fresh cache block; the rest is out
-        // of line so that the loops keep their registers.
         if self.version == FmiVersion::Fmi2 && vrs.len() == values.len() {
             // One element per reference: the cache block of each comes from one byte table.
             // Loops without calls (so the tables stay in registers): which blocks the
@@ -695,32 +685,10 @@ impl Instance {
         }
         let mut filled = 0;
         for &vr in vrs {
-            let fast = match self.access.get(vr as usize) {
-                Some(Some(a)) if a.base == BaseType::Real && self.fresh & 1u32.wrapping_shl(a.cache.into()) != 0 => {
-                    Some(a.width)
-                }
-                _ => None,
-            };
-            let width = match fast {
-                Some(width) => {
-                    let first = vr as usize;
-                    match (values.get_mut(filled..filled + width), self.value_cache.get(first..first + width)) {
-                        (Some(out), Some(cached)) => {
-                            // Element by element: a handful of values, no memcpy call.
-                            for (slot, &x) in out.iter_mut().zip(cached) {
-                                *slot = x;
-                            }
-                            width
-                        }
-                        _ => return self.count_error(vrs, BaseType::Real, values.len()),
-                    }
-                }
-                None => match self.read_real(vrs, vr, values, filled) {
-                    Ok(width) => width,
-                    Err(s) => return s,
-                },
-            };
-            filled += width;
+            match self.read_real(vrs, vr, values, filled) {
+                Ok(width) => filled += width,
+                Err(s) => return s,
+            }
         }
         if filled != values.len() {
             return self.count_error(vrs, BaseType::Real, values.len());
@@ -731,9 +699,9 @@ impl Instance {
         Status::Ok
     }
 
-    /// Reads the values of one reference into `values[filled..]` by every path but the fast
-    /// one of [`Instance::get_real`]: filling a stale cache block, reading through the model,
-    /// and the errors. Returns the number of values read.
+    /// Reads the values of one reference into `values[filled..]`: from the value cache
+    /// (filling its block if stale) or through the model. Returns the number of values read.
+    /// Out of line, so that the loops of [`Instance::get_real`] keep their registers.
     #[inline(never)]
     fn read_real(&mut self, vrs: &[u32], vr: u32, values: &mut [f64], filled: usize) -> Result<usize, Status> {
         let a = self.access(vr, BaseType::Real)?;
@@ -753,7 +721,12 @@ impl Instance {
         }
         let first = vr as usize;
         match self.value_cache.get(first..first + out.len()) {
-            Some(cached) => out.copy_from_slice(cached),
+            // Element by element: a handful of values, no memcpy call.
+            Some(cached) => {
+                for (slot, &x) in out.iter_mut().zip(cached) {
+                    *slot = x;
+                }
+            }
             None => out.fill(f64::NAN),
         }
         Ok(a.width)
@@ -830,11 +803,23 @@ impl Instance {
     }
 
     pub fn get_integer(&mut self, vrs: &[u32], values: &mut [i32]) -> Status {
-        if let Err(s) = self.check_values(vrs, BaseType::Integer, values.len(), false) {
+        self.get_elements(vrs, values, BaseType::Integer, |model, r| model.get_integer(r))
+    }
+
+    /// A get of Integer or Boolean values, each read through the model and written as the C
+    /// type of the calling FMI version.
+    fn get_elements<T>(
+        &mut self,
+        vrs: &[u32],
+        values: &mut [T],
+        base: BaseType,
+        read: impl Fn(&mut AnyModel, VariableRef) -> T,
+    ) -> Status {
+        if let Err(s) = self.check_values(vrs, base, values.len(), false) {
             return s;
         }
         for (slot, r) in values.iter_mut().zip(elements(&self.access, vrs)) {
-            *slot = self.model.get_integer(r);
+            *slot = read(&mut self.model, r);
         }
         Status::Ok
     }
@@ -854,23 +839,19 @@ impl Instance {
         Status::Ok
     }
 
-    pub fn get_boolean(&mut self, vrs: &[u32], values: &mut [bool]) -> Status {
-        if let Err(s) = self.check_values(vrs, BaseType::Boolean, values.len(), false) {
-            return s;
-        }
-        for (slot, r) in values.iter_mut().zip(elements(&self.access, vrs)) {
-            *slot = self.model.get_boolean(r);
-        }
-        Status::Ok
+    /// Booleans as the calling version's C type `T`: `encode` turns a value into it.
+    pub fn get_boolean<T>(&mut self, vrs: &[u32], values: &mut [T], encode: impl Fn(bool) -> T) -> Status {
+        self.get_elements(vrs, values, BaseType::Boolean, |model, r| encode(model.get_boolean(r)))
     }
 
-    pub fn set_boolean(&mut self, vrs: &[u32], values: &[bool]) -> Status {
+    /// Booleans given as the calling version's C type `T`: `decode` reads one.
+    pub fn set_boolean<T: Copy>(&mut self, vrs: &[u32], values: &[T], decode: impl Fn(T) -> bool) -> Status {
         if let Err(s) = self.check_values(vrs, BaseType::Boolean, values.len(), true) {
             return s;
         }
         self.fresh = 0;
         for (r, &x) in elements(&self.access, vrs).zip(values) {
-            if let Err(m) = self.model.set_boolean(r, x) {
+            if let Err(m) = self.model.set_boolean(r, decode(x)) {
                 return self.error(&m);
             }
         }
@@ -1064,7 +1045,8 @@ impl Instance {
     }
 
     /// The references of a directional (`adjoint` false: seeds per known, sensitivities per
-    /// unknown) or adjoint derivative (the other way round), with every size and seed checked.
+    /// unknown) or adjoint derivative (the other way round), with the model's capability,
+    /// every size and every seed checked.
     fn derivative_arguments(
         &self,
         unknowns: &[u32],
@@ -1073,6 +1055,13 @@ impl Instance {
         out: &[f64],
         adjoint: bool,
     ) -> Result<(Vec<VariableRef>, Vec<VariableRef>), Status> {
+        let capabilities = self.kind.info().capabilities;
+        if adjoint && !capabilities.adjoint_derivatives {
+            return Err(self.error("not supported by this model (providesAdjointDerivatives=\"false\")"));
+        }
+        if !adjoint && !capabilities.directional_derivatives {
+            return Err(self.error("not supported by this model (providesDirectionalDerivative=\"false\")"));
+        }
         let (u, k) = self.derivative_refs(unknowns, knowns)?;
         let (from, to) = if adjoint {
             (("unknowns", u.len()), ("knowns", k.len()))
@@ -1104,9 +1093,6 @@ impl Instance {
         seeds: &[f64],
         out: &mut [f64],
     ) -> Status {
-        if !self.kind.info().capabilities.directional_derivatives {
-            return self.error("not supported by this model (providesDirectionalDerivative=\"false\")");
-        }
         let (u, k) = match self.derivative_arguments(unknowns, knowns, seeds, out, false) {
             Ok(x) => x,
             Err(s) => return s,
@@ -1126,9 +1112,6 @@ impl Instance {
         seeds: &[f64],
         out: &mut [f64],
     ) -> Status {
-        if !self.kind.info().capabilities.adjoint_derivatives {
-            return self.error("not supported by this model (providesAdjointDerivatives=\"false\")");
-        }
         let (u, k) = match self.derivative_arguments(unknowns, knowns, seeds, out, true) {
             Ok(x) => x,
             Err(s) => return s,
@@ -1274,7 +1257,8 @@ impl Instance {
 
     /// Returns `(enterEventMode, terminateSimulation)`.
     pub fn completed_integrator_step(&mut self) -> (bool, bool) {
-        match self.model_mut().completed_integrator_step() {
+        // A check of the state, no change: the cached values stay.
+        match self.model.completed_integrator_step() {
             Ok(()) => (false, false),
             Err(e) => {
                 self.terminated = true;
@@ -1430,6 +1414,22 @@ impl Instance {
     }
 
     /// The bytes of one of this instance's states.
+    /// `fmi2SerializeFMUstate`/`fmi3SerializeFMUState`: a state's bytes into the importer's
+    /// buffer (`out`, all the bytes it gave), which must be large enough.
+    pub fn serialize_fmu_state(&self, handle: *mut c_void, out: &mut [u8]) -> Status {
+        let bytes = match self.fmu_state_bytes(handle) {
+            Ok(bytes) => bytes,
+            Err(status) => return status,
+        };
+        match out.get_mut(..bytes.len()) {
+            Some(slots) => {
+                slots.copy_from_slice(bytes);
+                Status::Ok
+            }
+            None => self.error(&format!("buffer of {} bytes is too small, the state needs {}", out.len(), bytes.len())),
+        }
+    }
+
     pub fn fmu_state_bytes(&self, handle: *mut c_void) -> Result<&[u8], Status> {
         match self.own_state(handle).and_then(|i| self.fmu_states.get(i)) {
             Some(s) => Ok(&s.bytes),

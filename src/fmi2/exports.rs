@@ -223,14 +223,7 @@ pub unsafe extern "C" fn fmi2GetBoolean(
     boundary!(c, F::GetBoolean, args("vr = {}, value = {}", show(vr, nvr), show(value, nvr)), |inst| {
         let vrs = try_slice!(inst, vr, nvr, "vr");
         let values = try_slice_mut!(inst, value, nvr, "value");
-        let mut flags = vec![false; values.len()];
-        let status = inst.get_boolean(vrs, &mut flags);
-        if status == Status::Ok {
-            for (v, f) in values.iter_mut().zip(flags) {
-                *v = if f { fmi2True } else { fmi2False };
-            }
-        }
-        status
+        inst.get_boolean(vrs, values, |f| if f { fmi2True } else { fmi2False })
     })
 }
 
@@ -294,8 +287,7 @@ pub unsafe extern "C" fn fmi2SetBoolean(
     boundary!(c, F::SetBoolean, args("vr = {}, value = {}", show(vr, nvr), show(value, nvr)), |inst| {
         let vrs = try_slice!(inst, vr, nvr, "vr");
         let values = try_slice!(inst, value, nvr, "value");
-        let flags: Vec<bool> = values.iter().map(|&v| v != fmi2False).collect();
-        inst.set_boolean(vrs, &flags)
+        inst.set_boolean(vrs, values, |v| v != fmi2False)
     })
 }
 
@@ -372,21 +364,8 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
     size: usize,
 ) -> fmi2Status {
     boundary!(c, F::SerializeFMUstate, args("FMUstate = {state:?}, size = {size}"), |inst| {
-        let needed = match inst.fmu_state_bytes(state) {
-            Ok(bytes) => bytes.len(),
-            Err(status) => return status,
-        };
-        if size < needed {
-            return inst.error(&format!("buffer of {size} bytes is too small, the state needs {needed}"));
-        }
-        let out = try_slice_mut!(inst, serialized as *mut u8, needed, "serializedState");
-        match inst.fmu_state_bytes(state) {
-            Ok(bytes) => {
-                out.copy_from_slice(bytes);
-                Status::Ok
-            }
-            Err(status) => status,
-        }
+        let out = try_slice_mut!(inst, serialized as *mut u8, size, "serializedState");
+        inst.serialize_fmu_state(state, out)
     })
 }
 

@@ -260,29 +260,14 @@ impl Fmi2Function {
     }
 }
 
-/// The states FMI 2 has (FMI 3's intermediate update and configuration modes are not among
-/// them).
-pub const FMI2_STATES: [ModelState; 11] = [
-    ModelState::Instantiated,
-    ModelState::InitializationMode,
-    ModelState::StepComplete,
-    ModelState::StepInProgress,
-    ModelState::StepFailed,
-    ModelState::StepCanceled,
-    ModelState::Terminated,
-    ModelState::Error,
-    ModelState::Fatal,
-    ModelState::EventMode,
-    ModelState::ContinuousTimeMode,
-];
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn do_step_only_in_step_complete_and_fatal_allows_nothing() {
-        for state in FMI2_STATES {
+        // Every state, FMI 3's own included (no FMI 2 function is allowed there).
+        for state in ModelState::ALL {
             assert_eq!(
                 Fmi2Function::DoStep.allowed_in(InterfaceType::CoSimulation, state),
                 state == ModelState::StepComplete

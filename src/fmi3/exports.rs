@@ -394,14 +394,7 @@ pub unsafe extern "C" fn fmi3GetBoolean(
         |inst| {
             let vrs = try_slice!(inst, vrs, n_vrs, "valueReferences");
             let values = try_slice_mut!(inst, values, n_values, "values");
-            let mut flags = vec![false; values.len()];
-            let status = inst.get_boolean(vrs, &mut flags);
-            if status == Status::Ok {
-                for (v, f) in values.iter_mut().zip(flags) {
-                    *v = f as fmi3Boolean;
-                }
-            }
-            status
+            inst.get_boolean(vrs, values, |f| f as fmi3Boolean)
         }
     )
 }
@@ -423,8 +416,7 @@ pub unsafe extern "C" fn fmi3SetBoolean(
         |inst| {
             let vrs = try_slice!(inst, vrs, n_vrs, "valueReferences");
             let values = try_slice!(inst, values, n_values, "values");
-            let flags: Vec<bool> = values.iter().map(|&v| v != fmi3False).collect();
-            inst.set_boolean(vrs, &flags)
+            inst.set_boolean(vrs, values, |v| v != fmi3False)
         }
     )
 }
@@ -719,21 +711,8 @@ pub unsafe extern "C" fn fmi3SerializeFMUState(
     size: usize,
 ) -> fmi3Status {
     boundary!(instance, F::SerializeFMUState, args("FMUState = {state:?}, size = {size}"), |inst| {
-        let needed = match inst.fmu_state_bytes(state) {
-            Ok(bytes) => bytes.len(),
-            Err(status) => return status,
-        };
-        if size < needed {
-            return inst.error(&format!("buffer of {size} bytes is too small, the state needs {needed}"));
-        }
-        let out = try_slice_mut!(inst, serialized, needed, "serializedState");
-        match inst.fmu_state_bytes(state) {
-            Ok(bytes) => {
-                out.copy_from_slice(bytes);
-                Status::Ok
-            }
-            Err(status) => status,
-        }
+        let out = try_slice_mut!(inst, serialized, size, "serializedState");
+        inst.serialize_fmu_state(state, out)
     })
 }
 

@@ -72,6 +72,18 @@ pub struct Capabilities {
     pub event_indicators: usize,
 }
 
+impl Capabilities {
+    /// Co-Simulation only, no derivatives, no events: a model without dynamics of its own.
+    pub const NONE: Capabilities = Capabilities {
+        model_exchange: false,
+        directional_derivatives: false,
+        adjoint_derivatives: false,
+        can_interpolate_inputs: false,
+        max_output_derivative_order: 0,
+        event_indicators: 0,
+    };
+}
+
 /// What a completed co-simulation step did.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StepReport {

@@ -20,14 +20,7 @@ pub static INFO: ModelInfo = ModelInfo {
     documentation: "<p>Benchmark floor for the performance comparison: no physics.</p>",
     states: super::platform::variables::STATES,
     // No physics: no derivatives of any kind.
-    capabilities: super::Capabilities {
-        model_exchange: false,
-        directional_derivatives: false,
-        adjoint_derivatives: false,
-        can_interpolate_inputs: false,
-        max_output_derivative_order: 0,
-        event_indicators: 0,
-    },
+    capabilities: super::Capabilities::NONE,
 };
 
 #[derive(Clone, Debug, Default)]

@@ -84,13 +84,16 @@ impl ConfigurationGuard {
         let min_squared = self.min_leg_length * self.min_leg_length;
         let mut bad = false;
         for k in 0..LEG_COUNT {
-            let length_squared =
-                legs.leg[0][k] * legs.leg[0][k] + legs.leg[1][k] * legs.leg[1][k] + legs.leg[2][k] * legs.leg[2][k];
-            let height = state.r.z + legs.arm[2][k] - self.base_plane;
             // No early exit: the six comparisons run side by side; the fault is named below.
-            bad |= !(length_squared > min_squared) | !(height * self.side > 0.0);
+            bad |= !(squared_length(legs, k) > min_squared) | !(self.height(state, legs, k) * self.side > 0.0);
         }
         if bad { Err(self.fault(state, legs)) } else { Ok(()) }
+    }
+
+    /// Height of platform joint `k` above the base plane, m.
+    #[inline(always)]
+    fn height(&self, state: &BodyState, legs: &LegKinematics, k: usize) -> f64 {
+        state.r.z + legs.arm[2][k] - self.base_plane
     }
 
     /// The first leg that fails [`ConfigurationGuard::check_legs`].
@@ -98,12 +101,11 @@ impl ConfigurationGuard {
     fn fault(&self, state: &BodyState, legs: &LegKinematics) -> PhysicsFault {
         let min_squared = self.min_leg_length * self.min_leg_length;
         for k in 0..LEG_COUNT {
-            let length_squared =
-                legs.leg[0][k] * legs.leg[0][k] + legs.leg[1][k] * legs.leg[1][k] + legs.leg[2][k] * legs.leg[2][k];
+            let length_squared = squared_length(legs, k);
             if !(length_squared > min_squared) {
                 return PhysicsFault::LegCollapsed { leg: k + 1, length: length_squared.sqrt() };
             }
-            let height = state.r.z + legs.arm[2][k] - self.base_plane;
+            let height = self.height(state, legs, k);
             if !(height * self.side > 0.0) {
                 return PhysicsFault::JointBelowBase { leg: k + 1, height };
             }
@@ -116,4 +118,10 @@ impl ConfigurationGuard {
     pub fn condition_number(stand: &Stand, state: &BodyState) -> f64 {
         ForceMomentMatrix::new(stand, &LegGeometry::new(stand, state)).condition_number()
     }
+}
+
+/// `|a_k - B_k|²`, m² (no square root).
+#[inline(always)]
+fn squared_length(legs: &LegKinematics, k: usize) -> f64 {
+    legs.leg[0][k] * legs.leg[0][k] + legs.leg[1][k] * legs.leg[1][k] + legs.leg[2][k] * legs.leg[2][k]
 }

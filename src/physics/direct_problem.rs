@@ -131,12 +131,10 @@ pub fn singular_legs(stand: &Stand, legs: &LegGeometry) -> [bool; LEG_COUNT] {
 pub fn force_moment_determinant(legs: &LegKinematics, ell: f64) -> f64 {
     let mut a = [[0.0f64; 6]; 6];
     let inv_ell = 1.0 / ell;
-    // Row by row over the legs (vector registers), the arithmetic of `LegKinematics::direction`
-    // and of nalgebra's cross product.
+    // Row by row over the legs (vector registers), the arithmetic of nalgebra's cross product.
+    let directions = legs.directions();
     for c in 0..3 {
-        for k in 0..LEG_COUNT {
-            a[c][k] = if legs.length[k] > 0.0 { legs.leg[c][k] * legs.inverse_length[k] } else { 0.0 };
-        }
+        a[c] = std::array::from_fn(|k| directions[c][k]);
     }
     let arm = &legs.arm;
     for k in 0..LEG_COUNT {

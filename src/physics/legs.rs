@@ -115,10 +115,9 @@ impl JointArrays {
         let mut rates = [0.0; LANES];
         for k in 0..LANES {
             let mut rate = 0.0;
-            let carried = legs.length[k] > 0.0;
             for c in 0..3 {
                 let velocity = state.v[c] + (d1[c] * a[0][k] + d2[c] * a[1][k] + d3[c] * a[2][k]);
-                let n = if carried { legs.leg[c][k] * legs.inverse_length[k] } else { 0.0 };
+                let n = legs.direction_component(c, k);
                 rate = if c == 0 { n * velocity } else { rate + n * velocity };
             }
             rates[k] = rate;
@@ -148,21 +147,16 @@ impl LegKinematics {
         std::array::from_fn(|k| self.length[k])
     }
 
-    /// Unit direction of leg `k` (zero for a collapsed leg, never NaN), as
+    /// Unit leg directions `[component][lane]` (zero for a collapsed leg, never NaN), as
     /// [`LegGeometry::direction`].
     #[inline(always)]
-    pub fn direction(&self, k: usize) -> [f64; 3] {
-        if self.length[k] > 0.0 {
-            let s = self.inverse_length[k];
-            [self.leg[0][k] * s, self.leg[1][k] * s, self.leg[2][k] * s]
-        } else {
-            [0.0; 3]
-        }
+    pub fn directions(&self) -> [[f64; LANES]; 3] {
+        std::array::from_fn(|c| std::array::from_fn(|k| self.direction_component(c, k)))
     }
 
-    /// The arm of leg `k`.
+    /// Component `c` of the unit direction of lane `k`: the one definition of a direction.
     #[inline(always)]
-    pub fn arm(&self, k: usize) -> Vector3<f64> {
-        Vector3::new(self.arm[0][k], self.arm[1][k], self.arm[2][k])
+    fn direction_component(&self, c: usize, k: usize) -> f64 {
+        if self.length[k] > 0.0 { self.leg[c][k] * self.inverse_length[k] } else { 0.0 }
     }
 }

@@ -11,11 +11,11 @@ use crate::physics::configuration::ConfigurationGuard;
 use crate::physics::direct_problem::{force_moment_determinant, singular_legs};
 use crate::physics::end_stops::{EndStops, STROKE_LIMITS};
 use crate::physics::error::{ParameterError, PhysicsFault};
-use crate::physics::forces::{HeldForces, LegForceLaw};
+use crate::physics::forces::LegForceLaw;
 use crate::physics::legs::{LegGeometry, LegKinematics};
 use crate::physics::projection::project_onto_constraints;
 use crate::physics::special_form::SpecialForm;
-use crate::physics::stand::{LEG_COUNT, Stand};
+use crate::physics::stand::Stand;
 
 /// Length of the simulation state: the 24 special-form coordinates, then the work of the
 /// actuator forces and the energy taken by the stops' damping (quadratures integrated with
@@ -349,10 +349,10 @@ impl PlatformSimulation {
         let was = self.track_singularities || self.stop_at_singularity;
         self.track_singularities = on;
         if on && !was && self.integrator.sides.known {
-            let mut g = [0.0; switching::COUNT];
-            self.dynamics(&HeldForces::constant([0.0; LEG_COUNT])).switching_values(body(&self.state), &mut g);
+            let legs = self.form.joints.kinematics(&self.body_state());
+            let determinant = force_moment_determinant(&legs, self.guard.characteristic_length);
             let bit = 1 << switching::DETERMINANT;
-            let side = if g[switching::DETERMINANT] > 0.0 { bit } else { 0 };
+            let side = if determinant > 0.0 { bit } else { 0 };
             self.integrator.sides.bits = (self.integrator.sides.bits & !bit) | side;
         }
     }

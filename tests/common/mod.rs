@@ -4,6 +4,7 @@
 pub mod fmi3_host;
 pub mod fmi_host;
 pub mod newton_euler;
+pub mod rng;
 
 use nalgebra::{Matrix3, Vector3};
 use stewart_fmu::integration::SolverSettings;

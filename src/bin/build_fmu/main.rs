@@ -83,15 +83,17 @@ fn run() -> Result<(), String> {
     Ok(())
 }
 
-fn build_one(kind: ModelKind, root: &Path, library: &Path, out_dir: &Path, update: bool) -> Result<(), String> {
-    let id = kind.info().model_identifier;
-    let source = root.join("modelDescription").join(format!("{id}.xml"));
-    let generated = model_description_xml(kind, FmiVersion::Fmi2);
+/// The committed model description at `source`, which must equal the one `generated` from
+/// the code (with `update`, it is written first).
+fn committed_description(source: &Path, generated: &str, update: bool) -> Result<String, String> {
     if update {
-        std::fs::write(&source, &generated).map_err(|e| format!("cannot write {}: {e}", source.display()))?;
+        if let Some(dir) = source.parent() {
+            std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+        }
+        std::fs::write(source, generated).map_err(|e| format!("cannot write {}: {e}", source.display()))?;
         println!("build-fmu: wrote {}", source.display());
     }
-    let committed = std::fs::read_to_string(&source).map_err(|e| format!("cannot read {}: {e}", source.display()))?;
+    let committed = std::fs::read_to_string(source).map_err(|e| format!("cannot read {}: {e}", source.display()))?;
     if committed != generated {
         return Err(format!(
             "{} is out of date with the variable tables in the code (run `cargo run --release --bin build-fmu -- \
@@ -99,6 +101,13 @@ fn build_one(kind: ModelKind, root: &Path, library: &Path, out_dir: &Path, updat
             source.display()
         ));
     }
+    Ok(committed)
+}
+
+fn build_one(kind: ModelKind, root: &Path, library: &Path, out_dir: &Path, update: bool) -> Result<(), String> {
+    let id = kind.info().model_identifier;
+    let source = root.join("modelDescription").join(format!("{id}.xml"));
+    let committed = committed_description(&source, &model_description_xml(kind, FmiVersion::Fmi2), update)?;
     let summary = xml_check::check(&committed).map_err(|e| format!("{}: {e}", source.display()))?;
     let guid = instantiation_token(kind, FmiVersion::Fmi2);
     if summary.guid != guid {
@@ -124,22 +133,7 @@ fn build_one(kind: ModelKind, root: &Path, library: &Path, out_dir: &Path, updat
 fn build_one_fmi3(kind: ModelKind, root: &Path, library: &Path, out_dir: &Path, update: bool) -> Result<(), String> {
     let id = kind.info().model_identifier;
     let source = root.join("modelDescription").join("fmi3").join(format!("{id}.xml"));
-    let generated = model_description_xml(kind, FmiVersion::Fmi3);
-    if update {
-        if let Some(dir) = source.parent() {
-            std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
-        }
-        std::fs::write(&source, &generated).map_err(|e| format!("cannot write {}: {e}", source.display()))?;
-        println!("build-fmu: wrote {}", source.display());
-    }
-    let committed = std::fs::read_to_string(&source).map_err(|e| format!("cannot read {}: {e}", source.display()))?;
-    if committed != generated {
-        return Err(format!(
-            "{} is out of date with the variable tables in the code (run `cargo run --release --bin build-fmu -- \
-             --update-model-description` and review the diff)",
-            source.display()
-        ));
-    }
+    let committed = committed_description(&source, &model_description_xml(kind, FmiVersion::Fmi3), update)?;
     let summary = xml_check3::check(&committed).map_err(|e| format!("{}: {e}", source.display()))?;
     let token = instantiation_token(kind, FmiVersion::Fmi3);
     if summary.token != token {

@@ -30,7 +30,8 @@ struct Variable {
     derivative: Option<usize>,
 }
 
-fn attributes(e: &BytesStart) -> Result<HashMap<String, String>, String> {
+/// An element's attributes by name; a duplicate is an error (both FMI versions' checks).
+pub fn attributes(e: &BytesStart) -> Result<HashMap<String, String>, String> {
     let mut out = HashMap::new();
     for a in e.attributes() {
         let a = a.map_err(|err| format!("bad attribute: {err}"))?;

@@ -4,7 +4,9 @@
 use std::collections::{BTreeSet, HashMap, HashSet};
 
 use quick_xml::Reader;
-use quick_xml::events::{BytesStart, Event};
+use quick_xml::events::Event;
+
+use super::xml_check::attributes;
 
 pub struct Summary {
     pub token: String,
@@ -33,22 +35,6 @@ impl Variable {
     fn size(&self) -> usize {
         self.dimensions.iter().product()
     }
-}
-
-fn attributes(e: &BytesStart) -> Result<HashMap<String, String>, String> {
-    let mut out = HashMap::new();
-    for a in e.attributes() {
-        let a = a.map_err(|err| format!("bad attribute: {err}"))?;
-        let key = a.key.as_ref().to_string();
-        let value = a
-            .normalized_value(quick_xml::XmlVersion::Implicit1_0)
-            .map_err(|err| format!("bad attribute value: {err}"))?
-            .into_owned();
-        if out.insert(key.clone(), value).is_some() {
-            return Err(format!("duplicate attribute {key}"));
-        }
-    }
-    Ok(out)
 }
 
 const VARIABLE_ELEMENTS: [&str; 3] = ["Float64", "Int32", "Boolean"];

@@ -35,14 +35,7 @@ pub static INFO: ModelInfo = ModelInfo {
     states: &[],
     // No dynamics: outputs follow the inputs at the communication points; input and output
     // derivatives are not provided.
-    capabilities: super::Capabilities {
-        model_exchange: false,
-        directional_derivatives: false,
-        adjoint_derivatives: false,
-        can_interpolate_inputs: false,
-        max_output_derivative_order: 0,
-        event_indicators: 0,
-    },
+    capabilities: super::Capabilities::NONE,
 };
 
 /// Default feedback gain, N/m: with the default stand and a 1 ms communication step it keeps

@@ -418,7 +418,7 @@ impl FmuModel for PlatformModel {
     fn cache_block(&self, group: usize) -> Option<u8> {
         match group {
             group::L | group::LDOT => Some(cache_block::LEGS),
-            g if variables::is_output_or_derivative(g) && OUTPUT_GROUPS.contains(&g) => Some(cache_block::OUTPUTS),
+            g if OUTPUT_GROUPS.contains(&g) => Some(cache_block::OUTPUTS),
             _ => None,
         }
     }
