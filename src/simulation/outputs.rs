@@ -67,7 +67,7 @@ impl PlatformOutputs {
         let ldot = legs.length_rates(stand, &state);
         let mut stop_force = [0.0; LEG_COUNT];
         let mut stop_energy = 0.0;
-        if let Some(stops) = &form.stops {
+        if let Some(stops) = form.stops() {
             for k in 0..LEG_COUNT {
                 stop_force[k] = stops.contact(k, legs.length[k], ldot[k]).force;
             }
@@ -137,7 +137,7 @@ impl PlatformOutputs {
         }
         let mut dstop = [0.0; LEG_COUNT];
         let mut dstop_energy = 0.0;
-        if let Some(stops) = &form.stops {
+        if let Some(stops) = form.stops() {
             for k in 0..LEG_COUNT {
                 dstop[k] = stops.contact_tangent(k, out.l[k], out.ldot[k], dl[k], dldot[k]).force;
             }

@@ -139,7 +139,7 @@ impl<L: LegForceLaw + ?Sized> PlatformDynamics<'_, L> {
 
     #[inline(always)]
     fn switching_of(&self, legs: &LegKinematics, g: &mut [f64], with_determinant: bool) {
-        match &self.form.stops {
+        match self.form.stops() {
             Some(stops) => stops.stroke_margins(&legs.lengths(), g),
             None => {
                 for x in g.iter_mut().take(STROKE_LIMITS) {
@@ -329,7 +329,7 @@ impl PlatformSimulation {
             let legs = LegGeometry::new(self.stand(), &self.body_state());
             s.validate_initial_lengths(self.stand(), &legs.length)?;
         }
-        self.form.stops = stops;
+        self.form.set_end_stops(stops);
         self.integrator.sides = SwitchingSides::default();
         Ok(self)
     }

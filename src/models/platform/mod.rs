@@ -801,8 +801,8 @@ impl FmuModel for PlatformModel {
                 // The stand and stabilisation equal the parameters'; the guard, integrator,
                 // time and state are the simulation's own.
                 w.stand(sim.stand());
-                w.bool(sim.form.stops.is_some());
-                save_stops(w, &sim.form.stops.unwrap_or_default());
+                w.bool(sim.form.stops().is_some());
+                save_stops(w, &sim.form.stops().copied().unwrap_or_default());
                 w.bool(sim.stop_at_singularity);
                 w.i32(sim.stabilisation.code());
                 w.f64(sim.form.baumgarte_rate);

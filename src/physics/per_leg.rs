@@ -1,0 +1,286 @@
+//! A value per leg, the six legs side by side: [`PerLeg`].
+//!
+//! The right-hand side computes the six legs with the same arithmetic, so it is written once
+//! over `PerLeg` values. On x86-64 a `PerLeg` is three pairs in SSE2 registers, which every
+//! x86-64 processor has (nothing is chosen at run time; the integrators' AVX2 copy encodes the
+//! same operations with VEX). Elsewhere it is six plain values. Every operation is per leg and
+//! exactly rounded (IEEE 754 `+ - * / sqrt`), and [`PerLeg::sum`] adds in one fixed order, so
+//! both forms give the same bits.
+//!
+//! Writing the lanes out by hand, rather than leaving loops over arrays to the compiler, is
+//! what keeps them in registers: the compiler's vectoriser splits such loops into scalars and
+//! shuffles as soon as a branch or a narrower array appears (measured: docs/model.md §9).
+
+use super::stand::LEG_COUNT;
+
+#[cfg(target_arch = "x86_64")]
+mod lanes {
+    use core::arch::x86_64::{
+        __m128d, _mm_add_pd, _mm_and_pd, _mm_cmpgt_pd, _mm_cmplt_pd, _mm_cvtsd_f64, _mm_div_pd, _mm_movemask_pd,
+        _mm_mul_pd, _mm_or_pd, _mm_set_pd, _mm_set1_pd, _mm_setzero_pd, _mm_sqrt_pd, _mm_sub_pd, _mm_unpackhi_pd,
+    };
+
+    /// Legs 1-2, 3-4 and 5-6 in three SSE2 registers.
+    #[derive(Clone, Copy)]
+    pub struct Lanes([__m128d; 3]);
+
+    impl Lanes {
+        #[inline(always)]
+        pub fn new(x: &[f64; 6]) -> Self {
+            // SAFETY (here and below): SSE2 is part of the x86-64 baseline.
+            unsafe { Lanes([_mm_set_pd(x[1], x[0]), _mm_set_pd(x[3], x[2]), _mm_set_pd(x[5], x[4])]) }
+        }
+
+        #[inline(always)]
+        pub fn splat(x: f64) -> Self {
+            Lanes([unsafe { _mm_set1_pd(x) }; 3])
+        }
+
+        #[inline(always)]
+        fn map2(self, other: Self, op: impl Fn(__m128d, __m128d) -> __m128d) -> Self {
+            let (a, b) = (self.0, other.0);
+            Lanes([op(a[0], b[0]), op(a[1], b[1]), op(a[2], b[2])])
+        }
+
+        #[inline(always)]
+        pub fn add(self, other: Self) -> Self {
+            self.map2(other, |a, b| unsafe { _mm_add_pd(a, b) })
+        }
+
+        #[inline(always)]
+        pub fn sub(self, other: Self) -> Self {
+            self.map2(other, |a, b| unsafe { _mm_sub_pd(a, b) })
+        }
+
+        #[inline(always)]
+        pub fn mul(self, other: Self) -> Self {
+            self.map2(other, |a, b| unsafe { _mm_mul_pd(a, b) })
+        }
+
+        #[inline(always)]
+        pub fn div(self, other: Self) -> Self {
+            self.map2(other, |a, b| unsafe { _mm_div_pd(a, b) })
+        }
+
+        #[inline(always)]
+        pub fn sqrt(self) -> Self {
+            let a = self.0;
+            unsafe { Lanes([_mm_sqrt_pd(a[0]), _mm_sqrt_pd(a[1]), _mm_sqrt_pd(a[2])]) }
+        }
+
+        /// `value` where `self > 0`, else 0 (also where `self` is NaN).
+        #[inline(always)]
+        pub fn where_positive(self, value: Self) -> Self {
+            self.map2(value, |a, v| unsafe { _mm_and_pd(_mm_cmpgt_pd(a, _mm_setzero_pd()), v) })
+        }
+
+        /// Whether any lane lies below `lower` or above `upper`.
+        #[inline(always)]
+        pub fn any_outside(self, lower: Self, upper: Self) -> bool {
+            unsafe {
+                let outside =
+                    |k: usize| _mm_or_pd(_mm_cmplt_pd(self.0[k], lower.0[k]), _mm_cmpgt_pd(self.0[k], upper.0[k]));
+                _mm_movemask_pd(_mm_or_pd(_mm_or_pd(outside(0), outside(1)), outside(2))) != 0
+            }
+        }
+
+        /// `((x1 + x3) + x5) + ((x2 + x4) + x6)`.
+        #[inline(always)]
+        pub fn sum(self) -> f64 {
+            unsafe {
+                let s = _mm_add_pd(_mm_add_pd(self.0[0], self.0[1]), self.0[2]);
+                _mm_cvtsd_f64(s) + _mm_cvtsd_f64(_mm_unpackhi_pd(s, s))
+            }
+        }
+
+        #[inline(always)]
+        pub fn to_array(self) -> [f64; 6] {
+            let lane =
+                |k: usize| unsafe { (_mm_cvtsd_f64(self.0[k]), _mm_cvtsd_f64(_mm_unpackhi_pd(self.0[k], self.0[k]))) };
+            let ([x0, x1], [x2, x3], [x4, x5]) = (lane(0).into(), lane(1).into(), lane(2).into());
+            [x0, x1, x2, x3, x4, x5]
+        }
+    }
+}
+
+#[cfg(not(target_arch = "x86_64"))]
+mod lanes {
+    /// Six plain values, with the operations and the order of the sum of the x86-64 form.
+    #[derive(Clone, Copy)]
+    pub struct Lanes([f64; 6]);
+
+    impl Lanes {
+        #[inline(always)]
+        pub fn new(x: &[f64; 6]) -> Self {
+            Lanes(*x)
+        }
+
+        #[inline(always)]
+        pub fn splat(x: f64) -> Self {
+            Lanes([x; 6])
+        }
+
+        #[inline(always)]
+        fn map2(self, other: Self, op: impl Fn(f64, f64) -> f64) -> Self {
+            Lanes(std::array::from_fn(|k| op(self.0[k], other.0[k])))
+        }
+
+        #[inline(always)]
+        pub fn add(self, other: Self) -> Self {
+            self.map2(other, |a, b| a + b)
+        }
+
+        #[inline(always)]
+        pub fn sub(self, other: Self) -> Self {
+            self.map2(other, |a, b| a - b)
+        }
+
+        #[inline(always)]
+        pub fn mul(self, other: Self) -> Self {
+            self.map2(other, |a, b| a * b)
+        }
+
+        #[inline(always)]
+        pub fn div(self, other: Self) -> Self {
+            self.map2(other, |a, b| a / b)
+        }
+
+        #[inline(always)]
+        pub fn sqrt(self) -> Self {
+            Lanes(self.0.map(f64::sqrt))
+        }
+
+        #[inline(always)]
+        pub fn where_positive(self, value: Self) -> Self {
+            self.map2(value, |a, v| if a > 0.0 { v } else { 0.0 })
+        }
+
+        #[inline(always)]
+        pub fn any_outside(self, lower: Self, upper: Self) -> bool {
+            (0..6).any(|k| self.0[k] < lower.0[k] || self.0[k] > upper.0[k])
+        }
+
+        #[inline(always)]
+        pub fn sum(self) -> f64 {
+            let x = self.0;
+            ((x[0] + x[2]) + x[4]) + ((x[1] + x[3]) + x[5])
+        }
+
+        #[inline(always)]
+        pub fn to_array(self) -> [f64; 6] {
+            self.0
+        }
+    }
+}
+
+/// One value per leg (legs 1..6), for arithmetic on all six at once. Every operation acts leg
+/// by leg with the rounding of the scalar operation.
+#[derive(Clone, Copy)]
+pub struct PerLeg(lanes::Lanes);
+
+const _: () = assert!(LEG_COUNT == 6, "PerLeg holds six legs");
+
+impl PerLeg {
+    #[inline(always)]
+    pub fn new(per_leg: &[f64; LEG_COUNT]) -> Self {
+        PerLeg(lanes::Lanes::new(per_leg))
+    }
+
+    /// The first six lanes of a row over [`super::legs::LANES`].
+    #[inline(always)]
+    pub fn from_lanes(row: &[f64; super::legs::LANES]) -> Self {
+        let mut six = [0.0; LEG_COUNT];
+        six.copy_from_slice(&row[..LEG_COUNT]);
+        PerLeg::new(&six)
+    }
+
+    /// The same value for every leg.
+    #[inline(always)]
+    pub fn splat(x: f64) -> Self {
+        PerLeg(lanes::Lanes::splat(x))
+    }
+
+    #[inline(always)]
+    pub fn sqrt(self) -> Self {
+        PerLeg(self.0.sqrt())
+    }
+
+    /// `value` for the legs where `self > 0`, 0 for the others (and where `self` is NaN).
+    #[inline(always)]
+    pub fn where_positive(self, value: Self) -> Self {
+        PerLeg(self.0.where_positive(value.0))
+    }
+
+    /// Whether any leg lies below its `lower` or above its `upper` bound.
+    #[inline(always)]
+    pub fn any_outside(self, lower: Self, upper: Self) -> bool {
+        self.0.any_outside(lower.0, upper.0)
+    }
+
+    /// The sum over the legs, in the fixed order `((x1 + x3) + x5) + ((x2 + x4) + x6)`.
+    #[inline(always)]
+    pub fn sum(self) -> f64 {
+        self.0.sum()
+    }
+
+    #[inline(always)]
+    pub fn to_array(self) -> [f64; LEG_COUNT] {
+        self.0.to_array()
+    }
+
+    /// The cross product `a x b` of two vectors given per leg by their components.
+    #[inline(always)]
+    pub fn cross(a: &[PerLeg; 3], b: &[PerLeg; 3]) -> [PerLeg; 3] {
+        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    }
+}
+
+macro_rules! per_leg_operator {
+    ($trait:ident, $method:ident) => {
+        impl std::ops::$trait for PerLeg {
+            type Output = PerLeg;
+            #[inline(always)]
+            fn $method(self, other: PerLeg) -> PerLeg {
+                PerLeg(self.0.$method(other.0))
+            }
+        }
+    };
+}
+
+per_leg_operator!(Add, add);
+per_leg_operator!(Sub, sub);
+per_leg_operator!(Mul, mul);
+per_leg_operator!(Div, div);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every operation equals the scalar one leg by leg, to the bit, and the sum adds in its
+    /// documented order.
+    #[test]
+    fn operations_are_the_scalar_ones_leg_by_leg() {
+        let a = [1.5, -2.25, 3.0e-7, 4.0e8, 0.1, f64::NAN];
+        let b = [0.3, 7.0, -1.0e-3, 2.5, 0.0, 1.0];
+        let (pa, pb) = (PerLeg::new(&a), PerLeg::new(&b));
+        let bits = |x: [f64; 6]| x.map(f64::to_bits);
+        let scalar = |op: fn(f64, f64) -> f64| bits(std::array::from_fn(|k| op(a[k], b[k])));
+        assert_eq!(bits((pa + pb).to_array()), scalar(|x, y| x + y));
+        assert_eq!(bits((pa - pb).to_array()), scalar(|x, y| x - y));
+        assert_eq!(bits((pa * pb).to_array()), scalar(|x, y| x * y));
+        assert_eq!(bits((pa / pb).to_array()), scalar(|x, y| x / y));
+        assert_eq!(bits(pb.sqrt().to_array()), bits(b.map(f64::sqrt)));
+        assert_eq!(bits(pa.where_positive(pb).to_array()), scalar(|x, y| if x > 0.0 { y } else { 0.0 }));
+        assert_eq!(pb.sum().to_bits(), (((b[0] + b[2]) + b[4]) + ((b[1] + b[3]) + b[5])).to_bits());
+        assert_eq!(PerLeg::splat(2.5).to_array(), [2.5; 6]);
+        let (lo, hi) = (PerLeg::splat(-1.0), PerLeg::splat(1.0));
+        assert!(!PerLeg::new(&[0.0, 0.5, -0.5, 1.0, -1.0, 0.9]).any_outside(lo, hi));
+        for k in 0..6 {
+            for x in [-1.5, 1.5] {
+                let mut v = [0.0; 6];
+                v[k] = x;
+                assert!(PerLeg::new(&v).any_outside(lo, hi), "leg {k} at {x}");
+            }
+        }
+    }
+}
