@@ -186,14 +186,6 @@ impl PerLeg {
         PerLeg(lanes::Lanes::new(per_leg))
     }
 
-    /// The first six lanes of a row over [`super::legs::LANES`].
-    #[inline(always)]
-    pub fn from_lanes(row: &[f64; super::legs::LANES]) -> Self {
-        let mut six = [0.0; LEG_COUNT];
-        six.copy_from_slice(&row[..LEG_COUNT]);
-        PerLeg::new(&six)
-    }
-
     /// The same value for every leg.
     #[inline(always)]
     pub fn splat(x: f64) -> Self {

@@ -19,7 +19,7 @@ use nalgebra::Vector3;
 use super::body_state::{BodyState, STATE_DIM, StateVector, layout};
 use super::end_stops::EndStops;
 use super::forces::LegForceLaw;
-use super::legs::{JointArrays, LegGeometry, LegKinematics};
+use super::legs::{JointArrays, LegGeometry, LegKinematics, LegLanes};
 use super::per_leg::PerLeg;
 use super::stand::{LEG_COUNT, Stand};
 
@@ -308,13 +308,7 @@ impl SpecialForm {
     /// line, only when a leg is outside its stroke.
     #[inline(always)]
     fn wrench_of(&self, y: &StateVector, state: &BodyState, u: &[f64; LEG_COUNT]) -> LegWrench {
-        let (platform, base) = (&self.joints.platform, &self.joints.base);
-        let [e1, e2, e3] = &state.e;
-        let a = [0, 1, 2].map(|c| PerLeg::from_lanes(&platform[c]));
-        let arm =
-            [0, 1, 2].map(|c| PerLeg::splat(e1[c]) * a[0] + PerLeg::splat(e2[c]) * a[1] + PerLeg::splat(e3[c]) * a[2]);
-        let leg = [0, 1, 2].map(|c| PerLeg::splat(state.r[c]) + arm[c] - PerLeg::from_lanes(&base[c]));
-        let length = (leg[0] * leg[0] + leg[1] * leg[1] + leg[2] * leg[2]).sqrt();
+        let LegLanes { arm, leg, length } = self.joints.legs(state);
         let scale = length.where_positive(PerLeg::new(u) / length);
         let f = leg.map(|x| x * scale);
         let moment = PerLeg::cross(&arm, &f);
