@@ -16,8 +16,9 @@ use super::stand::LEG_COUNT;
 #[cfg(target_arch = "x86_64")]
 mod lanes {
     use core::arch::x86_64::{
-        __m128d, _mm_add_pd, _mm_and_pd, _mm_cmpgt_pd, _mm_cmplt_pd, _mm_cvtsd_f64, _mm_div_pd, _mm_movemask_pd,
-        _mm_mul_pd, _mm_or_pd, _mm_set_pd, _mm_set1_pd, _mm_setzero_pd, _mm_sqrt_pd, _mm_sub_pd, _mm_unpackhi_pd,
+        __m128d, _mm_add_pd, _mm_and_pd, _mm_andnot_pd, _mm_cmpgt_pd, _mm_cmplt_pd, _mm_cvtsd_f64, _mm_div_pd,
+        _mm_max_pd, _mm_min_pd, _mm_movemask_pd, _mm_mul_pd, _mm_or_pd, _mm_set_pd, _mm_set1_pd, _mm_setzero_pd,
+        _mm_sqrt_pd, _mm_sub_pd, _mm_unpackhi_pd,
     };
 
     /// Legs 1-2, 3-4 and 5-6 in three SSE2 registers.
@@ -72,6 +73,23 @@ mod lanes {
         #[inline(always)]
         pub fn where_positive(self, value: Self) -> Self {
             self.map2(value, |a, v| unsafe { _mm_and_pd(_mm_cmpgt_pd(a, _mm_setzero_pd()), v) })
+        }
+
+        /// `positive` where `self > 0`, else `otherwise`.
+        #[inline(always)]
+        pub fn select_positive(self, positive: Self, otherwise: Self) -> Self {
+            let (a, p, o) = (self.0, positive.0, otherwise.0);
+            let lane = |k: usize| unsafe {
+                let mask = _mm_cmpgt_pd(a[k], _mm_setzero_pd());
+                _mm_or_pd(_mm_and_pd(mask, p[k]), _mm_andnot_pd(mask, o[k]))
+            };
+            Lanes([lane(0), lane(1), lane(2)])
+        }
+
+        /// `self` limited to `[lower, upper]` (finite values; `lower <= upper`).
+        #[inline(always)]
+        pub fn clamp(self, lower: Self, upper: Self) -> Self {
+            self.map2(upper, |a, b| unsafe { _mm_min_pd(a, b) }).map2(lower, |a, b| unsafe { _mm_max_pd(a, b) })
         }
 
         /// Whether any lane lies below `lower` or above `upper`.
@@ -156,6 +174,16 @@ mod lanes {
         }
 
         #[inline(always)]
+        pub fn select_positive(self, positive: Self, otherwise: Self) -> Self {
+            Lanes(std::array::from_fn(|k| if self.0[k] > 0.0 { positive.0[k] } else { otherwise.0[k] }))
+        }
+
+        #[inline(always)]
+        pub fn clamp(self, lower: Self, upper: Self) -> Self {
+            self.map2(upper, f64::min).map2(lower, f64::max)
+        }
+
+        #[inline(always)]
         pub fn any_outside(self, lower: Self, upper: Self) -> bool {
             (0..6).any(|k| self.0[k] < lower.0[k] || self.0[k] > upper.0[k])
         }
@@ -201,6 +229,19 @@ impl PerLeg {
     #[inline(always)]
     pub fn where_positive(self, value: Self) -> Self {
         PerLeg(self.0.where_positive(value.0))
+    }
+
+    /// `positive` for the legs where `self > 0`, `otherwise` for the others.
+    #[inline(always)]
+    pub fn select_positive(self, positive: Self, otherwise: Self) -> Self {
+        PerLeg(self.0.select_positive(positive.0, otherwise.0))
+    }
+
+    /// Each leg's value limited to `[lower, upper]` (for finite values with `lower <= upper`,
+    /// as `f64::clamp`).
+    #[inline(always)]
+    pub fn clamp(self, lower: Self, upper: Self) -> Self {
+        PerLeg(self.0.clamp(lower.0, upper.0))
     }
 
     /// Whether any leg lies below its `lower` or above its `upper` bound.
@@ -263,6 +304,10 @@ mod tests {
         assert_eq!(bits((pa / pb).to_array()), scalar(|x, y| x / y));
         assert_eq!(bits(pb.sqrt().to_array()), bits(b.map(f64::sqrt)));
         assert_eq!(bits(pa.where_positive(pb).to_array()), scalar(|x, y| if x > 0.0 { y } else { 0.0 }));
+        assert_eq!(bits(pa.select_positive(pa, pb).to_array()), scalar(|x, y| if x > 0.0 { x } else { y }));
+        let (lo, hi) = (PerLeg::splat(-1.0), PerLeg::splat(1.0));
+        let finite = PerLeg::new(&[1.5, -2.25, 3.0e-7, -0.0, 0.99, -1.0]);
+        assert_eq!(bits(finite.clamp(lo, hi).to_array()), bits(finite.to_array().map(|x| x.clamp(-1.0, 1.0))));
         assert_eq!(pb.sum().to_bits(), (((b[0] + b[2]) + b[4]) + ((b[1] + b[3]) + b[5])).to_bits());
         assert_eq!(PerLeg::splat(2.5).to_array(), [2.5; 6]);
         let (lo, hi) = (PerLeg::splat(-1.0), PerLeg::splat(1.0));
