@@ -313,6 +313,8 @@ impl SpecialForm {
         let f = leg.map(|x| x * scale);
         let moment = PerLeg::cross(&arm, &f);
         let stop = if length.any_outside(PerLeg::new(&self.stroke[0]), PerLeg::new(&self.stroke[1])) {
+            // Contact is rare: keep the hot path's registers for the free motion.
+            std::hint::cold_path();
             self.stop_wrench(state, &arm, &leg, length)
         } else {
             StopWrench::default()
