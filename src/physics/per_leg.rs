@@ -9,7 +9,9 @@
 //!
 //! Writing the lanes out by hand, rather than leaving loops over arrays to the compiler, is
 //! what keeps them in registers: the compiler's vectoriser splits such loops into scalars and
-//! shuffles as soon as a branch or a narrower array appears (measured: docs/model.md §9).
+//! shuffles as soon as a branch or a padded lane appears. Measured with callgrind on the RK4
+//! co-simulation cycle: loops over eight-lane arrays 5,166 instructions, the same right-hand
+//! side over `PerLeg` 4,966, and plain eight-lane loops for every operation 6,263.
 
 use super::stand::LEG_COUNT;
 
