@@ -115,13 +115,12 @@ impl SpecialForm {
         let [inv23, inv31, inv12] = self.inverse_pair;
         let (p12, p23, p31) = (d1.dot(d2), d2.dot(d3), d3.dot(d1));
 
-        // e_a'' = sum_b c[a][b] e_b: the special form's terms gathered by axis.
-        let c = [
-            [-d1.norm_squared(), l3 * inv12 - self.c12.0 * p12, -(self.c31.1 * p31) - l2 * inv31],
-            [-(self.c12.1 * p12) - l3 * inv12, -d2.norm_squared(), l1 * inv23 - self.c23.0 * p23],
-            [l2 * inv31 - self.c31.0 * p31, -(self.c23.1 * p23) - l1 * inv23, -d3.norm_squared()],
-        ];
-        let [e1_dd, e2_dd, e3_dd] = c.map(|c| e1 * c[0] + e2 * c[1] + e3 * c[2]);
+        let e1_dd = e1 * (-d1.norm_squared()) - e2 * (self.c12.0 * p12) - e3 * (self.c31.1 * p31) + e2 * (l3 * inv12)
+            - e3 * (l2 * inv31);
+        let e2_dd = e2 * (-d2.norm_squared()) - e3 * (self.c23.0 * p23) - e1 * (self.c12.1 * p12) + e3 * (l1 * inv23)
+            - e1 * (l3 * inv12);
+        let e3_dd = e3 * (-d3.norm_squared()) - e1 * (self.c31.0 * p31) - e2 * (self.c23.1 * p23) + e1 * (l2 * inv31)
+            - e2 * (l1 * inv23);
         let mut e_dd = [e1_dd, e2_dd, e3_dd];
         if self.baumgarte_rate > 0.0 {
             let correction = self.baumgarte_correction(&state.to_vector());
