@@ -2,7 +2,8 @@
 //! control of Hairer's DOPRI5 code. Propagates the 5th-order solution (local extrapolation).
 
 use super::{
-    Crossing, Events, IntegrationError, IntegratorStats, MAX_SWITCHING, OdeSystem, SolverSettings, SwitchingKind, bits,
+    Crossing, Events, IntegrationError, IntegratorStats, MAX_SWITCHING, MethodCall, OdeSystem, SolverSettings,
+    SwitchingKind, bits,
 };
 
 const C2: f64 = 1.0 / 5.0;
@@ -188,18 +189,15 @@ fn locate<S: OdeSystem<N>, const N: usize>(
     b
 }
 
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
     system: &S,
-    s: &SolverSettings,
-    memory: &mut Dopri5Memory,
-    stats: &mut IntegratorStats,
-    events: &mut Events<'_, N>,
+    call: MethodCall<'_, '_, N>,
     t0: f64,
     y: &mut [f64; N],
     t1: f64,
 ) -> Result<f64, IntegrationError<S::Fault>> {
+    let MethodCall { settings: s, memory, stats, events } = call;
     let span = t1 - t0;
     let h_max = if s.max_step > 0.0 { s.max_step.min(span) } else { span };
     let fsal = !system.modifies_state_after_step();

@@ -310,37 +310,46 @@ impl Integrator {
             self.sides = switching_sides(system, t0, y);
         }
         let mut events = Events { sides: &mut self.sides, log: crossings, stop_at_restart };
+        let call = MethodCall {
+            settings: &self.settings,
+            memory: &mut self.dopri5,
+            stats: &mut self.stats,
+            events: &mut events,
+        };
         #[cfg(target_arch = "x86_64")]
         if self.vector_extensions
             && std::arch::is_x86_feature_detected!("avx2")
             && std::arch::is_x86_feature_detected!("fma")
         {
             // SAFETY: the processor has AVX2 and FMA (detected just now).
-            return unsafe {
-                run_avx(system, &self.settings, &mut self.dopri5, &mut self.stats, &mut events, t0, y, t1)
-            };
+            return unsafe { run_avx(system, call, t0, y, t1) };
         }
-        run(system, &self.settings, &mut self.dopri5, &mut self.stats, &mut events, t0, y, t1)
+        run(system, call, t0, y, t1)
     }
+}
+
+/// What a method works with during one call, besides the system and the interval.
+pub(crate) struct MethodCall<'a, 'e, const N: usize> {
+    pub settings: &'a SolverSettings,
+    /// The adaptive method's memory between calls (its next step size).
+    pub memory: &'a mut dopri5::Dopri5Memory,
+    pub stats: &'a mut IntegratorStats,
+    pub events: &'a mut Events<'e, N>,
 }
 
 /// The chosen method over one call; inlined into [`run_avx`] too, so that everything the
 /// methods inline (the system's right-hand side) is compiled a second time for AVX2.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
 fn run<S: OdeSystem<N>, const N: usize>(
     system: &S,
-    settings: &SolverSettings,
-    memory: &mut dopri5::Dopri5Memory,
-    stats: &mut IntegratorStats,
-    events: &mut Events<'_, N>,
+    call: MethodCall<'_, '_, N>,
     t0: f64,
     y: &mut [f64; N],
     t1: f64,
 ) -> Result<f64, IntegrationError<S::Fault>> {
-    match settings.method {
-        Method::DormandPrince45 => dopri5::integrate(system, settings, memory, stats, events, t0, y, t1),
-        Method::RungeKutta4 => rk4::integrate(system, settings, stats, events, t0, y, t1),
+    match call.settings.method {
+        Method::DormandPrince45 => dopri5::integrate(system, call, t0, y, t1),
+        Method::RungeKutta4 => rk4::integrate(system, call, t0, y, t1),
     }
 }
 
@@ -350,18 +359,14 @@ fn run<S: OdeSystem<N>, const N: usize>(
 /// The processor must support AVX2 and FMA.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx,avx2,fma")]
-#[allow(clippy::too_many_arguments)]
 unsafe fn run_avx<S: OdeSystem<N>, const N: usize>(
     system: &S,
-    settings: &SolverSettings,
-    memory: &mut dopri5::Dopri5Memory,
-    stats: &mut IntegratorStats,
-    events: &mut Events<'_, N>,
+    call: MethodCall<'_, '_, N>,
     t0: f64,
     y: &mut [f64; N],
     t1: f64,
 ) -> Result<f64, IntegrationError<S::Fault>> {
-    run(system, settings, memory, stats, events, t0, y, t1)
+    run(system, call, t0, y, t1)
 }
 
 /// The switching bookkeeping a method updates during one call.

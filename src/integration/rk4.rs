@@ -7,20 +7,18 @@
 //! that step's local error is of first order in the step (the method's order assumes a smooth
 //! right-hand side), which the end-stop tests measure.
 
-use super::{
-    Crossing, Events, IntegrationError, IntegratorStats, MAX_SWITCHING, OdeSystem, SolverSettings, SwitchingKind, bits,
-};
+use super::{Crossing, IntegrationError, MAX_SWITCHING, MethodCall, OdeSystem, SwitchingKind, bits};
 
 #[inline(always)]
 pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
     system: &S,
-    s: &SolverSettings,
-    stats: &mut IntegratorStats,
-    events: &mut Events<'_, N>,
+    call: MethodCall<'_, '_, N>,
     t0: f64,
     y: &mut [f64; N],
     t1: f64,
 ) -> Result<f64, IntegrationError<S::Fault>> {
+    // RK4 keeps nothing between calls.
+    let MethodCall { settings: s, stats, events, .. } = call;
     let switching = system.switching_count().min(MAX_SWITCHING);
     let mut g_start = [0.0; MAX_SWITCHING];
     let mut g_end = [0.0; MAX_SWITCHING];
