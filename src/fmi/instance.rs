@@ -26,7 +26,7 @@ use super::registry;
 use super::{FmiFunction, FmiVersion, InterfaceType, ModelState, Status};
 use crate::models::snapshot::{self, ByteReader, ByteWriter, SnapshotError, fnv1a64};
 use crate::models::variables::{
-    Causality, Initial, Variability, VariableGroup, VariableRef, VariableTable, VariableType,
+    Causality, Dependency, Initial, Variability, VariableGroup, VariableRef, VariableTable, VariableType,
 };
 use crate::models::{AnyModel, EventUpdate, ModelKind, StepReport};
 
@@ -81,6 +81,14 @@ struct Access {
     settable_in: u16,
     /// The block of the value cache a Real variable is read through, or [`NO_CACHE`].
     cache: u8,
+    /// How many elements of the group, from this one on, consecutive value references
+    /// address (FMI 2: to the end of the array; FMI 3: the variable's own width): the
+    /// longest run a set of consecutive references may store in one call to the model.
+    run: usize,
+    /// The cache blocks a set of this variable makes stale: those holding an output that
+    /// depends on it (`<ModelStructure>`: outputs' and initial unknowns' dependencies) for
+    /// an input; every block for anything else (parameters change the whole model).
+    stales: u32,
 }
 
 /// [`Access::cache`] of a variable read through the model element by element.
@@ -97,8 +105,27 @@ fn base_type(t: VariableType) -> BaseType {
 }
 
 /// The access table of a model for one FMI version, indexed by value reference.
-fn access_table(table: &VariableTable, version: FmiVersion, model: &AnyModel) -> Vec<Option<Access>> {
+/// `cache_block` gives the model's cache block of each group ([`AnyModel::cache_block`]).
+fn access_table(
+    table: &VariableTable,
+    version: FmiVersion,
+    cache_block: impl Fn(usize) -> Option<u8>,
+) -> Vec<Option<Access>> {
     let max_vr = table.groups.iter().map(|g| g.vr(g.len().saturating_sub(1))).max().unwrap_or(0);
+    let blocks: Vec<Option<u8>> = (0..table.groups.len()).map(cache_block).collect();
+    // The cache blocks holding a value that depends on an input group, by the model's
+    // declared structure: outputs, initial unknowns and derivatives.
+    let dependants = |input: &VariableGroup| {
+        let on_input = |d: &Dependency| matches!(*d, Dependency::All(n) | Dependency::SameIndex(n) if n == input.name);
+        table.groups.iter().zip(&blocks).fold(0u32, |mask, (g, block)| {
+            let mut knowns =
+                g.output_dependencies.iter().chain(g.initial_dependencies).chain(g.derivative_dependencies);
+            match block {
+                Some(b) if knowns.any(on_input) => mask | 1 << b,
+                _ => mask,
+            }
+        })
+    };
     (0..=max_vr)
         .map(|vr| {
             let (g, r) = match version {
@@ -112,10 +139,55 @@ fn access_table(table: &VariableTable, version: FmiVersion, model: &AnyModel) ->
                 FmiVersion::Fmi3 => g.len(),
             };
             let base = base_type(g.var_type);
-            let cache = if base == BaseType::Real { model.cache_block(r.group) } else { None };
-            Some(Access { group: r.group, index: r.index, width, base, settable_in, cache: cache.unwrap_or(NO_CACHE) })
+            let cache = if base == BaseType::Real { blocks.get(r.group).copied().flatten() } else { None };
+            let stales = if g.causality == Causality::Input { dependants(g) } else { u32::MAX };
+            Some(Access {
+                group: r.group,
+                index: r.index,
+                width,
+                base,
+                settable_in,
+                cache: cache.unwrap_or(NO_CACHE),
+                run: g.len() - r.index,
+                stales,
+            })
         })
         .collect()
+}
+
+/// By element value reference: the cache block each Real element is read through, or
+/// [`NO_CACHE`].
+fn element_blocks(access: &[Option<Access>]) -> Vec<u8> {
+    let mut blocks = vec![NO_CACHE; access.len()];
+    for (vr, a) in access.iter().enumerate() {
+        if let Some(a) = a
+            && a.base == BaseType::Real
+            && let Some(elements) = blocks.get_mut(vr..vr + a.width)
+        {
+            elements.fill(a.cache);
+        }
+    }
+    blocks
+}
+
+/// By element value reference: the length of the run of elements from it in the same cache
+/// block (0 for an element not cached).
+fn cache_runs(blocks: &[u8]) -> Vec<u16> {
+    let mut runs = vec![0u16; blocks.len()];
+    for vr in (0..blocks.len()).rev() {
+        if blocks[vr] != NO_CACHE {
+            let rest = if blocks.get(vr + 1) == Some(&blocks[vr]) { runs[vr + 1] } else { 0 };
+            runs[vr] = rest.saturating_add(1);
+        }
+    }
+    runs
+}
+
+/// Whether value references are consecutive (`vrs[i] = vrs[0] + i`): one branch-free pass.
+#[inline]
+fn consecutive(vrs: &[u32]) -> bool {
+    let Some(&first) = vrs.first() else { return false };
+    vrs.iter().enumerate().fold(0, |diff, (i, &vr)| diff | (vr ^ first.wrapping_add(i as u32))) == 0
 }
 
 /// Whether a variable may be set in a state (FMI 2.0 conditions 1, 3, 6 of the CS table; 1, 3,
@@ -238,9 +310,12 @@ pub struct Instance {
     value_cache: Vec<f64>,
     /// Bit `b`: block `b` of `value_cache` holds the model's current values.
     fresh: u32,
-    /// By value reference: the cache block of a Real element read one per reference (FMI 2),
-    /// or [`NO_CACHE`] (the fast path's one-byte table).
+    /// By element value reference (FMI 2's numbering, the value cache's index): the cache
+    /// block of a Real element, or [`NO_CACHE`] (the fast paths' one-byte table).
     cached_element: Vec<u8>,
+    /// By element value reference: how many consecutive elements from this one lie in its
+    /// cache block (0: not cached), so that a get of consecutive elements is one copy.
+    cache_run: Vec<u16>,
     pub table: VariableTable,
     /// Hash of the instantiation token, stamped into serialized states.
     token_hash: u64,
@@ -290,7 +365,7 @@ impl Instance {
         let info = kind.info();
         let table = VariableTable::new(info.groups);
         let model = kind.instantiate();
-        let access = access_table(&table, version, &model);
+        let access = access_table(&table, version, |g| model.cache_block(g));
         let state_order = match version {
             FmiVersion::Fmi2 => (0..info.states.len()).collect(),
             FmiVersion::Fmi3 => super::description::fmi3_state_order(info),
@@ -303,13 +378,8 @@ impl Instance {
             logger,
             value_cache: vec![0.0; access.len()],
             fresh: 0,
-            cached_element: access
-                .iter()
-                .map(|a| match a {
-                    Some(a) if a.base == BaseType::Real && a.width == 1 => a.cache,
-                    _ => NO_CACHE,
-                })
-                .collect(),
+            cached_element: element_blocks(&access),
+            cache_run: cache_runs(&element_blocks(&access)),
             model,
             table,
             token_hash: fnv1a64(token.as_bytes()),
@@ -648,6 +718,26 @@ impl Instance {
     pub fn get_real(&mut self, vrs: &[u32], values: &mut [f64]) -> Status {
         // One pass: a get that fails leaves its values undefined (FMI 2.0 section 2.1.3,
         // FMI 3.0 section 2.2.6), so nothing needs validating before the first is written.
+        if let Some((first, block)) = self.cached_run(vrs, values.len()) {
+            // Consecutive elements of one cache block (the legs' lengths and rates): one copy.
+            let bit = 1u32 << block;
+            if self.fresh & bit == 0 {
+                self.model.fill_cache(block, &mut self.value_cache);
+                self.fresh |= bit;
+            }
+            if let Some(cached) = self.value_cache.get(first..first + values.len()) {
+                values.copy_from_slice(cached);
+                let nan = values.iter().fold(false, |nan, x| nan | x.is_nan());
+                return if nan { self.nan_error(vrs, values) } else { Status::Ok };
+            }
+        }
+        self.get_real_elementwise(vrs, values)
+    }
+
+    /// [`Instance::get_real`] reference by reference. Out of line, so that the fast path
+    /// above keeps few registers.
+    #[inline(never)]
+    fn get_real_elementwise(&mut self, vrs: &[u32], values: &mut [f64]) -> Status {
         if self.version == FmiVersion::Fmi2 && vrs.len() == values.len() {
             // One element per reference: the cache block of each comes from one byte table.
             // Loops without calls (so the tables stay in registers): which blocks the
@@ -697,6 +787,34 @@ impl Instance {
             return self.nan_error(vrs, values);
         }
         Status::Ok
+    }
+
+    /// When `vrs` address `n` consecutive elements of one cache block (FMI 2: consecutive
+    /// references; FMI 3: consecutive variables), the first element's value reference (its
+    /// place in the value cache) and the block.
+    #[inline]
+    fn cached_run(&self, vrs: &[u32], n: usize) -> Option<(usize, u8)> {
+        let first = *vrs.first()? as usize;
+        if n == 0 || n > usize::from(*self.cache_run.get(first)?) {
+            return None;
+        }
+        let whole = match self.version {
+            FmiVersion::Fmi2 => vrs.len() == n && consecutive(vrs),
+            FmiVersion::Fmi3 => {
+                // Each reference must be a variable (not an inner element) right after the last.
+                let mut next = first;
+                for &vr in vrs {
+                    match self.access.get(vr as usize) {
+                        Some(Some(a)) if vr as usize == next => next += a.width,
+                        _ => return None,
+                    }
+                }
+                next == first + n
+            }
+        };
+        whole
+            .then(|| (first, self.cached_element.get(first).copied().unwrap_or(NO_CACHE)))
+            .filter(|&(_, b)| b != NO_CACHE)
     }
 
     /// Reads the values of one reference into `values[filled..]`: from the value cache
@@ -750,6 +868,21 @@ impl Instance {
     }
 
     pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Status {
+        if let Some(a) = self.settable_run(vrs, values) {
+            // Consecutive elements of one array (the leg forces): checked in one pass, stored
+            // in one call; only the cached outputs that depend on the input go stale.
+            self.fresh &= !a.stales;
+            return match self.model.set_real_run(VariableRef { group: a.group, index: a.index }, values) {
+                Ok(()) => Status::Ok,
+                Err(m) => self.error(&m),
+            };
+        }
+        self.set_real_elementwise(vrs, values)
+    }
+
+    /// [`Instance::set_real`] reference by reference, out of line as for gets.
+    #[inline(never)]
+    fn set_real_elementwise(&mut self, vrs: &[u32], values: &[f64]) -> Status {
         // Two passes, no allocation: validate every reference and value, then store (all or
         // nothing).
         if let Err(s) = self.check_set_real(vrs, values) {
@@ -771,6 +904,20 @@ impl Instance {
             Ok(()) => Status::Ok,
             Err(m) => self.error(&m),
         }
+    }
+
+    /// When `vrs` address consecutive elements of one settable Real group (FMI 2:
+    /// consecutive references; FMI 3: one variable) and every value is finite, the first
+    /// element's access entry.
+    #[inline]
+    fn settable_run(&self, vrs: &[u32], values: &[f64]) -> Option<Access> {
+        let a = (*self.access.get(*vrs.first()? as usize)?)?;
+        let addressed = match self.version {
+            FmiVersion::Fmi2 => vrs.len() == values.len() && values.len() <= a.run && consecutive(vrs),
+            FmiVersion::Fmi3 => vrs.len() == 1 && values.len() == a.width,
+        };
+        let finite = values.iter().fold(true, |finite, x| finite & x.is_finite());
+        (addressed && finite && a.base == BaseType::Real && a.settable_in & self.state.bit() != 0).then_some(a)
     }
 
     /// The first pass of [`Instance::set_real`]: references, states and values. FMI 2's
@@ -1444,5 +1591,41 @@ impl Instance {
             return self.error(&format!("serialized state refused: {e}"));
         }
         self.store_fmu_state(slot, bytes.to_vec())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The cache blocks a set of the named group's first element makes stale, for a model
+    /// whose groups `cached` (by name) sit in the given blocks.
+    fn stales(kind: ModelKind, cached: &[(&str, u8)], set: &str) -> u32 {
+        let table = VariableTable::new(kind.info().groups);
+        let block = |g: usize| cached.iter().find(|(name, _)| table.groups[g].name == *name).map(|&(_, b)| b);
+        let access = access_table(&table, FmiVersion::Fmi2, block);
+        let (_, g) = table.group(set).expect("group");
+        access[g.first_vr as usize].expect("access").stales
+    }
+
+    #[test]
+    fn a_set_makes_stale_exactly_the_cached_values_that_depend_on_it() {
+        // The platform's leg lengths and rates depend on the state only; its accelerations
+        // (Model Exchange derivatives) on the leg forces too; a parameter changes everything.
+        let platform = [("l", 0), ("ldot", 0), ("der(v)", 3)];
+        assert_eq!(stales(ModelKind::Platform, &platform, "F"), 1 << 3);
+        assert_eq!(stales(ModelKind::Platform, &platform[..2], "F"), 0);
+        assert_eq!(stales(ModelKind::Platform, &platform, "M"), u32::MAX);
+        // The controller's force command feeds its inputs through.
+        assert_eq!(stales(ModelKind::Controller, &[("F", 0)], "l"), 1 << 0);
+        assert_eq!(stales(ModelKind::Controller, &[("F", 0), ("rp", 1)], "pose.r"), (1 << 0) | (1 << 1));
+    }
+
+    #[test]
+    fn runs_of_cached_elements_and_consecutive_references() {
+        assert_eq!(cache_runs(&[NO_CACHE, 0, 0, 1, NO_CACHE, 1]), vec![0, 2, 1, 1, 0, 1]);
+        assert!(consecutive(&[7, 8, 9, 10, 11, 12, 13, 14, 15, 16]));
+        assert!(!consecutive(&[7, 8, 9, 10, 11, 12, 13, 14, 16, 15]));
+        assert!(!consecutive(&[]));
     }
 }

@@ -148,6 +148,12 @@ pub trait FmuModel {
     /// Stores a finite Real value of a parameter or input; may refuse a value outside the
     /// variable's domain.
     fn set_real(&mut self, var: VariableRef, value: f64) -> Result<(), String>;
+    /// Stores finite values of consecutive elements of one Real group, `first` naming the
+    /// first (a set of an array's elements in order, e.g. the six leg forces: the fast path
+    /// of `fmi2SetReal`/`fmi3SetFloat64`). The default sets them one by one.
+    fn set_real_run(&mut self, first: VariableRef, values: &[f64]) -> Result<(), String> {
+        set_one_by_one(self, first, values)
+    }
     fn get_integer(&mut self, var: VariableRef) -> i32;
     fn set_integer(&mut self, var: VariableRef, value: i32) -> Result<(), String>;
     fn get_boolean(&mut self, _var: VariableRef) -> bool {
@@ -217,6 +223,14 @@ pub trait FmuModel {
     fn restore(r: &mut ByteReader) -> Result<Self, SnapshotError>
     where
         Self: Sized;
+}
+
+/// [`FmuModel::set_real_run`] element by element, stopping at the first value refused.
+pub fn set_one_by_one<M: FmuModel + ?Sized>(model: &mut M, first: VariableRef, values: &[f64]) -> Result<(), String> {
+    for (i, &x) in values.iter().enumerate() {
+        model.set_real(VariableRef { group: first.group, index: first.index + i }, x)?;
+    }
+    Ok(())
 }
 
 /// Most blocks a model's value cache may have (see [`FmuModel::cache_block`]).
@@ -327,6 +341,10 @@ impl AnyModel {
             }
             Ok(())
         })
+    }
+    #[inline]
+    pub fn set_real_run(&mut self, first: VariableRef, values: &[f64]) -> Result<(), String> {
+        dispatch!(self, m => m.set_real_run(first, values))
     }
     pub fn cache_block(&self, group: usize) -> Option<u8> {
         dispatch!(self, m => m.cache_block(group)).filter(|&b| b < CACHE_BLOCKS)

@@ -451,6 +451,20 @@ impl FmuModel for PlatformModel {
         Ok(())
     }
 
+    fn set_real_run(&mut self, first: VariableRef, values: &[f64]) -> Result<(), String> {
+        // The leg forces, set every step: one copy.
+        if first.group == group::F
+            && let Some(forces) = self.forces.get_mut(first.index..first.index + values.len())
+        {
+            forces.copy_from_slice(values);
+            if self.simulation.is_none() {
+                self.invalidate_outputs();
+            }
+            return Ok(());
+        }
+        super::set_one_by_one(self, first, values)
+    }
+
     fn get_integer(&mut self, var: VariableRef) -> i32 {
         match var.group {
             group::METHOD => self.parameters.settings.method.code(),

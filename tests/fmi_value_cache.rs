@@ -1,0 +1,119 @@
+//! Reads and writes of runs of consecutive elements (the co-simulation cycle's six forces
+//! and twelve leg values, each one call that copies): they give what element-by-element
+//! calls give, the leg lengths match the geometry of the pose the FMU reports, and the
+//! cached values follow every change of the model (steps, parameters) but not a change of
+//! an input they do not depend on.
+
+mod common;
+
+use common::fmi_host::Host;
+use common::fmi3_host::{Host3, Kind};
+use stewart_fmu::fmi2::exports::fmi2GetReal;
+use stewart_fmu::fmi2::types::*;
+use stewart_fmu::fmi3::exports::fmi3GetFloat64;
+use stewart_fmu::fmi3::types::*;
+
+fn vrs(h: &Host, names: &[String]) -> Vec<u32> {
+    names.iter().map(|n| h.vr(n)).collect()
+}
+
+/// One `fmi2GetReal` of all `names`.
+fn read(h: &Host, names: &[String]) -> Vec<f64> {
+    let vrs = vrs(h, names);
+    let mut out = vec![f64::NAN; vrs.len()];
+    assert_eq!(unsafe { fmi2GetReal(h.c, vrs.as_ptr(), vrs.len(), out.as_mut_ptr()) }, fmi2OK);
+    out
+}
+
+fn legs() -> Vec<String> {
+    (1..=6).map(|k| format!("l[{k}]")).chain((1..=6).map(|k| format!("ldot[{k}]"))).collect()
+}
+
+/// `|r + R A_k - B_k|` from the pose outputs and the joint parameters, each read alone.
+fn geometric_lengths(h: &Host) -> Vec<f64> {
+    let r: Vec<f64> = (1..=3).map(|i| h.get(&format!("r[{i}]"))).collect();
+    (1..=6)
+        .map(|k| {
+            let d: Vec<f64> = (1..=3)
+                .map(|a| {
+                    let arm: f64 = (1..=3).map(|b| h.get(&format!("R[{a},{b}]")) * h.get(&format!("A[{k},{b}]"))).sum();
+                    r[a - 1] + arm - h.get(&format!("B[{k},{a}]"))
+                })
+                .collect();
+            d.iter().map(|x| x * x).sum::<f64>().sqrt()
+        })
+        .collect()
+}
+
+fn assert_lengths_match_the_pose(h: &Host, what: &str) -> Vec<f64> {
+    let l = read(h, &legs());
+    let geometry = geometric_lengths(h);
+    let worst = l.iter().zip(&geometry).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    println!("{what}: l = {:?}, largest difference from the pose's geometry {worst:.1e} m", &l[..6]);
+    assert!(worst < 1e-12, "{what}: {worst}");
+    l
+}
+
+#[test]
+fn runs_read_what_single_reads_give_and_follow_steps_and_parameters() {
+    let mut h = Host::platform("runs");
+    assert_eq!(h.setup(None), fmi2OK);
+    assert_eq!(h.enter(), fmi2OK);
+    // Initialization Mode: the legs follow the parameters (a set of a parameter makes every
+    // cached value stale).
+    let before = assert_lengths_match_the_pose(&h, "initial pose");
+    let z0 = h.get("r0[3]");
+    assert_eq!(h.set("r0[3]", z0 + 0.02), fmi2OK);
+    let raised = assert_lengths_match_the_pose(&h, "r0[3] raised by 2 cm");
+    assert!(raised[..6].iter().zip(&before[..6]).all(|(a, b)| a > b), "{raised:?} {before:?}");
+    assert_eq!(h.exit(), fmi2OK);
+
+    let names = legs();
+    let mut last = read(&h, &names);
+    for step in 0..40 {
+        // Forces as one run: leg feedback around the neutral lengths plus a pattern.
+        let f: [f64; 6] = std::array::from_fn(|k| {
+            3_000.0 - 2e5 * (last[k] - raised[k]) - 1e3 * last[6 + k] + 400.0 * ((step * (k + 1)) as f64).sin()
+        });
+        assert_eq!(h.set_forces(f), fmi2OK);
+        let forces: Vec<String> = (1..=6).map(|k| format!("F[{k}]")).collect();
+        assert_eq!(read(&h, &forces), f.to_vec(), "the forces read back");
+        // The legs do not depend on the forces: a set leaves them as they were.
+        let after_set = read(&h, &names);
+        assert_eq!(
+            after_set.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+            last.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
+        );
+        assert_eq!(h.step(1e-3), fmi2OK);
+        let run = read(&h, &names);
+        let singles: Vec<f64> = names.iter().map(|n| h.get(n)).collect();
+        assert_eq!(run, singles, "step {step}: one run against one value per call");
+        let mut reversed_names = names.clone();
+        reversed_names.reverse();
+        let mut reversed = read(&h, &reversed_names);
+        reversed.reverse();
+        assert_eq!(run, reversed, "step {step}: references in reverse order");
+        assert_ne!(run, last, "step {step}: the legs moved");
+        last = run;
+    }
+    assert_lengths_match_the_pose(&h, "after 40 steps");
+}
+
+#[test]
+fn fmi3_reads_of_consecutive_arrays_equal_reads_of_each() {
+    let mut h = Host3::platform("arrays", Kind::CoSimulation);
+    assert_eq!(h.initialise(&[]), fmi3OK);
+    for step in 0..20 {
+        let f: Vec<f64> = (0..6).map(|k| 3_000.0 + 100.0 * ((step + k) as f64).cos()).collect();
+        assert_eq!(h.set("F", &f), fmi3OK);
+        assert_eq!(h.get("F"), f);
+        assert_eq!(h.step(1e-3).0, fmi3OK);
+        let both = [h.vr("l"), h.vr("ldot")];
+        let mut out = [f64::NAN; 12];
+        assert_eq!(unsafe { fmi3GetFloat64(h.c, both.as_ptr(), 2, out.as_mut_ptr(), 12) }, fmi3OK);
+        let each: Vec<f64> = h.get("l").into_iter().chain(h.get("ldot")).collect();
+        assert_eq!(out.to_vec(), each, "step {step}");
+        // The wrong count is still refused on this path.
+        assert_eq!(unsafe { fmi3GetFloat64(h.c, both.as_ptr(), 2, out.as_mut_ptr(), 11) }, fmi3Error);
+    }
+}
