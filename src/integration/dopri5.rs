@@ -71,7 +71,9 @@ fn scaled_rms<const N: usize>(v: &[f64; N], y0: &[f64; N], y1: &[f64; N], s: &So
     (sum / N as f64).sqrt()
 }
 
-/// Hairer's initial step estimate.
+/// Hairer's initial step estimate. Inlined, so that the AVX2 copy of the method has its own
+/// (with the system's wide right-hand side).
+#[inline(always)]
 fn initial_step<S: OdeSystem<N>, const N: usize>(
     system: &S,
     s: &SolverSettings,

@@ -137,6 +137,16 @@ pub trait OdeSystem<const N: usize> {
     /// `dy = f(t, y)`.
     fn derivative(&self, t: f64, y: &[f64; N], dy: &mut [f64; N]);
 
+    /// [`OdeSystem::derivative`] for the methods' AVX2 copy ([`run_avx`]): a system may use
+    /// the wider registers there, for the same bits.
+    ///
+    /// # Safety
+    /// The processor must support AVX2 and FMA.
+    #[inline(always)]
+    unsafe fn derivative_wide(&self, t: f64, y: &[f64; N], dy: &mut [f64; N]) {
+        self.derivative(t, y, dy)
+    }
+
     /// Called on every accepted step's end state; may move it (e.g. back onto constraints).
     fn after_step(&self, _y: &mut [f64; N]) {}
 
@@ -366,7 +376,60 @@ unsafe fn run_avx<S: OdeSystem<N>, const N: usize>(
     y: &mut [f64; N],
     t1: f64,
 ) -> Result<f64, IntegrationError<S::Fault>> {
-    run(system, call, t0, y, t1)
+    run(&WideRegisters(system), call, t0, y, t1)
+}
+
+/// A system whose right-hand side is its [`OdeSystem::derivative_wide`]: what [`run_avx`]
+/// integrates, so that only the AVX2 copy calls it.
+#[cfg(target_arch = "x86_64")]
+struct WideRegisters<'a, S>(&'a S);
+
+#[cfg(target_arch = "x86_64")]
+impl<S: OdeSystem<N>, const N: usize> OdeSystem<N> for WideRegisters<'_, S> {
+    type Fault = S::Fault;
+
+    #[inline(always)]
+    fn derivative(&self, t: f64, y: &[f64; N], dy: &mut [f64; N]) {
+        // SAFETY: only `run_avx` builds this wrapper, on processors with AVX2 and FMA.
+        unsafe { self.0.derivative_wide(t, y, dy) }
+    }
+    #[inline(always)]
+    fn after_step(&self, y: &mut [f64; N]) {
+        self.0.after_step(y)
+    }
+    #[inline(always)]
+    fn modifies_state_after_step(&self) -> bool {
+        self.0.modifies_state_after_step()
+    }
+    #[inline(always)]
+    fn check(&self, t: f64, y: &[f64; N]) -> Result<(), Self::Fault> {
+        self.0.check(t, y)
+    }
+    #[inline(always)]
+    fn check_and_switching(
+        &self,
+        t: f64,
+        y: &[f64; N],
+        g: Option<&mut [f64; MAX_SWITCHING]>,
+    ) -> Result<(), Self::Fault> {
+        self.0.check_and_switching(t, y, g)
+    }
+    #[inline(always)]
+    fn switching_count(&self) -> usize {
+        self.0.switching_count()
+    }
+    #[inline(always)]
+    fn switching(&self, t: f64, y: &[f64; N], g: &mut [f64; MAX_SWITCHING]) {
+        self.0.switching(t, y, g)
+    }
+    #[inline(always)]
+    fn switching_kind(&self, index: usize) -> SwitchingKind {
+        self.0.switching_kind(index)
+    }
+    #[inline(always)]
+    fn switching_fault(&self, index: usize, t: f64, y: &[f64; N]) -> Option<Self::Fault> {
+        self.0.switching_fault(index, t, y)
+    }
 }
 
 /// The switching bookkeeping a method updates during one call.

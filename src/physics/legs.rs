@@ -5,7 +5,7 @@
 use nalgebra::Vector3;
 
 use super::body_state::BodyState;
-use super::per_leg::PerLeg;
+use super::per_leg::{Lanes, Narrow, PerLeg, components};
 use super::stand::{LEG_COUNT, Stand};
 
 /// Geometry of the six legs for one state.
@@ -80,12 +80,12 @@ impl JointArrays {
     /// [`LegGeometry::new`] (arm `e1 A1 + e2 A2 + e3 A3`, leg `r + arm - B`, length), so arms,
     /// legs and lengths are equal to the bit.
     #[inline(always)]
-    pub fn legs(&self, state: &BodyState) -> LegLanes {
+    pub fn legs<L: Lanes>(&self, state: &BodyState) -> LegLanes<L> {
         let [e1, e2, e3] = &state.e;
-        let a = self.platform.map(|row| PerLeg::new(&row));
+        let a = components!(|c| PerLeg::<L>::new(&self.platform[c]));
         let arm =
-            [0, 1, 2].map(|c| PerLeg::splat(e1[c]) * a[0] + PerLeg::splat(e2[c]) * a[1] + PerLeg::splat(e3[c]) * a[2]);
-        let leg = [0, 1, 2].map(|c| PerLeg::splat(state.r[c]) + arm[c] - PerLeg::new(&self.base[c]));
+            components!(|c| PerLeg::splat(e1[c]) * a[0] + PerLeg::splat(e2[c]) * a[1] + PerLeg::splat(e3[c]) * a[2]);
+        let leg = components!(|c| PerLeg::splat(state.r[c]) + arm[c] - PerLeg::new(&self.base[c]));
         let length = (leg[0] * leg[0] + leg[1] * leg[1] + leg[2] * leg[2]).sqrt();
         LegLanes { arm, leg, length }
     }
@@ -138,13 +138,13 @@ impl JointArrays {
 
 /// The legs of one state side by side: see [`JointArrays::legs`].
 #[derive(Clone, Copy)]
-pub struct LegLanes {
+pub struct LegLanes<L: Lanes = Narrow> {
     /// Arms `R A_k`, inertial components, m.
-    pub arm: [PerLeg; 3],
+    pub arm: [PerLeg<L>; 3],
     /// Leg vectors `a_k - B_k = r + R A_k - B_k`, m.
-    pub leg: [PerLeg; 3],
+    pub leg: [PerLeg<L>; 3],
     /// `l_k`, m.
-    pub length: PerLeg,
+    pub length: PerLeg<L>,
 }
 
 /// The legs of one state as arrays over the legs (`[component][leg]`): see
@@ -199,10 +199,19 @@ mod tests {
                 &rotation_from_angles(&Vector3::new(roll, -0.04, 0.02)),
                 &Vector3::new(0.3, 0.2, -0.1),
             );
-            let lanes = joints.legs(&state);
+            let lanes = joints.legs::<Narrow>(&state);
             let arrays = joints.kinematics(&state);
             let single = LegGeometry::new(&stand, &state);
             let bits = |x: [f64; LEG_COUNT]| x.map(f64::to_bits);
+            #[cfg(target_arch = "x86_64")]
+            if std::arch::is_x86_feature_detected!("avx") {
+                let wide = joints.legs::<super::super::per_leg::Wide>(&state);
+                assert_eq!(bits(wide.length.to_array()), bits(arrays.length));
+                for c in 0..3 {
+                    assert_eq!(bits(wide.arm[c].to_array()), bits(arrays.arm[c]));
+                    assert_eq!(bits(wide.leg[c].to_array()), bits(arrays.leg[c]));
+                }
+            }
             assert_eq!(bits(lanes.length.to_array()), bits(arrays.length));
             assert_eq!(bits(arrays.length), bits(single.length));
             for c in 0..3 {

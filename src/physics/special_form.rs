@@ -20,7 +20,7 @@ use super::body_state::{BodyState, STATE_DIM, StateVector, layout};
 use super::end_stops::EndStops;
 use super::forces::LegForceLaw;
 use super::legs::{JointArrays, LegGeometry, LegLanes};
-use super::per_leg::PerLeg;
+use super::per_leg::{Lanes, Narrow, PerLeg, Wide, components};
 use super::stand::{LEG_COUNT, Stand};
 
 /// The stand-dependent coefficients of the special form, computed once per parameter set so
@@ -283,10 +283,10 @@ impl SpecialForm {
     /// [`PerLeg::sum`]'s order. A collapsed (or non-finite) leg carries nothing. The end
     /// stops' forces are computed (side by side too) only when a leg is outside its stroke.
     #[inline(always)]
-    fn wrench_of(&self, state: &BodyState, u: &[f64; LEG_COUNT]) -> LegWrench {
-        let LegLanes { arm, leg, length } = self.joints.legs(state);
+    fn wrench_of<V: Lanes>(&self, state: &BodyState, u: &[f64; LEG_COUNT]) -> LegWrench {
+        let LegLanes { arm, leg, length } = self.joints.legs::<V>(state);
         let scale = length.where_positive(PerLeg::new(u) / length);
-        let f = leg.map(|x| x * scale);
+        let f = components!(|c| leg[c] * scale);
         let moment = PerLeg::cross(&arm, &f);
         let touches = length.any_outside(PerLeg::new(&self.stroke[0]), PerLeg::new(&self.stroke[1]));
         let stop = match &self.stops {
@@ -307,19 +307,19 @@ impl SpecialForm {
     /// The end stops' forces ([`EndStops::contact`]) for the six legs side by side; 0 for a
     /// leg inside its stroke or collapsed.
     #[inline(always)]
-    fn stop_wrench(
+    fn stop_wrench<V: Lanes>(
         stops: &EndStops,
         joints: &JointArrays,
         state: &BodyState,
-        arm: &[PerLeg; 3],
-        leg: &[PerLeg; 3],
-        length: PerLeg,
+        arm: &[PerLeg<V>; 3],
+        leg: &[PerLeg<V>; 3],
+        length: PerLeg<V>,
     ) -> StopWrench {
         let inverse_length = PerLeg::splat(1.0) / length;
-        let n = leg.map(|x| length.where_positive(x * inverse_length));
+        let n = components!(|c| length.where_positive(leg[c] * inverse_length));
         let [d1, d2, d3] = &state.e_dot;
-        let a = joints.platform.map(|row| PerLeg::new(&row));
-        let velocity = [0, 1, 2].map(|c| {
+        let a = components!(|c| PerLeg::new(&joints.platform[c]));
+        let velocity = components!(|c| {
             PerLeg::splat(state.v[c])
                 + (PerLeg::splat(d1[c]) * a[0] + PerLeg::splat(d2[c]) * a[1] + PerLeg::splat(d3[c]) * a[2])
         });
@@ -334,7 +334,7 @@ impl SpecialForm {
         let damper = (PerLeg::splat(stops.damping) * delta_rate).clamp(PerLeg::splat(0.0) - spring, spring);
         let in_contact = length.where_positive(delta);
         let force = in_contact.where_positive(s * (spring + damper));
-        let fs = n.map(|x| x * force);
+        let fs = components!(|c| n[c] * force);
         let moment = PerLeg::cross(arm, &fs);
         StopWrench {
             force: Vector3::new(fs[0].sum(), fs[1].sum(), fs[2].sum()),
@@ -354,13 +354,40 @@ impl SpecialForm {
         law: &L,
         dy: &mut StateVector,
     ) -> LegPower {
+        self.derivative_in::<L, Narrow>(t, y, law, dy)
+    }
+
+    /// [`SpecialForm::derivative`] with the legs in AVX registers ([`Wide`]): the same bits.
+    ///
+    /// # Safety
+    /// The processor must support AVX, and the caller should be compiled with it (the
+    /// integrators' AVX2 copy), or the lanes' operations are not inlined.
+    #[inline(always)]
+    pub unsafe fn derivative_wide<L: LegForceLaw + ?Sized>(
+        &self,
+        t: f64,
+        y: &StateVector,
+        law: &L,
+        dy: &mut StateVector,
+    ) -> LegPower {
+        self.derivative_in::<L, Wide>(t, y, law, dy)
+    }
+
+    #[inline(always)]
+    fn derivative_in<L: LegForceLaw + ?Sized, V: Lanes>(
+        &self,
+        t: f64,
+        y: &StateVector,
+        law: &L,
+        dy: &mut StateVector,
+    ) -> LegPower {
         let state = BodyState::from_vector(y);
         let u = if law.depends_on_state() {
             law.leg_forces(t, &state, &LegGeometry::new(&self.stand, &state))
         } else {
             law.leg_forces_at(t)
         };
-        let w = self.wrench_of(&state, &u);
+        let w = self.wrench_of::<V>(&state, &u);
         let power = LegPower {
             actuator: w.force.dot(&state.v) + w.moment.dot(&state.angular_velocity_inertial()),
             dissipation: w.stop.dissipation,

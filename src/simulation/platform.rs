@@ -168,6 +168,18 @@ impl<L: LegForceLaw + ?Sized> OdeSystem<SIMULATION_DIM> for PlatformDynamics<'_,
     }
 
     #[inline(always)]
+    unsafe fn derivative_wide(&self, t: f64, y: &SimulationState, dy: &mut SimulationState) {
+        if let Some((body_rate, quadrature_rate)) = dy.split_first_chunk_mut::<STATE_DIM>() {
+            // SAFETY: forwarded to the caller (AVX2 and FMA).
+            let power = unsafe { self.form.derivative_wide(t, body(y), self.law, body_rate) };
+            if let [work, dissipated] = quadrature_rate {
+                *work = power.actuator;
+                *dissipated = power.dissipation;
+            }
+        }
+    }
+
+    #[inline(always)]
     fn after_step(&self, y: &mut SimulationState) {
         if self.stabilisation == Stabilisation::Projection
             && let Some(b) = y.first_chunk_mut::<STATE_DIM>()
