@@ -126,6 +126,9 @@ fn access_table(
             }
         })
     };
+    // Per group: what a set of it makes stale.
+    let stales: Vec<u32> =
+        table.groups.iter().map(|g| if g.causality == Causality::Input { dependants(g) } else { u32::MAX }).collect();
     (0..=max_vr)
         .map(|vr| {
             let (g, r) = match version {
@@ -140,7 +143,7 @@ fn access_table(
             };
             let base = base_type(g.var_type);
             let cache = if base == BaseType::Real { blocks.get(r.group).copied().flatten() } else { None };
-            let stales = if g.causality == Causality::Input { dependants(g) } else { u32::MAX };
+            let stales = stales.get(r.group).copied().unwrap_or(u32::MAX);
             Some(Access {
                 group: r.group,
                 index: r.index,
@@ -366,6 +369,7 @@ impl Instance {
         let table = VariableTable::new(info.groups);
         let model = kind.instantiate();
         let access = access_table(&table, version, |g| model.cache_block(g));
+        let cached_element = element_blocks(&access);
         let state_order = match version {
             FmiVersion::Fmi2 => (0..info.states.len()).collect(),
             FmiVersion::Fmi3 => super::description::fmi3_state_order(info),
@@ -378,8 +382,8 @@ impl Instance {
             logger,
             value_cache: vec![0.0; access.len()],
             fresh: 0,
-            cached_element: element_blocks(&access),
-            cache_run: cache_runs(&element_blocks(&access)),
+            cache_run: cache_runs(&cached_element),
+            cached_element,
             model,
             table,
             token_hash: fnv1a64(token.as_bytes()),
