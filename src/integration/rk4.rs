@@ -7,7 +7,7 @@
 //! that step's local error is of first order in the step (the method's order assumes a smooth
 //! right-hand side), which the end-stop tests measure.
 
-use super::{Crossing, IntegrationError, MAX_SWITCHING, MethodCall, OdeSystem, SwitchingKind, bits};
+use super::{Crossing, IntegrationError, MAX_SWITCHING, MethodCall, OdeSystem, SwitchingKind, bits, in_memory};
 
 #[inline(always)]
 pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
@@ -50,14 +50,17 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
         for j in 0..N {
             stage[j] = y[j] + 0.5 * h * k1[j];
         }
+        in_memory(&mut stage);
         system.derivative(t_mid, &stage, &mut k2);
         for j in 0..N {
             stage[j] = y[j] + 0.5 * h * k2[j];
         }
+        in_memory(&mut stage);
         system.derivative(t_mid, &stage, &mut k3);
         for j in 0..N {
             stage[j] = y[j] + h * k3[j];
         }
+        in_memory(&mut stage);
         system.derivative(t_end, &stage, &mut k4);
         for j in 0..N {
             y[j] += h / 6.0 * (k1[j] + 2.0 * (k2[j] + k3[j]) + k4[j]);

@@ -451,6 +451,7 @@ impl FmuModel for PlatformModel {
         Ok(())
     }
 
+    #[inline]
     fn set_real_run(&mut self, first: VariableRef, values: &[f64]) -> Result<(), String> {
         // The leg forces, set every step: one copy.
         if first.group == group::F
