@@ -241,7 +241,10 @@ pub const CACHE_BLOCKS: u8 = 31;
 pub fn fill_group(cache: &mut [f64], group: &VariableGroup, values: &[f64]) {
     let first = group.first_vr as usize;
     if let Some(slots) = cache.get_mut(first..first + values.len()) {
-        slots.copy_from_slice(values);
+        // Element by element: a handful of values, no call to memcpy.
+        for (slot, &x) in slots.iter_mut().zip(values) {
+            *slot = x;
+        }
     }
 }
 

@@ -425,7 +425,7 @@ impl FmuModel for PlatformModel {
 
     fn fill_cache(&mut self, block: u8, cache: &mut [f64]) {
         if block == cache_block::LEGS {
-            let legs = *self.leg_outputs();
+            let legs = self.leg_outputs();
             fill_group(cache, &variables::GROUPS[group::L], &legs.l);
             fill_group(cache, &variables::GROUPS[group::LDOT], &legs.ldot);
         } else {
