@@ -137,7 +137,7 @@ pub trait OdeSystem<const N: usize> {
     /// `dy = f(t, y)`.
     fn derivative(&self, t: f64, y: &[f64; N], dy: &mut [f64; N]);
 
-    /// [`OdeSystem::derivative`] for the methods' AVX2 copy ([`run_avx`]): a system may use
+    /// [`OdeSystem::derivative`] for the methods' AVX2 copy (`run_avx`): a system may use
     /// the wider registers there, for the same bits.
     ///
     /// # Safety

@@ -1,17 +1,21 @@
 //! A value per leg, the six legs side by side: [`PerLeg`].
 //!
 //! The right-hand side computes the six legs with the same arithmetic, so it is written once
-//! over `PerLeg` values. On x86-64 a `PerLeg` is three pairs in SSE2 registers, which every
-//! x86-64 processor has (nothing is chosen at run time; the integrators' AVX2 copy encodes the
-//! same operations with VEX). Elsewhere it is six plain values. Every operation is per leg and
+//! over `PerLeg` values, generic over how the six are held ([`Lanes`]): [`Narrow`] is three
+//! pairs in SSE2 registers, which every x86-64 processor has; `Wide` is legs 1-4 and 5-6 in
+//! two AVX registers, used only by the integrators' AVX2 copy (chosen at run time where the
+//! processor has it). Elsewhere both are six plain values. Every operation is per leg and
 //! exactly rounded (IEEE 754 `+ - * / sqrt`), and [`PerLeg::sum`] adds in one fixed order, so
-//! both forms give the same bits.
+//! all forms give the same bits.
 //!
 //! Writing the lanes out by hand, rather than leaving loops over arrays to the compiler, is
 //! what keeps them in registers: the compiler's vectoriser splits such loops into scalars and
 //! shuffles as soon as a branch or a padded lane appears. Measured with callgrind on the RK4
 //! co-simulation cycle: loops over eight-lane arrays 5,166 instructions, the same right-hand
-//! side over `PerLeg` 4,966, and plain eight-lane loops for every operation 6,263.
+//! side over `PerLeg` 4,966, and plain eight-lane loops for every operation 6,263. The AVX
+//! registers took the cycle from 4,650 to 4,567 instructions and the adaptive step's
+//! right-hand sides further (criterion: 0.97 us per adaptive step in the previous release's
+//! run, 0.91 us in this one).
 
 use super::stand::LEG_COUNT;
 
@@ -333,7 +337,7 @@ mod lanes {
 }
 
 /// How six per-leg values are held and operated on: [`Narrow`] (SSE2 pairs, every x86-64)
-/// or [`Wide`] (AVX: legs 1-4 and 5-6 in two 256-bit registers). Both give the same bits:
+/// or `Wide` (AVX: legs 1-4 and 5-6 in two 256-bit registers). Both give the same bits:
 /// every operation is per leg, and the sum adds in one fixed order.
 pub trait Lanes: Copy {
     fn new(x: &[f64; LEG_COUNT]) -> Self;
@@ -351,7 +355,10 @@ pub trait Lanes: Copy {
     fn to_array(self) -> [f64; LEG_COUNT];
 }
 
-pub use lanes::{Narrow, Wide};
+pub use lanes::Narrow;
+// Crate-private: its operations execute AVX instructions, so only the AVX2 copy of the
+// right-hand side (behind `unsafe fn derivative_wide`) may make one.
+pub(crate) use lanes::Wide;
 
 /// `components!(|c| expr)` is `[expr with c = 0, 1, 2]`: a vector's three components, each
 /// given per leg, written out. A macro rather than an array `map` or a closure: the AVX2 copy

@@ -357,7 +357,7 @@ impl SpecialForm {
         self.derivative_in::<L, Narrow>(t, y, law, dy)
     }
 
-    /// [`SpecialForm::derivative`] with the legs in AVX registers ([`Wide`]): the same bits.
+    /// [`SpecialForm::derivative`] with the legs in AVX registers (`Wide`): the same bits.
     ///
     /// # Safety
     /// The processor must support AVX, and the caller should be compiled with it (the

@@ -167,6 +167,9 @@ impl<L: LegForceLaw + ?Sized> OdeSystem<SIMULATION_DIM> for PlatformDynamics<'_,
         }
     }
 
+    /// [`PlatformDynamics::derivative`] with the legs in AVX registers. Its lines repeated
+    /// rather than shared through a closure: a closure full of AVX intrinsics is not inlined
+    /// into the AVX2 copy (see `physics::per_leg::components!`).
     #[inline(always)]
     unsafe fn derivative_wide(&self, t: f64, y: &SimulationState, dy: &mut SimulationState) {
         if let Some((body_rate, quadrature_rate)) = dy.split_first_chunk_mut::<STATE_DIM>() {
