@@ -177,6 +177,21 @@ pub trait OdeSystem<const N: usize> {
         Ok(())
     }
 
+    /// [`OdeSystem::check_and_switching`] for the methods' AVX2 copy, as
+    /// [`OdeSystem::derivative_wide`].
+    ///
+    /// # Safety
+    /// The processor must support AVX2 and FMA.
+    #[inline(always)]
+    unsafe fn check_and_switching_wide(
+        &self,
+        t: f64,
+        y: &[f64; N],
+        g: Option<&mut [f64; MAX_SWITCHING]>,
+    ) -> Result<(), Self::Fault> {
+        self.check_and_switching(t, y, g)
+    }
+
     /// Number of switching functions (at most [`MAX_SWITCHING`]; 0 = none, no cost).
     fn switching_count(&self) -> usize {
         0
@@ -403,7 +418,7 @@ impl<S: OdeSystem<N>, const N: usize> OdeSystem<N> for WideRegisters<'_, S> {
     }
     #[inline(always)]
     fn check(&self, t: f64, y: &[f64; N]) -> Result<(), Self::Fault> {
-        self.0.check(t, y)
+        self.check_and_switching(t, y, None)
     }
     #[inline(always)]
     fn check_and_switching(
@@ -412,7 +427,8 @@ impl<S: OdeSystem<N>, const N: usize> OdeSystem<N> for WideRegisters<'_, S> {
         y: &[f64; N],
         g: Option<&mut [f64; MAX_SWITCHING]>,
     ) -> Result<(), Self::Fault> {
-        self.0.check_and_switching(t, y, g)
+        // SAFETY: as in `derivative`.
+        unsafe { self.0.check_and_switching_wide(t, y, g) }
     }
     #[inline(always)]
     fn switching_count(&self) -> usize {

@@ -116,6 +116,40 @@ impl JointArrays {
         LegKinematics { arm, leg, length, inverse_length }
     }
 
+    /// [`JointArrays::kinematics`], computed in lanes `V` where they are cheaper for it
+    /// ([`Lanes::FOR_CHECKS`]); the same bits either way.
+    #[inline(always)]
+    pub fn kinematics_in<V: Lanes>(&self, state: &BodyState) -> LegKinematics {
+        if !V::FOR_CHECKS {
+            return self.kinematics(state);
+        }
+        let LegLanes { arm, leg, length } = self.legs::<V>(state);
+        LegKinematics {
+            arm: components!(|c| arm[c].to_array()),
+            leg: components!(|c| leg[c].to_array()),
+            length: length.to_array(),
+            inverse_length: (PerLeg::splat(1.0) / length).to_array(),
+        }
+    }
+
+    /// [`JointArrays::length_rates`], in lanes `V` as [`JointArrays::kinematics_in`].
+    #[inline(always)]
+    pub fn length_rates_in<V: Lanes>(&self, state: &BodyState, legs: &LegKinematics) -> [f64; LEG_COUNT] {
+        if !V::FOR_CHECKS {
+            return self.length_rates(state, legs);
+        }
+        let [d1, d2, d3] = &state.e_dot;
+        let a = components!(|c| PerLeg::<V>::new(&self.platform[c]));
+        let length = PerLeg::<V>::new(&legs.length);
+        let inverse_length = PerLeg::<V>::new(&legs.inverse_length);
+        let n = components!(|c| length.where_positive(PerLeg::new(&legs.leg[c]) * inverse_length));
+        let velocity = components!(|c| {
+            PerLeg::splat(state.v[c])
+                + (PerLeg::splat(d1[c]) * a[0] + PerLeg::splat(d2[c]) * a[1] + PerLeg::splat(d3[c]) * a[2])
+        });
+        (n[0] * velocity[0] + n[1] * velocity[1] + n[2] * velocity[2]).to_array()
+    }
+
     /// Leg length rates `dl_k/dt = n_k . (v + d(R A_k)/dt)`, m/s, as [`LegGeometry::length_rates`]
     /// (the same arithmetic; 0 for a collapsed leg).
     #[inline(always)]
@@ -201,11 +235,19 @@ mod tests {
             );
             let lanes = joints.legs::<Narrow>(&state);
             let arrays = joints.kinematics(&state);
+            assert_eq!(joints.kinematics_in::<Narrow>(&state), arrays);
             let single = LegGeometry::new(&stand, &state);
             let bits = |x: [f64; LEG_COUNT]| x.map(f64::to_bits);
             #[cfg(target_arch = "x86_64")]
             if std::arch::is_x86_feature_detected!("avx") {
-                let wide = joints.legs::<super::super::per_leg::Wide>(&state);
+                use super::super::per_leg::Wide;
+                let wide_arrays = joints.kinematics_in::<Wide>(&state);
+                assert_eq!(wide_arrays, arrays);
+                assert_eq!(
+                    bits(joints.length_rates_in::<Wide>(&state, &arrays)),
+                    bits(joints.length_rates(&state, &arrays))
+                );
+                let wide = joints.legs::<Wide>(&state);
                 assert_eq!(bits(wide.length.to_array()), bits(arrays.length));
                 for c in 0..3 {
                     assert_eq!(bits(wide.arm[c].to_array()), bits(arrays.arm[c]));

@@ -43,6 +43,7 @@ mod lanes {
     }
 
     impl super::Lanes for Narrow {
+        const FOR_CHECKS: bool = false;
         #[inline(always)]
         fn new(x: &[f64; 6]) -> Self {
             // SAFETY (here and below): SSE2 is part of the x86-64 baseline.
@@ -144,6 +145,7 @@ mod lanes {
 
     // SAFETY (every `unsafe` block of this impl): a `Wide` exists only where AVX runs (above).
     impl super::Lanes for Wide {
+        const FOR_CHECKS: bool = true;
         #[inline(always)]
         fn new(x: &[f64; 6]) -> Self {
             unsafe { Wide(_mm256_set_pd(x[3], x[2], x[1], x[0]), _mm256_set_pd(0.0, 0.0, x[5], x[4])) }
@@ -268,6 +270,7 @@ mod lanes {
     pub type Wide = Narrow;
 
     impl super::Lanes for Narrow {
+        const FOR_CHECKS: bool = false;
         #[inline(always)]
         fn new(x: &[f64; 6]) -> Self {
             Narrow(*x)
@@ -340,6 +343,9 @@ mod lanes {
 /// or `Wide` (AVX: legs 1-4 and 5-6 in two 256-bit registers). Both give the same bits:
 /// every operation is per leg, and the sum adds in one fixed order.
 pub trait Lanes: Copy {
+    /// Whether the checks at the end of a step compute the legs in these lanes too (see
+    /// [`crate::physics::legs::JointArrays::kinematics_in`]).
+    const FOR_CHECKS: bool;
     fn new(x: &[f64; LEG_COUNT]) -> Self;
     fn splat(x: f64) -> Self;
     fn add(self, other: Self) -> Self;

@@ -13,6 +13,7 @@ use crate::physics::end_stops::{EndStops, STROKE_LIMITS};
 use crate::physics::error::{ParameterError, PhysicsFault};
 use crate::physics::forces::LegForceLaw;
 use crate::physics::legs::{LegGeometry, LegKinematics};
+use crate::physics::per_leg::{Lanes, Narrow, Wide};
 use crate::physics::projection::project_onto_constraints;
 use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::Stand;
@@ -151,6 +152,28 @@ impl<L: LegForceLaw + ?Sized> PlatformDynamics<'_, L> {
             *x = force_moment_determinant(legs, self.guard.characteristic_length);
         }
     }
+
+    /// The guard, the switching functions and the leg outputs from one computation of the
+    /// legs (in lanes `V`: see `JointArrays::kinematics_in`).
+    #[inline(always)]
+    fn check_and_switching_in<V: Lanes>(
+        &self,
+        y: &SimulationState,
+        g: Option<&mut [f64; MAX_SWITCHING]>,
+    ) -> Result<(), PhysicsFault> {
+        let state = BodyState::from_vector(body(y));
+        if !state.is_finite() {
+            return Err(PhysicsFault::NonFiniteState);
+        }
+        let legs = self.form.joints.kinematics_in::<V>(&state);
+        self.guard.check_legs(&state, &legs)?;
+        let ldot = self.form.joints.length_rates_in::<V>(&state, &legs);
+        self.checked_legs.set(Some(LegOutputs { l: legs.lengths(), ldot }));
+        if let Some(g) = g {
+            self.switching_of(&legs, g, self.tracks_singularities());
+        }
+        Ok(())
+    }
 }
 
 impl<L: LegForceLaw + ?Sized> OdeSystem<SIMULATION_DIM> for PlatformDynamics<'_, L> {
@@ -209,18 +232,17 @@ impl<L: LegForceLaw + ?Sized> OdeSystem<SIMULATION_DIM> for PlatformDynamics<'_,
         y: &SimulationState,
         g: Option<&mut [f64; MAX_SWITCHING]>,
     ) -> Result<(), PhysicsFault> {
-        let state = BodyState::from_vector(body(y));
-        if !state.is_finite() {
-            return Err(PhysicsFault::NonFiniteState);
-        }
-        let legs = self.form.joints.kinematics(&state);
-        self.guard.check_legs(&state, &legs)?;
-        let ldot = self.form.joints.length_rates(&state, &legs);
-        self.checked_legs.set(Some(LegOutputs { l: legs.lengths(), ldot }));
-        if let Some(g) = g {
-            self.switching_of(&legs, g, self.tracks_singularities());
-        }
-        Ok(())
+        self.check_and_switching_in::<Narrow>(y, g)
+    }
+
+    #[inline(always)]
+    unsafe fn check_and_switching_wide(
+        &self,
+        _t: f64,
+        y: &SimulationState,
+        g: Option<&mut [f64; MAX_SWITCHING]>,
+    ) -> Result<(), PhysicsFault> {
+        self.check_and_switching_in::<Wide>(y, g)
     }
 
     fn switching_count(&self) -> usize {
