@@ -66,6 +66,14 @@ fn runs_read_what_single_reads_give_and_follow_steps_and_parameters() {
     assert_eq!(h.set("r0[3]", z0 + 0.02), fmi2OK);
     let raised = assert_lengths_match_the_pose(&h, "r0[3] raised by 2 cm");
     assert!(raised[..6].iter().zip(&before[..6]).all(|(a, b)| a > b), "{raised:?} {before:?}");
+    // Parameters set in one call out of order (reference by reference, not as a run): the
+    // legs follow too, then back.
+    let x0 = h.get("r0[1]");
+    assert_eq!(h.set_many(&["r0[3]", "r0[1]"], &[z0 + 0.05, x0 + 0.03]), fmi2OK);
+    let moved = assert_lengths_match_the_pose(&h, "r0[3] raised by 5 cm and r0[1] moved by 3 cm in one call");
+    assert_ne!(moved[..6], raised[..6]);
+    assert_eq!(h.set_many(&["r0[3]", "r0[1]"], &[z0 + 0.02, x0]), fmi2OK);
+    assert_eq!(assert_lengths_match_the_pose(&h, "back"), raised);
     assert_eq!(h.exit(), fmi2OK);
 
     let names = legs();

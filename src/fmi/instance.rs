@@ -85,9 +85,10 @@ struct Access {
     /// address (FMI 2: to the end of the array; FMI 3: the variable's own width): the
     /// longest run a set of consecutive references may store in one call to the model.
     run: usize,
-    /// The cache blocks a set of this variable makes stale: those holding an output that
-    /// depends on it (`<ModelStructure>`: outputs' and initial unknowns' dependencies) for
-    /// an input; every block for anything else (parameters change the whole model).
+    /// The cache blocks a set of this variable makes stale: for an input, those holding a
+    /// value that depends on it (`<ModelStructure>`: the dependencies of outputs, initial
+    /// unknowns and derivatives); for anything else every block (parameters change the whole
+    /// model).
     stales: u32,
 }
 
@@ -304,9 +305,9 @@ pub struct Instance {
     pub state: ModelState,
     pub logger: Logger,
     /// Private, so that every change invalidates the value cache: through
-    /// [`Instance::model_mut`] or [`Instance::replace_model`], or by clearing `fresh` where
-    /// another field is borrowed alongside (`set_real`, `set_boolean`,
-    /// `update_discrete_states`).
+    /// [`Instance::model_mut`] or [`Instance::replace_model`], by [`Instance::stale_after_set`]
+    /// for sets of Real and Boolean variables, or by clearing `fresh` where another field is
+    /// borrowed alongside (`update_discrete_states`).
     model: AnyModel,
     /// Real values by value reference, for the cache blocks set in `fresh` (see
     /// [`crate::models::FmuModel::cache_block`]).
@@ -823,7 +824,8 @@ impl Instance {
 
     /// Reads the values of one reference into `values[filled..]`: from the value cache
     /// (filling its block if stale) or through the model. Returns the number of values read.
-    /// Out of line, so that the loops of [`Instance::get_real`] keep their registers.
+    /// Out of line, so that the loops of [`Instance::get_real_elementwise`] keep their
+    /// registers.
     #[inline(never)]
     fn read_real(&mut self, vrs: &[u32], vr: u32, values: &mut [f64], filled: usize) -> Result<usize, Status> {
         let a = self.access(vr, BaseType::Real)?;
@@ -874,7 +876,8 @@ impl Instance {
     pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Status {
         if let Some(a) = self.settable_run(vrs, values) {
             // Consecutive elements of one array (the leg forces): checked in one pass, stored
-            // in one call; only the cached outputs that depend on the input go stale.
+            // in one call; only the cached values that depend on the input go stale (all the
+            // elements share the entry's `stales`, as `stale_after_set` would find).
             self.fresh &= !a.stales;
             return match self.model.set_real_run(VariableRef { group: a.group, index: a.index }, values) {
                 Ok(()) => Status::Ok,
@@ -892,7 +895,7 @@ impl Instance {
         if let Err(s) = self.check_set_real(vrs, values) {
             return s;
         }
-        self.fresh = 0;
+        self.stale_after_set(vrs);
         let access = &self.access;
         let result = if self.version == FmiVersion::Fmi2 {
             // One element per reference (checked above).
@@ -908,6 +911,15 @@ impl Instance {
             Ok(()) => Status::Ok,
             Err(m) => self.error(&m),
         }
+    }
+
+    /// Marks stale the cached values a set of `vrs` changes ([`Access::stales`]); an unknown
+    /// reference (refused before anything is set) counts as changing everything.
+    fn stale_after_set(&mut self, vrs: &[u32]) {
+        let stale = vrs.iter().fold(0u32, |mask, &vr| {
+            mask | self.access.get(vr as usize).copied().flatten().map_or(u32::MAX, |a| a.stales)
+        });
+        self.fresh &= !stale;
     }
 
     /// When `vrs` address consecutive elements of one settable Real group (FMI 2:
@@ -1000,7 +1012,7 @@ impl Instance {
         if let Err(s) = self.check_values(vrs, BaseType::Boolean, values.len(), true) {
             return s;
         }
-        self.fresh = 0;
+        self.stale_after_set(vrs);
         for (r, &x) in elements(&self.access, vrs).zip(values) {
             if let Err(m) = self.model.set_boolean(r, decode(x)) {
                 return self.error(&m);
@@ -1564,7 +1576,6 @@ impl Instance {
         }
     }
 
-    /// The bytes of one of this instance's states.
     /// `fmi2SerializeFMUstate`/`fmi3SerializeFMUState`: a state's bytes into the importer's
     /// buffer (`out`, all the bytes it gave), which must be large enough.
     pub fn serialize_fmu_state(&self, handle: *mut c_void, out: &mut [u8]) -> Status {
@@ -1581,6 +1592,7 @@ impl Instance {
         }
     }
 
+    /// The bytes of one of this instance's states.
     pub fn fmu_state_bytes(&self, handle: *mut c_void) -> Result<&[u8], Status> {
         match self.own_state(handle).and_then(|i| self.fmu_states.get(i)) {
             Some(s) => Ok(&s.bytes),

@@ -132,10 +132,7 @@ pub fn force_moment_determinant(legs: &LegKinematics, ell: f64) -> f64 {
     let mut a = [[0.0f64; 6]; 6];
     let inv_ell = 1.0 / ell;
     // Row by row over the legs (vector registers), the arithmetic of nalgebra's cross product.
-    let directions = legs.directions();
-    for c in 0..3 {
-        a[c] = std::array::from_fn(|k| directions[c][k]);
-    }
+    a[..3].copy_from_slice(&legs.directions());
     let arm = &legs.arm;
     for k in 0..LEG_COUNT {
         let n = [a[0][k], a[1][k], a[2][k]];

@@ -76,9 +76,9 @@ impl JointArrays {
         JointArrays { platform: by_component(&stand.platform_joints), base: by_component(&stand.base_joints) }
     }
 
-    /// The legs of a state, side by side, for the right-hand side. The same arithmetic in the same order as
-    /// [`LegGeometry::new`] (arm `e1 A1 + e2 A2 + e3 A3`, leg `r + arm - B`, length), so arms,
-    /// legs and lengths are equal to the bit.
+    /// The legs of a state, side by side, for the right-hand side. The same arithmetic in the
+    /// same order as [`LegGeometry::new`] (arm `e1 A1 + e2 A2 + e3 A3`, leg `r + arm - B`,
+    /// length), so arms, legs and lengths are equal to the bit.
     #[inline(always)]
     pub fn legs<L: Lanes>(&self, state: &BodyState) -> LegLanes<L> {
         let [e1, e2, e3] = &state.e;
@@ -138,16 +138,32 @@ impl JointArrays {
         if !V::FOR_CHECKS {
             return self.length_rates(state, legs);
         }
+        let leg = components!(|c| PerLeg::<V>::new(&legs.leg[c]));
+        let (_, rates) =
+            self.directions_and_rates(state, &leg, PerLeg::new(&legs.length), PerLeg::new(&legs.inverse_length));
+        rates.to_array()
+    }
+
+    /// Unit leg directions (0 for a collapsed leg) and length rates
+    /// `dl_k/dt = n_k . (v + d(R A_k)/dt)`, m/s, of legs given side by side: the arithmetic of
+    /// [`JointArrays::length_rates`] in lanes, for the end stops' contact law and the AVX2
+    /// copy's checks.
+    #[inline(always)]
+    pub fn directions_and_rates<V: Lanes>(
+        &self,
+        state: &BodyState,
+        leg: &[PerLeg<V>; 3],
+        length: PerLeg<V>,
+        inverse_length: PerLeg<V>,
+    ) -> ([PerLeg<V>; 3], PerLeg<V>) {
         let [d1, d2, d3] = &state.e_dot;
         let a = components!(|c| PerLeg::<V>::new(&self.platform[c]));
-        let length = PerLeg::<V>::new(&legs.length);
-        let inverse_length = PerLeg::<V>::new(&legs.inverse_length);
-        let n = components!(|c| length.where_positive(PerLeg::new(&legs.leg[c]) * inverse_length));
+        let n = components!(|c| length.where_positive(leg[c] * inverse_length));
         let velocity = components!(|c| {
             PerLeg::splat(state.v[c])
                 + (PerLeg::splat(d1[c]) * a[0] + PerLeg::splat(d2[c]) * a[1] + PerLeg::splat(d3[c]) * a[2])
         });
-        (n[0] * velocity[0] + n[1] * velocity[1] + n[2] * velocity[2]).to_array()
+        (n, n[0] * velocity[0] + n[1] * velocity[1] + n[2] * velocity[2])
     }
 
     /// Leg length rates `dl_k/dt = n_k . (v + d(R A_k)/dt)`, m/s, as [`LegGeometry::length_rates`]

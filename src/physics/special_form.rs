@@ -315,15 +315,7 @@ impl SpecialForm {
         leg: &[PerLeg<V>; 3],
         length: PerLeg<V>,
     ) -> StopWrench {
-        let inverse_length = PerLeg::splat(1.0) / length;
-        let n = components!(|c| length.where_positive(leg[c] * inverse_length));
-        let [d1, d2, d3] = &state.e_dot;
-        let a = components!(|c| PerLeg::new(&joints.platform[c]));
-        let velocity = components!(|c| {
-            PerLeg::splat(state.v[c])
-                + (PerLeg::splat(d1[c]) * a[0] + PerLeg::splat(d2[c]) * a[1] + PerLeg::splat(d3[c]) * a[2])
-        });
-        let ldot = n[0] * velocity[0] + n[1] * velocity[1] + n[2] * velocity[2];
+        let (n, ldot) = joints.directions_and_rates(state, leg, length, PerLeg::splat(1.0) / length);
         // Penetration delta and the sign s of the stop force: +1 at the lower stop, -1 at the
         // upper one; delta' = -s ldot.
         let below = PerLeg::new(&stops.lower) - length;

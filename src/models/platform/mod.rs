@@ -249,6 +249,13 @@ impl PlatformModel {
         })
     }
 
+    /// After a set of Real values: in Initialization Mode the outputs follow the parameters.
+    fn values_set(&mut self) {
+        if self.simulation.is_none() {
+            self.invalidate_outputs();
+        }
+    }
+
     /// The current state changed: the cached outputs are stale.
     fn invalidate_outputs(&mut self) {
         self.outputs = None;
@@ -444,10 +451,7 @@ impl FmuModel for PlatformModel {
     fn set_real(&mut self, var: VariableRef, value: f64) -> Result<(), String> {
         let slot = self.parameter_slot(var).ok_or("not a settable Real variable")?;
         *slot = value;
-        if self.simulation.is_none() {
-            // In Initialization Mode outputs follow the parameters.
-            self.invalidate_outputs();
-        }
+        self.values_set();
         Ok(())
     }
 
@@ -458,9 +462,7 @@ impl FmuModel for PlatformModel {
             && let Some(forces) = self.forces.get_mut(first.index..first.index + values.len())
         {
             forces.copy_from_slice(values);
-            if self.simulation.is_none() {
-                self.invalidate_outputs();
-            }
+            self.values_set();
             return Ok(());
         }
         super::set_one_by_one(self, first, values)
