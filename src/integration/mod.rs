@@ -147,6 +147,16 @@ pub trait OdeSystem<const N: usize> {
         self.derivative(t, y, dy)
     }
 
+    /// `f(t, y)` returned by value, for a method's stages: the array is written once by
+    /// [`OdeSystem::derivative`] (the compiler drops the zeroing before it), where an array
+    /// declared for the whole call is zeroed on every call.
+    #[inline(always)]
+    fn derivative_of(&self, t: f64, y: &[f64; N]) -> [f64; N] {
+        let mut dy = [0.0; N];
+        self.derivative(t, y, &mut dy);
+        dy
+    }
+
     /// Called on every accepted step's end state; may move it (e.g. back onto constraints).
     fn after_step(&self, _y: &mut [f64; N]) {}
 
@@ -477,12 +487,29 @@ impl<const N: usize> Events<'_, N> {
 
 /// Iterates over the set bits of `mask`, lowest first.
 pub(crate) fn bits(mask: u32) -> impl Iterator<Item = usize> {
-    (0..32).filter(move |i| mask >> i & 1 == 1)
+    // Lowest set bit first, each step clearing it: nothing to do for an empty mask (every
+    // step without a crossing), where a scan of the 32 positions cost 160 instructions.
+    let mut rest = mask;
+    std::iter::from_fn(move || {
+        (rest != 0).then(|| {
+            let i = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
+            i
+        })
+    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn bits_lists_the_set_bits_lowest_first() {
+        assert_eq!(bits(0).count(), 0);
+        assert_eq!(bits(0b1011).collect::<Vec<_>>(), [0, 1, 3]);
+        assert_eq!(bits(1 << 31 | 1 << 4).collect::<Vec<_>>(), [4, 31]);
+        assert_eq!(bits(u32::MAX).collect::<Vec<_>>(), (0..32).collect::<Vec<_>>());
+    }
 
     /// A ball dropped from height `H` onto a stiff linear spring floor (`y'' = -g` above the
     /// floor, `y'' = -g - k y` in it): the right-hand side has a kink at `y = 0`, and the

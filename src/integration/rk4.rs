@@ -38,7 +38,6 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
     }
     let n = steps as u64;
     let h = span / steps;
-    let (mut k1, mut k2, mut k3, mut k4, mut stage) = ([0.0; N], [0.0; N], [0.0; N], [0.0; N], [0.0; N]);
     for i in 0..n {
         let t = t0 + i as f64 * h;
         let t_end = if i + 1 == n { t1 } else { t0 + (i + 1) as f64 * h };
@@ -46,22 +45,17 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
         if switching > 0 {
             y_start = *y;
         }
-        system.derivative(t, y, &mut k1);
-        for j in 0..N {
-            stage[j] = y[j] + 0.5 * h * k1[j];
-        }
+        // Stages by value (`derivative_of`, `from_fn`): written once, never zeroed first.
+        let k1 = system.derivative_of(t, y);
+        let mut stage: [f64; N] = std::array::from_fn(|j| y[j] + 0.5 * h * k1[j]);
         in_memory(&mut stage);
-        system.derivative(t_mid, &stage, &mut k2);
-        for j in 0..N {
-            stage[j] = y[j] + 0.5 * h * k2[j];
-        }
+        let k2 = system.derivative_of(t_mid, &stage);
+        let mut stage: [f64; N] = std::array::from_fn(|j| y[j] + 0.5 * h * k2[j]);
         in_memory(&mut stage);
-        system.derivative(t_mid, &stage, &mut k3);
-        for j in 0..N {
-            stage[j] = y[j] + h * k3[j];
-        }
+        let k3 = system.derivative_of(t_mid, &stage);
+        let mut stage: [f64; N] = std::array::from_fn(|j| y[j] + h * k3[j]);
         in_memory(&mut stage);
-        system.derivative(t_end, &stage, &mut k4);
+        let k4 = system.derivative_of(t_end, &stage);
         for j in 0..N {
             y[j] += h / 6.0 * (k1[j] + 2.0 * (k2[j] + k3[j]) + k4[j]);
         }

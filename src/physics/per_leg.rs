@@ -17,6 +17,7 @@
 //! right-hand sides further (criterion: 0.97 us per adaptive step in the previous release's
 //! run, 0.91 us in this one).
 
+use super::per_axis::AxisLanes;
 use super::stand::LEG_COUNT;
 
 #[cfg(target_arch = "x86_64")]
@@ -43,6 +44,7 @@ mod lanes {
     }
 
     impl super::Lanes for Narrow {
+        type Axes = crate::physics::per_axis::Pair;
         const FOR_CHECKS: bool = false;
         #[inline(always)]
         fn new(x: &[f64; 6]) -> Self {
@@ -145,6 +147,7 @@ mod lanes {
 
     // SAFETY (every `unsafe` block of this impl): a `Wide` exists only where AVX runs (above).
     impl super::Lanes for Wide {
+        type Axes = crate::physics::per_axis::Quad;
         const FOR_CHECKS: bool = true;
         #[inline(always)]
         fn new(x: &[f64; 6]) -> Self {
@@ -270,6 +273,7 @@ mod lanes {
     pub type Wide = Narrow;
 
     impl super::Lanes for Narrow {
+        type Axes = crate::physics::per_axis::Pair;
         const FOR_CHECKS: bool = false;
         #[inline(always)]
         fn new(x: &[f64; 6]) -> Self {
@@ -343,6 +347,8 @@ mod lanes {
 /// or `Wide` (AVX: legs 1-4 and 5-6 in two 256-bit registers). Both give the same bits:
 /// every operation is per leg, and the sum adds in one fixed order.
 pub trait Lanes: Copy {
+    /// The same registers for three per-axis values ([`super::per_axis`]).
+    type Axes: AxisLanes;
     /// Whether the checks at the end of a step compute the legs in these lanes too (see
     /// [`crate::physics::legs::JointArrays::kinematics_in`]).
     const FOR_CHECKS: bool;

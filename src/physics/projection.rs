@@ -6,6 +6,7 @@
 use nalgebra::Matrix3;
 
 use super::body_state::{StateVector, layout};
+use super::per_axis::{AxisLanes, AxisRows, Pair};
 
 /// Newton-Schulz iterations stop once the orthogonality defect is below this.
 const ORTHOGONALITY_TARGET: f64 = 1e-15;
@@ -13,38 +14,69 @@ const ORTHOGONALITY_TARGET: f64 = 1e-15;
 /// use a polar decomposition by SVD instead of the iteration, which needs a small defect.
 const NEWTON_SCHULZ_LIMIT: f64 = 0.1;
 
-fn defect(q: &Matrix3<f64>) -> f64 {
-    (q.transpose() * q - Matrix3::identity()).abs().max()
+/// The frame's products `e_a . e_a` (lane `a`) and `e_a . e_(a+1)`: the entries of `Q^T Q`
+/// for `Q = [e1 e2 e3]` (symmetric, so these six are all of them).
+#[inline(always)]
+fn gram(e: &AxisRows<Pair>) -> (Pair, Pair) {
+    (e.dot(e), e.dot(&e.next()))
 }
 
-/// Replaces `e1, e2, e3` by the nearest orthonormal frame (polar factor of `R`, no axis
-/// preferred, unlike Gram-Schmidt) and `e1', e2', e3'` by their projection on the tangent
-/// space at that frame: `R' <- R skew(R^T R')`.
+/// `max |Q^T Q - I|` over the entries; infinite if any is not finite.
+#[inline(always)]
+fn defect(e: &AxisRows<Pair>) -> f64 {
+    let (diagonal, off) = gram(e);
+    let (diagonal, off) = (diagonal.to_array(), off.to_array());
+    let entries = [diagonal[0] - 1.0, diagonal[1] - 1.0, diagonal[2] - 1.0, off[0], off[1], off[2]];
+    let finite = entries.iter().fold(true, |all, x| all & x.is_finite());
+    if finite { entries.iter().fold(0.0, |d: f64, x| d.max(x.abs())) } else { f64::INFINITY }
+}
+
+/// Replaces `e1, e2, e3` by the nearest orthonormal frame (polar factor of `Q = [e1 e2 e3]`,
+/// no axis preferred, unlike Gram-Schmidt) and `e1', e2', e3'` by their projection on the
+/// tangent space at that frame: `Q' <- Q skew(Q^T Q')`. Written per axis in lanes
+/// ([`AxisRows`]): the matrix products are the dot products `e_a . e_b`, `e_a . e_b'` and
+/// combinations of the axes.
 #[inline(always)]
 pub fn project_onto_constraints(y: &mut StateVector) {
-    let mut q = Matrix3::from_column_slice(&y[layout::E..layout::E + 9]);
-    let mut d = defect(&q);
-    if d > NEWTON_SCHULZ_LIMIT || !d.is_finite() {
+    let Some(components) = y.get(layout::E..layout::E + 9).and_then(|s| <&[f64; 9]>::try_from(s).ok()) else {
+        return;
+    };
+    let mut e = AxisRows::<Pair>::from_components(components);
+    let mut d = defect(&e);
+    if d > NEWTON_SCHULZ_LIMIT {
+        let q = Matrix3::from_column_slice(components);
         let svd = q.svd(true, true);
         if let (Some(u), Some(v_t)) = (svd.u, svd.v_t) {
-            q = u * v_t;
+            let polar = u * v_t;
+            if let Ok(c) = <&[f64; 9]>::try_from(polar.as_slice()) {
+                e = AxisRows::from_components(c);
+            }
         }
-        d = defect(&q);
+        d = defect(&e);
     }
     // Newton-Schulz for the polar factor: Q <- Q (3I - Q^T Q)/2, quadratic convergence;
-    // from an integrator's drift of 1e-10 two iterations reach round-off.
+    // from an integrator's drift of 1e-10 two iterations reach round-off. Per axis:
+    // e_b <- (3 - e_b.e_b)/2 e_b - (e_b.e_(b+1))/2 e_(b+1) - (e_(b-1).e_b)/2 e_(b-1).
     let mut iterations = 0;
     while d > ORTHOGONALITY_TARGET && iterations < 6 {
-        q = q * (Matrix3::identity() * 3.0 - q.transpose() * q) * 0.5;
-        d = defect(&q);
+        let (diagonal, off) = gram(&e);
+        let half = Pair::splat(0.5);
+        let own = Pair::splat(3.0).sub(diagonal).mul(half);
+        let next = Pair::splat(0.0).sub(off.mul(half));
+        e = e.combine(own, next, next.previous());
+        d = defect(&e);
         iterations += 1;
     }
-    let q_dot = Matrix3::from_column_slice(&y[layout::E_DOT..layout::E_DOT + 9]);
-    let s = q.transpose() * q_dot;
-    let w = (s - s.transpose()) * 0.5;
-    let q_dot = q * w;
-    y[layout::E..layout::E + 9].copy_from_slice(q.as_slice());
-    y[layout::E_DOT..layout::E_DOT + 9].copy_from_slice(q_dot.as_slice());
+    // Q^T Q' is e_a . e_b'; its skew part W has W_(a,a+1) = (e_a.e_(a+1)' - e_(a+1).e_a')/2,
+    // and column b of Q W is e_b' <- W_(b-1,b) e_(b-1) - W_(b,b+1) e_(b+1).
+    let Some(rates) = y.get(layout::E_DOT..layout::E_DOT + 9).and_then(|s| <&[f64; 9]>::try_from(s).ok()) else {
+        return;
+    };
+    let e_dot = AxisRows::<Pair>::from_components(rates);
+    let w = e.dot(&e_dot.next()).sub(e.next().dot(&e_dot)).mul(Pair::splat(0.5));
+    let e_dot = e.combine(Pair::splat(0.0), Pair::splat(0.0).sub(w), w.previous());
+    y[layout::E..layout::E + 9].copy_from_slice(&e.components());
+    y[layout::E_DOT..layout::E_DOT + 9].copy_from_slice(&e_dot.components());
 }
 
 #[cfg(test)]

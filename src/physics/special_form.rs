@@ -20,6 +20,7 @@ use super::body_state::{BodyState, STATE_DIM, StateVector, layout};
 use super::end_stops::EndStops;
 use super::forces::LegForceLaw;
 use super::legs::{JointArrays, LegGeometry, LegLanes};
+use super::per_axis::{AxisLanes, AxisRows, Pair};
 use super::per_leg::{Lanes, Narrow, PerLeg, Wide, components};
 use super::stand::{LEG_COUNT, Stand};
 
@@ -45,6 +46,13 @@ pub struct SpecialForm {
     c23: (f64, f64),
     /// `2 I1/(I3+I1)`, `2 I3/(I3+I1)`: coupling of `e3'.e1'` into `e3''` and `e1''`.
     c31: (f64, f64),
+    /// The same coefficients per axis ([`AxisRows`]: axis `a` in lane `a`, indices mod 3):
+    /// `1/(I_a + I_(a+1))` (`1/J3, 1/J1, 1/J2`)...
+    inverse_pair_axes: [f64; 3],
+    /// ... the coupling of `e_a'.e_(a+1)'` into `e_a''` (`c12.0, c23.0, c31.0`) ...
+    coupling_next: [f64; 3],
+    /// ... and into `e_(a+1)''` (`c12.1, c23.1, c31.1`).
+    coupling_previous: [f64; 3],
     /// Baumgarte stabilisation rate `alpha` (1/s): `e_a'' -= 1/2 sum_b K_ab e_b` with
     /// `K = 2 alpha dC/dt + alpha² C`, `C_ab = e_a.e_b - delta_ab`, so that the constraint
     /// residual obeys `C'' + 2 alpha C' + alpha² C = 0` near the manifold (critically damped
@@ -66,6 +74,9 @@ impl SpecialForm {
             c12: (2.0 * i2 / (i1 + i2), 2.0 * i1 / (i1 + i2)),
             c23: (2.0 * i3 / (i2 + i3), 2.0 * i2 / (i2 + i3)),
             c31: (2.0 * i1 / (i3 + i1), 2.0 * i3 / (i3 + i1)),
+            inverse_pair_axes: [1.0 / (i1 + i2), 1.0 / (i2 + i3), 1.0 / (i3 + i1)],
+            coupling_next: [2.0 * i2 / (i1 + i2), 2.0 * i3 / (i2 + i3), 2.0 * i1 / (i3 + i1)],
+            coupling_previous: [2.0 * i1 / (i1 + i2), 2.0 * i2 / (i2 + i3), 2.0 * i3 / (i3 + i1)],
             baumgarte_rate: 0.0,
             stops: None,
             stroke: [[f64::NEG_INFINITY; LEG_COUNT], [f64::INFINITY; LEG_COUNT]],
@@ -102,29 +113,46 @@ impl SpecialForm {
 
     /// Second derivatives `(r'', [e1'', e2'', e3''])` for the resultant leg force `force` and
     /// leg moment `moment` about the centre of mass (both inertial components).
-    #[inline(always)]
     pub fn accelerations(
         &self,
         state: &BodyState,
         force: &Vector3<f64>,
         moment: &Vector3<f64>,
     ) -> (Vector3<f64>, [Vector3<f64>; 3]) {
+        let (e, e_dot) = (AxisRows::<Pair>::of(&state.e), AxisRows::of(&state.e_dot));
+        self.accelerations_of(state, &e, &e_dot, force, moment)
+    }
+
+    /// [`SpecialForm::accelerations`] with the axes and their rates as rows.
+    ///
+    /// The module's formula grouped per axis (indices mod 3):
+    /// `e_a'' = k_a e_a + n_a e_(a+1) + p_a e_(a-1)` with
+    /// - `k_a = -|e_a'|²`,
+    /// - `n_a = L_(a-1)/(I_a + I_(a+1)) - c_a (e_a'.e_(a+1)')`,
+    /// - `p_a = -(c'_(a-1) (e_(a-1)'.e_a') + L_(a+1)/(I_(a-1) + I_a))`,
+    ///
+    /// where `c_a = 2 I_(a+1)/(I_a + I_(a+1))` and `c'_a = 2 I_a/(I_a + I_(a+1))`; each
+    /// coefficient computed for the three axes side by side.
+    #[inline(always)]
+    fn accelerations_of<A: AxisLanes>(
+        &self,
+        state: &BodyState,
+        e: &AxisRows<A>,
+        e_dot: &AxisRows<A>,
+        force: &Vector3<f64>,
+        moment: &Vector3<f64>,
+    ) -> (Vector3<f64>, [Vector3<f64>; 3]) {
         let mut a = force * self.inverse_mass;
         a.z -= self.stand.gravity;
 
-        let [e1, e2, e3] = &state.e;
-        let [d1, d2, d3] = &state.e_dot;
-        let (l1, l2, l3) = (moment.dot(e1), moment.dot(e2), moment.dot(e3));
-        let [inv23, inv31, inv12] = self.inverse_pair;
-        let (p12, p23, p31) = (d1.dot(d2), d2.dot(d3), d3.dot(d1));
-
-        let e1_dd = e1 * (-d1.norm_squared()) - e2 * (self.c12.0 * p12) - e3 * (self.c31.1 * p31) + e2 * (l3 * inv12)
-            - e3 * (l2 * inv31);
-        let e2_dd = e2 * (-d2.norm_squared()) - e3 * (self.c23.0 * p23) - e1 * (self.c12.1 * p12) + e3 * (l1 * inv23)
-            - e1 * (l3 * inv12);
-        let e3_dd = e3 * (-d3.norm_squared()) - e1 * (self.c31.0 * p31) - e2 * (self.c23.1 * p23) + e1 * (l2 * inv31)
-            - e2 * (l1 * inv23);
-        let mut e_dd = [e1_dd, e2_dd, e3_dd];
+        let l = e.dot_with(moment);
+        let pairs = e_dot.dot(&e_dot.next());
+        let inverse = A::new(self.inverse_pair_axes);
+        let own = A::splat(0.0).sub(e_dot.dot(e_dot));
+        let next = l.previous().mul(inverse).sub(A::new(self.coupling_next).mul(pairs));
+        let previous = A::splat(0.0)
+            .sub(A::new(self.coupling_previous).mul(pairs).previous().add(l.next().mul(inverse.previous())));
+        let mut e_dd = e.combine(own, next, previous).vectors();
         if self.baumgarte_rate > 0.0 {
             let correction = self.baumgarte_correction(&state.to_vector());
             for (e_dd_a, c) in e_dd.iter_mut().zip(correction) {
@@ -380,11 +408,13 @@ impl SpecialForm {
             law.leg_forces_at(t)
         };
         let w = self.wrench_of::<V>(&state, &u);
-        let power = LegPower {
-            actuator: w.force.dot(&state.v) + w.moment.dot(&state.angular_velocity_inertial()),
-            dissipation: w.stop.dissipation,
-        };
-        let (a, e_dd) = self.accelerations(&state, &(w.force + w.stop.force), &(w.moment + w.stop.moment));
+        let (e, e_dot) = (AxisRows::<V::Axes>::of(&state.e), AxisRows::of(&state.e_dot));
+        // The inertial angular velocity `1/2 sum_a e_a x e_a'`, as `BodyState`'s.
+        let omega = e.cross_sum(&e_dot) * 0.5;
+        let power =
+            LegPower { actuator: w.force.dot(&state.v) + w.moment.dot(&omega), dissipation: w.stop.dissipation };
+        let (a, e_dd) =
+            self.accelerations_of(&state, &e, &e_dot, &(w.force + w.stop.force), &(w.moment + w.stop.moment));
         dy[layout::R..layout::R + 3].copy_from_slice(&y[layout::V..layout::V + 3]);
         dy[layout::V..layout::V + 3].copy_from_slice(a.as_slice());
         dy[layout::E..layout::E + 9].copy_from_slice(&y[layout::E_DOT..layout::E_DOT + 9]);
@@ -465,7 +495,7 @@ mod tests {
             total_moment += arm.cross(&(n * (u[k] + c.force)));
             dissipation += c.dissipation;
         }
-        let (a, e_dd) = form.accelerations(&state, &total_force, &total_moment);
+        let (a, e_dd) = paper_accelerations(form, &state, &total_force, &total_moment);
         let mut dy = [0.0; 24];
         dy[layout::R..layout::R + 3].copy_from_slice(state.v.as_slice());
         dy[layout::V..layout::V + 3].copy_from_slice(a.as_slice());
@@ -475,6 +505,33 @@ mod tests {
         }
         let actuator = force.dot(&state.v) + moment.dot(&state.angular_velocity_inertial());
         (dy, LegPower { actuator, dissipation })
+    }
+
+    /// The module's formula (paper 1.4-1.6) term by term with three-vectors, independently of
+    /// [`SpecialForm::accelerations`]'s grouping per axis in lanes.
+    fn paper_accelerations(
+        form: &SpecialForm,
+        state: &BodyState,
+        force: &Vector3<f64>,
+        moment: &Vector3<f64>,
+    ) -> (Vector3<f64>, [Vector3<f64>; 3]) {
+        let mut a = force / form.stand.mass;
+        a.z -= form.stand.gravity;
+        let [i1, i2, i3] = form.stand.second_moments();
+        let [e1, e2, e3] = &state.e;
+        let [d1, d2, d3] = &state.e_dot;
+        let (l1, l2, l3) = (moment.dot(e1), moment.dot(e2), moment.dot(e3));
+        let (p12, p23, p31) = (d1.dot(d2), d2.dot(d3), d3.dot(d1));
+        let e1_dd = -e1 * d1.norm_squared() - e2 * (2.0 * i2 / (i1 + i2) * p12) - e3 * (2.0 * i3 / (i3 + i1) * p31)
+            + e2 * (l3 / (i1 + i2))
+            - e3 * (l2 / (i3 + i1));
+        let e2_dd = -e2 * d2.norm_squared() - e3 * (2.0 * i3 / (i2 + i3) * p23) - e1 * (2.0 * i1 / (i1 + i2) * p12)
+            + e3 * (l1 / (i2 + i3))
+            - e1 * (l3 / (i1 + i2));
+        let e3_dd = -e3 * d3.norm_squared() - e1 * (2.0 * i1 / (i3 + i1) * p31) - e2 * (2.0 * i2 / (i2 + i3) * p23)
+            + e1 * (l2 / (i3 + i1))
+            - e2 * (l1 / (i2 + i3));
+        (a, [e1_dd, e2_dd, e3_dd])
     }
 
     /// The same held forces seen as a law that depends on the state (through `LegGeometry`).
