@@ -18,9 +18,9 @@ use nalgebra::Vector3;
 #[cfg(target_arch = "x86_64")]
 mod lanes {
     use core::arch::x86_64::{
-        __m128d, __m256d, _mm_add_pd, _mm_cvtsd_f64, _mm_mul_pd, _mm_set_pd, _mm_set1_pd, _mm_shuffle_pd,
-        _mm_storeu_pd, _mm_sub_pd, _mm_unpackhi_pd, _mm256_add_pd, _mm256_mul_pd, _mm256_permute4x64_pd, _mm256_set_pd,
-        _mm256_set1_pd, _mm256_storeu_pd, _mm256_sub_pd,
+        __m128d, __m256d, _mm_add_pd, _mm_cvtsd_f64, _mm_loadu_pd, _mm_mul_pd, _mm_set_pd, _mm_set1_pd, _mm_shuffle_pd,
+        _mm_storeu_pd, _mm_sub_pd, _mm_unpackhi_pd, _mm256_add_pd, _mm256_loadu_pd, _mm256_mul_pd,
+        _mm256_permute4x64_pd, _mm256_set_pd, _mm256_set1_pd, _mm256_storeu_pd, _mm256_sub_pd,
     };
 
     /// Axes 1-2 and 3 (and the padding lane) in two SSE2 registers.
@@ -32,6 +32,11 @@ mod lanes {
         #[inline(always)]
         fn new(x: [f64; 3]) -> Self {
             unsafe { Pair(_mm_set_pd(x[1], x[0]), _mm_set_pd(0.0, x[2])) }
+        }
+
+        #[inline(always)]
+        fn load(x: &[f64; 4]) -> Self {
+            unsafe { Pair(_mm_loadu_pd(x.as_ptr()), _mm_loadu_pd(x.as_ptr().add(2))) }
         }
 
         #[inline(always)]
@@ -98,6 +103,11 @@ mod lanes {
         }
 
         #[inline(always)]
+        fn load(x: &[f64; 4]) -> Self {
+            unsafe { Quad(_mm256_loadu_pd(x.as_ptr())) }
+        }
+
+        #[inline(always)]
         fn splat(x: f64) -> Self {
             unsafe { Quad(_mm256_set1_pd(x)) }
         }
@@ -160,6 +170,11 @@ mod lanes {
         }
 
         #[inline(always)]
+        fn load(x: &[f64; 4]) -> Self {
+            Pair(*x)
+        }
+
+        #[inline(always)]
         fn splat(x: f64) -> Self {
             Pair([x; 4])
         }
@@ -208,6 +223,8 @@ mod lanes {
 /// or `Quad` (AVX2). Both give the same bits.
 pub trait AxisLanes: Copy {
     fn new(x: [f64; 3]) -> Self;
+    /// Four lanes read as they are stored (for per-axis constants kept padded).
+    fn load(x: &[f64; 4]) -> Self;
     fn splat(x: f64) -> Self;
     fn add(self, other: Self) -> Self;
     fn sub(self, other: Self) -> Self;

@@ -46,13 +46,14 @@ pub struct SpecialForm {
     c23: (f64, f64),
     /// `2 I1/(I3+I1)`, `2 I3/(I3+I1)`: coupling of `e3'.e1'` into `e3''` and `e1''`.
     c31: (f64, f64),
-    /// The same coefficients per axis ([`AxisRows`]: axis `a` in lane `a`, indices mod 3):
+    /// The same coefficients per axis ([`AxisRows`]: axis `a` in lane `a`, indices mod 3; a
+    /// fourth lane 0, so that each loads whole):
     /// `1/(I_a + I_(a+1))` (`1/J3, 1/J1, 1/J2`)...
-    inverse_pair_axes: [f64; 3],
+    inverse_pair_axes: [f64; 4],
     /// ... the coupling of `e_a'.e_(a+1)'` into `e_a''` (`c12.0, c23.0, c31.0`) ...
-    coupling_next: [f64; 3],
+    coupling_next: [f64; 4],
     /// ... and into `e_(a+1)''` (`c12.1, c23.1, c31.1`).
-    coupling_previous: [f64; 3],
+    coupling_previous: [f64; 4],
     /// Baumgarte stabilisation rate `alpha` (1/s): `e_a'' -= 1/2 sum_b K_ab e_b` with
     /// `K = 2 alpha dC/dt + alpha² C`, `C_ab = e_a.e_b - delta_ab`, so that the constraint
     /// residual obeys `C'' + 2 alpha C' + alpha² C = 0` near the manifold (critically damped
@@ -74,9 +75,9 @@ impl SpecialForm {
             c12: (2.0 * i2 / (i1 + i2), 2.0 * i1 / (i1 + i2)),
             c23: (2.0 * i3 / (i2 + i3), 2.0 * i2 / (i2 + i3)),
             c31: (2.0 * i1 / (i3 + i1), 2.0 * i3 / (i3 + i1)),
-            inverse_pair_axes: [1.0 / (i1 + i2), 1.0 / (i2 + i3), 1.0 / (i3 + i1)],
-            coupling_next: [2.0 * i2 / (i1 + i2), 2.0 * i3 / (i2 + i3), 2.0 * i1 / (i3 + i1)],
-            coupling_previous: [2.0 * i1 / (i1 + i2), 2.0 * i2 / (i2 + i3), 2.0 * i3 / (i3 + i1)],
+            inverse_pair_axes: [1.0 / (i1 + i2), 1.0 / (i2 + i3), 1.0 / (i3 + i1), 0.0],
+            coupling_next: [2.0 * i2 / (i1 + i2), 2.0 * i3 / (i2 + i3), 2.0 * i1 / (i3 + i1), 0.0],
+            coupling_previous: [2.0 * i1 / (i1 + i2), 2.0 * i2 / (i2 + i3), 2.0 * i3 / (i3 + i1), 0.0],
             baumgarte_rate: 0.0,
             stops: None,
             stroke: [[f64::NEG_INFINITY; LEG_COUNT], [f64::INFINITY; LEG_COUNT]],
@@ -147,11 +148,11 @@ impl SpecialForm {
 
         let l = e.dot_with(moment);
         let pairs = e_dot.dot(&e_dot.next());
-        let inverse = A::new(self.inverse_pair_axes);
+        let inverse = A::load(&self.inverse_pair_axes);
         let own = A::splat(0.0).sub(e_dot.dot(e_dot));
-        let next = l.previous().mul(inverse).sub(A::new(self.coupling_next).mul(pairs));
+        let next = l.previous().mul(inverse).sub(A::load(&self.coupling_next).mul(pairs));
         let previous = A::splat(0.0)
-            .sub(A::new(self.coupling_previous).mul(pairs).previous().add(l.next().mul(inverse.previous())));
+            .sub(A::load(&self.coupling_previous).mul(pairs).previous().add(l.next().mul(inverse.previous())));
         let mut e_dd = e.combine(own, next, previous).vectors();
         if self.baumgarte_rate > 0.0 {
             let correction = self.baumgarte_correction(&state.to_vector());
