@@ -29,6 +29,7 @@ use crate::models::variables::{
     Causality, Dependency, Initial, Variability, VariableGroup, VariableRef, VariableTable, VariableType,
 };
 use crate::models::{AnyModel, EventUpdate, ModelKind, StepReport};
+use crate::physics::body_state::all_finite;
 
 /// How far `currentCommunicationPoint` may be from the FMU's time, and a step's end past
 /// `stopTime`: round-off only. The FMU's time after a step is the importer's `t + h`, so an
@@ -949,7 +950,7 @@ impl Instance {
             FmiVersion::Fmi2 => vrs.len() == values.len() && values.len() <= a.run && consecutive(vrs),
             FmiVersion::Fmi3 => vrs.len() == 1 && values.len() == a.width,
         };
-        let finite = values.iter().fold(true, |finite, x| finite & x.is_finite());
+        let finite = all_finite(values);
         (addressed && finite && a.base == BaseType::Real && a.settable_in & self.state.bit() != 0).then_some(a)
     }
 

@@ -111,14 +111,12 @@ pub struct SwitchingSides {
 
 impl SwitchingSides {
     /// The sides of the values `g[..count]`.
+    #[inline]
     pub fn of(g: &[f64; MAX_SWITCHING], count: usize) -> Self {
-        let mut bits = 0;
-        for (i, x) in g.iter().enumerate().take(count) {
-            if *x > 0.0 {
-                bits |= 1 << i;
-            }
-        }
-        SwitchingSides { bits, known: true }
+        // Every value compared (no early exit, no branch: vector compares and a mask), the
+        // functions past `count` masked off afterwards.
+        let bits = g.iter().enumerate().fold(0u32, |bits, (i, x)| bits | (u32::from(*x > 0.0) << i));
+        SwitchingSides { bits: bits & 1u32.checked_shl(count as u32).map_or(u32::MAX, |b| b - 1), known: true }
     }
 
     /// Bits of the functions whose side differs from `g`.
@@ -159,6 +157,15 @@ pub trait OdeSystem<const N: usize> {
 
     /// Called on every accepted step's end state; may move it (e.g. back onto constraints).
     fn after_step(&self, _y: &mut [f64; N]) {}
+
+    /// [`OdeSystem::after_step`] for the methods' AVX2 copy, as `derivative_wide`.
+    ///
+    /// # Safety
+    /// The processor must support AVX2 and FMA.
+    #[inline(always)]
+    unsafe fn after_step_wide(&self, y: &mut [f64; N]) {
+        self.after_step(y)
+    }
 
     /// Whether [`OdeSystem::after_step`] can change the state. If not, the adaptive method
     /// reuses its last stage as the next step's first (FSAL).
@@ -420,7 +427,8 @@ impl<S: OdeSystem<N>, const N: usize> OdeSystem<N> for WideRegisters<'_, S> {
     }
     #[inline(always)]
     fn after_step(&self, y: &mut [f64; N]) {
-        self.0.after_step(y)
+        // SAFETY: as in `derivative`.
+        unsafe { self.0.after_step_wide(y) }
     }
     #[inline(always)]
     fn modifies_state_after_step(&self) -> bool {

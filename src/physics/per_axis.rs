@@ -301,13 +301,15 @@ impl<A: AxisLanes> AxisRows<A> {
         AxisRows { x: self.x.next(), y: self.y.next(), z: self.z.next() }
     }
 
-    /// `sum_a v_a x w_a`, each cross product as `nalgebra`'s and summed `(1 + 2) + 3`.
+    /// `m . sum_a (v_a x w_a)`: the three cross products lanewise (as `nalgebra`'s), dotted
+    /// with `m` lanewise, then one sum over the axes (one sum across the lanes, where summing
+    /// the cross products first takes three).
     #[inline(always)]
-    pub fn cross_sum(&self, w: &Self) -> Vector3<f64> {
+    pub fn cross_sum_dot(&self, w: &Self, m: &Vector3<f64>) -> f64 {
         let x = self.y.mul(w.z).sub(self.z.mul(w.y));
         let y = self.z.mul(w.x).sub(self.x.mul(w.z));
         let z = self.x.mul(w.y).sub(self.y.mul(w.x));
-        Vector3::new(x.sum3(), y.sum3(), z.sum3())
+        x.mul(A::splat(m.x)).add(y.mul(A::splat(m.y))).add(z.mul(A::splat(m.z))).sum3()
     }
 
     /// Rows of `u_a = own_a v_a + next_a v_(a+1) + previous_a v_(a-1)`: each axis's
@@ -350,7 +352,8 @@ mod tests {
             assert_eq!(with[a], v[a].dot(&m));
         }
         let cross = v[0].cross(&w[0]) + v[1].cross(&w[1]) + v[2].cross(&w[2]);
-        assert_eq!(rv.cross_sum(&rw), cross);
+        let m = Vector3::new(-0.3, 1.7, 0.6);
+        assert!((rv.cross_sum_dot(&rw, &m) - m.dot(&cross)).abs() <= 1e-15 * m.norm() * cross.norm());
         let (own, nx, pv) = ([2.0, -1.0, 0.5], [0.25, 3.0, -2.0], [-0.125, 1.5, 4.0]);
         let combined = rv.combine(Pair::new(own), Pair::new(nx), Pair::new(pv)).vectors();
         for a in 0..3 {
@@ -374,7 +377,8 @@ mod tests {
         assert_eq!(pv.dot(&pw).to_array()[..3], qv.dot(&qw).to_array()[..3]);
         assert_eq!(pv.next().x.to_array()[..3], qv.next().x.to_array()[..3]);
         assert_eq!(pv.x.previous().to_array()[..3], qv.x.previous().to_array()[..3]);
-        assert_eq!(pv.cross_sum(&pw), qv.cross_sum(&qw));
+        let m = Vector3::new(0.25, -1.5, 3.0);
+        assert_eq!(pv.cross_sum_dot(&pw, &m), qv.cross_sum_dot(&qw, &m));
         let c = [0.5, -2.0, 1.25];
         let (p, q) = (
             pv.combine(Pair::new(c), Pair::splat(0.75), pw.x).vectors(),

@@ -5,8 +5,8 @@
 
 use nalgebra::Matrix3;
 
-use super::body_state::{StateVector, layout};
-use super::per_axis::{AxisLanes, AxisRows, Pair};
+use super::body_state::{StateVector, axes, axes_rates, layout};
+use super::per_axis::{AxisLanes, AxisRows, Pair, Quad};
 
 /// Newton-Schulz iterations stop once the orthogonality defect is below this.
 const ORTHOGONALITY_TARGET: f64 = 1e-15;
@@ -17,13 +17,13 @@ const NEWTON_SCHULZ_LIMIT: f64 = 0.1;
 /// The frame's products `e_a . e_a` (lane `a`) and `e_a . e_(a+1)`: the entries of `Q^T Q`
 /// for `Q = [e1 e2 e3]` (symmetric, so these six are all of them).
 #[inline(always)]
-fn gram(e: &AxisRows<Pair>) -> (Pair, Pair) {
+fn gram<A: AxisLanes>(e: &AxisRows<A>) -> (A, A) {
     (e.dot(e), e.dot(&e.next()))
 }
 
 /// `max |Q^T Q - I|` over the entries; infinite if any is not finite.
 #[inline(always)]
-fn defect(e: &AxisRows<Pair>) -> f64 {
+fn defect<A: AxisLanes>(e: &AxisRows<A>) -> f64 {
     let (diagonal, off) = gram(e);
     let (diagonal, off) = (diagonal.to_array(), off.to_array());
     let entries = [diagonal[0] - 1.0, diagonal[1] - 1.0, diagonal[2] - 1.0, off[0], off[1], off[2]];
@@ -38,10 +38,23 @@ fn defect(e: &AxisRows<Pair>) -> f64 {
 /// combinations of the axes.
 #[inline(always)]
 pub fn project_onto_constraints(y: &mut StateVector) {
-    let Some(components) = y.get(layout::E..layout::E + 9).and_then(|s| <&[f64; 9]>::try_from(s).ok()) else {
-        return;
-    };
-    let mut e = AxisRows::<Pair>::from_components(components);
+    project_in::<Pair>(y)
+}
+
+/// [`project_onto_constraints`] with the axes in one AVX register: the same bits.
+///
+/// # Safety
+/// The processor must support AVX2, and the caller should be compiled with it (the
+/// integrators' AVX2 copy), or the lanes' operations are not inlined.
+#[inline(always)]
+pub(crate) unsafe fn project_onto_constraints_wide(y: &mut StateVector) {
+    project_in::<Quad>(y)
+}
+
+#[inline(always)]
+fn project_in<A: AxisLanes>(y: &mut StateVector) {
+    let components = axes(y);
+    let mut e = AxisRows::<A>::from_components(components);
     let mut d = defect(&e);
     if d > NEWTON_SCHULZ_LIMIT {
         let q = Matrix3::from_column_slice(components);
@@ -60,21 +73,18 @@ pub fn project_onto_constraints(y: &mut StateVector) {
     let mut iterations = 0;
     while d > ORTHOGONALITY_TARGET && iterations < 6 {
         let (diagonal, off) = gram(&e);
-        let half = Pair::splat(0.5);
-        let own = Pair::splat(3.0).sub(diagonal).mul(half);
-        let next = Pair::splat(0.0).sub(off.mul(half));
+        let half = A::splat(0.5);
+        let own = A::splat(3.0).sub(diagonal).mul(half);
+        let next = A::splat(0.0).sub(off.mul(half));
         e = e.combine(own, next, next.previous());
         d = defect(&e);
         iterations += 1;
     }
     // Q^T Q' is e_a . e_b'; its skew part W has W_(a,a+1) = (e_a.e_(a+1)' - e_(a+1).e_a')/2,
     // and column b of Q W is e_b' <- W_(b-1,b) e_(b-1) - W_(b,b+1) e_(b+1).
-    let Some(rates) = y.get(layout::E_DOT..layout::E_DOT + 9).and_then(|s| <&[f64; 9]>::try_from(s).ok()) else {
-        return;
-    };
-    let e_dot = AxisRows::<Pair>::from_components(rates);
-    let w = e.dot(&e_dot.next()).sub(e.next().dot(&e_dot)).mul(Pair::splat(0.5));
-    let e_dot = e.combine(Pair::splat(0.0), Pair::splat(0.0).sub(w), w.previous());
+    let e_dot = AxisRows::<A>::from_components(axes_rates(y));
+    let w = e.dot(&e_dot.next()).sub(e.next().dot(&e_dot)).mul(A::splat(0.5));
+    let e_dot = e.combine(A::splat(0.0), A::splat(0.0).sub(w), w.previous());
     y[layout::E..layout::E + 9].copy_from_slice(&e.components());
     y[layout::E_DOT..layout::E_DOT + 9].copy_from_slice(&e_dot.components());
 }

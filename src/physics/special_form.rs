@@ -38,22 +38,16 @@ pub struct SpecialForm {
     /// (callgrind, `benches/cycle_bench.py`).
     stroke: [[f64; LEG_COUNT]; 2],
     inverse_mass: f64,
-    /// `1/(I2+I3) = 1/J1`, `1/(I3+I1) = 1/J2`, `1/(I1+I2) = 1/J3`.
-    inverse_pair: [f64; 3],
-    /// `2 I2/(I1+I2)`, `2 I1/(I1+I2)`: coupling of `e1'.e2'` into `e1''` and `e2''`.
-    c12: (f64, f64),
-    /// `2 I3/(I2+I3)`, `2 I2/(I2+I3)`: coupling of `e2'.e3'` into `e2''` and `e3''`.
-    c23: (f64, f64),
-    /// `2 I1/(I3+I1)`, `2 I3/(I3+I1)`: coupling of `e3'.e1'` into `e3''` and `e1''`.
-    c31: (f64, f64),
-    /// The same coefficients per axis ([`AxisRows`]: axis `a` in lane `a`, indices mod 3; a
-    /// fourth lane 0, so that each loads whole):
-    /// `1/(I_a + I_(a+1))` (`1/J3, 1/J1, 1/J2`)...
+    /// The coefficients per axis ([`AxisRows`]: axis `a` in lane `a`, indices mod 3; a fourth
+    /// lane 0, so that each loads whole): `1/(I_a + I_(a+1))`, i.e. `1/(I1+I2) = 1/J3`,
+    /// `1/(I2+I3) = 1/J1`, `1/(I3+I1) = 1/J2`...
     inverse_pair_axes: [f64; 4],
-    /// ... the coupling of `e_a'.e_(a+1)'` into `e_a''` (`c12.0, c23.0, c31.0`) ...
+    /// ... `c_a = 2 I_(a+1)/(I_a + I_(a+1))`, the coupling of `e_a'.e_(a+1)'` into `e_a''`
+    /// (`2 I2/(I1+I2)`, `2 I3/(I2+I3)`, `2 I1/(I3+I1)`) ...
     coupling_next: [f64; 4],
-    /// ... and into `e_(a+1)''` (`c12.1, c23.1, c31.1`).
-    coupling_previous: [f64; 4],
+    /// ... and `-c'_a`, with `c'_a = 2 I_a/(I_a + I_(a+1))` its coupling into `e_(a+1)''`
+    /// (`2 I1/(I1+I2)`, `2 I2/(I2+I3)`, `2 I3/(I3+I1)`); kept negative, as it enters.
+    minus_coupling_previous: [f64; 4],
     /// Baumgarte stabilisation rate `alpha` (1/s): `e_a'' -= 1/2 sum_b K_ab e_b` with
     /// `K = 2 alpha dC/dt + alpha² C`, `C_ab = e_a.e_b - delta_ab`, so that the constraint
     /// residual obeys `C'' + 2 alpha C' + alpha² C = 0` near the manifold (critically damped
@@ -71,13 +65,9 @@ impl SpecialForm {
         let [i1, i2, i3] = stand.second_moments();
         SpecialForm {
             inverse_mass: 1.0 / stand.mass,
-            inverse_pair: [1.0 / (i2 + i3), 1.0 / (i3 + i1), 1.0 / (i1 + i2)],
-            c12: (2.0 * i2 / (i1 + i2), 2.0 * i1 / (i1 + i2)),
-            c23: (2.0 * i3 / (i2 + i3), 2.0 * i2 / (i2 + i3)),
-            c31: (2.0 * i1 / (i3 + i1), 2.0 * i3 / (i3 + i1)),
             inverse_pair_axes: [1.0 / (i1 + i2), 1.0 / (i2 + i3), 1.0 / (i3 + i1), 0.0],
             coupling_next: [2.0 * i2 / (i1 + i2), 2.0 * i3 / (i2 + i3), 2.0 * i1 / (i3 + i1), 0.0],
-            coupling_previous: [2.0 * i1 / (i1 + i2), 2.0 * i2 / (i2 + i3), 2.0 * i3 / (i3 + i1), 0.0],
+            minus_coupling_previous: [-2.0 * i1 / (i1 + i2), -2.0 * i2 / (i2 + i3), -2.0 * i3 / (i3 + i1), 0.0],
             baumgarte_rate: 0.0,
             stops: None,
             stroke: [[f64::NEG_INFINITY; LEG_COUNT], [f64::INFINITY; LEG_COUNT]],
@@ -151,8 +141,8 @@ impl SpecialForm {
         let inverse = A::load(&self.inverse_pair_axes);
         let own = A::splat(0.0).sub(e_dot.dot(e_dot));
         let next = l.previous().mul(inverse).sub(A::load(&self.coupling_next).mul(pairs));
-        let previous = A::splat(0.0)
-            .sub(A::load(&self.coupling_previous).mul(pairs).previous().add(l.next().mul(inverse.previous())));
+        let previous =
+            A::load(&self.minus_coupling_previous).mul(pairs).previous().sub(l.next().mul(inverse.previous()));
         let mut e_dd = e.combine(own, next, previous).vectors();
         if self.baumgarte_rate > 0.0 {
             let correction = self.baumgarte_correction(&state.to_vector());
@@ -263,24 +253,23 @@ impl SpecialForm {
         let (l1, l2, l3) = (moment.dot(e1), moment.dot(e2), moment.dot(e3));
         let (dl1, dl2, dl3) =
             (dmoment.dot(e1) + moment.dot(de1), dmoment.dot(e2) + moment.dot(de2), dmoment.dot(e3) + moment.dot(de3));
-        let [inv23, inv31, inv12] = self.inverse_pair;
+        let [inv12, inv23, inv31, _] = self.inverse_pair_axes;
+        let [c12_0, c23_0, c31_0, _] = self.coupling_next;
+        let [c12_1, c23_1, c31_1, _] = self.minus_coupling_previous.map(|c| -c);
         let (p12, p23, p31) = (d1.dot(d2), d2.dot(d3), d3.dot(d1));
         let (dp12, dp23, dp31) = (dd1.dot(d2) + d1.dot(dd2), dd2.dot(d3) + d2.dot(dd3), dd3.dot(d1) + d3.dot(dd1));
         let (n1, n2, n3) = (d1.norm_squared(), d2.norm_squared(), d3.norm_squared());
         let (dn1, dn2, dn3) = (2.0 * d1.dot(dd1), 2.0 * d2.dot(dd2), 2.0 * d3.dot(dd3));
         // d(c x) = dc x + c dx for every term of the special form.
-        let de1_dd =
-            -(e1 * dn1 + de1 * n1) - (e2 * dp12 + de2 * p12) * self.c12.0 - (e3 * dp31 + de3 * p31) * self.c31.1
-                + (e2 * dl3 + de2 * l3) * inv12
-                - (e3 * dl2 + de3 * l2) * inv31;
-        let de2_dd =
-            -(e2 * dn2 + de2 * n2) - (e3 * dp23 + de3 * p23) * self.c23.0 - (e1 * dp12 + de1 * p12) * self.c12.1
-                + (e3 * dl1 + de3 * l1) * inv23
-                - (e1 * dl3 + de1 * l3) * inv12;
-        let de3_dd =
-            -(e3 * dn3 + de3 * n3) - (e1 * dp31 + de1 * p31) * self.c31.0 - (e2 * dp23 + de2 * p23) * self.c23.1
-                + (e1 * dl2 + de1 * l2) * inv31
-                - (e2 * dl1 + de2 * l1) * inv23;
+        let de1_dd = -(e1 * dn1 + de1 * n1) - (e2 * dp12 + de2 * p12) * c12_0 - (e3 * dp31 + de3 * p31) * c31_1
+            + (e2 * dl3 + de2 * l3) * inv12
+            - (e3 * dl2 + de3 * l2) * inv31;
+        let de2_dd = -(e2 * dn2 + de2 * n2) - (e3 * dp23 + de3 * p23) * c23_0 - (e1 * dp12 + de1 * p12) * c12_1
+            + (e3 * dl1 + de3 * l1) * inv23
+            - (e1 * dl3 + de1 * l3) * inv12;
+        let de3_dd = -(e3 * dn3 + de3 * n3) - (e1 * dp31 + de1 * p31) * c31_0 - (e2 * dp23 + de2 * p23) * c23_1
+            + (e1 * dl2 + de1 * l2) * inv31
+            - (e2 * dl1 + de2 * l1) * inv23;
         let mut de_dd = [de1_dd, de2_dd, de3_dd];
         if self.baumgarte_rate > 0.0 {
             let alpha = self.baumgarte_rate;
@@ -410,10 +399,11 @@ impl SpecialForm {
         };
         let w = self.wrench_of::<V>(&state, &u);
         let (e, e_dot) = (AxisRows::<V::Axes>::of(&state.e), AxisRows::of(&state.e_dot));
-        // The inertial angular velocity `1/2 sum_a e_a x e_a'`, as `BodyState`'s.
-        let omega = e.cross_sum(&e_dot) * 0.5;
-        let power =
-            LegPower { actuator: w.force.dot(&state.v) + w.moment.dot(&omega), dissipation: w.stop.dissipation };
+        // `F.v + L.omega` with the inertial angular velocity `omega = 1/2 sum_a e_a x e_a'`.
+        let power = LegPower {
+            actuator: w.force.dot(&state.v) + 0.5 * e.cross_sum_dot(&e_dot, &w.moment),
+            dissipation: w.stop.dissipation,
+        };
         let (a, e_dd) =
             self.accelerations_of(&state, &e, &e_dot, &(w.force + w.stop.force), &(w.moment + w.stop.moment));
         dy[layout::R..layout::R + 3].copy_from_slice(&y[layout::V..layout::V + 3]);

@@ -3,7 +3,7 @@
 use crate::integration::{
     CrossingLog, IntegrationError, Integrator, MAX_SWITCHING, OdeSystem, SolverSettings, SwitchingKind, SwitchingSides,
 };
-use crate::physics::body_state::{BodyState, STATE_DIM, StateVector};
+use crate::physics::body_state::{BodyState, STATE_DIM, StateVector, all_finite};
 use std::cell::Cell;
 
 use super::outputs::LegOutputs;
@@ -14,7 +14,7 @@ use crate::physics::error::{ParameterError, PhysicsFault};
 use crate::physics::forces::LegForceLaw;
 use crate::physics::legs::{LegGeometry, LegKinematics};
 use crate::physics::per_leg::{Lanes, Narrow, Wide};
-use crate::physics::projection::project_onto_constraints;
+use crate::physics::projection::{project_onto_constraints, project_onto_constraints_wide};
 use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::Stand;
 
@@ -161,8 +161,7 @@ impl<L: LegForceLaw + ?Sized> PlatformDynamics<'_, L> {
         y: &SimulationState,
         g: Option<&mut [f64; MAX_SWITCHING]>,
     ) -> Result<(), PhysicsFault> {
-        // Over the state vector as stored: contiguous, so the 24 comparisons vectorise.
-        if !body(y).iter().fold(true, |all, x| all & x.is_finite()) {
+        if !all_finite(body(y)) {
             return Err(PhysicsFault::NonFiniteState);
         }
         let state = BodyState::from_vector(body(y));
@@ -212,6 +211,17 @@ impl<L: LegForceLaw + ?Sized> OdeSystem<SIMULATION_DIM> for PlatformDynamics<'_,
             && let Some(b) = y.first_chunk_mut::<STATE_DIM>()
         {
             project_onto_constraints(b);
+        }
+    }
+
+    /// [`PlatformDynamics::after_step`] with the axes in AVX registers: the same bits.
+    #[inline(always)]
+    unsafe fn after_step_wide(&self, y: &mut SimulationState) {
+        if self.stabilisation == Stabilisation::Projection
+            && let Some(b) = y.first_chunk_mut::<STATE_DIM>()
+        {
+            // SAFETY: forwarded to the caller (AVX2).
+            unsafe { project_onto_constraints_wide(b) };
         }
     }
 
