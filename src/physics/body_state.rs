@@ -45,7 +45,8 @@ pub fn axes_rates(y: &StateVector) -> &[f64; 9] {
     rates
 }
 
-// The patterns above spell the layout out.
+// The patterns above, and the whole-array writes of the right-hand side and the projection,
+// spell the layout out.
 const _: () = assert!(layout::E == 6 && layout::E_DOT == 15 && STATE_DIM == 24);
 
 /// The rigid body's state, unpacked.

@@ -5,7 +5,7 @@
 
 use nalgebra::Matrix3;
 
-use super::body_state::{StateVector, axes, axes_rates, layout};
+use super::body_state::{StateVector, axes, axes_rates};
 use super::per_axis::{AxisLanes, AxisRows, Pair, Quad};
 
 /// Newton-Schulz iterations stop once the orthogonality defect is below this.
@@ -85,14 +85,19 @@ fn project_in<A: AxisLanes>(y: &mut StateVector) {
     let e_dot = AxisRows::<A>::from_components(axes_rates(y));
     let w = e.dot(&e_dot.next()).sub(e.next().dot(&e_dot)).mul(A::splat(0.5));
     let e_dot = e.combine(A::splat(0.0), A::splat(0.0).sub(w), w.previous());
-    y[layout::E..layout::E + 9].copy_from_slice(&e.components());
-    y[layout::E_DOT..layout::E_DOT + 9].copy_from_slice(&e_dot.components());
+    // The whole state written as one array, as `SpecialForm::derivative` writes its result:
+    // the next step reads it back in 256-bit loads (p50 0.456 against 0.459 us per RK4 cycle,
+    // three interleaved runs each, +5 instructions).
+    let ([e1, e2, e3, e4, e5, e6, e7, e8, e9], [d1, d2, d3, d4, d5, d6, d7, d8, d9]) =
+        (e.components(), e_dot.components());
+    *y = [y[0], y[1], y[2], y[3], y[4], y[5], e1, e2, e3, e4, e5, e6, e7, e8, e9, d1, d2, d3, d4, d5, d6, d7, d8, d9];
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::physics::body_state::BodyState;
+    use crate::physics::body_state::layout;
     use crate::physics::kinematics::rotation_from_angles;
     use nalgebra::Vector3;
 

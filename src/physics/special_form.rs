@@ -406,12 +406,17 @@ impl SpecialForm {
         };
         let (a, e_dd) =
             self.accelerations_of(&state, &e, &e_dot, &(w.force + w.stop.force), &(w.moment + w.stop.moment));
-        dy[layout::R..layout::R + 3].copy_from_slice(&y[layout::V..layout::V + 3]);
-        dy[layout::V..layout::V + 3].copy_from_slice(a.as_slice());
-        dy[layout::E..layout::E + 9].copy_from_slice(&y[layout::E_DOT..layout::E_DOT + 9]);
-        for (i, e) in e_dd.iter().enumerate() {
-            dy[layout::E_DOT + 3 * i..layout::E_DOT + 3 * i + 3].copy_from_slice(e.as_slice());
-        }
+        // One array written whole, not piece by piece: the method reads the derivative back at
+        // once in 256-bit loads, and a load that spans several smaller stores cannot be served
+        // from the store buffer; it waits for them to reach the cache. Measured with the C
+        // host's RK4 cycle (`cycle_host ... rk4 latency 1000000`, three interleaved runs):
+        // p50 0.488 us with the piecewise copies, 0.458 with this (3,469 and 3,463
+        // instructions).
+        let [e1, e2, e3] = e_dd;
+        *dy = [
+            y[3], y[4], y[5], a.x, a.y, a.z, y[15], y[16], y[17], y[18], y[19], y[20], y[21], y[22], y[23], e1.x, e1.y,
+            e1.z, e2.x, e2.y, e2.z, e3.x, e3.y, e3.z,
+        ];
         power
     }
 }
