@@ -200,9 +200,9 @@ static COUNTING: [u32; 1024] = {
 };
 
 /// Whether value references are consecutive (`vrs[i] = vrs[0] + i`). Compared as a whole
-/// with the run of [`COUNTING`] that starts at `vrs[0]` (one `memcmp`: 12 references in
-/// about 20 instructions, where a fold over them took about 70); beyond it, one branch-free
-/// pass.
+/// with the run of [`COUNTING`] that starts at `vrs[0]` (one `memcmp`; the read of the twelve
+/// leg values went from 362 to 335 instructions against a fold over the references); beyond
+/// it, one branch-free pass.
 #[inline]
 fn consecutive(vrs: &[u32]) -> bool {
     let Some(&first) = vrs.first() else { return false };

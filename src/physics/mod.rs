@@ -8,7 +8,7 @@
 //! | [`body_state`] | the 24 redundant coordinates `r, v, e_a, e_a'` |
 //! | [`legs`] | leg arms, lengths, directions, rates and the resultant wrench |
 //! | [`per_leg`] | a value per leg, the six legs side by side in vector registers |
-//! | [`per_axis`] | a value per body axis, the three axes side by side (the axis accelerations) |
+//! | [`per_axis`] | a value per body axis, the three axes side by side (axis accelerations, power, projection) |
 //! | [`end_stops`] | stroke limits as a unilateral virtual potential with contact damping |
 //! | [`forces`] | leg force laws (held inputs, springs, closures) |
 //! | [`special_form`] | the special-form equations of motion (paper 1.4-1.6) |

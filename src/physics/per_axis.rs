@@ -1,7 +1,9 @@
 //! A value per body axis, the three axes side by side: [`AxisLanes`] and [`AxisRows`].
 //!
 //! The special form's axis accelerations (paper 1.5-1.6) are, per axis `a`, dot products
-//! (`L.e_a`, `|e_a'|²`, `e_a'.e_(a+1)'`) and a combination of the three axes. Held as rows
+//! (`L.e_a`, `|e_a'|²`, `e_a'.e_(a+1)'`) and a combination of the three axes; so are the
+//! actuator power's `L.omega` (cross products `e_a x e_a'`) and the projection onto the
+//! constraints (`e_a.e_b`, `e_a.e_b'`, Newton-Schulz combinations). Held as rows
 //! (lane `a` holds axis `a+1`'s value), the dot products are lanewise products and sums,
 //! and the combination is lane rotations: no sums across a register. Measured with callgrind
 //! on the RK4 co-simulation cycle (four right-hand sides): 4,254 instructions with
@@ -372,7 +374,7 @@ mod tests {
         let v = vectors();
         let w = [v[2], v[0] * 3.0, v[1] - v[2]];
         let (pv, pw) = (AxisRows::<Pair>::of(&v), AxisRows::<Pair>::of(&w));
-        // SAFETY: AVX2 detected above.
+        // AVX2 detected above: `Quad`'s operations may run.
         let (qv, qw) = (AxisRows::<Quad>::of(&v), AxisRows::<Quad>::of(&w));
         assert_eq!(pv.dot(&pw).to_array()[..3], qv.dot(&qw).to_array()[..3]);
         assert_eq!(pv.next().x.to_array()[..3], qv.next().x.to_array()[..3]);

@@ -16,11 +16,11 @@
 
 use nalgebra::Vector3;
 
-use super::body_state::{BodyState, STATE_DIM, StateVector, layout};
+use super::body_state::{BodyState, STATE_DIM, StateVector, axes_rates, layout};
 use super::end_stops::EndStops;
 use super::forces::LegForceLaw;
 use super::legs::{JointArrays, LegGeometry, LegLanes};
-use super::per_axis::{AxisLanes, AxisRows, Pair};
+use super::per_axis::{AxisLanes, AxisRows};
 use super::per_leg::{Lanes, Narrow, PerLeg, Wide, components};
 use super::stand::{LEG_COUNT, Stand};
 
@@ -103,18 +103,8 @@ impl SpecialForm {
     }
 
     /// Second derivatives `(r'', [e1'', e2'', e3''])` for the resultant leg force `force` and
-    /// leg moment `moment` about the centre of mass (both inertial components).
-    pub fn accelerations(
-        &self,
-        state: &BodyState,
-        force: &Vector3<f64>,
-        moment: &Vector3<f64>,
-    ) -> (Vector3<f64>, [Vector3<f64>; 3]) {
-        let (e, e_dot) = (AxisRows::<Pair>::of(&state.e), AxisRows::of(&state.e_dot));
-        self.accelerations_of(state, &e, &e_dot, force, moment)
-    }
-
-    /// [`SpecialForm::accelerations`] with the axes and their rates as rows.
+    /// leg moment `moment` about the centre of mass (both inertial components), the axes and
+    /// their rates given as rows.
     ///
     /// The module's formula grouped per axis (indices mod 3):
     /// `e_a'' = k_a e_a + n_a e_(a+1) + p_a e_(a-1)` with
@@ -125,7 +115,7 @@ impl SpecialForm {
     /// where `c_a = 2 I_(a+1)/(I_a + I_(a+1))` and `c'_a = 2 I_a/(I_a + I_(a+1))`; each
     /// coefficient computed for the three axes side by side.
     #[inline(always)]
-    fn accelerations_of<A: AxisLanes>(
+    fn accelerations<A: AxisLanes>(
         &self,
         state: &BodyState,
         e: &AxisRows<A>,
@@ -404,8 +394,7 @@ impl SpecialForm {
             actuator: w.force.dot(&state.v) + 0.5 * e.cross_sum_dot(&e_dot, &w.moment),
             dissipation: w.stop.dissipation,
         };
-        let (a, e_dd) =
-            self.accelerations_of(&state, &e, &e_dot, &(w.force + w.stop.force), &(w.moment + w.stop.moment));
+        let (a, e_dd) = self.accelerations(&state, &e, &e_dot, &(w.force + w.stop.force), &(w.moment + w.stop.moment));
         // One array written whole, not piece by piece: the method reads the derivative back at
         // once in 256-bit loads, and a load that spans several smaller stores cannot be served
         // from the store buffer; it waits for them to reach the cache. Measured with the C
@@ -413,9 +402,10 @@ impl SpecialForm {
         // p50 0.488 us with the piecewise copies, 0.458 with this (3,469 and 3,463
         // instructions).
         let [e1, e2, e3] = e_dd;
+        let [d1, d2, d3, d4, d5, d6, d7, d8, d9] = *axes_rates(y);
         *dy = [
-            y[3], y[4], y[5], a.x, a.y, a.z, y[15], y[16], y[17], y[18], y[19], y[20], y[21], y[22], y[23], e1.x, e1.y,
-            e1.z, e2.x, e2.y, e2.z, e3.x, e3.y, e3.z,
+            state.v.x, state.v.y, state.v.z, a.x, a.y, a.z, d1, d2, d3, d4, d5, d6, d7, d8, d9, e1.x, e1.y, e1.z, e2.x,
+            e2.y, e2.z, e3.x, e3.y, e3.z,
         ];
         power
     }
@@ -504,7 +494,7 @@ mod tests {
     }
 
     /// The module's formula (paper 1.4-1.6) term by term with three-vectors, independently of
-    /// [`SpecialForm::accelerations`]'s grouping per axis in lanes.
+    /// `SpecialForm::accelerations`'s grouping per axis in lanes.
     fn paper_accelerations(
         form: &SpecialForm,
         state: &BodyState,
