@@ -125,3 +125,66 @@ fn fmi3_reads_of_consecutive_arrays_equal_reads_of_each() {
         assert_eq!(unsafe { fmi3GetFloat64(h.c, both.as_ptr(), 2, out.as_mut_ptr(), 11) }, fmi3Error);
     }
 }
+
+/// One `fmi2GetReal` of all `names`: the status and the values.
+fn try_read(h: &Host, names: &[String]) -> (fmi2Status, Vec<f64>) {
+    let vrs = vrs(h, names);
+    let mut out = vec![0.0; vrs.len()];
+    let s = unsafe { fmi2GetReal(h.c, vrs.as_ptr(), vrs.len(), out.as_mut_ptr()) };
+    (s, out)
+}
+
+#[test]
+fn a_nan_output_is_refused_on_the_run_path_and_only_where_read() {
+    // Joint 1 of the platform and of the base pushed to opposite ends of the doubles: leg 1's
+    // length overflows to infinity, and its rate, (d . d') / l, is (inf * 0) / inf.
+    let mut h = Host::platform("nan");
+    assert_eq!(h.setup(None), fmi2OK);
+    assert_eq!(h.enter(), fmi2OK);
+    let (a11, b11) = (h.get("A[1,1]"), h.get("B[1,1]"));
+    assert_eq!(h.set("A[1,1]", 1.7e308), fmi2OK);
+    assert_eq!(h.set("B[1,1]", -1.7e308), fmi2OK);
+    // Twice: the first read computes the block, the second copies it.
+    for read in ["first", "second"] {
+        h.clear_log();
+        let (status, values) = try_read(&h, &legs());
+        println!("{read} read of the legs: {status}, {values:?}, {:?}", h.last_message());
+        assert_eq!(values[0], f64::INFINITY, "l[1]");
+        assert!(values[6].is_nan(), "ldot[1] = {}", values[6]);
+        assert_eq!(status, fmi2Error, "{read} read");
+        assert!(h.last_message().contains("ldot[1] is not a number"), "{}", h.last_message());
+    }
+    // The same block without the NaN element: read, as one run, with no error.
+    let lengths: Vec<String> = legs().into_iter().take(6).collect();
+    let (status, values) = try_read(&h, &lengths);
+    assert_eq!(status, fmi2OK, "{values:?}");
+    assert_eq!(values.len(), 6);
+    // The parameters set back: no NaN any more, the run reads again.
+    assert_eq!(h.set_many(&["A[1,1]", "B[1,1]"], &[a11, b11]), fmi2OK);
+    let (status, values) = try_read(&h, &legs());
+    assert_eq!(status, fmi2OK, "{values:?}");
+    assert!(values.iter().all(|x| x.is_finite()));
+}
+
+#[test]
+fn outputs_not_read_for_some_steps_are_computed_again_when_read() {
+    // A host that reads the legs every step gets them computed as the step ends; one that
+    // stops reading, steps and reads again must get the values of the new state.
+    let mut h = Host::platform("decay");
+    assert_eq!(h.initialise(&[]), fmi2OK);
+    let names = legs();
+    let mut previous = read(&h, &names);
+    for (pattern, unread_steps) in [(0.0, 0), (1.0, 1), (2.0, 2), (3.0, 0), (4.0, 3)] {
+        for _ in 0..=unread_steps {
+            let f: [f64; 6] = std::array::from_fn(|k| 3_000.0 + 200.0 * (pattern + k as f64).sin());
+            assert_eq!(h.set_forces(f), fmi2OK);
+            assert_eq!(h.step(1e-3), fmi2OK);
+        }
+        let run = read(&h, &names);
+        let singles: Vec<f64> = names.iter().map(|n| h.get(n)).collect();
+        assert_eq!(run, singles, "after {unread_steps} steps unread");
+        assert_ne!(run, previous, "the legs moved");
+        assert_lengths_match_the_pose(&h, &format!("after {unread_steps} steps unread"));
+        previous = run;
+    }
+}

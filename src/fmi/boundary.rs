@@ -110,30 +110,38 @@ pub fn no_instance<T>(on_panic: T, body: impl FnOnce() -> T) -> T {
 /// # Safety
 /// A non-NULL `ptr` must point to `n` initialised values that stay valid and unaliased for
 /// the call.
+#[inline(always)]
 pub unsafe fn c_slice<'a, T>(ptr: *const T, n: usize) -> Option<&'a [T]> {
-    if n == 0 {
-        Some(&[])
-    } else if ptr.is_null() {
-        None
-    } else {
-        // SAFETY: non-NULL, and the caller guarantees `n` valid elements.
-        Some(unsafe { std::slice::from_raw_parts(ptr, n) })
+    if ptr.is_null() {
+        return null_slice(n);
     }
+    // SAFETY: non-NULL, and the caller guarantees `n` valid elements.
+    Some(unsafe { std::slice::from_raw_parts(ptr, n) })
+}
+
+/// [`c_slice`] of a NULL pointer, out of the usual path: empty for `n == 0`.
+#[cold]
+fn null_slice<'a, T>(n: usize) -> Option<&'a [T]> {
+    (n == 0).then_some(&[])
 }
 
 /// The mutable counterpart of [`c_slice`].
 ///
 /// # Safety
 /// As for [`c_slice`], and the memory must be writable.
+#[inline(always)]
 pub unsafe fn c_slice_mut<'a, T>(ptr: *mut T, n: usize) -> Option<&'a mut [T]> {
-    if n == 0 {
-        Some(&mut [])
-    } else if ptr.is_null() {
-        None
-    } else {
-        // SAFETY: non-NULL, and the caller guarantees `n` valid, writable elements.
-        Some(unsafe { std::slice::from_raw_parts_mut(ptr, n) })
+    if ptr.is_null() {
+        return null_slice_mut(n);
     }
+    // SAFETY: non-NULL, and the caller guarantees `n` valid, writable elements.
+    Some(unsafe { std::slice::from_raw_parts_mut(ptr, n) })
+}
+
+/// [`c_slice_mut`] of a NULL pointer, out of the usual path.
+#[cold]
+fn null_slice_mut<'a, T>(n: usize) -> Option<&'a mut [T]> {
+    (n == 0).then_some(&mut [])
 }
 
 /// A C array for a `logCalls` message: up to eight values, then the count.

@@ -199,16 +199,61 @@ static COUNTING: [u32; 1024] = {
     c
 };
 
-/// Whether value references are consecutive (`vrs[i] = vrs[0] + i`). Compared as a whole
-/// with the run of [`COUNTING`] that starts at `vrs[0]` (one `memcmp`; the read of the twelve
-/// leg values went from 362 to 335 instructions against a fold over the references); beyond
-/// it, one branch-free pass.
-#[inline]
+/// Whether value references are consecutive (`vrs[i] = vrs[0] + i`): compared with the run
+/// of [`COUNTING`] that starts at `vrs[0]`, beyond it with the counting itself.
+#[inline(always)]
 fn consecutive(vrs: &[u32]) -> bool {
     let Some(&first) = vrs.first() else { return false };
     match COUNTING.get(first as usize..first as usize + vrs.len()) {
-        Some(run) => run == vrs,
+        Some(run) => same_u32(run, vrs),
         None => vrs.iter().enumerate().fold(0, |diff, (i, &vr)| diff | (vr ^ first.wrapping_add(i as u32))) == 0,
+    }
+}
+
+/// `a == b` for slices of one length. From 4 to 16 elements (a dozen references in a read
+/// or set), two overlapping fixed-size comparisons of the ends, without early exit, as libc's
+/// `memcmp` does inside but without its call.
+#[inline(always)]
+fn same_u32(a: &[u32], b: &[u32]) -> bool {
+    match a.len() {
+        8..=16 => ends_equal::<8>(a, b),
+        4..=7 => ends_equal::<4>(a, b),
+        _ => a == b,
+    }
+}
+
+/// Whether the first and the last `K` elements of `a` and `b` (of one length, at least `K`)
+/// agree.
+#[inline(always)]
+fn ends_equal<const K: usize>(a: &[u32], b: &[u32]) -> bool {
+    match (a.first_chunk::<K>(), b.first_chunk::<K>(), a.last_chunk::<K>(), b.last_chunk::<K>()) {
+        // `&`, not `&&`: both compared without a branch between them.
+        (Some(a0), Some(b0), Some(a1), Some(b1)) => (a0 == b0) & (a1 == b1),
+        _ => false,
+    }
+}
+
+/// `to.copy_from_slice(from)`. From 2 to 16 values (a read of a dozen outputs), two
+/// overlapping fixed-size copies of the ends, as libc's `memcpy` does inside but without its
+/// call.
+#[inline(always)]
+fn copy_f64(to: &mut [f64], from: &[f64]) {
+    match to.len() {
+        8..=16 => copy_ends::<8>(to, from),
+        4..=7 => copy_ends::<4>(to, from),
+        2..=3 => copy_ends::<2>(to, from),
+        _ => to.copy_from_slice(from),
+    }
+}
+
+/// Copies the first and the last `K` values of `from` into `to` (of one length, at least `K`).
+#[inline(always)]
+fn copy_ends<const K: usize>(to: &mut [f64], from: &[f64]) {
+    if let (Some(t), Some(f)) = (to.first_chunk_mut::<K>(), from.first_chunk::<K>()) {
+        *t = *f;
+    }
+    if let (Some(t), Some(f)) = (to.last_chunk_mut::<K>(), from.last_chunk::<K>()) {
+        *t = *f;
     }
 }
 
@@ -332,6 +377,13 @@ pub struct Instance {
     value_cache: Vec<f64>,
     /// Bit `b`: block `b` of `value_cache` holds the model's current values.
     fresh: u32,
+    /// Bit `b`: block `b` (when fresh) holds a NaN, as the model reported when it filled the
+    /// block, so that a read checks its values for NaN only then.
+    nan: u32,
+    /// Bit `b`: block `b` was read since the last step. A step fills these blocks again as it
+    /// ends, so that a host reading the same outputs every step gets them computed once per
+    /// step and its read is a copy; a block no longer read drops out after one step.
+    read_since_step: u32,
     /// By element value reference (FMI 2's numbering, the value cache's index): the cache
     /// block of a Real element, or [`NO_CACHE`] (the fast paths' one-byte table).
     cached_element: Vec<u8>,
@@ -401,6 +453,8 @@ impl Instance {
             logger,
             value_cache: vec![0.0; access.len()],
             fresh: 0,
+            nan: 0,
+            read_since_step: 0,
             cache_run: cache_runs(&cached_element),
             cached_element,
             model,
@@ -738,27 +792,59 @@ impl Instance {
         &mut self.model
     }
 
+    #[inline(always)]
     pub fn get_real(&mut self, vrs: &[u32], values: &mut [f64]) -> Status {
-        // One pass: a get that fails leaves its values undefined (FMI 2.0 section 2.1.3,
-        // FMI 3.0 section 2.2.6), so nothing needs validating before the first is written.
-        if let Some((first, block)) = self.cached_run(vrs, values.len()) {
-            // Consecutive elements of one cache block (the legs' lengths and rates): one copy.
-            let bit = 1u32 << block;
-            if self.fresh & bit == 0 {
-                self.model.fill_cache(block, &mut self.value_cache);
-                self.fresh |= bit;
-            }
-            if let Some(cached) = self.value_cache.get(first..first + values.len()) {
-                values.copy_from_slice(cached);
-                let nan = values.iter().fold(false, |nan, x| nan | x.is_nan());
-                return if nan { self.nan_error(vrs, values) } else { Status::Ok };
-            }
+        match self.get_fresh_run(vrs, values) {
+            Some(status) => status,
+            None => self.get_real_elementwise(vrs, values),
         }
-        self.get_real_elementwise(vrs, values)
     }
 
-    /// [`Instance::get_real`] reference by reference. Out of line, so that the fast path
-    /// above keeps few registers.
+    /// The fast path of [`Instance::get_real`]: consecutive elements of one cache block (the
+    /// legs' lengths and rates) that the step has computed already, one copy. `None`: the
+    /// general path (which fills a stale block first). A get that fails leaves its values
+    /// undefined (FMI 2.0 section 2.1.3, FMI 3.0 section 2.2.6), so nothing needs validating
+    /// before the first is written.
+    #[inline(always)]
+    fn get_fresh_run(&mut self, vrs: &[u32], values: &mut [f64]) -> Option<Status> {
+        let (first, block) = self.cached_run(vrs, values.len())?;
+        let bit = 1u32 << block;
+        if self.fresh & bit == 0 {
+            return None;
+        }
+        self.read_since_step |= bit;
+        copy_f64(values, self.value_cache.get(first..first + values.len())?);
+        Some(if self.nan & bit == 0 { Status::Ok } else { self.check_nan(vrs, values) })
+    }
+
+    /// Fills the cache blocks in `blocks` from the model and notes which hold a NaN.
+    #[inline(never)]
+    fn refresh(&mut self, blocks: u32) {
+        let mut rest = blocks;
+        while rest != 0 {
+            let block = rest.trailing_zeros();
+            let nan = self.model.fill_cache(block as u8, &mut self.value_cache);
+            debug_assert_eq!(nan, self.block_holds_nan(block), "fill_cache's NaN report, block {block}");
+            self.nan = (self.nan & !(1 << block)) | (u32::from(nan) << block);
+            rest &= rest - 1;
+        }
+        self.fresh |= blocks;
+    }
+
+    /// Whether an element of cache block `block` is NaN (the check of the models' reports).
+    fn block_holds_nan(&self, block: u32) -> bool {
+        let values = self.value_cache.iter().zip(&self.cached_element);
+        values.filter(|&(_, &b)| u32::from(b) == block).any(|(x, _)| x.is_nan())
+    }
+
+    /// The end of a get whose block holds a NaN somewhere: an error if one was read.
+    #[cold]
+    fn check_nan(&self, vrs: &[u32], values: &[f64]) -> Status {
+        if values.iter().any(|x| x.is_nan()) { self.nan_error(vrs, values) } else { Status::Ok }
+    }
+
+    /// [`Instance::get_real`] reference by reference (and any read of a stale block). Out of
+    /// line, so that the fast path above keeps few registers.
     #[inline(never)]
     fn get_real_elementwise(&mut self, vrs: &[u32], values: &mut [f64]) -> Status {
         if self.version == FmiVersion::Fmi2 && vrs.len() == values.len() {
@@ -774,13 +860,8 @@ impl Instance {
             }
             let mut nan = false;
             if needed & 1u32.wrapping_shl(NO_CACHE.into()) == 0 {
-                let mut stale = needed & !self.fresh;
-                while stale != 0 {
-                    let block = stale.trailing_zeros();
-                    self.model.fill_cache(block as u8, &mut self.value_cache);
-                    stale &= stale - 1;
-                }
-                self.fresh |= needed;
+                self.refresh(needed & !self.fresh);
+                self.read_since_step |= needed;
                 let cache = &self.value_cache;
                 for (slot, &vr) in values.iter_mut().zip(vrs) {
                     *slot = cache.get(vr as usize).copied().unwrap_or(f64::NAN);
@@ -815,7 +896,7 @@ impl Instance {
     /// When `vrs` address `n` consecutive elements of one cache block (FMI 2: consecutive
     /// references; FMI 3: consecutive variables), the first element's value reference (its
     /// place in the value cache) and the block.
-    #[inline]
+    #[inline(always)]
     fn cached_run(&self, vrs: &[u32], n: usize) -> Option<(usize, u8)> {
         let first = *vrs.first()? as usize;
         if n == 0 || n > usize::from(*self.cache_run.get(first)?) {
@@ -823,21 +904,25 @@ impl Instance {
         }
         let whole = match self.version {
             FmiVersion::Fmi2 => vrs.len() == n && consecutive(vrs),
-            FmiVersion::Fmi3 => {
-                // Each reference must be a variable (not an inner element) right after the last.
-                let mut next = first;
-                for &vr in vrs {
-                    match self.access.get(vr as usize) {
-                        Some(Some(a)) if vr as usize == next => next += a.width,
-                        _ => return None,
-                    }
-                }
-                next == first + n
-            }
+            FmiVersion::Fmi3 => self.consecutive_variables(vrs, n),
         };
-        whole
-            .then(|| (first, self.cached_element.get(first).copied().unwrap_or(NO_CACHE)))
-            .filter(|&(_, b)| b != NO_CACHE)
+        let block = *self.cached_element.get(first)?;
+        (whole && block != NO_CACHE).then_some((first, block))
+    }
+
+    /// FMI 3: whether `vrs` are whole variables, each right after the last, `n` elements in
+    /// all. Out of line, so that FMI 2's fast path stays small.
+    #[inline(never)]
+    fn consecutive_variables(&self, vrs: &[u32], n: usize) -> bool {
+        let Some(&first) = vrs.first() else { return false };
+        let mut next = first as usize;
+        for &vr in vrs {
+            match self.access.get(vr as usize) {
+                Some(Some(a)) if vr as usize == next => next += a.width,
+                _ => return false,
+            }
+        }
+        next == first as usize + n
     }
 
     /// Reads the values of one reference into `values[filled..]`: from the value cache
@@ -858,9 +943,9 @@ impl Instance {
         }
         let bit = 1u32 << a.cache;
         if self.fresh & bit == 0 {
-            self.model.fill_cache(a.cache, &mut self.value_cache);
-            self.fresh |= bit;
+            self.refresh(bit);
         }
+        self.read_since_step |= bit;
         let first = vr as usize;
         match self.value_cache.get(first..first + out.len()) {
             // Element by element: a handful of values, no memcpy call.
@@ -1105,11 +1190,13 @@ impl Instance {
                     }
                     if reached >= t_end || !event {
                         self.time = if reached >= t_end { t_end } else { reached };
+                        self.refresh_read_blocks();
                         return (Status::Ok, outcome);
                     }
                     // An event before the step's end: ask the importer whether to return now.
                     if self.return_early_at(reached) {
                         outcome.early_return = true;
+                        self.refresh_read_blocks();
                         return (Status::Ok, outcome);
                     }
                     t = reached;
@@ -1127,6 +1214,13 @@ impl Instance {
                 }
             }
         }
+    }
+
+    /// At the end of a step: the cache blocks read since the last one, computed now (see
+    /// `read_since_step`).
+    fn refresh_read_blocks(&mut self) {
+        let read = std::mem::take(&mut self.read_since_step);
+        self.refresh(read);
     }
 
     /// At an event at `t` inside an FMI 3 step with early return allowed: the importer's

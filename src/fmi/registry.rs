@@ -51,17 +51,19 @@ fn probe(p: *mut c_void) -> impl Iterator<Item = &'static Slot> {
 }
 
 /// The live slot of `p`, if any.
+#[inline(always)]
 fn find(p: *mut c_void) -> Option<&'static Slot> {
     if p.is_null() {
         return None;
     }
+    // The usual case first: `p` in the slot its hash names (few instances, few collisions).
     for slot in probe(p) {
         let state = slot.state.load(Ordering::Acquire);
-        if state == EMPTY {
-            return None;
-        }
         if state & LIVE != 0 && slot.address.load(Ordering::Acquire) == p as usize {
             return Some(slot);
+        }
+        if state == EMPTY {
+            return None;
         }
     }
     None
@@ -130,17 +132,16 @@ pub fn acquire(p: *mut c_void, version: FmiVersion) -> Access {
 #[inline]
 pub fn release(busy: Busy) -> bool {
     let Busy(slot) = busy;
-    let mut state = slot.state.load(Ordering::Acquire);
-    loop {
-        if state & FREEING != 0 {
-            slot.state.store(TOMBSTONE, Ordering::Release);
-            return true;
-        }
-        match slot.state.compare_exchange(state, state & !BUSY, Ordering::AcqRel, Ordering::Acquire) {
-            Ok(_) => return false,
-            Err(now) => state = now,
-        }
+    // BUSY is set (this call set it), so subtracting it clears exactly that bit, in one atomic
+    // instruction that also returns the state before.
+    let before = slot.state.fetch_sub(BUSY, Ordering::AcqRel);
+    if before & FREEING != 0 {
+        // Freed during the call: nothing else may use the slot any more (acquire and
+        // request_free refuse a FREEING state), so a plain store ends it.
+        slot.state.store(TOMBSTONE, Ordering::Release);
+        return true;
     }
+    false
 }
 
 /// What to do with an instance the importer frees.

@@ -143,8 +143,11 @@ pub trait FmuModel {
         None
     }
     /// Writes the current values of every element of the groups in cache block `block` into
-    /// `cache` at their value references.
-    fn fill_cache(&mut self, _block: u8, _cache: &mut [f64]) {}
+    /// `cache` at their value references; `true` if one of them is NaN (so that reads of the
+    /// block check their values for NaN only then).
+    fn fill_cache(&mut self, _block: u8, _cache: &mut [f64]) -> bool {
+        false
+    }
     /// Stores a finite Real value of a parameter or input; may refuse a value outside the
     /// variable's domain.
     fn set_real(&mut self, var: VariableRef, value: f64) -> Result<(), String>;
@@ -236,16 +239,19 @@ pub fn set_one_by_one<M: FmuModel + ?Sized>(model: &mut M, first: VariableRef, v
 /// Most blocks a model's value cache may have (see [`FmuModel::cache_block`]).
 pub const CACHE_BLOCKS: u8 = 31;
 
-/// Writes `values` into a value cache at the value references of `group`'s elements.
+/// Writes `values` into a value cache at the value references of `group`'s elements;
+/// `true` if one of them is NaN.
 #[inline]
-pub fn fill_group(cache: &mut [f64], group: &VariableGroup, values: &[f64]) {
+pub fn fill_group<const N: usize>(cache: &mut [f64], group: &VariableGroup, values: &[f64; N]) -> bool {
     let first = group.first_vr as usize;
-    if let Some(slots) = cache.get_mut(first..first + values.len()) {
+    if let Some(slots) = cache.get_mut(first..first + N) {
         // Element by element: a handful of values, no call to memcpy.
         for (slot, &x) in slots.iter_mut().zip(values) {
             *slot = x;
         }
     }
+    // A fold without early exit over a fixed length: a few vector compares.
+    values.iter().fold(false, |nan, x| nan | x.is_nan())
 }
 
 /// Every model this binary implements.
@@ -353,7 +359,7 @@ impl AnyModel {
         dispatch!(self, m => m.cache_block(group)).filter(|&b| b < CACHE_BLOCKS)
     }
     #[inline]
-    pub fn fill_cache(&mut self, block: u8, cache: &mut [f64]) {
+    pub fn fill_cache(&mut self, block: u8, cache: &mut [f64]) -> bool {
         dispatch!(self, m => m.fill_cache(block, cache))
     }
     pub fn get_integer(&mut self, var: VariableRef) -> i32 {

@@ -343,6 +343,23 @@ impl PlatformModel {
         })
     }
 
+    /// [`FmuModel::fill_cache`] of the outputs block.
+    #[inline(never)]
+    fn fill_outputs(&mut self, cache: &mut [f64]) -> bool {
+        let outputs = *self.outputs();
+        let mut nan = false;
+        for g in OUTPUT_GROUPS {
+            let first = variables::GROUPS[g].first_vr as usize;
+            for index in 0..variables::GROUPS[g].len() {
+                if let Some(slot) = cache.get_mut(first + index) {
+                    *slot = Self::output_value(&outputs, VariableRef { group: g, index });
+                    nan |= slot.is_nan();
+                }
+            }
+        }
+        nan
+    }
+
     fn output_value(o: &PlatformOutputs, var: VariableRef) -> f64 {
         let i = var.index;
         let pick3 = |v: &Vector3<f64>| v.get(i).copied().unwrap_or(0.0);
@@ -430,21 +447,15 @@ impl FmuModel for PlatformModel {
         }
     }
 
-    fn fill_cache(&mut self, block: u8, cache: &mut [f64]) {
+    #[inline]
+    fn fill_cache(&mut self, block: u8, cache: &mut [f64]) -> bool {
         if block == cache_block::LEGS {
+            // Read every step by most hosts: kept small (the other block is out of line).
             let legs = self.leg_outputs();
-            fill_group(cache, &variables::GROUPS[group::L], &legs.l);
-            fill_group(cache, &variables::GROUPS[group::LDOT], &legs.ldot);
+            let nan_l = fill_group(cache, &variables::GROUPS[group::L], &legs.l);
+            nan_l | fill_group(cache, &variables::GROUPS[group::LDOT], &legs.ldot)
         } else {
-            let outputs = *self.outputs();
-            for g in OUTPUT_GROUPS {
-                let first = variables::GROUPS[g].first_vr as usize;
-                for index in 0..variables::GROUPS[g].len() {
-                    if let Some(slot) = cache.get_mut(first + index) {
-                        *slot = Self::output_value(&outputs, VariableRef { group: g, index });
-                    }
-                }
-            }
+            self.fill_outputs(cache)
         }
     }
 
