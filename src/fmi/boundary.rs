@@ -36,8 +36,8 @@ pub fn panic_message(payload: &(dyn Any + Send)) -> String {
 ///   call returns.
 ///
 /// # Safety
-/// `c` may be any pointer: it is dereferenced only if the registry knows it as a live
-/// instance of this version.
+/// `c` may be any pointer: it is never dereferenced; the instance is used only if the
+/// registry knows `c` as the handle of a live instance of this version.
 pub unsafe fn call<F: FmiFunction>(
     c: *mut c_void,
     func: F,
@@ -47,9 +47,11 @@ pub unsafe fn call<F: FmiFunction>(
     let Access::Granted(busy) = registry::acquire(c, F::VERSION) else {
         return Status::Error;
     };
+    let address = busy.instance();
     let outcome = catch_unwind(AssertUnwindSafe(|| {
-        // SAFETY: the registry granted `c`: a live Box<Instance> no other call is using.
-        let instance = unsafe { &mut *(c as *mut Instance) };
+        // SAFETY: the registry granted the handle: a live Box<Instance> no other call is
+        // using.
+        let instance = unsafe { &mut *(address as *mut Instance) };
         instance.begin(func.name());
         if let Err(status) = instance.check_call(func) {
             return status;
@@ -68,7 +70,7 @@ pub unsafe fn call<F: FmiFunction>(
     if registry::release(busy) {
         // SAFETY: freed by the importer during the call and now unregistered: nothing else
         // refers to it.
-        unsafe { Instance::drop_handle(c) };
+        unsafe { Instance::drop_instance(address) };
     }
     outcome.unwrap_or(Status::Error)
 }
@@ -78,17 +80,17 @@ pub unsafe fn call<F: FmiFunction>(
 /// NULL, freed or foreign handles are left alone.
 ///
 /// # Safety
-/// `c` may be any pointer: it is dereferenced only if the registry knows it as a live, idle
-/// instance of this version.
+/// `c` may be any pointer: it is never dereferenced; the instance is dropped only if the
+/// registry knows `c` as the handle of a live, idle instance of this version.
 pub unsafe fn free_instance<F: FmiFunction>(c: *mut c_void, func: F) {
     no_instance((), || {
-        if registry::request_free(c, F::VERSION) == registry::Free::Now {
+        if let registry::Free::Now(address) = registry::request_free(c, F::VERSION) {
             // SAFETY: the registry handed the live, idle instance over for dropping.
-            let instance = unsafe { &mut *(c as *mut Instance) };
+            let instance = unsafe { &mut *(address as *mut Instance) };
             instance.begin(func.name());
             instance.log_call(Status::Ok, String::new);
             // SAFETY: as above; no reference to it remains.
-            unsafe { Instance::drop_handle(c) };
+            unsafe { Instance::drop_instance(address) };
         }
     })
 }

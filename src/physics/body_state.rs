@@ -27,9 +27,18 @@ pub mod layout {
 /// instruction, without a branch. The end-of-step check of the 24 coordinates cost 56
 /// instructions as a fold of `is_finite`; this took the RK4 co-simulation cycle from 3,503 to
 /// 3,483 (callgrind).
+///
+/// From 4 to 8 values of a length known only at run time (a set of the six leg forces): two
+/// overlapping fixed-size halves, which the compiler unrolls, instead of a loop and its
+/// set-up (the set of the forces 271 -> 248 instructions).
 #[inline(always)]
 pub fn all_finite(values: &[f64]) -> bool {
-    values.iter().fold(0u64, |bits, x| bits | (x * 0.0).to_bits()) & !(1u64 << 63) == 0
+    let bits = |v: &[f64]| v.iter().fold(0u64, |bits, x| bits | (x * 0.0).to_bits());
+    let or = match (values.len(), values.first_chunk::<4>(), values.last_chunk::<4>()) {
+        (4..=8, Some(head), Some(tail)) => bits(head) | bits(tail),
+        _ => bits(values),
+    };
+    or & !(1u64 << 63) == 0
 }
 
 /// The components of `e1, e2, e3` in a state vector, one axis after another.
@@ -190,10 +199,14 @@ mod tests {
         assert!(all_finite(&finite));
         assert!(all_finite(&[]));
         for bad in [f64::NAN, -f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
-            for k in 0..finite.len() {
-                let mut v = finite;
-                v[k] = bad;
-                assert!(!all_finite(&v), "{bad} at {k}");
+            // Every length (the overlapping halves from 4 to 8), every place.
+            for n in 1..=finite.len() {
+                assert!(all_finite(&finite[..n]));
+                for k in 0..n {
+                    let mut v = finite[..n].to_vec();
+                    v[k] = bad;
+                    assert!(!all_finite(&v), "{bad} at {k} of {n}");
+                }
             }
         }
     }
