@@ -2,8 +2,9 @@
 the six leg forces (leg feedback around the neutral legs), steps 1 ms and reads the twelve leg
 lengths and rates, through the packaged FMI 2 and FMI 3 platform FMUs. Prints one table:
 
-- instructions per cycle and its split (set, step, get), from callgrind over 5000 cycles
-  (repeatable; wall times on this shared machine vary up to 2x between runs), in three
+- instructions per cycle and its split (set, step, get: the host's functions, and the
+  exported call inside each alone, per call), from callgrind over 5000 cycles (repeatable;
+  wall times on this shared machine vary up to 2x between runs), in four
   motions: hovering on the leg feedback (no stop touched), resting in contact with all six
   lower stops (zero forces), hovering with the end stops switched off, and (FMI 2) hovering
   with `logEvents` delivered to a logger that drops it, so that passages through singular
@@ -58,6 +59,14 @@ def instructions(host, version, binary, token, method, folder, scenario="hover")
     for name in ("run_cycles", "set_forces", "do_step", "get_outputs"):
         m = re.search(r"^\s*([\d,]+) \([^)]*\)\s+\S*cycle_host\.c:" + name + r" \[", report, re.M)
         counts[name] = int(m.group(1).replace(",", "")) / COUNT_CYCLES
+    # The FMU's own share of each host function: the exported function it calls, per call
+    # (without the host's force law, call and status check).
+    tree = subprocess.run(["callgrind_annotate", "--tree=calling", "--inclusive=yes", str(out)], check=True,
+                          capture_output=True, text=True).stdout
+    for name in ("set_forces", "do_step", "get_outputs"):
+        m = re.search(r"\*\s+\S*cycle_host\.c:" + name + r" \[.*\n\s*([\d,]+) \([^)]*\)\s+>\s+\S*:(fmi\w+) "
+                      r"\(([\d,]+)x\)", tree)
+        counts["fmu_" + name] = int(m.group(1).replace(",", "")) / int(m.group(3).replace(",", ""))
     return counts
 
 
@@ -129,7 +138,10 @@ def main():
     lines.append("Instructions per cycle (callgrind, 5000 cycles): set 6 forces + fmi2DoStep/fmi3DoStep 1 ms + get 12 values")
     lines.append("(hover: leg feedback, no stop touched; contact: resting on all six lower stops; nostops: hover with "
                  "stops = false; logevents: hover with logEvents delivered, singular passages tracked)")
-    lines.append(f"{'FMU':6} {'method':7} {'motion':9} {'cycle':>8} {'set':>7} {'step':>8} {'get':>7}")
+    lines.append("(set, step, get: the host's functions, each around one call; in the FMU: that exported call alone, "
+                 "per call)")
+    lines.append(f"{'FMU':6} {'method':7} {'motion':9} {'cycle':>8} {'set':>7} {'step':>8} {'get':>7}   "
+                 f"{'in the FMU: set':>15} {'step':>8} {'get':>7}")
     cycles = {}
     for version in ("fmi2", "fmi3"):
         binary, token = unpack(version, folder)
@@ -139,7 +151,8 @@ def main():
                 c = instructions(host, version, binary, token, method, folder, scenario)
                 cycles[(version, method, scenario)] = c
                 lines.append(f"{version:6} {method:7} {scenario:9} {c['run_cycles']:8.0f} {c['set_forces']:7.0f} "
-                             f"{c['do_step']:8.0f} {c['get_outputs']:7.0f}")
+                             f"{c['do_step']:8.0f} {c['get_outputs']:7.0f}   {c['fmu_set_forces']:15.0f} "
+                             f"{c['fmu_do_step']:8.0f} {c['fmu_get_outputs']:7.0f}")
     lines.append("")
     binary, token = unpack("fmi2", folder)
     latency = {}

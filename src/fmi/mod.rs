@@ -11,7 +11,7 @@
 //! | [`log`] | log categories and messages to the importer's FMI 2 or FMI 3 logger |
 //! | [`description`] | `modelDescription.xml` of both versions, the instantiation tokens, the documentation page |
 //! | [`library`] | which model a token selects in this binary |
-//! | [`registry`] | the live instance handles, recognised by address (stale, foreign, busy) |
+//! | [`registry`] | the live instance handles: a handle is its slot in a static table (stale, foreign, busy handles refused unread) |
 
 pub mod boundary;
 pub mod description;

@@ -6,7 +6,7 @@
 //! The importer must follow the FMI 2.0 calling conventions for arrays and strings: array
 //! arguments point to at least `n` elements (or are NULL when `n == 0`); strings are
 //! NUL-terminated. NULL where a value is required is detected and answered with `fmi2Error`.
-//! Instance and FMU-state handles may be anything: they are looked up by address
+//! Instance and FMU-state handles may be anything: they are checked by value
 //! ([`crate::fmi::registry`], the instance's own states) before any use, so freed, foreign and
 //! other-version handles are refused without being read.
 

@@ -6,8 +6,8 @@
 //! The importer must follow the FMI 3.0 calling conventions for arrays and strings: array
 //! arguments point to at least as many elements as their count says (or are NULL when it is
 //! 0); strings are NUL-terminated. NULL where a value is required is detected and answered
-//! with `fmi3Error`. Instance and FMU-state handles may be anything: they are looked up by
-//! address ([`crate::fmi::registry`], the instance's own states) before any use, so freed,
+//! with `fmi3Error`. Instance and FMU-state handles may be anything: they are checked by
+//! value ([`crate::fmi::registry`], the instance's own states) before any use, so freed,
 //! foreign and other-version handles are refused without being read.
 
 use std::ffi::{CStr, CString, c_char};
