@@ -153,6 +153,7 @@ pub trait FmiFunction: Copy {
     fn name(self) -> &'static str;
     /// Bit set over [`ModelState::bit`].
     fn allowed_states(self, interface: InterfaceType) -> u16;
+    #[inline(always)]
     fn allowed_in(self, interface: InterfaceType, state: ModelState) -> bool {
         self.allowed_states(interface) & state.bit() != 0
     }

@@ -76,6 +76,8 @@ impl FmiFunction for Fmi2Function {
         Fmi2Function::name(self)
     }
 
+    // Inlined, so that each export's mask folds to a constant.
+    #[inline(always)]
     fn allowed_states(self, interface: InterfaceType) -> u16 {
         Fmi2Function::allowed_states(self, interface)
     }
@@ -180,6 +182,7 @@ impl Fmi2Function {
     /// The states in which the function may be called, as a bit set over [`ModelState`].
     /// Get functions marked "7"/"8" in the tables (values for debugging only) are allowed.
     /// Per-variable conditions (which variables may be set when) are checked separately.
+    #[inline(always)]
     pub const fn allowed_states(self, interface: InterfaceType) -> u16 {
         use Fmi2Function::*;
         match interface {

@@ -136,6 +136,7 @@ impl Fmi3Function {
 
     /// The states in which the function may be called, as a bit set over [`ModelState`].
     /// Per-variable conditions (which variables may be set when) are checked separately.
+    #[inline(always)]
     pub const fn allowed_states(self, interface: InterfaceType) -> u16 {
         use Fmi3Function::*;
         let me = matches!(interface, InterfaceType::ModelExchange);
@@ -194,6 +195,8 @@ impl FmiFunction for Fmi3Function {
         Fmi3Function::name(self)
     }
 
+    // Inlined, so that each export's mask folds to a constant.
+    #[inline(always)]
     fn allowed_states(self, interface: InterfaceType) -> u16 {
         Fmi3Function::allowed_states(self, interface)
     }
