@@ -121,6 +121,14 @@ fn fmi3_reads_of_consecutive_arrays_equal_reads_of_each() {
         assert_eq!(unsafe { fmi3GetFloat64(h.c, both.as_ptr(), 2, out.as_mut_ptr(), 12) }, fmi3OK);
         let each: Vec<f64> = h.get("l").into_iter().chain(h.get("ldot")).collect();
         assert_eq!(out.to_vec(), each, "step {step}");
+        // Not consecutive (the arrays in the other order, one twice): the general path gives
+        // the same values.
+        for (refs, names) in [([h.vr("ldot"), h.vr("l")], ["ldot", "l"]), ([h.vr("l"), h.vr("l")], ["l", "l"])] {
+            let mut other = [f64::NAN; 12];
+            assert_eq!(unsafe { fmi3GetFloat64(h.c, refs.as_ptr(), 2, other.as_mut_ptr(), 12) }, fmi3OK);
+            let expected: Vec<f64> = h.get(names[0]).into_iter().chain(h.get(names[1])).collect();
+            assert_eq!(other.to_vec(), expected, "step {step}, {names:?}");
+        }
         // The wrong count is still refused on this path.
         assert_eq!(unsafe { fmi3GetFloat64(h.c, both.as_ptr(), 2, out.as_mut_ptr(), 11) }, fmi3Error);
     }

@@ -407,6 +407,9 @@ pub struct Instance {
     /// consecutive elements from it in that block, so that a get of consecutive elements is
     /// one copy.
     cached: Vec<CachedElement>,
+    /// By value reference: the width of the variable it names (0 if none), for FMI 3's check
+    /// of consecutive whole variables (4 bytes a reference against the access entries' 40).
+    variable_width: Vec<u32>,
     pub table: VariableTable,
     /// Hash of the instantiation token, stamped into serialized states.
     token_hash: u64,
@@ -472,6 +475,7 @@ impl Instance {
             nan: 0,
             read_since_step: 0,
             cached: cached_elements(&access),
+            variable_width: access.iter().map(|a| a.map_or(0, |a| u32::try_from(a.width).unwrap_or(0))).collect(),
             model,
             table,
             token_hash: fnv1a64(token.as_bytes()),
@@ -937,10 +941,12 @@ impl Instance {
         let Some(&first) = vrs.first() else { return false };
         let mut next = first as usize;
         for &vr in vrs {
-            match self.access.get(vr as usize) {
-                Some(Some(a)) if vr as usize == next => next += a.width,
-                _ => return false,
+            // 0 for an element inside a variable or an unknown reference: the general path.
+            let width = self.variable_width.get(vr as usize).map_or(0, |&w| w as usize);
+            if (vr as usize != next) | (width == 0) {
+                return false;
             }
+            next += width;
         }
         next == first as usize + n
     }
