@@ -3,15 +3,20 @@
  * feedback around the neutral legs (so the platform stays near its pose for any run length).
  *
  *   cycle_host fmi2|fmi3 <binary.so> <GUID or token> rk4|dopri5 count   <cycles>
+ *   cycle_host ...                                              loop <cycles> <runs>
  *   cycle_host ...                                              latency <cycles>
  *   cycle_host ...                                              threads <cycles> <threads>
  *   cycle_host ...                                              instantiate <count>
  *
  * count: no clock in the loop, for callgrind; set_forces, do_step and get_outputs are separate
  * non-inlined functions so that their inclusive instruction counts split the cycle.
- * latency: clock_gettime around every cycle; prints percentiles in microseconds.
- * threads: that many threads, each with its own instance, run the cycles at once; prints
- * steps per second.
+ * loop: <runs> runs of <cycles> cycles each, the clock read only before and after each run (as
+ * MuJoCo's own C loop is timed); prints microseconds per cycle of each run, their minimum and
+ * their median. loop and latency first run cycles untimed for WARM_UP_SECONDS.
+ * latency: clock_gettime around every cycle; prints percentiles in microseconds, and the cost of
+ * one clock read (the median of empty intervals), which every sample includes once.
+ * threads: that many threads, each with its own instance, warm up, then run the cycles at
+ * once; prints steps per second.
  *
  * CYCLE_SCENARIO (environment) picks the motion: hover (default: the leg feedback above, no
  * stop touched), contact (power loss: zero forces; the platform falls onto its lower stops and
@@ -140,20 +145,52 @@ static double now(void) {
     return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
+/* Cycles for WARM_UP_SECONDS before anything is timed, so that cold caches and branch
+ * predictors are not; returns how many, so that the timed cycles go on from there. */
+static const double WARM_UP_SECONDS = 0.3;
+static long warm_up_cycles(Instance c, double *legs) {
+    long done = 0;
+    double t0 = now();
+    while (now() - t0 < WARM_UP_SECONDS) {
+        run_cycles(c, 1000, legs, done);
+        done += 1000;
+    }
+    return done;
+}
+
 static int compare(const void *a, const void *b) {
     double x = *(const double *)a, y = *(const double *)b;
     return (x > y) - (x < y);
 }
 
-typedef struct { long n; double seconds; } Job;
+static double median(double *x, long n) {
+    qsort(x, n, sizeof *x, compare);
+    return n % 2 ? x[n / 2] : 0.5 * (x[n / 2 - 1] + x[n / 2]);
+}
+
+/* What one sample of the latency loop measures when the cycle takes no time: the median of
+ * 10^5 empty intervals between two clock reads. */
+static double clock_read_seconds(void) {
+    enum { N = 100000 };
+    static double empty[N];
+    for (long i = 0; i < N; i++) {
+        double t0 = now();
+        empty[i] = now() - t0;
+    }
+    return median(empty, N);
+}
+
+typedef struct { long n; double seconds; pthread_barrier_t *warm; } Job;
 
 static void *thread_job(void *arg) {
     Job *job = arg;
     Instance c = make();
     double legs[12];
     get_outputs(c, legs);
+    long first = warm_up_cycles(c, legs);
+    pthread_barrier_wait(job->warm); /* every thread starts its timed cycles together */
     double t0 = now();
-    run_cycles(c, job->n, legs, 0);
+    run_cycles(c, job->n, legs, first);
     job->seconds = now() - t0;
     release(c);
     return NULL;
@@ -203,14 +240,19 @@ int main(int argc, char **argv) {
     }
     if (strcmp(mode, "threads") == 0) {
         int threads = argc > 7 ? atoi(argv[7]) : 1;
+        if (threads < 1 || threads > 64) { fprintf(stderr, "threads must be 1 to 64\n"); return 2; }
         pthread_t ids[64];
         Job jobs[64];
-        double t0 = now();
-        for (int i = 0; i < threads && i < 64; i++) {
+        pthread_barrier_t warm;
+        pthread_barrier_init(&warm, NULL, threads + 1);
+        for (int i = 0; i < threads; i++) {
             jobs[i].n = n;
+            jobs[i].warm = &warm;
             pthread_create(&ids[i], NULL, thread_job, &jobs[i]);
         }
-        for (int i = 0; i < threads && i < 64; i++) pthread_join(ids[i], NULL);
+        pthread_barrier_wait(&warm);
+        double t0 = now();
+        for (int i = 0; i < threads; i++) pthread_join(ids[i], NULL);
         double wall = now() - t0;
         printf("threads %d: %ld cycles each, %.0f cycles/s in total, %.3f us per cycle per thread\n", threads, n,
                threads * n / wall, 1e6 * jobs[0].seconds / n);
@@ -231,13 +273,33 @@ int main(int argc, char **argv) {
             if (s) exit(7);
         }
         run_cycles(c, n, legs, warm_up);
+    } else if (strcmp(mode, "loop") == 0) {
+        int runs = argc > 7 ? atoi(argv[7]) : 5;
+        if (runs < 1 || runs > 1000) { fprintf(stderr, "runs must be 1 to 1000\n"); return 2; }
+        long first = warm_up_cycles(c, legs);
+        double per_cycle[1000];
+        printf("loop of %ld cycles, %d runs, clock outside the loop (us per cycle):", n, runs);
+        for (int r = 0; r < runs; r++) {
+            double t0 = now();
+            run_cycles(c, n, legs, first + (long)r * n);
+            per_cycle[r] = 1e6 * (now() - t0) / n;
+            printf(" %.3f", per_cycle[r]);
+        }
+        double best = per_cycle[0];
+        for (int r = 1; r < runs; r++) best = per_cycle[r] < best ? per_cycle[r] : best;
+        double middle = median(per_cycle, runs);
+        printf("; min %.3f median %.3f\n", best, middle);
     } else {
         double *dt = malloc(n * sizeof *dt);
+        if (!dt) return 2;
+        memset(dt, 0, n * sizeof *dt); /* touch every page before the clock runs */
+        double clock_read = clock_read_seconds();
+        long first = warm_up_cycles(c, legs);
         double clock0 = now(), clock1 = now();
         for (long i = 0; i < n; i++) {
             double t0 = now();
             set_forces(c, legs);
-            do_step(c, i * H);
+            do_step(c, (first + i) * H);
             get_outputs(c, legs);
             dt[i] = now() - t0;
         }
@@ -246,9 +308,10 @@ int main(int argc, char **argv) {
         double sum = 0;
         for (long i = 0; i < n; i++) sum += dt[i];
         qsort(dt, n, sizeof *dt, compare);
-        printf("latency over %ld cycles (us): mean %.3f p50 %.3f p99 %.3f p99.9 %.3f max %.1f; loop %.2f s\n", n,
+        printf("latency over %ld cycles (us): mean %.3f p50 %.3f p99 %.3f p99.9 %.3f max %.1f; loop %.2f s; "
+               "each sample includes one clock read, %.3f us\n", n,
                1e6 * sum / n, 1e6 * dt[n / 2], 1e6 * dt[(long)(n * 0.99)], 1e6 * dt[(long)(n * 0.999)],
-               1e6 * dt[n - 1], overhead);
+               1e6 * dt[n - 1], overhead, 1e6 * clock_read);
         free(dt);
     }
     printf("final leg 1: %.12f m\n", legs[0]);
