@@ -143,7 +143,7 @@ def mujoco_instructions(folder, steps=200):
     return int(m.group(1).replace(",", "")) / steps
 
 
-def instruction_table(host, folder):
+def instruction_table(host, fmus, folder):
     """The callgrind table: its lines and the counts by (version, method, motion)."""
     lines = ["Instructions per cycle (callgrind, 5000 cycles): set 6 forces + fmi2DoStep/fmi3DoStep 1 ms + get 12 values",
              "(hover: leg feedback, no stop touched; contact: resting on all six lower stops; nostops: hover with "
@@ -153,8 +153,7 @@ def instruction_table(host, folder):
              f"{'FMU':6} {'method':7} {'motion':9} {'cycle':>8} {'set':>7} {'step':>8} {'get':>7}   "
              f"{'in the FMU: set':>15} {'step':>8} {'get':>7}"]
     cycles = {}
-    for version in ("fmi2", "fmi3"):
-        binary, token = unpack(version, folder)
+    for version, (binary, token) in fmus.items():
         for method in ("rk4", "dopri5"):
             scenarios = ("hover", "contact", "nostops", "logevents") if version == "fmi2" else ("hover", "contact")
             for scenario in scenarios:
@@ -166,9 +165,9 @@ def instruction_table(host, folder):
     return lines, cycles
 
 
-def loop_time(host, folder, version, method):
+def loop_time(host, fmus, version, method):
     """One `loop` run of the C host: its line and (min, median) in us per cycle."""
-    binary, token = unpack(version, folder)
+    binary, token = fmus[version]
     text = run(host, version, binary, token, method, "loop", LOOP_CYCLES, LOOP_RUNS).splitlines()[0]
     m = re.search(r"min ([\d.]+) median ([\d.]+)", text)
     return f"FMI {version[-1]} {method}: {text}", (float(m.group(1)), float(m.group(2)))
@@ -184,25 +183,26 @@ def main():
                     str(ROOT / "benches" / "c" / "cycle_host.c"), "-ldl", "-lpthread"], check=True)
     header = [f"cycle_bench: {time.strftime('%Y-%m-%d %H:%M')}, {os.cpu_count()} cores, "
               f"{open('/proc/cpuinfo').read().split('model name')[1].split(':')[1].splitlines()[0].strip()}", ""]
+    fmus = {version: unpack(version, folder) for version in FMUS}
     # Wall clock first, ours and MuJoCo's C loops next to each other in time; callgrind last.
     wall, loops = [], {}
     for method in ("rk4", "dopri5"):
-        line, loops[("fmi2", method)] = loop_time(host, folder, "fmi2", method)
+        line, loops[("fmi2", method)] = loop_time(host, fmus, "fmi2", method)
         wall.append(line)
     mj = mujoco_step_us()
     for method in ("rk4", "dopri5"):
-        line, loops[("fmi3", method)] = loop_time(host, folder, "fmi3", method)
+        line, loops[("fmi3", method)] = loop_time(host, fmus, "fmi3", method)
         wall.append(line)
-    binary, token = unpack("fmi2", folder)
+    binary, token = fmus["fmi2"]
     for method in ("rk4", "dopri5"):
         text = run(host, "fmi2", binary, token, method, "latency", LATENCY_CYCLES)
         wall.append(f"FMI 2 {method}: {text.splitlines()[0]}")
     for threads in (1, 2):
         wall.append(f"FMI 2 rk4, {run(host, 'fmi2', binary, token, 'rk4', 'threads', 200_000, threads).strip()}")
     wall.append(f"FMI 2: {run(host, 'fmi2', binary, token, 'rk4', 'instantiate', 2000).strip()}")
-    binary3, token3 = unpack("fmi3", folder)
+    binary3, token3 = fmus["fmi3"]
     wall.append(f"FMI 3: {run(host, 'fmi3', binary3, token3, 'rk4', 'instantiate', 2000).strip()}")
-    table, cycles = instruction_table(host, folder)
+    table, cycles = instruction_table(host, fmus, folder)
     mujoco = []
     if mj is None:
         mujoco.append("MuJoCo: not installed (pip install mujoco), no comparison")
@@ -225,6 +225,7 @@ def main():
     print(text)
     (OUT / "cycle.txt").write_text(text + "\n")
     shutil.rmtree(folder, ignore_errors=True)
+
 
 if __name__ == "__main__":
     main()
