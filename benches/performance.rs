@@ -15,14 +15,13 @@ use stewart_fmu::fmi::FmiVersion;
 use stewart_fmu::fmi::description::instantiation_token;
 use stewart_fmu::fmi2::exports::*;
 use stewart_fmu::fmi2::types::*;
-use stewart_fmu::integration::{CrossingLog, Integrator, Method, SolverSettings};
+use stewart_fmu::integration::{Method, SolverSettings};
 use stewart_fmu::models::ModelKind;
-use stewart_fmu::physics::body_state::BodyState;
-use stewart_fmu::physics::configuration::ConfigurationGuard;
-use stewart_fmu::physics::forces::HeldForces;
+use stewart_fmu::physics::actuators::HeldForces;
+use stewart_fmu::physics::body::state::BodyState;
 use stewart_fmu::physics::special_form::SpecialForm;
 use stewart_fmu::physics::stand::Stand;
-use stewart_fmu::simulation::{PlatformDynamics, SimulationState, Stabilisation};
+use stewart_fmu::simulation::{PlatformSimulation, Stabilisation, VectorPath};
 
 const U0: f64 = 5900.715;
 const L0: f64 = 1.7550860729486566;
@@ -34,7 +33,7 @@ fn moving_state() -> BodyState {
     BodyState::from_pose(
         Stand::truck_cabin_neutral_position() + Vector3::new(0.01, -0.02, 0.03),
         Vector3::new(0.05, 0.0, -0.02),
-        &stewart_fmu::physics::kinematics::rotation_from_angles(&Vector3::new(0.02, -0.01, 0.05)),
+        &stewart_fmu::physics::body::kinematics::rotation_from_angles(&Vector3::new(0.02, -0.01, 0.05)),
         &Vector3::new(0.1, 0.05, -0.1),
     )
 }
@@ -43,35 +42,31 @@ fn physics(c: &mut Criterion) {
     let stand = Stand::truck_cabin();
     let form = SpecialForm::new(stand.clone());
     let state = moving_state();
-    let guard = ConfigurationGuard::for_initial_state(&stand, &state).unwrap();
     let law = HeldForces { value: [U0 + 10.0, U0 - 5.0, U0, U0 + 3.0, U0 - 2.0, U0], slope: [1.0; 6], t0: 0.0 };
     let y = state.to_vector();
     let mut dy = [0.0; 24];
     c.bench_function("rhs: special-form right-hand side (24 states)", |b| {
         b.iter(|| form.derivative(black_box(0.1), black_box(&y), &law, &mut dy))
     });
-    // Each with the AVX2 code the integrator picks on this processor, and with the baseline
-    // (SSE2) code (`Integrator::vector_extensions = false`; the same numbers to the bit).
-    for (name, method, vector_extensions) in [
-        ("rk4: one RK4 step of 1 ms (+projection, checks)", Method::RungeKutta4, true),
-        ("rk4 baseline code: one RK4 step of 1 ms", Method::RungeKutta4, false),
-        ("dopri5: one adaptive step of 1 ms (+projection, checks)", Method::DormandPrince45, true),
-        ("dopri5 baseline code: one adaptive step of 1 ms", Method::DormandPrince45, false),
+    // Each on the fastest vector path of this processor, and on the baseline (SSE2) path
+    // (`VectorPath::Baseline`; the same numbers to the bit).
+    for (name, method, path) in [
+        ("rk4: one RK4 step of 1 ms (+projection, checks)", Method::RungeKutta4, VectorPath::fastest()),
+        ("rk4 baseline code: one RK4 step of 1 ms", Method::RungeKutta4, VectorPath::Baseline),
+        ("dopri5: one adaptive step of 1 ms (+projection, checks)", Method::DormandPrince45, VectorPath::fastest()),
+        ("dopri5 baseline code: one adaptive step of 1 ms", Method::DormandPrince45, VectorPath::Baseline),
     ] {
         let settings = SolverSettings { method, max_step: 1e-3, fixed_step: 1e-3, ..SolverSettings::default() };
-        let dynamics = PlatformDynamics::new(&form, &law, Stabilisation::Projection, &guard, false);
-        let mut integrator = Integrator::new(settings);
-        integrator.vector_extensions = vector_extensions;
-        integrator.dopri5.h_next = 1e-3;
-        let mut crossings = CrossingLog::default();
-        let y_sim: SimulationState = std::array::from_fn(|i| if i < 24 { y[i] } else { 0.0 });
+        let mut sim = PlatformSimulation::new(stand.clone(), state, settings, Stabilisation::Projection, 0.0).unwrap();
+        sim.set_vector_path(path);
+        let start = (sim.state, sim.integrator);
         c.bench_function(name, |b| {
             b.iter(|| {
-                let mut y1 = y_sim;
-                integrator.dopri5.h_next = 1e-3;
-                crossings.clear();
-                integrator.integrate(&dynamics, 0.0, &mut y1, 1e-3, &mut crossings).unwrap();
-                black_box(y1)
+                (sim.state, sim.integrator) = start;
+                sim.integrator.dopri5.h_next = 1e-3;
+                sim.time = 0.0;
+                sim.advance(&law, 1e-3).unwrap();
+                black_box(sim.state)
             })
         });
     }

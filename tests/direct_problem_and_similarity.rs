@@ -8,10 +8,10 @@ mod common;
 use common::simulation;
 use nalgebra::Vector3;
 use stewart_fmu::integration::SolverSettings;
-use stewart_fmu::physics::body_state::BodyState;
+use stewart_fmu::physics::body::kinematics::angles_from_rotation;
+use stewart_fmu::physics::body::state::BodyState;
 use stewart_fmu::physics::direct_problem::solve_direct_problem;
-use stewart_fmu::physics::kinematics::angles_from_rotation;
-use stewart_fmu::physics::legs::LegGeometry;
+use stewart_fmu::physics::legs::geometry::LegGeometry;
 use stewart_fmu::physics::programme::{PoseProgramme, SoftStartSinusoid};
 use stewart_fmu::physics::scaling::Scales;
 use stewart_fmu::physics::stand::{PAPER_EQUILIBRIUM_LEG_FORCE, Stand};
@@ -142,7 +142,7 @@ fn si_and_nondimensional_runs_agree_after_scaling() {
         }
         u
     };
-    let rot = stewart_fmu::physics::kinematics::rotation_from_angles(&Vector3::new(0.05, -0.03, 0.1));
+    let rot = stewart_fmu::physics::body::kinematics::rotation_from_angles(&Vector3::new(0.05, -0.03, 0.1));
     let r0 = Stand::truck_cabin_neutral_position() + Vector3::new(0.02, 0.01, -0.03);
     let (v0, w0) = (Vector3::new(0.1, 0.0, -0.05), Vector3::new(0.2, -0.1, 0.3));
     let start_si = BodyState::from_pose(r0, v0, &rot, &w0);

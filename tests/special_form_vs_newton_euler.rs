@@ -8,8 +8,8 @@ use common::newton_euler::{LegLaw, NeState, NewtonEuler};
 use common::{max_abs_diff, pose, simulation};
 use nalgebra::{UnitQuaternion, Vector3};
 use stewart_fmu::integration::SolverSettings;
-use stewart_fmu::physics::body_state::BodyState;
-use stewart_fmu::physics::legs::LegGeometry;
+use stewart_fmu::physics::body::state::BodyState;
+use stewart_fmu::physics::legs::geometry::LegGeometry;
 use stewart_fmu::physics::stand::{PAPER_EQUILIBRIUM_LEG_FORCE, Stand};
 use stewart_fmu::simulation::Stabilisation;
 

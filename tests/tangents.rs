@@ -4,11 +4,11 @@
 //! contact with their lower and upper stops: relative error <= 1e-6.
 
 use nalgebra::Vector3;
-use stewart_fmu::physics::body_state::{BodyState, StateVector};
-use stewart_fmu::physics::end_stops::EndStops;
-use stewart_fmu::physics::forces::HeldForces;
-use stewart_fmu::physics::kinematics::rotation_from_angles;
-use stewart_fmu::physics::legs::LegGeometry;
+use stewart_fmu::physics::actuators::HeldForces;
+use stewart_fmu::physics::body::kinematics::rotation_from_angles;
+use stewart_fmu::physics::body::state::{BodyState, StateVector};
+use stewart_fmu::physics::legs::end_stops::EndStops;
+use stewart_fmu::physics::legs::geometry::LegGeometry;
 use stewart_fmu::physics::special_form::SpecialForm;
 use stewart_fmu::physics::stand::Stand;
 use stewart_fmu::simulation::outputs::{condition_number, condition_number_tangent};
@@ -79,7 +79,7 @@ fn right_hand_side_tangent_matches_central_differences() {
         let (y, u, dy, du) = random_case(&mut rng, case % 4 >= 2);
         let stops = (case % 8 >= 4).then(|| stops_around(&y, case));
         let mut form = SpecialForm::new(Stand::truck_cabin()).with_end_stops(stops);
-        form.baumgarte_rate = if case % 2 == 0 { 0.0 } else { 10.0 };
+        form.body.baumgarte_rate = if case % 2 == 0 { 0.0 } else { 10.0 };
         let (exact, dpower) = form.derivative_tangent(&y, &u, &dy, &du);
         let h = 1e-6;
         let eval = |sign: f64| {

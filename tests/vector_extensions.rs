@@ -1,22 +1,22 @@
-//! The integrators compiled for AVX2 ([`Integrator::vector_extensions`], chosen at run time
-//! where the processor has it) compute the same numbers as the baseline code, to the bit: the
-//! same operations in the same order, only wider registers. Checked on motions that take every
-//! branch of a step: contacts with both stops (located and stepped across), singular
-//! arrangements passed, and both methods.
+//! The steps' AVX2 path (`VectorPath::Avx2`, chosen at run time where the processor has it
+//! and the build has the `avx2` feature) computes the same numbers as the baseline path, to
+//! the bit: the same operations in the same order, only wider registers. Checked on motions
+//! that take every branch of a step: contacts with both stops (located and stepped across),
+//! singular arrangements passed, and both methods.
 
 mod common;
 
 use common::{pose, simulation};
 use nalgebra::Vector3;
-use stewart_fmu::integration::{Integrator, Method, SolverSettings};
-use stewart_fmu::physics::end_stops::EndStops;
-use stewart_fmu::physics::forces::HeldForces;
+use stewart_fmu::integration::{Method, SolverSettings};
+use stewart_fmu::physics::actuators::HeldForces;
+use stewart_fmu::physics::legs::end_stops::EndStops;
 use stewart_fmu::physics::stand::{PAPER_EQUILIBRIUM_LEG_FORCE, Stand};
-use stewart_fmu::simulation::{PlatformSimulation, Stabilisation};
+use stewart_fmu::simulation::{PlatformSimulation, Stabilisation, VectorPath};
 
 /// 2 s of 1 ms communication steps under forces that drive the platform through both stops
 /// and a tilt; returns every state and crossing time.
-fn run(method: Method, stops: bool, vector_extensions: bool) -> (Vec<[u64; 26]>, Vec<u64>) {
+fn run(method: Method, stops: bool, path: VectorPath) -> (Vec<[u64; 26]>, Vec<u64>) {
     let settings = SolverSettings { method, fixed_step: 1e-3, ..Default::default() };
     let start = pose(
         Vector3::new(0.01, -0.02, 0.0),
@@ -27,7 +27,8 @@ fn run(method: Method, stops: bool, vector_extensions: bool) -> (Vec<[u64; 26]>,
     let mut sim: PlatformSimulation = simulation(Stand::truck_cabin(), start, settings, Stabilisation::Projection)
         .with_end_stops(stops.then(EndStops::default))
         .expect("valid stops");
-    sim.integrator.vector_extensions = vector_extensions;
+    sim.set_vector_path(path);
+    assert_eq!(sim.vector_path(), path);
     let f0 = PAPER_EQUILIBRIUM_LEG_FORCE * 3000.0 * 9.81;
     // Hard into both stops with them, a milder sway without (nothing stops a tip-over then).
     let amplitude = if stops { 0.6 } else { 0.2 };
@@ -46,17 +47,21 @@ fn run(method: Method, stops: bool, vector_extensions: bool) -> (Vec<[u64; 26]>,
 
 #[test]
 fn avx2_and_baseline_code_give_the_same_bits() {
-    if !Integrator::new(SolverSettings::default()).vector_extensions {
-        panic!("vector extensions are on by default");
+    let fastest = VectorPath::fastest();
+    if fastest == VectorPath::Baseline {
+        println!("this build or processor has no AVX2 path: both runs take the baseline code");
     }
-    #[cfg(target_arch = "x86_64")]
-    if !std::arch::is_x86_feature_detected!("avx2") || !std::arch::is_x86_feature_detected!("fma") {
-        println!("this processor has no AVX2 and FMA: both runs take the baseline code");
-    }
+    let default = common::simulation(
+        Stand::truck_cabin(),
+        pose(Vector3::zeros(), Vector3::zeros(), Vector3::zeros(), Vector3::zeros()),
+        SolverSettings::default(),
+        Stabilisation::Projection,
+    );
+    assert_eq!(default.vector_path(), fastest, "a simulation takes the fastest path by default");
     for method in [Method::RungeKutta4, Method::DormandPrince45] {
         for stops in [true, false] {
-            let (fast, fast_crossings) = run(method, stops, true);
-            let (base, base_crossings) = run(method, stops, false);
+            let (fast, fast_crossings) = run(method, stops, fastest);
+            let (base, base_crossings) = run(method, stops, VectorPath::Baseline);
             println!("{method:?}, stops {stops}: {} states, {} crossings compared", fast.len(), fast_crossings.len());
             assert!(!stops || !fast_crossings.is_empty(), "the motion meets the stops");
             assert_eq!(fast_crossings, base_crossings, "{method:?}, stops {stops}");

@@ -10,8 +10,8 @@ mod common;
 
 use common::{neutral_state, simulation};
 use stewart_fmu::integration::{Method, SolverSettings};
-use stewart_fmu::physics::end_stops::EndStops;
-use stewart_fmu::physics::forces::HeldForces;
+use stewart_fmu::physics::actuators::HeldForces;
+use stewart_fmu::physics::legs::end_stops::EndStops;
 use stewart_fmu::physics::stand::{PAPER_EQUILIBRIUM_LEG_FORCE, Stand};
 use stewart_fmu::simulation::platform::switching;
 use stewart_fmu::simulation::{PlatformOutputs, PlatformSimulation, Stabilisation};
@@ -177,8 +177,9 @@ fn bounce(settings: SolverSettings, t_end: f64) -> (Vec<f64>, f64, usize, Vec<f6
         sim.advance(&HeldForces::constant([0.0; 6]), t + h).expect("step");
         t += h;
         for c in sim.crossings.as_slice().iter().filter(|c| c.index == switching::LOWER && !c.rising) {
-            let s =
-                stewart_fmu::physics::body_state::BodyState::from_vector(stewart_fmu::simulation::platform::body(&c.y));
+            let s = stewart_fmu::physics::body::state::BodyState::from_vector(stewart_fmu::simulation::platform::body(
+                &c.y,
+            ));
             landings.push(s.angular_velocity_body().norm());
         }
         z.push(sim.body_state().r.z);

@@ -29,7 +29,7 @@ use crate::models::variables::{
     Causality, Dependency, Initial, Variability, VariableGroup, VariableRef, VariableTable, VariableType,
 };
 use crate::models::{AnyModel, EventUpdate, ModelKind, StepReport};
-use crate::physics::body_state::all_finite;
+use crate::physics::body::state::all_finite;
 
 /// How far `currentCommunicationPoint` may be from the FMU's time, and a step's end past
 /// `stopTime`: round-off only. The FMU's time after a step is the importer's `t + h`, so an

@@ -62,8 +62,8 @@ impl Default for Dopri5Memory {
 
 /// Hairer's error norm `sqrt(1/N sum_i (v_i / sc_i)²)`, `sc_i = atol + rtol max(|y0_i|, |y1_i|)`.
 /// The squares are summed in four interleaved partial sums (element `i` into sum `i mod 4`,
-/// then `(s0 + s1) + (s2 + s3)`): a fixed order, so the same bits in both copies of the
-/// method, and one that vectorises (one running sum took 9 scalar instructions per element).
+/// then `(s0 + s1) + (s2 + s3)`): a fixed order, so the same bits whatever registers the
+/// method is compiled for, and one that vectorises (a single running sum does not).
 #[inline(always)]
 fn scaled_rms<const N: usize>(v: &[f64; N], y0: &[f64; N], y1: &[f64; N], s: &SolverSettings) -> f64 {
     // `max` by comparison (a NaN in `y1` gives a NaN norm, which the caller treats as a
@@ -84,8 +84,8 @@ fn scaled_rms<const N: usize>(v: &[f64; N], y0: &[f64; N], y1: &[f64; N], s: &So
     (((sums[0] + sums[1]) + (sums[2] + sums[3])) / N as f64).sqrt()
 }
 
-/// Hairer's initial step estimate. Inlined, so that the AVX2 copy of the method has its own
-/// (with the system's wide right-hand side).
+/// Hairer's initial step estimate. Inlined, so that a caller compiled for wider registers
+/// has its own copy.
 #[inline(always)]
 fn initial_step<S: OdeSystem<N>, const N: usize>(
     system: &S,

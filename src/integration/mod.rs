@@ -135,19 +135,8 @@ pub trait OdeSystem<const N: usize> {
     /// `dy = f(t, y)`.
     fn derivative(&self, t: f64, y: &[f64; N], dy: &mut [f64; N]);
 
-    /// [`OdeSystem::derivative`] for the methods' AVX2 copy (`run_avx`): a system may use
-    /// the wider registers there, for the same bits.
-    ///
-    /// # Safety
-    /// The processor must support AVX2 and FMA.
-    #[inline(always)]
-    unsafe fn derivative_wide(&self, t: f64, y: &[f64; N], dy: &mut [f64; N]) {
-        self.derivative(t, y, dy)
-    }
-
-    /// `f(t, y)` returned by value, for a method's stages, where arrays declared for the whole
-    /// call are zeroed on every call: 30 fewer instructions per RK4 co-simulation cycle
-    /// (callgrind, 3,770 -> 3,740).
+    /// `f(t, y)` returned by value, for a method's stages (an array declared for the whole
+    /// call would be zeroed on every call).
     #[inline(always)]
     fn derivative_of(&self, t: f64, y: &[f64; N]) -> [f64; N] {
         let mut dy = [0.0; N];
@@ -157,15 +146,6 @@ pub trait OdeSystem<const N: usize> {
 
     /// Called on every accepted step's end state; may move it (e.g. back onto constraints).
     fn after_step(&self, _y: &mut [f64; N]) {}
-
-    /// [`OdeSystem::after_step`] for the methods' AVX2 copy, as `derivative_wide`.
-    ///
-    /// # Safety
-    /// The processor must support AVX2 and FMA.
-    #[inline(always)]
-    unsafe fn after_step_wide(&self, y: &mut [f64; N]) {
-        self.after_step(y)
-    }
 
     /// Whether [`OdeSystem::after_step`] can change the state. If not, the adaptive method
     /// reuses its last stage as the next step's first (FSAL).
@@ -192,21 +172,6 @@ pub trait OdeSystem<const N: usize> {
             self.switching(t, y, g);
         }
         Ok(())
-    }
-
-    /// [`OdeSystem::check_and_switching`] for the methods' AVX2 copy, as
-    /// [`OdeSystem::derivative_wide`].
-    ///
-    /// # Safety
-    /// The processor must support AVX2 and FMA.
-    #[inline(always)]
-    unsafe fn check_and_switching_wide(
-        &self,
-        t: f64,
-        y: &[f64; N],
-        g: Option<&mut [f64; MAX_SWITCHING]>,
-    ) -> Result<(), Self::Fault> {
-        self.check_and_switching(t, y, g)
     }
 
     /// Number of switching functions (at most [`MAX_SWITCHING`]; 0 = none, no cost).
@@ -302,13 +267,6 @@ pub struct Integrator {
     pub stats: IntegratorStats,
     /// Sides of the system's switching functions at the current time.
     pub sides: SwitchingSides,
-    /// Run the methods compiled for AVX2 where the processor has it (x86-64, Haswell and
-    /// later): the same arithmetic in the same order, so the results are equal to the bit
-    /// (`tests/vector_extensions.rs`), with 256-bit registers and three-operand instructions
-    /// (about a fifth fewer instructions per step). Rust never fuses a multiplication and an
-    /// addition by itself, so enabling the FMA unit changes no rounding. False: the baseline
-    /// (SSE2) code everywhere.
-    pub vector_extensions: bool,
 }
 
 impl Integrator {
@@ -318,7 +276,6 @@ impl Integrator {
             dopri5: dopri5::Dopri5Memory::default(),
             stats: IntegratorStats::default(),
             sides: SwitchingSides::default(),
-            vector_extensions: true,
         }
     }
 
@@ -338,7 +295,10 @@ impl Integrator {
     /// As [`Integrator::integrate`]; with `stop_at_restart`, returns early at the first
     /// non-smooth point (a [`SwitchingKind::Restart`] crossing: the adaptive method has landed
     /// on it, the fixed-step method stops at the end of the step that crossed it). Returns
-    /// the time reached.
+    /// the time reached. Inlined, so that a caller compiled for wider registers (the
+    /// platform's AVX2 path, `simulation::vector`) compiles the methods and its system with
+    /// them.
+    #[inline(always)]
     pub fn integrate_until_event<S: OdeSystem<N>, const N: usize>(
         &mut self,
         system: &S,
@@ -358,14 +318,6 @@ impl Integrator {
             stats: &mut self.stats,
             events: &mut events,
         };
-        #[cfg(target_arch = "x86_64")]
-        if self.vector_extensions
-            && std::arch::is_x86_feature_detected!("avx2")
-            && std::arch::is_x86_feature_detected!("fma")
-        {
-            // SAFETY: the processor has AVX2 and FMA (detected just now).
-            return unsafe { run_avx(system, call, t0, y, t1) };
-        }
         run(system, call, t0, y, t1)
     }
 }
@@ -379,8 +331,7 @@ pub(crate) struct MethodCall<'a, 'e, const N: usize> {
     pub events: &'a mut Events<'e, N>,
 }
 
-/// The chosen method over one call; inlined into [`run_avx`] too, so that everything the
-/// methods inline (the system's right-hand side) is compiled a second time for AVX2.
+/// The chosen method over one call.
 #[inline(always)]
 fn run<S: OdeSystem<N>, const N: usize>(
     system: &S,
@@ -395,82 +346,10 @@ fn run<S: OdeSystem<N>, const N: usize>(
     }
 }
 
-/// [`run`] compiled for AVX2 (see [`Integrator::vector_extensions`]).
-///
-/// # Safety
-/// The processor must support AVX2 and FMA.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx,avx2,fma")]
-unsafe fn run_avx<S: OdeSystem<N>, const N: usize>(
-    system: &S,
-    call: MethodCall<'_, '_, N>,
-    t0: f64,
-    y: &mut [f64; N],
-    t1: f64,
-) -> Result<f64, IntegrationError<S::Fault>> {
-    run(&WideRegisters(system), call, t0, y, t1)
-}
-
-/// A system whose right-hand side is its [`OdeSystem::derivative_wide`]: what [`run_avx`]
-/// integrates, so that only the AVX2 copy calls it.
-#[cfg(target_arch = "x86_64")]
-struct WideRegisters<'a, S>(&'a S);
-
-#[cfg(target_arch = "x86_64")]
-impl<S: OdeSystem<N>, const N: usize> OdeSystem<N> for WideRegisters<'_, S> {
-    type Fault = S::Fault;
-
-    #[inline(always)]
-    fn derivative(&self, t: f64, y: &[f64; N], dy: &mut [f64; N]) {
-        // SAFETY: only `run_avx` builds this wrapper, on processors with AVX2 and FMA.
-        unsafe { self.0.derivative_wide(t, y, dy) }
-    }
-    #[inline(always)]
-    fn after_step(&self, y: &mut [f64; N]) {
-        // SAFETY: as in `derivative`.
-        unsafe { self.0.after_step_wide(y) }
-    }
-    #[inline(always)]
-    fn modifies_state_after_step(&self) -> bool {
-        self.0.modifies_state_after_step()
-    }
-    #[inline(always)]
-    fn check(&self, t: f64, y: &[f64; N]) -> Result<(), Self::Fault> {
-        self.check_and_switching(t, y, None)
-    }
-    #[inline(always)]
-    fn check_and_switching(
-        &self,
-        t: f64,
-        y: &[f64; N],
-        g: Option<&mut [f64; MAX_SWITCHING]>,
-    ) -> Result<(), Self::Fault> {
-        // SAFETY: as in `derivative`.
-        unsafe { self.0.check_and_switching_wide(t, y, g) }
-    }
-    #[inline(always)]
-    fn switching_count(&self) -> usize {
-        self.0.switching_count()
-    }
-    #[inline(always)]
-    fn switching(&self, t: f64, y: &[f64; N], g: &mut [f64; MAX_SWITCHING]) {
-        self.0.switching(t, y, g)
-    }
-    #[inline(always)]
-    fn switching_kind(&self, index: usize) -> SwitchingKind {
-        self.0.switching_kind(index)
-    }
-    #[inline(always)]
-    fn switching_fault(&self, index: usize, t: f64, y: &[f64; N]) -> Option<Self::Fault> {
-        self.0.switching_fault(index, t, y)
-    }
-}
-
-/// Keeps a method's stage in memory before the right-hand side reads it. Without this the
+/// Keeps a method's stage in memory before the right-hand side reads it: otherwise the
 /// compiler folds the stage's combination into the right-hand side's loads and rebuilds the
-/// vectors it needs with shuffles: measured with callgrind, 180 more instructions per RK4
-/// step with the legs in AVX registers (the adaptive method gains nothing from it, measured
-/// the same way, so it does without). Changes no number.
+/// vectors it needs with shuffles, which costs more than the store (`benches/results/`).
+/// Changes no number.
 #[inline(always)]
 pub(crate) fn in_memory<T>(stage: &mut T) {
     std::hint::black_box(stage);
@@ -496,7 +375,7 @@ impl<const N: usize> Events<'_, N> {
 /// Iterates over the set bits of `mask`, lowest first.
 pub(crate) fn bits(mask: u32) -> impl Iterator<Item = usize> {
     // Lowest set bit first, each step clearing it: nothing to do for an empty mask (every
-    // step without a crossing), where a scan of the 32 positions cost 160 instructions.
+    // step without a crossing).
     let mut rest = mask;
     std::iter::from_fn(move || {
         (rest != 0).then(|| {

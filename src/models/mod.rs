@@ -6,6 +6,7 @@
 //! | module | what it holds |
 //! |---|---|
 //! | [`variables`] | variable groups, value references, access metadata |
+//! | [`declare`] | `declare_variables!`: each variable declared once, bound to its storage |
 //! | [`units`] | unit definitions |
 //! | [`snapshot`] | the byte format of serialized FMU states |
 //! | [`platform`] | the `StewartPlatform` model |
@@ -17,6 +18,7 @@
 //! its own; see [`crate::fmi::description`]).
 
 pub mod controller;
+pub mod declare;
 pub mod platform;
 pub mod snapshot;
 pub mod trivial;
@@ -51,6 +53,21 @@ pub struct ModelInfo {
     /// What the model supports, declared in the model descriptions and enforced by the
     /// instance.
     pub capabilities: Capabilities,
+}
+
+impl ModelInfo {
+    /// Where an element sits in the continuous state vector (`None`: it is not a state).
+    pub fn state_index(&self, var: VariableRef) -> Option<usize> {
+        let name = self.groups.get(var.group)?.name;
+        self.states.iter().position(|&(g, i)| g == name && i == var.index)
+    }
+
+    /// Where the state an element of a derivative variable is the derivative of sits in the
+    /// continuous state vector (`der(v)[2]`: `v[2]`'s place).
+    pub fn derivative_state_index(&self, var: VariableRef) -> Option<usize> {
+        let of = self.groups.get(var.group)?.derivative_of?;
+        self.states.iter().position(|&(g, i)| g == of && i == var.index)
+    }
 }
 
 /// A model's capabilities: written into both model descriptions, checked by the FMI layer.
@@ -238,21 +255,6 @@ pub fn set_one_by_one<M: FmuModel + ?Sized>(model: &mut M, first: VariableRef, v
 
 /// Most blocks a model's value cache may have (see [`FmuModel::cache_block`]).
 pub const CACHE_BLOCKS: u8 = 31;
-
-/// Writes `values` into a value cache at the value references of `group`'s elements;
-/// `true` if one of them is NaN.
-#[inline]
-pub fn fill_group<const N: usize>(cache: &mut [f64], group: &VariableGroup, values: &[f64; N]) -> bool {
-    let first = group.first_vr as usize;
-    if let Some(slots) = cache.get_mut(first..first + N) {
-        // Element by element: a handful of values, no call to memcpy.
-        for (slot, &x) in slots.iter_mut().zip(values) {
-            *slot = x;
-        }
-    }
-    // A fold without early exit over a fixed length: a few vector compares.
-    values.iter().fold(false, |nan, x| nan | x.is_nan())
-}
 
 /// Every model this binary implements.
 pub enum AnyModel {

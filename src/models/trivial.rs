@@ -5,7 +5,7 @@
 
 use super::platform::{PlatformModel, variables::group};
 use super::snapshot::{ByteReader, ByteWriter, SnapshotError};
-use super::variables::VariableRef;
+use super::variables::{Causality, VariableRef};
 use super::{DefaultExperiment, FmuModel, ModelInfo, StepError, StepReport};
 use crate::models::Initialised;
 
@@ -38,7 +38,10 @@ impl FmuModel for TrivialModel {
         if var.group == group::TIME {
             return self.time;
         }
-        if super::platform::variables::is_output_or_derivative(var.group) {
+        // Every value computed from the state copies a force (classified by causality).
+        if let Some(g) = INFO.groups.get(var.group)
+            && matches!(g.causality, Causality::Output | Causality::Local)
+        {
             return self.storage.forces[var.index % 6];
         }
         self.storage.get_real(var)

@@ -430,24 +430,3 @@ impl VariableGroup {
         VariableGroup { output_dependencies, ..self }
     }
 }
-
-/// Declares a model's variables once, in order: `model_variables! { TIME => V::time(0), F =>
-/// V::input("F", ...), ... }` defines `GROUPS` (the table every description, value reference
-/// and documentation page comes from) and `group::TIME`, `group::F`, ... (each variable's
-/// index in it, for the model's `match`es), so an index cannot disagree with the table.
-macro_rules! model_variables {
-    ($($id:ident => $def:expr),* $(,)?) => {
-        /// Indices into [`GROUPS`], matched on by the model (declared with the table by
-        /// `model_variables!`).
-        pub mod group {
-            #[allow(non_camel_case_types, clippy::upper_case_acronyms, dead_code)]
-            #[repr(usize)]
-            enum Index { $($id),* }
-            $(pub const $id: usize = Index::$id as usize;)*
-        }
-
-        pub static GROUPS: &[$crate::models::variables::VariableGroup] = &[$($def),*];
-    };
-}
-
-pub(crate) use model_variables;

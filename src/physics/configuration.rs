@@ -4,10 +4,10 @@
 //! the step). A singular leg arrangement is not among them: with the leg forces given, the
 //! motion is regular there (the simulation reports such passages instead).
 
-use super::body_state::BodyState;
+use super::body::state::BodyState;
 use super::direct_problem::ForceMomentMatrix;
 use super::error::{ParameterError, PhysicsFault};
-use super::legs::{JointArrays, LegGeometry, LegKinematics};
+use super::legs::geometry::{JointArrays, LegGeometry, LegKinematics};
 use super::stand::{COINCIDENCE_TOLERANCE, LEG_COUNT, Stand};
 
 /// The limits a stand's motion must respect, fixed when the simulation starts.

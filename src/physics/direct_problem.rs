@@ -12,9 +12,9 @@
 
 use nalgebra::{Matrix6, Vector3, Vector6};
 
-use super::body_state::BodyState;
-use super::kinematics::PoseTrajectoryPoint;
-use super::legs::{LegGeometry, LegKinematics};
+use super::body::kinematics::PoseTrajectoryPoint;
+use super::body::state::BodyState;
+use super::legs::geometry::{LegGeometry, LegKinematics};
 use super::stand::{LEG_COUNT, Stand};
 
 /// Condition number (of the dimensionless force/moment matrix) above which a configuration is
@@ -234,7 +234,7 @@ pub fn solve_direct_problem(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::physics::legs::JointArrays;
+    use crate::physics::legs::geometry::JointArrays;
     use crate::physics::stand::PAPER_EQUILIBRIUM_LEG_FORCE;
     use nalgebra::Matrix3;
 
@@ -253,7 +253,7 @@ mod tests {
     #[test]
     fn determinant_matches_the_lu_one() {
         let stand = Stand::truck_cabin();
-        let rot = crate::physics::kinematics::rotation_from_angles(&Vector3::new(0.1, -0.2, 0.7));
+        let rot = crate::physics::body::kinematics::rotation_from_angles(&Vector3::new(0.1, -0.2, 0.7));
         let state = BodyState::from_pose(Vector3::new(0.05, 0.02, 1.9), Vector3::zeros(), &rot, &Vector3::zeros());
         let m = ForceMomentMatrix::new(&stand, &LegGeometry::new(&stand, &state));
         let (ours, lu) = (m.determinant(), m.matrix.determinant());

@@ -13,7 +13,7 @@
 
 use nalgebra::Vector3;
 
-use super::kinematics::PoseTrajectoryPoint;
+use super::body::kinematics::PoseTrajectoryPoint;
 
 /// `q(t) = offset + amplitude sin(frequency t + phase) (1 - exp(-t/time_constant))²`.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -6,9 +6,12 @@
 //! |---|---|
 //! | [`platform`] | [`PlatformSimulation`]: state, time, integrator; `advance` with roll-back |
 //! | [`outputs`] | the FMU outputs derived from a state, and their time derivatives |
+//! | [`vector`] | which vector registers a step computes in (the one door to AVX2) |
 
 pub mod outputs;
 pub mod platform;
+pub mod vector;
 
 pub use outputs::{LegOutputs, PlatformOutputs};
 pub use platform::{PlatformDynamics, PlatformSimulation, SIMULATION_DIM, SimulationState, Stabilisation, StepFailure};
+pub use vector::VectorPath;

@@ -2,48 +2,51 @@
 //! time derivatives of the outputs (`fmi2GetRealOutputDerivatives`) are the directional
 //! derivative along the state's own rate `dy/dt`: one chain rule serves both.
 
-use nalgebra::{Matrix3, Matrix6, Vector3};
+use nalgebra::{Matrix3, Matrix6, Scalar, Vector3};
 
-use super::platform::{SimulationState, body, quadrature};
-use crate::physics::body_state::BodyState;
+use super::platform::{SIMULATION_DIM, SimulationState, body, quadrature};
+use crate::physics::body::invariants::mechanical_energy;
+use crate::physics::body::kinematics::angles_from_rotation;
+use crate::physics::body::state::{BodyState, STATE_DIM};
 use crate::physics::direct_problem::ForceMomentMatrix;
-use crate::physics::invariants::mechanical_energy;
-use crate::physics::kinematics::angles_from_rotation;
-use crate::physics::legs::LegGeometry;
+use crate::physics::legs::geometry::LegGeometry;
+use crate::physics::number::{Dual, Real};
 use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::{LEG_COUNT, Stand};
 
 /// Everything the platform FMU reports about a state (except `kappa`, which costs a
-/// singular value decomposition and is computed on request: [`condition_number`]).
+/// singular value decomposition and is computed on request: [`condition_number`]), in the
+/// number type `T`: `f64` for the values, [`Dual`] for their directional derivatives.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PlatformOutputs {
+pub struct PlatformOutputs<T: Scalar = f64> {
     /// Centre of mass, m.
-    pub r: Vector3<f64>,
+    pub r: Vector3<T>,
     /// Centre-of-mass velocity, m/s.
-    pub v: Vector3<f64>,
+    pub v: Vector3<T>,
     /// Rotation body -> inertial (column b = e_b).
-    pub rotation: Matrix3<f64>,
+    pub rotation: Matrix3<T>,
     /// Roll, pitch, yaw (1-2-3), rad.
-    pub angles: Vector3<f64>,
+    pub angles: Vector3<T>,
     /// Angular velocity, body components, rad/s.
-    pub w: Vector3<f64>,
+    pub w: Vector3<T>,
     /// Leg lengths, m.
-    pub l: [f64; LEG_COUNT],
+    pub l: [T; LEG_COUNT],
     /// Leg length rates, m/s.
-    pub ldot: [f64; LEG_COUNT],
+    pub ldot: [T; LEG_COUNT],
     /// Kinetic plus gravitational potential energy plus the stops' potential energy, J.
-    pub energy: f64,
+    pub energy: T,
     /// max over a, b of |e_a . e_b - delta_ab|.
-    pub constraint_error: f64,
+    pub constraint_error: T,
     /// End-stop force along each leg, N (sign as the leg forces; 0 inside the stroke).
-    pub stop_force: [f64; LEG_COUNT],
+    pub stop_force: [T; LEG_COUNT],
     /// Work of the actuator forces since the start, J.
-    pub work_of_forces: f64,
+    pub work_of_forces: T,
     /// Energy taken by the stops' damping since the start, J.
-    pub dissipated_energy: f64,
+    pub dissipated_energy: T,
 }
 
-/// Leg lengths and rates alone (a subset of [`PlatformOutputs`], the same numbers).
+/// Leg lengths and rates alone: what a controller reads every step, computed without the
+/// other outputs (the same numbers as [`PlatformOutputs`]' fields of the same names).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LegOutputs {
     pub l: [f64; LEG_COUNT],
@@ -58,15 +61,16 @@ impl LegOutputs {
     }
 }
 
-impl PlatformOutputs {
-    pub fn compute(form: &SpecialForm, y: &SimulationState) -> Self {
+impl<T: Real> PlatformOutputs<T> {
+    /// The outputs of the simulation state `y`.
+    pub fn compute(form: &SpecialForm, y: &[T; SIMULATION_DIM]) -> Self {
         let stand = &form.stand;
-        let state = BodyState::from_vector(body(y));
+        let state = BodyState::from_vector(y.first_chunk::<STATE_DIM>().unwrap_or(&[T::zero(); STATE_DIM]));
         let legs = LegGeometry::new(stand, &state);
         let rotation = state.rotation();
         let ldot = legs.length_rates(stand, &state);
-        let mut stop_force = [0.0; LEG_COUNT];
-        let mut stop_energy = 0.0;
+        let mut stop_force = [T::zero(); LEG_COUNT];
+        let mut stop_energy = T::zero();
         if let Some(stops) = form.stops() {
             for k in 0..LEG_COUNT {
                 stop_force[k] = stops.contact(k, legs.length[k], ldot[k]).force;
@@ -88,91 +92,36 @@ impl PlatformOutputs {
             dissipated_energy: y[quadrature::WORK_DISSIPATED],
         }
     }
+}
 
+impl PlatformOutputs {
     /// Directional derivative of the outputs: their change for a change `dy` of the state
-    /// (exact chain rule; for `fmi2GetDirectionalDerivative` and linearisation). With `dy`
-    /// the state's rate `dy/dt` it gives the outputs' time derivatives. The entry for
-    /// `constraint_error` is the change of the largest residual `|e_a.e_b - delta_ab|`.
+    /// (exact: [`PlatformOutputs::compute`] on duals; for `fmi2GetDirectionalDerivative` and
+    /// linearisation). With `dy` the state's rate `dy/dt` it gives the outputs' time
+    /// derivatives. The entry for `constraint_error` is the change of the largest residual
+    /// `|e_a.e_b - delta_ab|`.
     pub fn tangent(form: &SpecialForm, y: &SimulationState, dy: &SimulationState) -> Self {
-        let stand = &form.stand;
-        let s = BodyState::from_vector(body(y));
-        let ds = BodyState::from_vector(body(dy));
-        let out = Self::compute(form, y);
-        let rot = s.rotation();
-        let drot = Matrix3::from_columns(&ds.e);
-        // angles: pitch = asin(R02), roll = atan2(-R12, R22), yaw = atan2(-R01, R00).
-        let datan2 = |y: f64, x: f64, dy: f64, dx: f64| {
-            let d = x * x + y * y;
-            if d > 0.0 { (x * dy - y * dx) / d } else { 0.0 }
-        };
-        let r02 = rot[(0, 2)];
-        let dpitch = if r02.abs() < 1.0 { drot[(0, 2)] / (1.0 - r02 * r02).sqrt() } else { 0.0 };
-        let droll = datan2(-rot[(1, 2)], rot[(2, 2)], -drot[(1, 2)], drot[(2, 2)]);
-        let dyaw = datan2(-rot[(0, 1)], rot[(0, 0)], -drot[(0, 1)], drot[(0, 0)]);
-        let [e1, e2, e3] = &s.e;
-        let [d1, d2, d3] = &s.e_dot;
-        let [de1, de2, de3] = &ds.e;
-        let [dd1, dd2, dd3] = &ds.e_dot;
-        let dw = Vector3::new(
-            0.5 * (dd2.dot(e3) + d2.dot(de3) - dd3.dot(e2) - d3.dot(de2)),
-            0.5 * (dd3.dot(e1) + d3.dot(de1) - dd1.dot(e3) - d1.dot(de3)),
-            0.5 * (dd1.dot(e2) + d1.dot(de2) - dd2.dot(e1) - d2.dot(de1)),
-        );
-        let mut dl = [0.0; LEG_COUNT];
-        let mut dldot = [0.0; LEG_COUNT];
-        for k in 0..LEG_COUNT {
-            let p = &stand.platform_joints[k];
-            let q = s.r + s.body_vector(p) - stand.base_joints[k];
-            let dq = ds.r + ds.body_vector(p);
-            let l = q.norm();
-            if l <= 0.0 {
-                continue;
-            }
-            let n = q / l;
-            let dn = (dq - n * n.dot(&dq)) / l;
-            let sv = s.v + s.body_vector_rate(p);
-            let dsv = ds.v + ds.body_vector_rate(p);
-            dl[k] = n.dot(&dq);
-            dldot[k] = dn.dot(&sv) + n.dot(&dsv);
-        }
-        let mut dstop = [0.0; LEG_COUNT];
-        let mut dstop_energy = 0.0;
-        if let Some(stops) = form.stops() {
-            for k in 0..LEG_COUNT {
-                dstop[k] = stops.contact_tangent(k, out.l[k], out.ldot[k], dl[k], dldot[k]).force;
-            }
-            dstop_energy = stops.potential_energy_tangent(&out.l, &dl);
-        }
-        let j = Vector3::from(stand.inertia);
-        let denergy = stand.mass * s.v.dot(&ds.v)
-            + out.w.dot(&j.component_mul(&dw))
-            + stand.mass * stand.gravity * ds.r.z
-            + dstop_energy;
-        // The largest residual and its change.
-        let (mut worst, mut dworst) = (-1.0, 0.0);
-        for a in 0..3 {
-            for b in a..3 {
-                let c = s.e[a].dot(&s.e[b]) - if a == b { 1.0 } else { 0.0 };
-                if c.abs() > worst {
-                    worst = c.abs();
-                    let dc = ds.e[a].dot(&s.e[b]) + s.e[a].dot(&ds.e[b]);
-                    dworst = if c < 0.0 { -dc } else { dc };
-                }
-            }
-        }
+        PlatformOutputs::<Dual>::compute(form, &Dual::seeded(y, dy)).map(|d| d.eps)
+    }
+}
+
+impl<T: Real> PlatformOutputs<T> {
+    /// Every value through `f` (a dual's derivative part, say).
+    pub fn map<U: Real>(&self, f: impl Fn(T) -> U) -> PlatformOutputs<U> {
+        let v3 = |v: &Vector3<T>| v.map(&f);
         PlatformOutputs {
-            r: ds.r,
-            v: ds.v,
-            rotation: drot,
-            angles: Vector3::new(droll, dpitch, dyaw),
-            w: dw,
-            l: dl,
-            ldot: dldot,
-            energy: denergy,
-            constraint_error: dworst,
-            stop_force: dstop,
-            work_of_forces: dy[quadrature::WORK_F],
-            dissipated_energy: dy[quadrature::WORK_DISSIPATED],
+            r: v3(&self.r),
+            v: v3(&self.v),
+            rotation: self.rotation.map(&f),
+            angles: v3(&self.angles),
+            w: v3(&self.w),
+            l: self.l.map(&f),
+            ldot: self.ldot.map(&f),
+            energy: f(self.energy),
+            constraint_error: f(self.constraint_error),
+            stop_force: self.stop_force.map(&f),
+            work_of_forces: f(self.work_of_forces),
+            dissipated_energy: f(self.dissipated_energy),
         }
     }
 }

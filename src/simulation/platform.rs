@@ -3,20 +3,23 @@
 use crate::integration::{
     CrossingLog, IntegrationError, Integrator, MAX_SWITCHING, OdeSystem, SolverSettings, SwitchingKind, SwitchingSides,
 };
-use crate::physics::body_state::{BodyState, STATE_DIM, StateVector, all_finite};
+use crate::physics::body::state::{BodyState, STATE_DIM, StateVector, all_finite};
 use std::cell::Cell;
 
 use super::outputs::LegOutputs;
+use crate::physics::actuators::LegForceLaw;
+use crate::physics::body::projection::project_onto_constraints_in;
 use crate::physics::configuration::ConfigurationGuard;
 use crate::physics::direct_problem::{force_moment_determinant, singular_legs};
-use crate::physics::end_stops::{EndStops, STROKE_LIMITS};
 use crate::physics::error::{ParameterError, PhysicsFault};
-use crate::physics::forces::LegForceLaw;
-use crate::physics::legs::{LegGeometry, LegKinematics};
-use crate::physics::per_leg::{Lanes, Narrow, Wide};
-use crate::physics::projection::{project_onto_constraints, project_onto_constraints_wide};
+use crate::physics::legs::end_stops::{EndStops, STROKE_LIMITS};
+use crate::physics::legs::geometry::{LegGeometry, LegKinematics};
+use crate::physics::legs::per_leg::{Lanes, Narrow};
 use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::Stand;
+use std::marker::PhantomData;
+
+use super::vector::VectorPath;
 
 /// Length of the simulation state: the 24 special-form coordinates, then the work of the
 /// actuator forces and the energy taken by the stops' damping (quadratures integrated with
@@ -87,8 +90,9 @@ impl Stabilisation {
 }
 
 /// The special-form equations with a force law, plus the work quadratures, as an ODE system
-/// for the integrators.
-pub struct PlatformDynamics<'a, L: ?Sized> {
+/// for the integrators, computed in lanes `V` ([`Lanes`]: the same numbers in each; which one
+/// a step uses is chosen in [`super::vector`]).
+pub struct PlatformDynamics<'a, L: ?Sized, V: Lanes = Narrow> {
     pub form: &'a SpecialForm,
     pub law: &'a L,
     pub stabilisation: Stabilisation,
@@ -102,6 +106,7 @@ pub struct PlatformDynamics<'a, L: ?Sized> {
     /// integration, those of its end state (the check is the last thing a step does), so that
     /// the outputs `l` and `ldot` cost no second computation of the legs.
     pub checked_legs: Cell<Option<LegOutputs>>,
+    lanes: PhantomData<V>,
 }
 
 impl<'a, L: ?Sized> PlatformDynamics<'a, L> {
@@ -121,6 +126,23 @@ impl<'a, L: ?Sized> PlatformDynamics<'a, L> {
             stop_at_singularity,
             track_singularities: true,
             checked_legs: Cell::new(None),
+            lanes: PhantomData,
+        }
+    }
+}
+
+impl<'a, L: ?Sized, V: Lanes> PlatformDynamics<'a, L, V> {
+    /// The same dynamics computed in lanes `W`.
+    pub(crate) fn in_lanes<W: Lanes>(&self) -> PlatformDynamics<'a, L, W> {
+        PlatformDynamics {
+            form: self.form,
+            law: self.law,
+            stabilisation: self.stabilisation,
+            guard: self.guard,
+            stop_at_singularity: self.stop_at_singularity,
+            track_singularities: self.track_singularities,
+            checked_legs: Cell::new(None),
+            lanes: PhantomData,
         }
     }
 
@@ -129,7 +151,7 @@ impl<'a, L: ?Sized> PlatformDynamics<'a, L> {
     }
 }
 
-impl<L: LegForceLaw + ?Sized> PlatformDynamics<'_, L> {
+impl<L: LegForceLaw + ?Sized, V: Lanes> PlatformDynamics<'_, L, V> {
     /// The values of all switching functions of a body state (see [`switching`]), the
     /// determinant included whether it is tracked or not (Model Exchange event indicators).
     #[inline(always)]
@@ -156,7 +178,7 @@ impl<L: LegForceLaw + ?Sized> PlatformDynamics<'_, L> {
     /// The guard, the switching functions and the leg outputs from one computation of the
     /// legs (in lanes `V`: see `JointArrays::kinematics_in`).
     #[inline(always)]
-    fn check_and_switching_in<V: Lanes>(
+    fn check_and_switching_in(
         &self,
         y: &SimulationState,
         g: Option<&mut [f64; MAX_SWITCHING]>,
@@ -176,28 +198,13 @@ impl<L: LegForceLaw + ?Sized> PlatformDynamics<'_, L> {
     }
 }
 
-impl<L: LegForceLaw + ?Sized> OdeSystem<SIMULATION_DIM> for PlatformDynamics<'_, L> {
+impl<L: LegForceLaw + ?Sized, V: Lanes> OdeSystem<SIMULATION_DIM> for PlatformDynamics<'_, L, V> {
     type Fault = PhysicsFault;
 
     #[inline(always)]
     fn derivative(&self, t: f64, y: &SimulationState, dy: &mut SimulationState) {
         if let Some((body_rate, quadrature_rate)) = dy.split_first_chunk_mut::<STATE_DIM>() {
-            let power = self.form.derivative(t, body(y), self.law, body_rate);
-            if let [work, dissipated] = quadrature_rate {
-                *work = power.actuator;
-                *dissipated = power.dissipation;
-            }
-        }
-    }
-
-    /// [`PlatformDynamics::derivative`] with the legs in AVX registers. Its lines repeated
-    /// rather than shared through a closure: a closure full of AVX intrinsics is not inlined
-    /// into the AVX2 copy (see `physics::per_leg::components!`).
-    #[inline(always)]
-    unsafe fn derivative_wide(&self, t: f64, y: &SimulationState, dy: &mut SimulationState) {
-        if let Some((body_rate, quadrature_rate)) = dy.split_first_chunk_mut::<STATE_DIM>() {
-            // SAFETY: forwarded to the caller (AVX2 and FMA).
-            let power = unsafe { self.form.derivative_wide(t, body(y), self.law, body_rate) };
+            let power = self.form.derivative_in::<L, V>(t, body(y), self.law, body_rate);
             if let [work, dissipated] = quadrature_rate {
                 *work = power.actuator;
                 *dissipated = power.dissipation;
@@ -210,18 +217,7 @@ impl<L: LegForceLaw + ?Sized> OdeSystem<SIMULATION_DIM> for PlatformDynamics<'_,
         if self.stabilisation == Stabilisation::Projection
             && let Some(b) = y.first_chunk_mut::<STATE_DIM>()
         {
-            project_onto_constraints(b);
-        }
-    }
-
-    /// [`PlatformDynamics::after_step`] with the axes in AVX registers: the same bits.
-    #[inline(always)]
-    unsafe fn after_step_wide(&self, y: &mut SimulationState) {
-        if self.stabilisation == Stabilisation::Projection
-            && let Some(b) = y.first_chunk_mut::<STATE_DIM>()
-        {
-            // SAFETY: forwarded to the caller (AVX2).
-            unsafe { project_onto_constraints_wide(b) };
+            project_onto_constraints_in::<V::Axes>(b);
         }
     }
 
@@ -243,17 +239,7 @@ impl<L: LegForceLaw + ?Sized> OdeSystem<SIMULATION_DIM> for PlatformDynamics<'_,
         y: &SimulationState,
         g: Option<&mut [f64; MAX_SWITCHING]>,
     ) -> Result<(), PhysicsFault> {
-        self.check_and_switching_in::<Narrow>(y, g)
-    }
-
-    #[inline(always)]
-    unsafe fn check_and_switching_wide(
-        &self,
-        _t: f64,
-        y: &SimulationState,
-        g: Option<&mut [f64; MAX_SWITCHING]>,
-    ) -> Result<(), PhysicsFault> {
-        self.check_and_switching_in::<Wide>(y, g)
+        self.check_and_switching_in(y, g)
     }
 
     fn switching_count(&self) -> usize {
@@ -338,6 +324,8 @@ pub struct PlatformSimulation {
     /// Sign changes of the switching functions during the last [`PlatformSimulation::advance`]
     /// (contacts, singular arrangements passed), in time order.
     pub crossings: CrossingLog<SIMULATION_DIM>,
+    /// The registers the steps compute in (the same numbers in each).
+    vector_path: VectorPath,
 }
 
 impl PlatformSimulation {
@@ -366,7 +354,19 @@ impl PlatformSimulation {
             time: t0,
             state,
             crossings: CrossingLog::default(),
+            vector_path: VectorPath::fastest(),
         })
+    }
+
+    /// The registers the steps compute in.
+    pub fn vector_path(&self) -> VectorPath {
+        self.vector_path
+    }
+
+    /// Chooses the registers the steps compute in (the baseline where `path` is not available
+    /// here); the numbers are the same in each.
+    pub fn set_vector_path(&mut self, path: VectorPath) {
+        self.vector_path = VectorPath::checked(path);
     }
 
     /// The same simulation with end stops (validated, and the initial pose checked against
@@ -450,14 +450,14 @@ impl PlatformSimulation {
             track_singularities: self.track_singularities,
             ..PlatformDynamics::new(&self.form, law, self.stabilisation, &self.guard, self.stop_at_singularity)
         };
-        let result = self.integrator.integrate_until_event(
-            &dynamics,
-            self.time,
-            &mut self.state,
+        let call = super::vector::Call {
+            t0: self.time,
+            y: &mut self.state,
             t1,
-            &mut self.crossings,
-            stop_at_contact,
-        );
+            log: &mut self.crossings,
+            stop_at_restart: stop_at_contact,
+        };
+        let result = super::vector::integrate(self.vector_path, &mut self.integrator, &dynamics, call);
         match result {
             Ok(reached) => {
                 self.time = reached;
@@ -491,8 +491,8 @@ impl PlatformSimulation {
 mod tests {
     use super::*;
     use crate::integration::Method;
-    use crate::physics::forces::HeldForces;
-    use crate::physics::kinematics::rotation_from_angles;
+    use crate::physics::actuators::HeldForces;
+    use crate::physics::body::kinematics::rotation_from_angles;
     use nalgebra::Vector3;
 
     /// The legs a step reports for its end state are those computed from that state alone.

@@ -8,8 +8,8 @@ pub mod rng;
 
 use nalgebra::{Matrix3, Vector3};
 use stewart_fmu::integration::SolverSettings;
-use stewart_fmu::physics::body_state::BodyState;
-use stewart_fmu::physics::kinematics::rotation_from_angles;
+use stewart_fmu::physics::body::kinematics::rotation_from_angles;
+use stewart_fmu::physics::body::state::BodyState;
 use stewart_fmu::physics::stand::Stand;
 use stewart_fmu::simulation::{PlatformSimulation, Stabilisation};
 

@@ -10,16 +10,17 @@ pub mod variables;
 use crate::models::Initialised;
 use nalgebra::Vector3;
 
+use super::declare::{Binding, IntegerStorage, Variables};
 use super::snapshot::{ByteReader, ByteWriter, SnapshotError};
 use super::variables::VariableRef;
 use super::{DefaultExperiment, FmuModel, ModelInfo, StepError, StepReport};
 use crate::control::{Disturbance, LegFeedback};
+use crate::physics::body::kinematics::{PoseTrajectoryPoint, angles_from_rotation};
 use crate::physics::direct_problem::solve_direct_problem;
-use crate::physics::end_stops::EndStops;
-use crate::physics::kinematics::{PoseTrajectoryPoint, angles_from_rotation};
+use crate::physics::legs::end_stops::EndStops;
 use crate::physics::programme::{PoseProgramme, SoftStartSinusoid, StartUp};
 use crate::physics::stand::{LEG_COUNT, Stand};
-use variables::group;
+use variables::BINDINGS;
 
 pub static INFO: ModelInfo = ModelInfo {
     model_name: "StewartController",
@@ -78,20 +79,44 @@ pub struct ControllerParameters {
     pub stand: Stand,
     pub feedback: LegFeedback,
     pub programme: ProgrammeKind,
+    /// Programme 1: the heave about `heave_centre`.
     pub heave_centre: Vector3<f64>,
-    /// `a` (m), `Omega` (rad/s), `T` (s).
-    pub heave: [f64; 3],
-    pub sine_offset: [f64; 6],
-    pub sine_amplitude: [f64; 6],
-    pub sine_frequency: [f64; 6],
-    pub sine_phase: [f64; 6],
-    pub sine_time_constant: f64,
+    pub heave: Heave,
+    /// Programme 2: a soft-start sinusoid in each degree of freedom (x, y, z, roll, pitch,
+    /// yaw).
+    pub sine: Sinusoids,
     pub disturbance: Disturbance,
     /// Programme 4: parked centre of mass (m) and lift duration (s).
     pub startup_position: Vector3<f64>,
     pub startup_duration: f64,
-    /// `Fmin`, `Fmax`, N.
-    pub force_limits: [f64; 2],
+    /// Actuator saturation `Fmin`, N.
+    pub f_min: f64,
+    /// Actuator saturation `Fmax`, N.
+    pub f_max: f64,
+}
+
+/// Programme 1: `z = z0 + a sin(Omega t)(1 - exp(-t/T))^2`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Heave {
+    /// `a`, m.
+    pub amplitude: f64,
+    /// `Omega`, rad/s.
+    pub frequency: f64,
+    /// `T`, s.
+    pub time_constant: f64,
+}
+
+/// Programme 2: offsets, amplitudes (positions, then angles), frequencies and phases of the
+/// six degrees of freedom, and one soft-start time constant.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sinusoids {
+    pub offset: [f64; 3],
+    pub angle_offset: [f64; 3],
+    pub amplitude: [f64; 3],
+    pub angle_amplitude: [f64; 3],
+    pub frequency: [f64; 6],
+    pub phase: [f64; 6],
+    pub time_constant: f64,
 }
 
 impl Default for ControllerParameters {
@@ -106,12 +131,16 @@ impl Default for ControllerParameters {
             feedback: LegFeedback { gain: DEFAULT_GAIN, damping: DEFAULT_DAMPING, feedforward: true },
             programme: ProgrammeKind::Heave,
             heave_centre: centre,
-            heave: [0.2 * r_b, omega, 2.0 / omega],
-            sine_offset: [centre.x, centre.y, centre.z, 0.0, 0.0, 0.0],
-            sine_amplitude: [0.0; 6],
-            sine_frequency: [omega; 6],
-            sine_phase: [0.0; 6],
-            sine_time_constant: 2.0 / omega,
+            heave: Heave { amplitude: 0.2 * r_b, frequency: omega, time_constant: 2.0 / omega },
+            sine: Sinusoids {
+                offset: [centre.x, centre.y, centre.z],
+                angle_offset: [0.0; 3],
+                amplitude: [0.0; 3],
+                angle_amplitude: [0.0; 3],
+                frequency: [omega; 6],
+                phase: [0.0; 6],
+                time_constant: 2.0 / omega,
+            },
             disturbance: Disturbance { amplitude: 0.0, frequency: 2.0 * omega, time_constant: 2.0 / omega },
             startup_position: Vector3::new(
                 centre.x,
@@ -119,10 +148,22 @@ impl Default for ControllerParameters {
                 EndStops::default().level_rest_height(&stand).unwrap_or(centre.z),
             ),
             startup_duration: DEFAULT_STARTUP_DURATION,
-            force_limits: [-DEFAULT_FORCE_LIMIT, DEFAULT_FORCE_LIMIT],
+            f_min: -DEFAULT_FORCE_LIMIT,
+            f_max: DEFAULT_FORCE_LIMIT,
             stand,
         }
     }
+}
+
+/// The pose of programme 3 (external), from the inputs `pose.*`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ExternalPose {
+    pub r: [f64; 3],
+    pub v: [f64; 3],
+    pub a: [f64; 3],
+    pub angles: [f64; 3],
+    pub angle_rates: [f64; 3],
+    pub angle_accelerations: [f64; 3],
 }
 
 /// Everything the controller reports at one instant.
@@ -136,14 +177,27 @@ pub struct ControllerOutputs {
     pub anglesp: Vector3<f64>,
 }
 
+impl ControllerOutputs {
+    /// The outputs where the programme cannot be produced: not numbers (the FMI layer refuses
+    /// to return them, naming the variable).
+    const UNDEFINED: ControllerOutputs = ControllerOutputs {
+        f: [f64::NAN; LEG_COUNT],
+        fp: [f64::NAN; LEG_COUNT],
+        lp: [f64::NAN; LEG_COUNT],
+        ldotp: [f64::NAN; LEG_COUNT],
+        rp: Vector3::new(f64::NAN, f64::NAN, f64::NAN),
+        anglesp: Vector3::new(f64::NAN, f64::NAN, f64::NAN),
+    };
+}
+
 /// The controller FMU model.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ControllerModel {
     pub parameters: ControllerParameters,
     pub l: [f64; LEG_COUNT],
     pub ldot: [f64; LEG_COUNT],
-    /// Inputs `pose.r, pose.v, pose.a, pose.angles, pose.angleRates, pose.angleAccelerations`.
-    pub pose: [[f64; 3]; 6],
+    /// Inputs `pose.*`.
+    pub pose: ExternalPose,
     pub time: f64,
     outputs: Option<ControllerOutputs>,
 }
@@ -162,7 +216,7 @@ impl Default for ControllerModel {
             parameters,
             l: neutral,
             ldot: [0.0; LEG_COUNT],
-            pose: [[centre.x, centre.y, centre.z], [0.0; 3], [0.0; 3], [0.0; 3], [0.0; 3], [0.0; 3]],
+            pose: ExternalPose { r: [centre.x, centre.y, centre.z], ..Default::default() },
             time: 0.0,
             outputs: None,
         }
@@ -173,26 +227,39 @@ impl ControllerModel {
     /// The programme pose with its derivatives at time `t`.
     pub fn programme_point(&self, t: f64) -> PoseTrajectoryPoint {
         let p = &self.parameters;
-        let heave = PoseProgramme::heave(p.heave_centre, p.heave[0], p.heave[1], p.heave[2]);
+        let heave = PoseProgramme::heave(p.heave_centre, p.heave.amplitude, p.heave.frequency, p.heave.time_constant);
         match p.programme {
             ProgrammeKind::Heave => heave.point(t),
             ProgrammeKind::StartUp => {
                 StartUp { from: p.startup_position, to: p.heave_centre, duration: p.startup_duration, then: heave }
                     .point(t)
             }
-            ProgrammeKind::Sinusoid => PoseProgramme {
-                dof: std::array::from_fn(|i| SoftStartSinusoid {
-                    offset: p.sine_offset[i],
-                    amplitude: p.sine_amplitude[i],
-                    frequency: p.sine_frequency[i],
-                    phase: p.sine_phase[i],
-                    time_constant: p.sine_time_constant,
-                }),
+            ProgrammeKind::Sinusoid => {
+                let s = &p.sine;
+                let offset = [s.offset, s.angle_offset].concat();
+                let amplitude = [s.amplitude, s.angle_amplitude].concat();
+                PoseProgramme {
+                    dof: std::array::from_fn(|i| SoftStartSinusoid {
+                        offset: offset[i],
+                        amplitude: amplitude[i],
+                        frequency: s.frequency[i],
+                        phase: s.phase[i],
+                        time_constant: s.time_constant,
+                    }),
+                }
+                .point(t)
             }
-            .point(t),
             ProgrammeKind::External => {
-                let v = |i: usize| Vector3::from(self.pose[i]);
-                PoseTrajectoryPoint::from_angles(v(0), v(1), v(2), &v(3), &v(4), &v(5))
+                let q = &self.pose;
+                let v = Vector3::from;
+                PoseTrajectoryPoint::from_angles(
+                    v(q.r),
+                    v(q.v),
+                    v(q.a),
+                    &v(q.angles),
+                    &v(q.angle_rates),
+                    &v(q.angle_accelerations),
+                )
             }
         }
     }
@@ -204,7 +271,7 @@ impl ControllerModel {
             .map_err(|e| format!("the programme pose at t = {} cannot be produced by the legs: {e}", self.time))?;
         let mut f = self.parameters.feedback.leg_forces(&solution, &self.l, &self.ldot);
         let d = self.parameters.disturbance.at(self.time);
-        let [f_min, f_max] = self.parameters.force_limits;
+        let (f_min, f_max) = (self.parameters.f_min, self.parameters.f_max);
         for fk in f.iter_mut() {
             *fk = (*fk + d).clamp(f_min, f_max);
         }
@@ -218,55 +285,21 @@ impl ControllerModel {
         })
     }
 
-    fn outputs(&mut self) -> Option<ControllerOutputs> {
+    /// The outputs at the current time and inputs, computed on the first read after a
+    /// change ([`ControllerOutputs::UNDEFINED`] where the programme cannot be produced).
+    fn outputs(&mut self) -> &ControllerOutputs {
         if self.outputs.is_none() {
-            self.outputs = self.compute().ok();
+            self.outputs = Some(self.compute().unwrap_or(ControllerOutputs::UNDEFINED));
         }
-        self.outputs
-    }
-
-    fn slot(&mut self, var: VariableRef) -> Option<&mut f64> {
-        let p = &mut self.parameters;
-        let i = var.index;
-        Some(match var.group {
-            group::L => self.l.get_mut(i)?,
-            group::LDOT => self.ldot.get_mut(i)?,
-            g @ group::POSE_R..=group::POSE_ANGLE_ACCELERATIONS => self.pose.get_mut(g - group::POSE_R)?.get_mut(i)?,
-            group::M => &mut p.stand.mass,
-            group::J => p.stand.inertia.get_mut(i)?,
-            group::G_GRAVITY => &mut p.stand.gravity,
-            group::B => p.stand.base_joints.get_mut(i / 3)?.get_mut(i % 3)?,
-            group::A => p.stand.platform_joints.get_mut(i / 3)?.get_mut(i % 3)?,
-            group::GAIN => &mut p.feedback.gain,
-            group::DAMPING => &mut p.feedback.damping,
-            group::HEAVE_CENTRE => p.heave_centre.get_mut(i)?,
-            group::HEAVE_AMPLITUDE => &mut p.heave[0],
-            group::HEAVE_FREQUENCY => &mut p.heave[1],
-            group::HEAVE_TIME_CONSTANT => &mut p.heave[2],
-            group::SINE_OFFSET => p.sine_offset.get_mut(i)?,
-            group::SINE_ANGLE_OFFSET => p.sine_offset.get_mut(3 + i)?,
-            group::SINE_AMPLITUDE => p.sine_amplitude.get_mut(i)?,
-            group::SINE_ANGLE_AMPLITUDE => p.sine_amplitude.get_mut(3 + i)?,
-            group::SINE_FREQUENCY => p.sine_frequency.get_mut(i)?,
-            group::SINE_PHASE => p.sine_phase.get_mut(i)?,
-            group::SINE_TIME_CONSTANT => &mut p.sine_time_constant,
-            group::DISTURBANCE_AMPLITUDE => &mut p.disturbance.amplitude,
-            group::DISTURBANCE_FREQUENCY => &mut p.disturbance.frequency,
-            group::DISTURBANCE_TIME_CONSTANT => &mut p.disturbance.time_constant,
-            group::STARTUP_POSITION => p.startup_position.get_mut(i)?,
-            group::STARTUP_DURATION => &mut p.startup_duration,
-            group::FMIN => &mut p.force_limits[0],
-            group::FMAX => &mut p.force_limits[1],
-            _ => return None,
-        })
+        self.outputs.as_ref().unwrap_or(&ControllerOutputs::UNDEFINED)
     }
 
     fn validate(&self) -> Result<(), String> {
         let p = &self.parameters;
         p.stand.validate().map_err(|e| e.to_string())?;
         for (name, value) in [
-            ("heave.timeConstant", p.heave[2]),
-            ("sine.timeConstant", p.sine_time_constant),
+            ("heave.timeConstant", p.heave.time_constant),
+            ("sine.timeConstant", p.sine.time_constant),
             ("disturbance.timeConstant", p.disturbance.time_constant),
         ] {
             if value < 0.0 {
@@ -276,7 +309,7 @@ impl ControllerModel {
         if p.programme == ProgrammeKind::StartUp && !(p.startup_duration > 0.0) {
             return Err(format!("parameter startup.duration: must be > 0 s, got {}", p.startup_duration));
         }
-        let [f_min, f_max] = p.force_limits;
+        let (f_min, f_max) = (p.f_min, p.f_max);
         if !(f_min < f_max) {
             return Err(format!("parameter Fmin: must be less than Fmax = {f_max} N, got {f_min} N"));
         }
@@ -290,56 +323,27 @@ impl FmuModel for ControllerModel {
     }
 
     fn get_real(&mut self, var: VariableRef) -> f64 {
-        if var.group == group::TIME {
-            return self.time;
-        }
-        if let Some(slot) = self.slot(var) {
-            return *slot;
-        }
-        // NaN when the programme cannot be produced (only possible before initialisation;
-        // the FMI layer turns it into an error naming the variable).
-        let Some(o) = self.outputs() else { return f64::NAN };
-        let i = var.index;
-        let pick6 = |a: &[f64; LEG_COUNT]| a.get(i).copied().unwrap_or(f64::NAN);
-        match var.group {
-            group::F => pick6(&o.f),
-            group::FP => pick6(&o.fp),
-            group::LP => pick6(&o.lp),
-            group::LDOTP => pick6(&o.ldotp),
-            group::RP => o.rp.get(i).copied().unwrap_or(f64::NAN),
-            group::ANGLESP => o.anglesp.get(i).copied().unwrap_or(f64::NAN),
-            _ => f64::NAN,
-        }
+        let value = match BINDINGS.get(var.group) {
+            Some(Binding::Stored) => self.real_stored(var),
+            Some(Binding::Output | Binding::Cached { .. }) => self.output_value(var),
+            Some(Binding::Computed) => Some(self.time),
+            _ => None,
+        };
+        value.unwrap_or(f64::NAN)
     }
 
     fn set_real(&mut self, var: VariableRef, value: f64) -> Result<(), String> {
-        let slot = self.slot(var).ok_or("not a settable Real variable")?;
-        *slot = value;
+        *self.real_slot(var).ok_or("not a settable Real variable")? = value;
         self.outputs = None;
         Ok(())
     }
 
     fn get_integer(&mut self, var: VariableRef) -> i32 {
-        match var.group {
-            group::FEEDFORWARD => self.parameters.feedback.feedforward as i32,
-            group::PROGRAMME => self.parameters.programme as i32,
-            _ => 0,
-        }
+        self.integer(var).unwrap_or(0)
     }
 
     fn set_integer(&mut self, var: VariableRef, value: i32) -> Result<(), String> {
-        match var.group {
-            group::FEEDFORWARD => match value {
-                0 | 1 => self.parameters.feedback.feedforward = value == 1,
-                _ => return Err(format!("{value} is neither 0 (off) nor 1 (on)")),
-            },
-            group::PROGRAMME => {
-                self.parameters.programme = ProgrammeKind::from_code(value).ok_or_else(|| {
-                    format!("{value} is not a programme (1 = heave, 2 = sinusoid, 3 = external, 4 = start-up)")
-                })?;
-            }
-            _ => return Err("not a settable Integer variable".into()),
-        }
+        self.set_integer_code(var, value).unwrap_or_else(|| Err("not a settable Integer variable".into()))?;
         self.outputs = None;
         Ok(())
     }
@@ -393,78 +397,30 @@ impl FmuModel for ControllerModel {
         0.0
     }
 
+    /// The stored variables (declaration order) and the time.
     fn save(&self, w: &mut ByteWriter) {
-        let p = &self.parameters;
-        w.stand(&p.stand);
-        w.f64s(&[p.feedback.gain, p.feedback.damping]);
-        w.bool(p.feedback.feedforward);
-        w.i32(p.programme as i32);
-        w.f64s(p.heave_centre.as_slice());
-        w.f64s(&p.heave);
-        for a in [&p.sine_offset, &p.sine_amplitude, &p.sine_frequency, &p.sine_phase] {
-            w.f64s(a);
-        }
-        w.f64(p.sine_time_constant);
-        w.f64s(&[p.disturbance.amplitude, p.disturbance.frequency, p.disturbance.time_constant]);
-        w.f64s(p.startup_position.as_slice());
-        w.f64(p.startup_duration);
-        w.f64s(&p.force_limits);
-        w.f64s(&self.l);
-        w.f64s(&self.ldot);
-        for v in &self.pose {
-            w.f64s(v);
-        }
+        self.save_variables(w);
         w.f64(self.time);
     }
 
     fn restore(r: &mut ByteReader) -> Result<Self, SnapshotError> {
-        let stand = r.stand()?;
-        let [gain, damping] = r.finite_array::<2>("gains")?;
-        let feedforward = r.bool()?;
-        let code = r.i32()?;
-        let programme =
-            ProgrammeKind::from_code(code).ok_or_else(|| SnapshotError(format!("invalid programme {code}")))?;
-        let heave_centre = Vector3::from(r.finite_array::<3>("heave.centre")?);
-        let heave = r.finite_array::<3>("heave")?;
-        let sine_offset = r.finite_array::<6>("sine.offset")?;
-        let sine_amplitude = r.finite_array::<6>("sine.amplitude")?;
-        let sine_frequency = r.finite_array::<6>("sine.frequency")?;
-        let sine_phase = r.finite_array::<6>("sine.phase")?;
-        let sine_time_constant = r.finite("sine.timeConstant")?;
-        let [amplitude, frequency, time_constant] = r.finite_array::<3>("disturbance")?;
-        let startup_position = Vector3::from(r.finite_array::<3>("startup.position")?);
-        let startup_duration = r.finite("startup.duration")?;
-        let force_limits = r.finite_array::<2>("Fmin, Fmax")?;
-        let l = r.finite_array::<LEG_COUNT>("l")?;
-        let ldot = r.finite_array::<LEG_COUNT>("ldot")?;
-        let mut pose = [[0.0; 3]; 6];
-        for v in pose.iter_mut() {
-            *v = r.finite_array::<3>("pose")?;
-        }
-        let time = r.finite("time")?;
-        Ok(ControllerModel {
-            parameters: ControllerParameters {
-                stand,
-                feedback: LegFeedback { gain, damping, feedforward },
-                programme,
-                heave_centre,
-                heave,
-                sine_offset,
-                sine_amplitude,
-                sine_frequency,
-                sine_phase,
-                sine_time_constant,
-                disturbance: Disturbance { amplitude, frequency, time_constant },
-                startup_position,
-                startup_duration,
-                force_limits,
-            },
-            l,
-            ldot,
-            pose,
-            time,
-            outputs: None,
-        })
+        let mut model = ControllerModel::default();
+        model.restore_variables(r)?;
+        model.time = r.finite("time")?;
+        model.outputs = None;
+        Ok(model)
+    }
+}
+
+impl IntegerStorage for ProgrammeKind {
+    fn code(&self) -> i32 {
+        *self as i32
+    }
+    fn set_code(&mut self, code: i32) -> Result<(), String> {
+        *self = ProgrammeKind::from_code(code).ok_or_else(|| {
+            format!("{code} is not a programme (1 = heave, 2 = sinusoid, 3 = external, 4 = start-up)")
+        })?;
+        Ok(())
     }
 }
 

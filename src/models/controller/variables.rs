@@ -1,9 +1,9 @@
 //! The `StewartController` variables. Stand parameters carry the same names as the
 //! platform's, so one parameter set describes both.
 
+use crate::models::declare::declare_variables;
 use crate::models::variables::Dependency::{All, SameIndex};
 use crate::models::variables::VariableGroup as V;
-use crate::models::variables::model_variables;
 
 const POSE_INPUTS: &[crate::models::variables::Dependency] = &[
     All("pose.r"),
@@ -65,118 +65,122 @@ const ALL_KNOWNS: &[crate::models::variables::Dependency] = &[
     All("Fmax"),
 ];
 
-model_variables! {
-    TIME => V::time(0),
-    L => V::input("l", &[6], 1, Some("m"), "Measured leg length l_k (from the platform's output l)"),
-    LDOT => V::input("ldot", &[6], 7, Some("m/s"), "Measured leg length rate (from the platform's output ldot)"),
-    POSE_R => V::input("pose.r", &[3], 13, Some("m"), "Programme 3 (external): centre of mass"),
-    POSE_V => V::input("pose.v", &[3], 16, Some("m/s"), "Programme 3 (external): velocity of the centre of mass"),
-    POSE_A => V::input("pose.a", &[3], 19, Some("m/s2"), "Programme 3 (external): acceleration of the centre of mass"),
-    POSE_ANGLES => V::input("pose.angles", &[3], 22, Some("rad"), "Programme 3 (external): roll, pitch, yaw (1-2-3)").display("deg"),
-    POSE_ANGLE_RATES => V::input("pose.angleRates", &[3], 25, Some("rad/s"), "Programme 3 (external): rates of roll, pitch, yaw"),
-    POSE_ANGLE_ACCELERATIONS => V::input(
-        "pose.angleAccelerations",
-        &[3],
-        28,
-        Some("rad/s2"),
-        "Programme 3 (external): second derivatives of roll, pitch, yaw",
-    ),
-    M => V::parameter("M", &[], 40, Some("kg"), "Mass of the loaded platform"),
-    J => V::parameter("J", &[3], 41, Some("kg.m2"), "Principal central moments of inertia"),
-    G_GRAVITY => V::parameter("g", &[], 44, Some("m/s2"), "Gravitational acceleration, along -z"),
-    B => V::parameter("B", &[6, 3], 50, Some("m"), "Base joint B_k, inertial frame"),
-    A => V::parameter("A", &[6, 3], 70, Some("m"), "Platform joint A_k, body frame from the centre of mass"),
-    GAIN => V::parameter("G", &[], 90, Some("N/m"), "Feedback gain on the leg-length error l^p - l (tunable)").tunable(),
-    DAMPING => V::parameter("D", &[], 91, Some("N.s/m"), "Feedback gain on the leg-rate error ldot^p - ldot (tunable)").tunable(),
-    FEEDFORWARD => V::parameter(
-        "feedforward",
-        &[],
-        92,
-        None,
-        "1 = apply the programme forces F^p of the direct problem plus feedback; 0 = feedback only (F^p = 0)",
-    )
-    .integer(0, 1),
-    PROGRAMME => V::parameter(
-        "programme",
-        &[],
-        93,
-        None,
-        "Programme motion: 1 = the paper's heave z = z0 + a sin(Omega t)(1 - exp(-t/T))^2 above heave.centre; \
-         2 = a sinusoid with soft start in each of the six degrees of freedom (sine.*); 3 = the pose and its \
-         derivatives from the inputs pose.*; 4 = start-up: a rest-to-rest lift from startup.position to \
-         heave.centre in startup.duration, then programme 1",
-    )
-    .integer(1, 4),
-    HEAVE_CENTRE => V::parameter("heave.centre", &[3], 94, Some("m"), "Programme 1: centre of mass about which the platform heaves"),
-    HEAVE_AMPLITUDE => V::parameter("heave.amplitude", &[], 97, Some("m"), "Programme 1: heave amplitude a"),
-    HEAVE_FREQUENCY => V::parameter("heave.frequency", &[], 98, Some("rad/s"), "Programme 1: heave circular frequency Omega"),
-    HEAVE_TIME_CONSTANT => V::parameter("heave.timeConstant", &[], 99, Some("s"), "Programme 1: soft-start time constant T"),
-    SINE_OFFSET => V::parameter("sine.offset", &[3], 100, Some("m"), "Programme 2: mean centre of mass x, y, z"),
-    SINE_ANGLE_OFFSET => V::parameter("sine.angleOffset", &[3], 103, Some("rad"), "Programme 2: mean roll, pitch, yaw").display("deg"),
-    SINE_AMPLITUDE => V::parameter("sine.amplitude", &[3], 106, Some("m"), "Programme 2: amplitudes of x, y, z"),
-    SINE_ANGLE_AMPLITUDE => V::parameter("sine.angleAmplitude", &[3], 109, Some("rad"), "Programme 2: amplitudes of roll, pitch, yaw")
-        .display("deg"),
-    SINE_FREQUENCY => V::parameter(
-        "sine.frequency",
-        &[6],
-        112,
-        Some("rad/s"),
-        "Programme 2: circular frequencies of x, y, z, roll, pitch, yaw",
-    ),
-    SINE_PHASE => V::parameter("sine.phase", &[6], 118, Some("rad"), "Programme 2: phases of x, y, z, roll, pitch, yaw"),
-    SINE_TIME_CONSTANT => V::parameter("sine.timeConstant", &[], 124, Some("s"), "Programme 2: soft-start time constant"),
-    DISTURBANCE_AMPLITUDE => V::parameter(
-        "disturbance.amplitude",
-        &[],
-        125,
-        Some("N"),
-        "Force disturbance added to every leg, amplitude sin(frequency t)(1 - exp(-t/timeConstant)): the \
-         paper's perturbation is 0.0001 M g (tunable)",
-    )
-    .tunable(),
-    DISTURBANCE_FREQUENCY => V::parameter("disturbance.frequency", &[], 126, Some("rad/s"), "Circular frequency of the disturbance"),
-    DISTURBANCE_TIME_CONSTANT => V::parameter("disturbance.timeConstant", &[], 127, Some("s"), "Soft-start time constant of the disturbance"),
-    F => V::output(
-        "F",
-        &[6],
-        150,
-        Some("N"),
-        "Leg force command F_k = F^p_k + G (l^p_k - l_k) + D (ldot^p_k - ldot_k) + disturbance (to the platform's F)",
-        ALL_KNOWNS,
-    )
-    .depends_on(FORCE_DEPENDENCIES),
-    FP => V::output("Fp", &[6], 156, Some("N"), "Programme leg forces F^p from the direct problem", ALL_KNOWNS)
-        .depends_on(POSE_INPUTS),
-    LP => V::output("lp", &[6], 162, Some("m"), "Programme leg lengths l^p (inverse kinematics)", ALL_KNOWNS)
-        .depends_on(LENGTH_DEPENDENCIES),
-    LDOTP => V::output("ldotp", &[6], 168, Some("m/s"), "Programme leg length rates", ALL_KNOWNS)
-        .depends_on(LENGTH_DEPENDENCIES),
-    RP => V::output("rp", &[3], 174, Some("m"), "Programme centre of mass", ALL_KNOWNS).depends_on(&[All("pose.r")]),
-    ANGLESP => V::output("anglesp", &[3], 177, Some("rad"), "Programme roll, pitch, yaw", ALL_KNOWNS)
-        .display("deg")
-        .depends_on(&[All("pose.angles")]),
-    STARTUP_POSITION => V::parameter(
-        "startup.position",
-        &[3],
-        128,
-        Some("m"),
-        "Programme 4: centre of mass of the parked platform at t = 0 (default: the default stand at rest on its \
-         lower end stops)",
-    ),
-    STARTUP_DURATION => V::parameter(
-        "startup.duration",
-        &[],
-        131,
-        Some("s"),
-        "Programme 4: duration of the lift to heave.centre (quintic rest-to-rest profile); the heave programme \
-         starts at its end",
-    ),
-    FMIN => V::parameter(
-        "Fmin",
-        &[],
-        132,
-        Some("N"),
-        "Actuator saturation: the force command F_k is limited to [Fmin, Fmax] (real drives saturate)",
-    ),
-    FMAX => V::parameter("Fmax", &[], 133, Some("N"), "Actuator saturation: largest force command (see Fmin)"),
+declare_variables! {
+    model: super::ControllerModel,
+    cache_blocks: [],
+    variables: {
+        TIME => V::time(0); computed,
+        L => V::input("l", &[6], 1, Some("m"), "Measured leg length l_k (from the platform's output l)"); real(l),
+        LDOT => V::input("ldot", &[6], 7, Some("m/s"), "Measured leg length rate (from the platform's output ldot)"); real(ldot),
+        POSE_R => V::input("pose.r", &[3], 13, Some("m"), "Programme 3 (external): centre of mass"); real(pose.r),
+        POSE_V => V::input("pose.v", &[3], 16, Some("m/s"), "Programme 3 (external): velocity of the centre of mass"); real(pose.v),
+        POSE_A => V::input("pose.a", &[3], 19, Some("m/s2"), "Programme 3 (external): acceleration of the centre of mass"); real(pose.a),
+        POSE_ANGLES => V::input("pose.angles", &[3], 22, Some("rad"), "Programme 3 (external): roll, pitch, yaw (1-2-3)").display("deg"); real(pose.angles),
+        POSE_ANGLE_RATES => V::input("pose.angleRates", &[3], 25, Some("rad/s"), "Programme 3 (external): rates of roll, pitch, yaw"); real(pose.angle_rates),
+        POSE_ANGLE_ACCELERATIONS => V::input(
+            "pose.angleAccelerations",
+            &[3],
+            28,
+            Some("rad/s2"),
+            "Programme 3 (external): second derivatives of roll, pitch, yaw",
+        ); real(pose.angle_accelerations),
+        M => V::parameter("M", &[], 40, Some("kg"), "Mass of the loaded platform"); real(parameters.stand.mass),
+        J => V::parameter("J", &[3], 41, Some("kg.m2"), "Principal central moments of inertia"); real(parameters.stand.inertia),
+        G_GRAVITY => V::parameter("g", &[], 44, Some("m/s2"), "Gravitational acceleration, along -z"); real(parameters.stand.gravity),
+        B => V::parameter("B", &[6, 3], 50, Some("m"), "Base joint B_k, inertial frame"); real(parameters.stand.base_joints),
+        A => V::parameter("A", &[6, 3], 70, Some("m"), "Platform joint A_k, body frame from the centre of mass"); real(parameters.stand.platform_joints),
+        GAIN => V::parameter("G", &[], 90, Some("N/m"), "Feedback gain on the leg-length error l^p - l (tunable)").tunable(); real(parameters.feedback.gain),
+        DAMPING => V::parameter("D", &[], 91, Some("N.s/m"), "Feedback gain on the leg-rate error ldot^p - ldot (tunable)").tunable(); real(parameters.feedback.damping),
+        FEEDFORWARD => V::parameter(
+            "feedforward",
+            &[],
+            92,
+            None,
+            "1 = apply the programme forces F^p of the direct problem plus feedback; 0 = feedback only (F^p = 0)",
+        )
+        .integer(0, 1); integer(parameters.feedback.feedforward),
+        PROGRAMME => V::parameter(
+            "programme",
+            &[],
+            93,
+            None,
+            "Programme motion: 1 = the paper's heave z = z0 + a sin(Omega t)(1 - exp(-t/T))^2 above heave.centre; \
+             2 = a sinusoid with soft start in each of the six degrees of freedom (sine.*); 3 = the pose and its \
+             derivatives from the inputs pose.*; 4 = start-up: a rest-to-rest lift from startup.position to \
+             heave.centre in startup.duration, then programme 1",
+        )
+        .integer(1, 4); integer(parameters.programme),
+        HEAVE_CENTRE => V::parameter("heave.centre", &[3], 94, Some("m"), "Programme 1: centre of mass about which the platform heaves"); real(parameters.heave_centre),
+        HEAVE_AMPLITUDE => V::parameter("heave.amplitude", &[], 97, Some("m"), "Programme 1: heave amplitude a"); real(parameters.heave.amplitude),
+        HEAVE_FREQUENCY => V::parameter("heave.frequency", &[], 98, Some("rad/s"), "Programme 1: heave circular frequency Omega"); real(parameters.heave.frequency),
+        HEAVE_TIME_CONSTANT => V::parameter("heave.timeConstant", &[], 99, Some("s"), "Programme 1: soft-start time constant T"); real(parameters.heave.time_constant),
+        SINE_OFFSET => V::parameter("sine.offset", &[3], 100, Some("m"), "Programme 2: mean centre of mass x, y, z"); real(parameters.sine.offset),
+        SINE_ANGLE_OFFSET => V::parameter("sine.angleOffset", &[3], 103, Some("rad"), "Programme 2: mean roll, pitch, yaw").display("deg"); real(parameters.sine.angle_offset),
+        SINE_AMPLITUDE => V::parameter("sine.amplitude", &[3], 106, Some("m"), "Programme 2: amplitudes of x, y, z"); real(parameters.sine.amplitude),
+        SINE_ANGLE_AMPLITUDE => V::parameter("sine.angleAmplitude", &[3], 109, Some("rad"), "Programme 2: amplitudes of roll, pitch, yaw")
+            .display("deg"); real(parameters.sine.angle_amplitude),
+        SINE_FREQUENCY => V::parameter(
+            "sine.frequency",
+            &[6],
+            112,
+            Some("rad/s"),
+            "Programme 2: circular frequencies of x, y, z, roll, pitch, yaw",
+        ); real(parameters.sine.frequency),
+        SINE_PHASE => V::parameter("sine.phase", &[6], 118, Some("rad"), "Programme 2: phases of x, y, z, roll, pitch, yaw"); real(parameters.sine.phase),
+        SINE_TIME_CONSTANT => V::parameter("sine.timeConstant", &[], 124, Some("s"), "Programme 2: soft-start time constant"); real(parameters.sine.time_constant),
+        DISTURBANCE_AMPLITUDE => V::parameter(
+            "disturbance.amplitude",
+            &[],
+            125,
+            Some("N"),
+            "Force disturbance added to every leg, amplitude sin(frequency t)(1 - exp(-t/timeConstant)): the \
+             paper's perturbation is 0.0001 M g (tunable)",
+        )
+        .tunable(); real(parameters.disturbance.amplitude),
+        DISTURBANCE_FREQUENCY => V::parameter("disturbance.frequency", &[], 126, Some("rad/s"), "Circular frequency of the disturbance"); real(parameters.disturbance.frequency),
+        DISTURBANCE_TIME_CONSTANT => V::parameter("disturbance.timeConstant", &[], 127, Some("s"), "Soft-start time constant of the disturbance"); real(parameters.disturbance.time_constant),
+        F => V::output(
+            "F",
+            &[6],
+            150,
+            Some("N"),
+            "Leg force command F_k = F^p_k + G (l^p_k - l_k) + D (ldot^p_k - ldot_k) + disturbance (to the platform's F)",
+            ALL_KNOWNS,
+        )
+        .depends_on(FORCE_DEPENDENCIES); output(outputs.f),
+        FP => V::output("Fp", &[6], 156, Some("N"), "Programme leg forces F^p from the direct problem", ALL_KNOWNS)
+            .depends_on(POSE_INPUTS); output(outputs.fp),
+        LP => V::output("lp", &[6], 162, Some("m"), "Programme leg lengths l^p (inverse kinematics)", ALL_KNOWNS)
+            .depends_on(LENGTH_DEPENDENCIES); output(outputs.lp),
+        LDOTP => V::output("ldotp", &[6], 168, Some("m/s"), "Programme leg length rates", ALL_KNOWNS)
+            .depends_on(LENGTH_DEPENDENCIES); output(outputs.ldotp),
+        RP => V::output("rp", &[3], 174, Some("m"), "Programme centre of mass", ALL_KNOWNS).depends_on(&[All("pose.r")]); output(outputs.rp),
+        ANGLESP => V::output("anglesp", &[3], 177, Some("rad"), "Programme roll, pitch, yaw", ALL_KNOWNS)
+            .display("deg")
+            .depends_on(&[All("pose.angles")]); output(outputs.anglesp),
+        STARTUP_POSITION => V::parameter(
+            "startup.position",
+            &[3],
+            128,
+            Some("m"),
+            "Programme 4: centre of mass of the parked platform at t = 0 (default: the default stand at rest on its \
+             lower end stops)",
+        ); real(parameters.startup_position),
+        STARTUP_DURATION => V::parameter(
+            "startup.duration",
+            &[],
+            131,
+            Some("s"),
+            "Programme 4: duration of the lift to heave.centre (quintic rest-to-rest profile); the heave programme \
+             starts at its end",
+        ); real(parameters.startup_duration),
+        FMIN => V::parameter(
+            "Fmin",
+            &[],
+            132,
+            Some("N"),
+            "Actuator saturation: the force command F_k is limited to [Fmin, Fmax] (real drives saturate)",
+        ); real(parameters.f_min),
+        FMAX => V::parameter("Fmax", &[], 133, Some("N"), "Actuator saturation: largest force command (see Fmin)"); real(parameters.f_max),
+    }
 }

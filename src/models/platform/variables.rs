@@ -1,9 +1,10 @@
 //! The `StewartPlatform` variables (docs/model.md §5). Names, units and meanings are part of the
 //! contract with hosts and tests: keep them.
 
+use crate::models::declare::declare_variables;
 use crate::models::variables::Dependency::{All, SameIndex};
 use crate::models::variables::VariableGroup as V;
-use crate::models::variables::model_variables;
+use crate::simulation::PlatformOutputs;
 
 /// The 24 continuous states in the order of the special form's state vector
 /// `r, v, e1, e2, e3, e1', e2', e3'`: `e_b` is column `b` of `R` (elements `R[1,b], R[2,b],
@@ -75,310 +76,313 @@ const ALL_PARAMETERS: &[crate::models::variables::Dependency] = &[
     All("stops.damping"),
 ];
 
-/// Groups computed from the state (outputs and Model Exchange derivatives).
-pub fn is_output_or_derivative(g: usize) -> bool {
-    (group::R..=group::CONSTRAINT_ERROR).contains(&g)
-        || (group::DER_V..=group::DER2_R).contains(&g)
-        || (group::FSTOP..=group::DER_WORK_DISSIPATED).contains(&g)
-}
-
-model_variables! {
-    TIME => V::time(0),
-    F => V::input(
-        "F",
-        &[6],
-        1,
-        Some("N"),
-        "Axial leg force u_k acting on the platform at A_k along the leg (positive pushes the platform away from the \
-         base). Held over each communication step, or interpolated to first order when fmi2SetRealInputDerivatives \
-         gave its derivative",
-    ),
-    M => V::parameter("M", &[], 10, Some("kg"), "Mass of the loaded platform (platform plus payload)"),
-    J => V::parameter(
-        "J",
-        &[3],
-        11,
-        Some("kg.m2"),
-        "Principal central moments of inertia about the body axes e1, e2, e3 (must satisfy the triangle inequality)",
-    ),
-    G => V::parameter("g", &[], 14, Some("m/s2"), "Gravitational acceleration, acting along -z"),
-    B => V::parameter("B", &[6, 3], 20, Some("m"), "Base joint B_k (row k: x, y, z) in the inertial frame"),
-    A => V::parameter(
-        "A",
-        &[6, 3],
-        40,
-        Some("m"),
-        "Platform joint A_k (row k: components along e1, e2, e3) in the body frame, from the centre of mass",
-    ),
-    R0 => V::parameter("r0", &[3], 60, Some("m"), "Initial position of the centre of mass"),
-    ANGLES0 => V::parameter("angles0", &[3], 63, Some("rad"), "Initial roll, pitch, yaw (1-2-3 sequence, R = Rx Ry Rz)")
-        .display("deg"),
-    V0 => V::parameter("v0", &[3], 66, Some("m/s"), "Initial velocity of the centre of mass"),
-    W0 => V::parameter("w0", &[3], 69, Some("rad/s"), "Initial angular velocity, body components"),
-    METHOD => V::parameter(
-        "solver.method",
-        &[],
-        80,
-        None,
-        "Integrator: 1 = Dormand-Prince 5(4), adaptive with error control (solver.relTol, solver.absTol, \
-         solver.maxStep); 2 = classical Runge-Kutta 4 with a fixed step (solver.fixedStep), a fixed cost per \
-         communication step for real time",
-    )
-    .integer(1, 2),
-    REL_TOL => V::parameter(
-        "solver.relTol",
-        &[],
-        81,
-        Some("1"),
-        "Relative tolerance of the adaptive integrator's local error (replaced by the tolerance of \
-         fmi2SetupExperiment when the importer defines one)",
-    ),
-    ABS_TOL => V::parameter(
-        "solver.absTol",
-        &[],
-        82,
-        Some("1"),
-        "Absolute tolerance of the adaptive integrator's local error, in the units of each state component \
-         (m, m/s, unit-vector components and their rates)",
-    ),
-    MAX_STEP => V::parameter(
-        "solver.maxStep",
-        &[],
-        83,
-        Some("s"),
-        "Largest internal step of the adaptive integrator; 0 = limited only by the communication step",
-    ),
-    FIXED_STEP => V::parameter(
-        "solver.fixedStep",
-        &[],
-        84,
-        Some("s"),
-        "Internal step bound of RungeKutta4: each communication step is split into the fewest equal steps not \
-         longer than this; 0 = one step per communication step",
-    ),
-    STABILISATION => V::parameter(
-        "solver.stabilisation",
-        &[],
-        85,
-        None,
-        "Constraint stabilisation: 2 = project onto the constraints e_a.e_b = delta_ab (orthonormal frame, \
-         rigid-rotation velocities) after every internal step; 3 = Baumgarte terms in the derivatives \
-         (solver.baumgarteRate), no projection; 1 = none, the residual drifts (for demonstration). Model Exchange \
-         always uses Baumgarte terms unless this is 1",
-    )
-    .integer(1, 3),
-    R => V::output("r", &[3], 100, Some("m"), "Centre of mass S, inertial frame", &[SameIndex("r0")]),
-    V => V::output("v", &[3], 103, Some("m/s"), "Velocity of the centre of mass", &[SameIndex("v0")])
-        .derivative_named("r", &[SameIndex("v")]),
-    ROT => V::output(
-        "R",
-        &[3, 3],
-        106,
-        Some("1"),
-        "Rotation matrix body -> inertial: R[a,b] is component a of the body axis e_b",
-        &[All("angles0")],
-    ),
-    ANGLES => V::output("angles", &[3], 115, Some("rad"), "Roll, pitch, yaw (1-2-3 sequence, R = Rx Ry Rz)", &[All("angles0")])
-        .display("deg")
-        .depends_on(&[All("R")]),
-    W => V::output("w", &[3], 118, Some("rad/s"), "Angular velocity, body components", &[SameIndex("w0")])
-        .depends_on(&[All("R"), All("der(R)")]),
-    L => V::output(
-        "l",
-        &[6],
-        121,
-        Some("m"),
-        "Leg length l_k = |a_k - B_k|",
-        &[All("A"), All("B"), All("r0"), All("angles0")],
-    )
-    .depends_on(POSE_STATES),
-    LDOT => V::output(
-        "ldot",
-        &[6],
-        127,
-        Some("m/s"),
-        "Leg length rate dl_k/dt",
-        &[All("A"), All("B"), All("r0"), All("angles0"), All("v0"), All("w0")],
-    )
-    .depends_on(ALL_STATES),
-    E => V::output(
-        "E",
-        &[],
-        133,
-        Some("J"),
-        "Kinetic plus gravitational potential energy plus the end stops' potential energy M v^2/2 + w.J w/2 + M g z \
-         + sum_k V_k (E(t) - E(0) = work.F - work.dissipated)",
-        &[
-            All("M"),
-            All("J"),
-            All("g"),
-            All("A"),
-            All("B"),
-            All("r0"),
-            All("angles0"),
-            All("v0"),
-            All("w0"),
-            All("stops"),
-            All("lmin"),
-            All("lmax"),
-            All("stops.stiffness"),
-        ],
-    )
-    .depends_on(ALL_STATES),
-    CONSTRAINT_ERROR => V::output(
-        "constraintError",
-        &[],
-        134,
-        Some("1"),
-        "Constraint residual max over a, b of |e_a.e_b - delta_ab|",
-        &[All("angles0")],
-    )
-    .depends_on(&[All("R")]),
-    BAUMGARTE_RATE => V::parameter(
-        "solver.baumgarteRate",
-        &[],
-        86,
-        Some("1/s"),
-        "Rate alpha of the Baumgarte stabilisation (constraint residual decays like exp(-alpha t)): used by \
-         Model Exchange, and by Co-Simulation with solver.stabilisation = 3",
-    ),
-    DER_V => V::local(
-        "der(v)",
-        &[3],
-        140,
-        Some("m/s2"),
-        "Acceleration of the centre of mass (Model Exchange derivative of v)",
-        ALL_PARAMETERS,
-    )
-    .derivative("v", "v", 1, MOTION_KNOWNS),
-    DER_R => V::local(
-        "der(R)",
-        &[3, 3],
-        143,
-        Some("1/s"),
-        "Time derivative of the rotation matrix: column b is de_b/dt (Model Exchange state)",
-        &[All("angles0"), All("w0")],
-    )
-    .derivative("R", "R", 1, &[SameIndex("der(R)")]),
-    DER2_R => V::local(
-        "der2(R)",
-        &[3, 3],
-        152,
-        Some("1/s2"),
-        "Second time derivative of the rotation matrix (the special form's e_b'', Model Exchange derivative of der(R))",
-        ALL_PARAMETERS,
-    )
-    .derivative("der(R)", "R", 2, MOTION_KNOWNS),
-    STOPS => V::parameter(
-        "stops",
-        &[],
-        170,
-        None,
-        "End stops on: each leg is limited to its stroke lmin[k] <= l_k <= lmax[k] by a unilateral virtual potential \
-         with contact damping (Fstop). false = the paper's idealised legs of unlimited stroke",
-    )
-    .boolean(),
-    LMIN => V::parameter(
-        "lmin",
-        &[6],
-        171,
-        Some("m"),
-        "Shortest leg length (lower end stop) of leg k: below it the stop pushes the platform away from the base",
-    ),
-    LMAX => V::parameter(
-        "lmax",
-        &[6],
-        177,
-        Some("m"),
-        "Longest leg length (upper end stop) of leg k: above it the stop pulls the platform towards the base",
-    ),
-    STOP_STIFFNESS => V::parameter(
-        "stops.stiffness",
-        &[],
-        183,
-        Some("N/m"),
-        "End-stop stiffness k_s: the stop force is k_s times the penetration (potential V = k_s delta^2 / 2)",
-    ),
-    STOP_DAMPING => V::parameter(
-        "stops.damping",
-        &[],
-        184,
-        Some("N.s/m"),
-        "End-stop contact damping c_s: a damper force c_s d(delta)/dt in contact only, limited to the spring force \
-         k_s delta so that the stop force is continuous at onset and never sticks (0 = elastic stops)",
-    ),
-    STOP_AT_SINGULARITY => V::parameter(
-        "stopAtSingularity",
-        &[],
-        185,
-        None,
-        "Discard a step in which the legs pass through a singular arrangement (the force/moment matrix's \
-         determinant changes sign), located inside the step. false = pass it and report it (logEvents)",
-    )
-    .boolean(),
-    FSTOP => V::output(
-        "Fstop",
-        &[6],
-        200,
-        Some("N"),
-        "End-stop force along leg k (sign as F: positive pushes the platform away from the base); 0 inside the stroke",
-        STOP_PARAMETERS,
-    )
-    .depends_on(ALL_STATES),
-    KAPPA => V::output(
-        "kappa",
-        &[],
-        206,
-        Some("1"),
-        "Condition number of the 6x6 leg force/moment matrix (moment rows divided by the stand's characteristic \
-         length): large near a singular leg arrangement, infinite at one",
-        &[All("A"), All("B"), All("r0"), All("angles0")],
-    )
-    .depends_on(POSE_STATES),
-    WORK_F => V::output(
-        "work.F",
-        &[],
-        207,
-        Some("J"),
-        "Work done by the leg forces F since the start, the integral of sum_k F_k ldot_k (Model Exchange state)",
-        &[],
-    ),
-    WORK_DISSIPATED => V::output(
-        "work.dissipated",
-        &[],
-        208,
-        Some("J"),
-        "Energy taken by the end stops' damping since the start (>= 0; Model Exchange state)",
-        &[],
-    ),
-    DER_WORK_F => V::local(
-        "der(work.F)",
-        &[],
-        210,
-        Some("W"),
-        "Power of the leg forces sum_k F_k ldot_k (Model Exchange derivative of work.F)",
-        ALL_PARAMETERS,
-    )
-    .derivative("work.F", "work.F", 1, MOTION_KNOWNS),
-    DER_WORK_DISSIPATED => V::local(
-        "der(work.dissipated)",
-        &[],
-        211,
-        Some("W"),
-        "Power taken by the end stops' damping (Model Exchange derivative of work.dissipated)",
-        STOP_PARAMETERS,
-    )
-    .derivative("work.dissipated", "work.dissipated", 1, ALL_STATES),
-    EVENT_INDICATORS => V::local(
-        "eventIndicators",
-        &[13],
-        220,
-        Some("1"),
-        "Event indicators (FMI 3 Model Exchange): l_k - lmin_k (k = 1..6, m), lmax_k - l_k (m), and the determinant of \
-         the leg force/moment matrix (moment rows divided by the stand's characteristic length); a sign change is a \
-         contact onset or release, or a passage through a singular leg arrangement. Constant 1 for the stroke limits \
-         when the end stops are off",
-        &[],
-    )
-    .fmi3_only(),
+declare_variables! {
+    model: super::PlatformModel,
+    outputs: PlatformOutputs,
+    cache_blocks: [
+        // What a controller reads every step, computed alone.
+        leg_outputs,
+        // Every other output of `PlatformOutputs`.
+        outputs,
+    ],
+    variables: {
+        TIME => V::time(0); computed,
+        F => V::input(
+            "F",
+            &[6],
+            1,
+            Some("N"),
+            "Axial leg force u_k acting on the platform at A_k along the leg (positive pushes the platform away from the \
+             base). Held over each communication step, or interpolated to first order when fmi2SetRealInputDerivatives \
+             gave its derivative",
+        ); real(forces),
+        M => V::parameter("M", &[], 10, Some("kg"), "Mass of the loaded platform (platform plus payload)"); real(parameters.stand.mass),
+        J => V::parameter(
+            "J",
+            &[3],
+            11,
+            Some("kg.m2"),
+            "Principal central moments of inertia about the body axes e1, e2, e3 (must satisfy the triangle inequality)",
+        ); real(parameters.stand.inertia),
+        G => V::parameter("g", &[], 14, Some("m/s2"), "Gravitational acceleration, acting along -z"); real(parameters.stand.gravity),
+        B => V::parameter("B", &[6, 3], 20, Some("m"), "Base joint B_k (row k: x, y, z) in the inertial frame"); real(parameters.stand.base_joints),
+        A => V::parameter(
+            "A",
+            &[6, 3],
+            40,
+            Some("m"),
+            "Platform joint A_k (row k: components along e1, e2, e3) in the body frame, from the centre of mass",
+        ); real(parameters.stand.platform_joints),
+        R0 => V::parameter("r0", &[3], 60, Some("m"), "Initial position of the centre of mass"); real(parameters.r0),
+        ANGLES0 => V::parameter("angles0", &[3], 63, Some("rad"), "Initial roll, pitch, yaw (1-2-3 sequence, R = Rx Ry Rz)")
+            .display("deg"); real(parameters.angles0),
+        V0 => V::parameter("v0", &[3], 66, Some("m/s"), "Initial velocity of the centre of mass"); real(parameters.v0),
+        W0 => V::parameter("w0", &[3], 69, Some("rad/s"), "Initial angular velocity, body components"); real(parameters.w0),
+        METHOD => V::parameter(
+            "solver.method",
+            &[],
+            80,
+            None,
+            "Integrator: 1 = Dormand-Prince 5(4), adaptive with error control (solver.relTol, solver.absTol, \
+             solver.maxStep); 2 = classical Runge-Kutta 4 with a fixed step (solver.fixedStep), a fixed cost per \
+             communication step for real time",
+        )
+        .integer(1, 2); integer(parameters.settings.method),
+        REL_TOL => V::parameter(
+            "solver.relTol",
+            &[],
+            81,
+            Some("1"),
+            "Relative tolerance of the adaptive integrator's local error (replaced by the tolerance of \
+             fmi2SetupExperiment when the importer defines one)",
+        ); real(parameters.settings.rel_tol),
+        ABS_TOL => V::parameter(
+            "solver.absTol",
+            &[],
+            82,
+            Some("1"),
+            "Absolute tolerance of the adaptive integrator's local error, in the units of each state component \
+             (m, m/s, unit-vector components and their rates)",
+        ); real(parameters.settings.abs_tol),
+        MAX_STEP => V::parameter(
+            "solver.maxStep",
+            &[],
+            83,
+            Some("s"),
+            "Largest internal step of the adaptive integrator; 0 = limited only by the communication step",
+        ); real(parameters.settings.max_step),
+        FIXED_STEP => V::parameter(
+            "solver.fixedStep",
+            &[],
+            84,
+            Some("s"),
+            "Internal step bound of RungeKutta4: each communication step is split into the fewest equal steps not \
+             longer than this; 0 = one step per communication step",
+        ); real(parameters.settings.fixed_step),
+        STABILISATION => V::parameter(
+            "solver.stabilisation",
+            &[],
+            85,
+            None,
+            "Constraint stabilisation: 2 = project onto the constraints e_a.e_b = delta_ab (orthonormal frame, \
+             rigid-rotation velocities) after every internal step; 3 = Baumgarte terms in the derivatives \
+             (solver.baumgarteRate), no projection; 1 = none, the residual drifts (for demonstration). Model Exchange \
+             always uses Baumgarte terms unless this is 1",
+        )
+        .integer(1, 3); integer(parameters.stabilisation),
+        R => V::output("r", &[3], 100, Some("m"), "Centre of mass S, inertial frame", &[SameIndex("r0")]); cached(outputs.r),
+        V => V::output("v", &[3], 103, Some("m/s"), "Velocity of the centre of mass", &[SameIndex("v0")])
+            .derivative_named("r", &[SameIndex("v")]); cached(outputs.v),
+        ROT => V::output(
+            "R",
+            &[3, 3],
+            106,
+            Some("1"),
+            "Rotation matrix body -> inertial: R[a,b] is component a of the body axis e_b",
+            &[All("angles0")],
+        ); cached(outputs.rotation),
+        ANGLES => V::output("angles", &[3], 115, Some("rad"), "Roll, pitch, yaw (1-2-3 sequence, R = Rx Ry Rz)", &[All("angles0")])
+            .display("deg")
+            .depends_on(&[All("R")]); cached(outputs.angles),
+        W => V::output("w", &[3], 118, Some("rad/s"), "Angular velocity, body components", &[SameIndex("w0")])
+            .depends_on(&[All("R"), All("der(R)")]); cached(outputs.w),
+        L => V::output(
+            "l",
+            &[6],
+            121,
+            Some("m"),
+            "Leg length l_k = |a_k - B_k|",
+            &[All("A"), All("B"), All("r0"), All("angles0")],
+        )
+        .depends_on(POSE_STATES); cached(leg_outputs.l),
+        LDOT => V::output(
+            "ldot",
+            &[6],
+            127,
+            Some("m/s"),
+            "Leg length rate dl_k/dt",
+            &[All("A"), All("B"), All("r0"), All("angles0"), All("v0"), All("w0")],
+        )
+        .depends_on(ALL_STATES); cached(leg_outputs.ldot),
+        E => V::output(
+            "E",
+            &[],
+            133,
+            Some("J"),
+            "Kinetic plus gravitational potential energy plus the end stops' potential energy M v^2/2 + w.J w/2 + M g z \
+             + sum_k V_k (E(t) - E(0) = work.F - work.dissipated)",
+            &[
+                All("M"),
+                All("J"),
+                All("g"),
+                All("A"),
+                All("B"),
+                All("r0"),
+                All("angles0"),
+                All("v0"),
+                All("w0"),
+                All("stops"),
+                All("lmin"),
+                All("lmax"),
+                All("stops.stiffness"),
+            ],
+        )
+        .depends_on(ALL_STATES); cached(outputs.energy),
+        CONSTRAINT_ERROR => V::output(
+            "constraintError",
+            &[],
+            134,
+            Some("1"),
+            "Constraint residual max over a, b of |e_a.e_b - delta_ab|",
+            &[All("angles0")],
+        )
+        .depends_on(&[All("R")]); cached(outputs.constraint_error),
+        BAUMGARTE_RATE => V::parameter(
+            "solver.baumgarteRate",
+            &[],
+            86,
+            Some("1/s"),
+            "Rate alpha of the Baumgarte stabilisation (constraint residual decays like exp(-alpha t)): used by \
+             Model Exchange, and by Co-Simulation with solver.stabilisation = 3",
+        ); real(parameters.baumgarte_rate),
+        DER_V => V::local(
+            "der(v)",
+            &[3],
+            140,
+            Some("m/s2"),
+            "Acceleration of the centre of mass (Model Exchange derivative of v)",
+            ALL_PARAMETERS,
+        )
+        .derivative("v", "v", 1, MOTION_KNOWNS); derivative,
+        DER_R => V::local(
+            "der(R)",
+            &[3, 3],
+            143,
+            Some("1/s"),
+            "Time derivative of the rotation matrix: column b is de_b/dt (Model Exchange state)",
+            &[All("angles0"), All("w0")],
+        )
+        .derivative("R", "R", 1, &[SameIndex("der(R)")]); derivative,
+        DER2_R => V::local(
+            "der2(R)",
+            &[3, 3],
+            152,
+            Some("1/s2"),
+            "Second time derivative of the rotation matrix (the special form's e_b'', Model Exchange derivative of der(R))",
+            ALL_PARAMETERS,
+        )
+        .derivative("der(R)", "R", 2, MOTION_KNOWNS); derivative,
+        STOPS => V::parameter(
+            "stops",
+            &[],
+            170,
+            None,
+            "End stops on: each leg is limited to its stroke lmin[k] <= l_k <= lmax[k] by a unilateral virtual potential \
+             with contact damping (Fstop). false = the paper's idealised legs of unlimited stroke",
+        )
+        .boolean(); boolean(parameters.stops_enabled),
+        LMIN => V::parameter(
+            "lmin",
+            &[6],
+            171,
+            Some("m"),
+            "Shortest leg length (lower end stop) of leg k: below it the stop pushes the platform away from the base",
+        ); real(parameters.stops.lower),
+        LMAX => V::parameter(
+            "lmax",
+            &[6],
+            177,
+            Some("m"),
+            "Longest leg length (upper end stop) of leg k: above it the stop pulls the platform towards the base",
+        ); real(parameters.stops.upper),
+        STOP_STIFFNESS => V::parameter(
+            "stops.stiffness",
+            &[],
+            183,
+            Some("N/m"),
+            "End-stop stiffness k_s: the stop force is k_s times the penetration (potential V = k_s delta^2 / 2)",
+        ); real(parameters.stops.stiffness),
+        STOP_DAMPING => V::parameter(
+            "stops.damping",
+            &[],
+            184,
+            Some("N.s/m"),
+            "End-stop contact damping c_s: a damper force c_s d(delta)/dt in contact only, limited to the spring force \
+             k_s delta so that the stop force is continuous at onset and never sticks (0 = elastic stops)",
+        ); real(parameters.stops.damping),
+        STOP_AT_SINGULARITY => V::parameter(
+            "stopAtSingularity",
+            &[],
+            185,
+            None,
+            "Discard a step in which the legs pass through a singular arrangement (the force/moment matrix's \
+             determinant changes sign), located inside the step. false = pass it and report it (logEvents)",
+        )
+        .boolean(); boolean(parameters.stop_at_singularity),
+        FSTOP => V::output(
+            "Fstop",
+            &[6],
+            200,
+            Some("N"),
+            "End-stop force along leg k (sign as F: positive pushes the platform away from the base); 0 inside the stroke",
+            STOP_PARAMETERS,
+        )
+        .depends_on(ALL_STATES); cached(outputs.stop_force),
+        KAPPA => V::output(
+            "kappa",
+            &[],
+            206,
+            Some("1"),
+            "Condition number of the 6x6 leg force/moment matrix (moment rows divided by the stand's characteristic \
+             length): large near a singular leg arrangement, infinite at one",
+            &[All("A"), All("B"), All("r0"), All("angles0")],
+        )
+        .depends_on(POSE_STATES); computed,
+        WORK_F => V::output(
+            "work.F",
+            &[],
+            207,
+            Some("J"),
+            "Work done by the leg forces F since the start, the integral of sum_k F_k ldot_k (Model Exchange state)",
+            &[],
+        ); cached(outputs.work_of_forces),
+        WORK_DISSIPATED => V::output(
+            "work.dissipated",
+            &[],
+            208,
+            Some("J"),
+            "Energy taken by the end stops' damping since the start (>= 0; Model Exchange state)",
+            &[],
+        ); cached(outputs.dissipated_energy),
+        DER_WORK_F => V::local(
+            "der(work.F)",
+            &[],
+            210,
+            Some("W"),
+            "Power of the leg forces sum_k F_k ldot_k (Model Exchange derivative of work.F)",
+            ALL_PARAMETERS,
+        )
+        .derivative("work.F", "work.F", 1, MOTION_KNOWNS); derivative,
+        DER_WORK_DISSIPATED => V::local(
+            "der(work.dissipated)",
+            &[],
+            211,
+            Some("W"),
+            "Power taken by the end stops' damping (Model Exchange derivative of work.dissipated)",
+            STOP_PARAMETERS,
+        )
+        .derivative("work.dissipated", "work.dissipated", 1, ALL_STATES); derivative,
+        EVENT_INDICATORS => V::local(
+            "eventIndicators",
+            &[13],
+            220,
+            Some("1"),
+            "Event indicators (FMI 3 Model Exchange): l_k - lmin_k (k = 1..6, m), lmax_k - l_k (m), and the determinant of \
+             the leg force/moment matrix (moment rows divided by the stand's characteristic length); a sign change is a \
+             contact onset or release, or a passage through a singular leg arrangement. Constant 1 for the stroke limits \
+             when the end stops are off",
+            &[],
+        )
+        .fmi3_only(); computed,
+    }
 }

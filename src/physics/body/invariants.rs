@@ -3,23 +3,24 @@
 
 use nalgebra::Vector3;
 
-use super::body_state::BodyState;
-use super::stand::Stand;
+use super::state::BodyState;
+use crate::physics::number::{Real, lift};
+use crate::physics::stand::Stand;
 
 /// Kinetic energy `M v²/2 + w.J w/2`, J.
-pub fn kinetic_energy(stand: &Stand, state: &BodyState) -> f64 {
+pub fn kinetic_energy<T: Real>(stand: &Stand, state: &BodyState<T>) -> T {
     let w = state.angular_velocity_body();
-    let j = Vector3::from(stand.inertia);
-    0.5 * stand.mass * state.v.norm_squared() + 0.5 * w.dot(&j.component_mul(&w))
+    let jw = lift::<T>(&Vector3::from(stand.inertia)).component_mul(&w);
+    state.v.dot(&state.v) * (0.5 * stand.mass) + w.dot(&jw) * 0.5
 }
 
 /// Gravitational potential energy `M g z`, J (zero at the base plane).
-pub fn potential_energy(stand: &Stand, state: &BodyState) -> f64 {
-    stand.mass * stand.gravity * state.r.z
+pub fn potential_energy<T: Real>(stand: &Stand, state: &BodyState<T>) -> T {
+    state.r.z * (stand.mass * stand.gravity)
 }
 
 /// Kinetic plus gravitational potential energy, J (the FMU output `E`).
-pub fn mechanical_energy(stand: &Stand, state: &BodyState) -> f64 {
+pub fn mechanical_energy<T: Real>(stand: &Stand, state: &BodyState<T>) -> T {
     kinetic_energy(stand, state) + potential_energy(stand, state)
 }
 

@@ -5,8 +5,8 @@
 
 use nalgebra::Matrix3;
 
-use super::body_state::{StateVector, axes, axes_rates};
-use super::per_axis::{AxisLanes, AxisRows, Pair, Quad};
+use super::per_axis::{AxisLanes, AxisRows, Pair};
+use super::state::{StateVector, axes, axes_rates};
 
 /// Newton-Schulz iterations stop once the orthogonality defect is below this.
 const ORTHOGONALITY_TARGET: f64 = 1e-15;
@@ -38,21 +38,12 @@ fn defect<A: AxisLanes>(e: &AxisRows<A>) -> f64 {
 /// combinations of the axes.
 #[inline(always)]
 pub fn project_onto_constraints(y: &mut StateVector) {
-    project_in::<Pair>(y)
+    project_onto_constraints_in::<Pair>(y)
 }
 
-/// [`project_onto_constraints`] with the axes in one AVX register: the same bits.
-///
-/// # Safety
-/// The processor must support AVX2, and the caller should be compiled with it (the
-/// integrators' AVX2 copy), or the lanes' operations are not inlined.
+/// [`project_onto_constraints`] with the axes in lanes `A`: the same bits in each.
 #[inline(always)]
-pub(crate) unsafe fn project_onto_constraints_wide(y: &mut StateVector) {
-    project_in::<Quad>(y)
-}
-
-#[inline(always)]
-fn project_in<A: AxisLanes>(y: &mut StateVector) {
+pub(crate) fn project_onto_constraints_in<A: AxisLanes>(y: &mut StateVector) {
     let components = axes(y);
     let mut e = AxisRows::<A>::from_components(components);
     let mut d = defect(&e);
@@ -86,8 +77,7 @@ fn project_in<A: AxisLanes>(y: &mut StateVector) {
     let w = e.dot(&e_dot.next()).sub(e.next().dot(&e_dot)).mul(A::splat(0.5));
     let e_dot = e.combine(A::splat(0.0), A::splat(0.0).sub(w), w.previous());
     // The whole state written as one array, as `SpecialForm::derivative` writes its result:
-    // the next step reads it back in 256-bit loads (p50 0.456 against 0.459 us per RK4 cycle,
-    // three interleaved runs each, +5 instructions).
+    // the next step reads it back in wide loads.
     let ([e1, e2, e3, e4, e5, e6, e7, e8, e9], [d1, d2, d3, d4, d5, d6, d7, d8, d9]) =
         (e.components(), e_dot.components());
     *y = [y[0], y[1], y[2], y[3], y[4], y[5], e1, e2, e3, e4, e5, e6, e7, e8, e9, d1, d2, d3, d4, d5, d6, d7, d8, d9];
@@ -96,9 +86,9 @@ fn project_in<A: AxisLanes>(y: &mut StateVector) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::physics::body_state::BodyState;
-    use crate::physics::body_state::layout;
-    use crate::physics::kinematics::rotation_from_angles;
+    use crate::physics::body::kinematics::rotation_from_angles;
+    use crate::physics::body::state::BodyState;
+    use crate::physics::body::state::layout;
     use nalgebra::Vector3;
 
     #[test]

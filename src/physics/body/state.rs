@@ -2,7 +2,9 @@
 //! `v`, the body axis unit vectors `e1, e2, e3` and their time derivatives (24 numbers, twice
 //! the six degrees of freedom).
 
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Matrix3, Scalar, Vector3};
+
+use crate::physics::number::Real;
 
 /// Length of the special-form state vector.
 pub const STATE_DIM: usize = 24;
@@ -59,26 +61,27 @@ pub fn axes_rates(y: &StateVector) -> &[f64; 9] {
 // spell the layout out.
 const _: () = assert!(layout::E == 6 && layout::E_DOT == 15 && STATE_DIM == 24);
 
-/// The rigid body's state, unpacked.
+/// The rigid body's state, unpacked, in the number type `T` (`f64`, or
+/// [`crate::physics::number::Dual`] for derivatives).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct BodyState {
+pub struct BodyState<T: Scalar = f64> {
     /// Centre of mass `r`, m.
-    pub r: Vector3<f64>,
+    pub r: Vector3<T>,
     /// Centre-of-mass velocity `dr/dt`, m/s.
-    pub v: Vector3<f64>,
+    pub v: Vector3<T>,
     /// Body axis unit vectors `e1, e2, e3` (principal central axes), inertial components.
-    pub e: [Vector3<f64>; 3],
+    pub e: [Vector3<T>; 3],
     /// Their time derivatives `de_a/dt = Ω × e_a`, 1/s.
-    pub e_dot: [Vector3<f64>; 3],
+    pub e_dot: [Vector3<T>; 3],
 }
 
 #[inline(always)]
-fn read3(y: &StateVector, at: usize) -> Vector3<f64> {
+fn read3<T: Real>(y: &[T; STATE_DIM], at: usize) -> Vector3<T> {
     Vector3::new(y[at], y[at + 1], y[at + 2])
 }
 
 #[inline(always)]
-fn write3(y: &mut StateVector, at: usize, v: &Vector3<f64>) {
+fn write3<T: Real>(y: &mut [T; STATE_DIM], at: usize, v: &Vector3<T>) {
     y[at] = v.x;
     y[at + 1] = v.y;
     y[at + 2] = v.z;
@@ -92,82 +95,6 @@ impl BodyState {
         let e = [rotation.column(0).into_owned(), rotation.column(1).into_owned(), rotation.column(2).into_owned()];
         let e_dot = [omega.cross(&e[0]), omega.cross(&e[1]), omega.cross(&e[2])];
         BodyState { r, v, e, e_dot }
-    }
-
-    #[inline(always)]
-    pub fn from_vector(y: &StateVector) -> Self {
-        BodyState {
-            r: read3(y, layout::R),
-            v: read3(y, layout::V),
-            e: [read3(y, layout::E), read3(y, layout::E + 3), read3(y, layout::E + 6)],
-            e_dot: [read3(y, layout::E_DOT), read3(y, layout::E_DOT + 3), read3(y, layout::E_DOT + 6)],
-        }
-    }
-
-    #[inline(always)]
-    pub fn to_vector(&self) -> StateVector {
-        let mut y = [0.0; STATE_DIM];
-        write3(&mut y, layout::R, &self.r);
-        write3(&mut y, layout::V, &self.v);
-        for a in 0..3 {
-            write3(&mut y, layout::E + 3 * a, &self.e[a]);
-            write3(&mut y, layout::E_DOT + 3 * a, &self.e_dot[a]);
-        }
-        y
-    }
-
-    /// Rotation matrix body -> inertial, `R = [e1 e2 e3]` (columns).
-    #[inline(always)]
-    pub fn rotation(&self) -> Matrix3<f64> {
-        Matrix3::from_columns(&self.e)
-    }
-
-    /// Time derivative of the rotation matrix, `dR/dt = [e1' e2' e3']`.
-    #[inline(always)]
-    pub fn rotation_rate(&self) -> Matrix3<f64> {
-        Matrix3::from_columns(&self.e_dot)
-    }
-
-    /// Angular velocity in body components, `w1 = e2'.e3`, `w2 = e3'.e1`, `w3 = e1'.e2`.
-    /// Each component is averaged with its antisymmetric partner (`w1 = -e3'.e2`, ...), which
-    /// is exact on the constraint manifold and the best estimate off it.
-    #[inline(always)]
-    pub fn angular_velocity_body(&self) -> Vector3<f64> {
-        let [e1, e2, e3] = &self.e;
-        let [d1, d2, d3] = &self.e_dot;
-        Vector3::new(0.5 * (d2.dot(e3) - d3.dot(e2)), 0.5 * (d3.dot(e1) - d1.dot(e3)), 0.5 * (d1.dot(e2) - d2.dot(e1)))
-    }
-
-    /// Angular velocity in inertial components, `omega = 1/2 sum_a e_a x e_a'` (exact on the
-    /// constraint manifold, where `e_a' = omega x e_a`).
-    #[inline(always)]
-    pub fn angular_velocity_inertial(&self) -> Vector3<f64> {
-        (self.e[0].cross(&self.e_dot[0]) + self.e[1].cross(&self.e_dot[1]) + self.e[2].cross(&self.e_dot[2])) * 0.5
-    }
-
-    /// Position of a body-fixed point given in body coordinates, relative to the centre of
-    /// mass, in inertial components: `R p = p1 e1 + p2 e2 + p3 e3`.
-    #[inline(always)]
-    pub fn body_vector(&self, p: &Vector3<f64>) -> Vector3<f64> {
-        self.e[0] * p.x + self.e[1] * p.y + self.e[2] * p.z
-    }
-
-    /// Velocity of that point relative to the centre of mass: `p1 e1' + p2 e2' + p3 e3'`.
-    #[inline(always)]
-    pub fn body_vector_rate(&self, p: &Vector3<f64>) -> Vector3<f64> {
-        self.e_dot[0] * p.x + self.e_dot[1] * p.y + self.e_dot[2] * p.z
-    }
-
-    /// Largest violation of the constraints `e_a . e_b = delta_ab` (paper eq. 1.2).
-    pub fn constraint_residual(&self) -> f64 {
-        let mut worst: f64 = 0.0;
-        for a in 0..3 {
-            for b in a..3 {
-                let target = if a == b { 1.0 } else { 0.0 };
-                worst = worst.max((self.e[a].dot(&self.e[b]) - target).abs());
-            }
-        }
-        worst
     }
 
     /// Largest violation of the velocity constraints `d/dt (e_a . e_b) = 0`.
@@ -188,10 +115,89 @@ impl BodyState {
     }
 }
 
+impl<T: Real> BodyState<T> {
+    #[inline(always)]
+    pub fn from_vector(y: &[T; STATE_DIM]) -> Self {
+        BodyState {
+            r: read3(y, layout::R),
+            v: read3(y, layout::V),
+            e: [read3(y, layout::E), read3(y, layout::E + 3), read3(y, layout::E + 6)],
+            e_dot: [read3(y, layout::E_DOT), read3(y, layout::E_DOT + 3), read3(y, layout::E_DOT + 6)],
+        }
+    }
+
+    #[inline(always)]
+    pub fn to_vector(&self) -> [T; STATE_DIM] {
+        let mut y = [T::zero(); STATE_DIM];
+        write3(&mut y, layout::R, &self.r);
+        write3(&mut y, layout::V, &self.v);
+        for a in 0..3 {
+            write3(&mut y, layout::E + 3 * a, &self.e[a]);
+            write3(&mut y, layout::E_DOT + 3 * a, &self.e_dot[a]);
+        }
+        y
+    }
+
+    /// Rotation matrix body -> inertial, `R = [e1 e2 e3]` (columns).
+    #[inline(always)]
+    pub fn rotation(&self) -> Matrix3<T> {
+        Matrix3::from_columns(&self.e)
+    }
+
+    /// Time derivative of the rotation matrix, `dR/dt = [e1' e2' e3']`.
+    #[inline(always)]
+    pub fn rotation_rate(&self) -> Matrix3<T> {
+        Matrix3::from_columns(&self.e_dot)
+    }
+
+    /// Angular velocity in body components, `w1 = e2'.e3`, `w2 = e3'.e1`, `w3 = e1'.e2`.
+    /// Each component is averaged with its antisymmetric partner (`w1 = -e3'.e2`, ...), which
+    /// is exact on the constraint manifold and the best estimate off it.
+    #[inline(always)]
+    pub fn angular_velocity_body(&self) -> Vector3<T> {
+        let [e1, e2, e3] = &self.e;
+        let [d1, d2, d3] = &self.e_dot;
+        Vector3::new((d2.dot(e3) - d3.dot(e2)) * 0.5, (d3.dot(e1) - d1.dot(e3)) * 0.5, (d1.dot(e2) - d2.dot(e1)) * 0.5)
+    }
+
+    /// Angular velocity in inertial components, `omega = 1/2 sum_a e_a x e_a'` (exact on the
+    /// constraint manifold, where `e_a' = omega x e_a`).
+    #[inline(always)]
+    pub fn angular_velocity_inertial(&self) -> Vector3<T> {
+        (self.e[0].cross(&self.e_dot[0]) + self.e[1].cross(&self.e_dot[1]) + self.e[2].cross(&self.e_dot[2]))
+            * T::constant(0.5)
+    }
+
+    /// Position of a body-fixed point given in body coordinates, relative to the centre of
+    /// mass, in inertial components: `R p = p1 e1 + p2 e2 + p3 e3`.
+    #[inline(always)]
+    pub fn body_vector(&self, p: &Vector3<f64>) -> Vector3<T> {
+        self.e[0] * T::constant(p.x) + self.e[1] * T::constant(p.y) + self.e[2] * T::constant(p.z)
+    }
+
+    /// Velocity of that point relative to the centre of mass: `p1 e1' + p2 e2' + p3 e3'`.
+    #[inline(always)]
+    pub fn body_vector_rate(&self, p: &Vector3<f64>) -> Vector3<T> {
+        self.e_dot[0] * T::constant(p.x) + self.e_dot[1] * T::constant(p.y) + self.e_dot[2] * T::constant(p.z)
+    }
+
+    /// Largest violation of the constraints `e_a . e_b = delta_ab` (paper eq. 1.2).
+    pub fn constraint_residual(&self) -> T {
+        let mut worst = T::zero();
+        for a in 0..3 {
+            for b in a..3 {
+                let target = if a == b { 1.0 } else { 0.0 };
+                worst = worst.max_of((self.e[a].dot(&self.e[b]) - target).abs());
+            }
+        }
+        worst
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::physics::kinematics::rotation_from_angles;
+    use crate::physics::body::kinematics::rotation_from_angles;
 
     #[test]
     fn all_finite_refuses_exactly_the_infinities_and_nans() {

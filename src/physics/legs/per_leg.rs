@@ -17,8 +17,8 @@
 //! right-hand sides further (criterion: 0.97 us per adaptive step in the previous release's
 //! run, 0.91 us in this one).
 
-use super::per_axis::AxisLanes;
-use super::stand::LEG_COUNT;
+use crate::physics::body::per_axis::AxisLanes;
+use crate::physics::stand::LEG_COUNT;
 
 #[cfg(target_arch = "x86_64")]
 mod lanes {
@@ -44,7 +44,7 @@ mod lanes {
     }
 
     impl super::Lanes for Narrow {
-        type Axes = crate::physics::per_axis::Pair;
+        type Axes = crate::physics::body::per_axis::Pair;
         const FOR_CHECKS: bool = false;
         #[inline(always)]
         fn new(x: &[f64; 6]) -> Self {
@@ -147,7 +147,7 @@ mod lanes {
 
     // SAFETY (every `unsafe` block of this impl): a `Wide` exists only where AVX runs (above).
     impl super::Lanes for Wide {
-        type Axes = crate::physics::per_axis::Quad;
+        type Axes = crate::physics::body::per_axis::Quad;
         const FOR_CHECKS: bool = true;
         #[inline(always)]
         fn new(x: &[f64; 6]) -> Self {
@@ -273,7 +273,7 @@ mod lanes {
     pub type Wide = Narrow;
 
     impl super::Lanes for Narrow {
-        type Axes = crate::physics::per_axis::Pair;
+        type Axes = crate::physics::body::per_axis::Pair;
         const FOR_CHECKS: bool = false;
         #[inline(always)]
         fn new(x: &[f64; 6]) -> Self {
@@ -350,7 +350,7 @@ pub trait Lanes: Copy {
     /// The same registers for three per-axis values ([`super::per_axis`]).
     type Axes: AxisLanes;
     /// Whether the checks at the end of a step compute the legs in these lanes too (see
-    /// [`crate::physics::legs::JointArrays::kinematics_in`]).
+    /// [`crate::physics::legs::geometry::JointArrays::kinematics_in`]).
     const FOR_CHECKS: bool;
     fn new(x: &[f64; LEG_COUNT]) -> Self;
     fn splat(x: f64) -> Self;

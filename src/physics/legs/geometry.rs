@@ -2,49 +2,53 @@
 //! Computed once per right-hand-side evaluation and shared by the force law and the
 //! special-form accelerations (no recomputation of the geometry).
 
-use nalgebra::Vector3;
+use nalgebra::{Scalar, Vector3};
 
-use super::body_state::BodyState;
 use super::per_leg::{Lanes, Narrow, PerLeg, components};
-use super::stand::{LEG_COUNT, Stand};
+use crate::physics::body::state::BodyState;
+use crate::physics::number::{Real, lift};
+use crate::physics::stand::{LEG_COUNT, Stand};
 
-/// Geometry of the six legs for one state.
+/// Geometry of the six legs for one state, in the number type `T`.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct LegGeometry {
+pub struct LegGeometry<T: Scalar = f64> {
     /// Arms `R A_k` from the centre of mass to platform joint k, inertial components, m.
-    pub arm: [Vector3<f64>; LEG_COUNT],
+    pub arm: [Vector3<T>; LEG_COUNT],
+    /// Leg vectors `a_k - B_k = r + R A_k - B_k`, m.
+    pub leg: [Vector3<T>; LEG_COUNT],
     /// Leg lengths `l_k`, m.
-    pub length: [f64; LEG_COUNT],
+    pub length: [T; LEG_COUNT],
     /// Unit leg directions `n_k = (a_k - B_k) / l_k` (zero for a collapsed leg, never NaN).
-    pub direction: [Vector3<f64>; LEG_COUNT],
+    pub direction: [Vector3<T>; LEG_COUNT],
 }
 
-impl LegGeometry {
+impl<T: Real> LegGeometry<T> {
     #[inline(always)]
-    pub fn new(stand: &Stand, state: &BodyState) -> Self {
+    pub fn new(stand: &Stand, state: &BodyState<T>) -> Self {
         let mut arm = [Vector3::zeros(); LEG_COUNT];
-        let mut length = [0.0; LEG_COUNT];
+        let mut leg = [Vector3::zeros(); LEG_COUNT];
+        let mut length = [T::zero(); LEG_COUNT];
         let mut direction = [Vector3::zeros(); LEG_COUNT];
         for k in 0..LEG_COUNT {
             arm[k] = state.body_vector(&stand.platform_joints[k]);
-            let leg = state.r + arm[k] - stand.base_joints[k];
-            length[k] = leg.norm();
+            leg[k] = state.r + arm[k] - lift(&stand.base_joints[k]);
+            length[k] = leg[k].dot(&leg[k]).sqrt();
             // One division, three multiplications.
-            direction[k] = if length[k] > 0.0 { leg * (1.0 / length[k]) } else { Vector3::zeros() };
+            if length[k] > T::zero() {
+                direction[k] = leg[k] * (T::one() / length[k]);
+            }
         }
-        LegGeometry { arm, length, direction }
+        LegGeometry { arm, leg, length, direction }
     }
 
     /// Leg length rates `dl_k/dt = n_k . (v + d(R A_k)/dt)`, m/s.
     #[inline(always)]
-    pub fn length_rates(&self, stand: &Stand, state: &BodyState) -> [f64; LEG_COUNT] {
-        let mut rates = [0.0; LEG_COUNT];
-        for k in 0..LEG_COUNT {
-            rates[k] = self.direction[k].dot(&(state.v + state.body_vector_rate(&stand.platform_joints[k])));
-        }
-        rates
+    pub fn length_rates(&self, stand: &Stand, state: &BodyState<T>) -> [T; LEG_COUNT] {
+        std::array::from_fn(|k| self.direction[k].dot(&(state.v + state.body_vector_rate(&stand.platform_joints[k]))))
     }
+}
 
+impl LegGeometry {
     /// Resultant force `sum_k u_k n_k` and moment about the centre of mass
     /// `L = sum_k (R A_k) x (u_k n_k)` of the leg forces `u`.
     #[inline(always)]
@@ -235,7 +239,7 @@ impl LegKinematics {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::physics::kinematics::rotation_from_angles;
+    use crate::physics::body::kinematics::rotation_from_angles;
 
     /// The legs side by side, as arrays and one by one are the same numbers to the bit.
     #[test]

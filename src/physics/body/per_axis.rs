@@ -92,7 +92,7 @@ mod lanes {
     /// The three axes (and the padding lane) in one AVX register.
     ///
     /// Only for code compiled with AVX2 enabled and run where the processor has it: the
-    /// right-hand side's AVX2 copy (see `super::super::per_leg::Wide`, which names this type
+    /// right-hand side's AVX2 copy (see `crate::physics::legs::per_leg::Wide`, which names this type
     /// as its axes). Written without closures, so that all of it inlines into that copy.
     #[derive(Clone, Copy)]
     pub struct Quad(__m256d);

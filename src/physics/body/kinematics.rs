@@ -5,7 +5,9 @@
 
 use nalgebra::{Matrix3, Vector3};
 
-use super::stand::{LEG_COUNT, Stand};
+use crate::physics::number::Real;
+
+use crate::physics::stand::{LEG_COUNT, Stand};
 
 /// Elementary rotation about x by `angle` (textbook `c1`).
 pub fn rotation_x(angle: f64) -> Matrix3<f64> {
@@ -33,10 +35,10 @@ pub fn rotation_from_angles(angles: &Vector3<f64>) -> Matrix3<f64> {
 /// `(roll, pitch, yaw)` of a rotation matrix, rad. Pitch lies in `[-pi/2, pi/2]`, roll and
 /// yaw in `(-pi, pi]`. At the gimbal lock (`|pitch| = pi/2`) roll and yaw are not unique;
 /// the result is still finite.
-pub fn angles_from_rotation(rot: &Matrix3<f64>) -> Vector3<f64> {
+pub fn angles_from_rotation<T: Real>(rot: &Matrix3<T>) -> Vector3<T> {
     // R = Rx Ry Rz: R02 = sin(pitch), R12 = -sin(roll) cos(pitch), R22 = cos(roll) cos(pitch),
     // R01 = -cos(pitch) sin(yaw), R00 = cos(pitch) cos(yaw).
-    let pitch = rot[(0, 2)].clamp(-1.0, 1.0).asin();
+    let pitch = rot[(0, 2)].clamp_to(T::constant(-1.0), T::one()).asin();
     let roll = (-rot[(1, 2)]).atan2(rot[(2, 2)]);
     let yaw = (-rot[(0, 1)]).atan2(rot[(0, 0)]);
     Vector3::new(roll, pitch, yaw)

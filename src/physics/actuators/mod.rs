@@ -2,9 +2,9 @@
 //!
 //! `u_k > 0` pushes the platform away from the base (extension), N.
 
-use super::body_state::BodyState;
-use super::legs::LegGeometry;
-use super::stand::LEG_COUNT;
+use crate::physics::body::state::BodyState;
+use crate::physics::legs::geometry::LegGeometry;
+use crate::physics::stand::LEG_COUNT;
 
 /// Axial leg forces as a function of time and state.
 pub trait LegForceLaw {

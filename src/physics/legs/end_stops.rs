@@ -23,8 +23,9 @@
 //! The damping takes the power `P_d = f_d delta_k' >= 0` (the clamp keeps the sign of
 //! `c_s delta_k'`), so that `E(t) - E(0) = W_F - W_d` with `E` including `sum V_k`.
 
-use super::error::ParameterError;
-use super::stand::{LEG_COUNT, Stand};
+use crate::physics::error::ParameterError;
+use crate::physics::number::Real;
+use crate::physics::stand::{LEG_COUNT, Stand};
 
 /// Lower end of the default stand's stroke, m. The neutral leg is 1.755 m; the heave
 /// programme of amplitude `0.2 R_b` keeps every leg within 1.61 .. 1.93 m.
@@ -67,11 +68,11 @@ impl Default for EndStops {
 
 /// The stop's force on one leg and the power its damping takes.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct StopContact {
+pub struct StopContact<T = f64> {
     /// `Fstop_k`, N, sign as the actuator force (positive pushes the platform away).
-    pub force: f64,
+    pub force: T,
     /// `P_d >= 0`, W.
-    pub dissipation: f64,
+    pub dissipation: T,
 }
 
 /// Number of switching functions of the stops: `l_k - lmin_k` then `lmax_k - l_k`.
@@ -87,67 +88,36 @@ impl EndStops {
     /// Penetration `delta` (m, > 0 in contact) and the sign `s` of the stop force (+1 lower,
     /// -1 upper); `delta <= 0` inside the stroke.
     #[inline(always)]
-    fn penetration(&self, k: usize, l: f64) -> (f64, f64) {
-        let below = self.lower[k] - l;
-        if below > 0.0 { (below, 1.0) } else { (l - self.upper[k], -1.0) }
+    fn penetration<T: Real>(&self, k: usize, l: T) -> (T, f64) {
+        let below = T::constant(self.lower[k]) - l;
+        if below > T::zero() { (below, 1.0) } else { (l - self.upper[k], -1.0) }
     }
 
-    /// Stop force and dissipation on leg `k` with length `l` and rate `ldot`.
+    /// Stop force and dissipation on leg `k` with length `l` and rate `ldot` (the law of the
+    /// module documentation; its derivative where it has a kink is that of the branch taken).
     #[inline(always)]
-    pub fn contact(&self, k: usize, l: f64, ldot: f64) -> StopContact {
+    pub fn contact<T: Real>(&self, k: usize, l: T, ldot: T) -> StopContact<T> {
         let (delta, s) = self.penetration(k, l);
-        if !(delta > 0.0) {
-            return StopContact::default();
+        if !(delta > T::zero()) {
+            return StopContact { force: T::zero(), dissipation: T::zero() };
         }
         // delta' = -s ldot: the lower stop is penetrated by a shortening leg.
-        let delta_rate = -s * ldot;
-        let spring = self.stiffness * delta;
-        let damper = (self.damping * delta_rate).clamp(-spring, spring);
-        StopContact { force: s * (spring + damper), dissipation: damper * delta_rate }
-    }
-
-    /// Change of the stop force of leg `k` for changes `dl`, `dldot` of its length and rate
-    /// (the exact derivative of [`EndStops::contact`] where it is differentiable; at a kink,
-    /// the derivative of the branch `contact` takes).
-    #[inline]
-    pub fn contact_tangent(&self, k: usize, l: f64, ldot: f64, dl: f64, dldot: f64) -> StopContact {
-        let (delta, s) = self.penetration(k, l);
-        if !(delta > 0.0) {
-            return StopContact::default();
-        }
-        let delta_rate = -s * ldot;
-        let (d_delta, d_delta_rate) = (-s * dl, -s * dldot);
-        let spring = self.stiffness * delta;
-        let d_spring = self.stiffness * d_delta;
-        let raw = self.damping * delta_rate;
-        let (damper, d_damper) = if raw > spring {
-            (spring, d_spring)
-        } else if raw < -spring {
-            (-spring, -d_spring)
-        } else {
-            (raw, self.damping * d_delta_rate)
-        };
-        StopContact { force: s * (d_spring + d_damper), dissipation: d_damper * delta_rate + damper * d_delta_rate }
+        let delta_rate = ldot * -s;
+        let spring = delta * self.stiffness;
+        let damper = (delta_rate * self.damping).clamp_to(-spring, spring);
+        StopContact { force: (spring + damper) * s, dissipation: damper * delta_rate }
     }
 
     /// Potential energy `sum_k V_k` of the stops for leg lengths `l`, J.
-    pub fn potential_energy(&self, l: &[f64; LEG_COUNT]) -> f64 {
-        (0..LEG_COUNT)
-            .map(|k| {
-                let (delta, _) = self.penetration(k, l[k]);
-                if delta > 0.0 { 0.5 * self.stiffness * delta * delta } else { 0.0 }
-            })
-            .sum()
-    }
-
-    /// Change of [`EndStops::potential_energy`] for changes `dl` of the lengths.
-    pub fn potential_energy_tangent(&self, l: &[f64; LEG_COUNT], dl: &[f64; LEG_COUNT]) -> f64 {
-        (0..LEG_COUNT)
-            .map(|k| {
-                let (delta, s) = self.penetration(k, l[k]);
-                if delta > 0.0 { self.stiffness * delta * (-s * dl[k]) } else { 0.0 }
-            })
-            .sum()
+    pub fn potential_energy<T: Real>(&self, l: &[T; LEG_COUNT]) -> T {
+        let mut energy = T::zero();
+        for k in 0..LEG_COUNT {
+            let (delta, _) = self.penetration(k, l[k]);
+            if delta > T::zero() {
+                energy += delta * (0.5 * self.stiffness) * delta;
+            }
+        }
+        energy
     }
 
     /// The twelve switching functions `l_k - lmin_k` (k = 1..6), then `lmax_k - l_k`: positive
@@ -221,8 +191,8 @@ impl EndStops {
         for k in 0..LEG_COUNT {
             let (lo, hi) = (self.lower[k], self.upper[k]);
             let (lo_name, hi_name) = (format!("lmin[{}]", k + 1), format!("lmax[{}]", k + 1));
-            super::stand::check_finite(&lo_name, lo)?;
-            super::stand::check_finite(&hi_name, hi)?;
+            crate::physics::stand::check_finite(&lo_name, lo)?;
+            crate::physics::stand::check_finite(&hi_name, hi)?;
             if lo <= 0.0 {
                 return Err(ParameterError::new(
                     lo_name,
@@ -236,14 +206,14 @@ impl EndStops {
                 ));
             }
         }
-        super::stand::check_finite("stops.stiffness", self.stiffness)?;
+        crate::physics::stand::check_finite("stops.stiffness", self.stiffness)?;
         if self.stiffness <= 0.0 {
             return Err(ParameterError::new(
                 "stops.stiffness",
                 format!("the stop stiffness must be positive, got {} N/m", self.stiffness),
             ));
         }
-        super::stand::check_finite("stops.damping", self.damping)?;
+        crate::physics::stand::check_finite("stops.damping", self.damping)?;
         if self.damping < 0.0 {
             return Err(ParameterError::new(
                 "stops.damping",
@@ -302,19 +272,24 @@ mod tests {
         }
     }
 
+    /// The law's derivative through duals against central differences, on each branch.
     #[test]
-    fn tangent_matches_central_differences_on_each_branch() {
+    fn derivative_matches_central_differences_on_each_branch() {
+        use crate::physics::number::Dual;
         let s = EndStops::default();
         for (l, ld) in [(1.44, -0.01), (1.44, -2.0), (1.44, 0.5), (2.16, 0.02), (2.16, 2.0), (2.16, -1.5)] {
             let (dl, dld) = (0.3, -0.7);
             let eps = 1e-9;
             let p = s.contact(0, l + eps * dl, ld + eps * dld);
             let m = s.contact(0, l - eps * dl, ld - eps * dld);
-            let t = s.contact_tangent(0, l, ld, dl, dld);
+            let t = s.contact(0, Dual::new(l, dl), Dual::new(ld, dld));
             let fd_force = (p.force - m.force) / (2.0 * eps);
             let fd_diss = (p.dissipation - m.dissipation) / (2.0 * eps);
-            assert!((t.force - fd_force).abs() <= 1e-5 * fd_force.abs().max(1.0), "{l} {ld}: {t:?} vs {fd_force}");
-            assert!((t.dissipation - fd_diss).abs() <= 1e-5 * fd_diss.abs().max(1.0), "{l} {ld}: {t:?} vs {fd_diss}");
+            assert!((t.force.eps - fd_force).abs() <= 1e-5 * fd_force.abs().max(1.0), "{l} {ld}: {t:?} vs {fd_force}");
+            assert!(
+                (t.dissipation.eps - fd_diss).abs() <= 1e-5 * fd_diss.abs().max(1.0),
+                "{l} {ld}: {t:?} vs {fd_diss}"
+            );
         }
     }
 
