@@ -6,10 +6,6 @@
 //! bounds-checked: a truncated, corrupted or foreign buffer gives an error, never an
 //! out-of-bounds read.
 
-use nalgebra::Vector3;
-
-use crate::physics::stand::{LEG_COUNT, Stand};
-
 /// Appends little-endian values to a byte buffer.
 #[derive(Default)]
 pub struct ByteWriter {
@@ -42,15 +38,6 @@ impl ByteWriter {
     }
     pub fn raw(&mut self, b: &[u8]) {
         self.bytes.extend_from_slice(b);
-    }
-    /// A stand: mass, inertia, gravity, base joints, platform joints.
-    pub fn stand(&mut self, s: &Stand) {
-        self.f64(s.mass);
-        self.f64s(&s.inertia);
-        self.f64(s.gravity);
-        for p in s.base_joints.iter().chain(s.platform_joints.iter()) {
-            self.f64s(p.as_slice());
-        }
     }
 }
 
@@ -128,23 +115,6 @@ impl<'a> ByteReader<'a> {
             b => Err(SnapshotError(format!("invalid boolean byte {b}"))),
         }
     }
-    /// What [`ByteWriter::stand`] wrote (finite values only).
-    pub fn stand(&mut self) -> Result<Stand, SnapshotError> {
-        let mass = self.finite("M")?;
-        let inertia = self.finite_array::<3>("J")?;
-        let gravity = self.finite("g")?;
-        let mut joints = [Vector3::zeros(); 2 * LEG_COUNT];
-        for j in joints.iter_mut() {
-            *j = Vector3::from(self.finite_array::<3>("joint")?);
-        }
-        Ok(Stand {
-            mass,
-            inertia,
-            gravity,
-            base_joints: std::array::from_fn(|k| joints[k]),
-            platform_joints: std::array::from_fn(|k| joints[LEG_COUNT + k]),
-        })
-    }
     pub fn remaining(&self) -> usize {
         self.bytes.len() - self.pos
     }
@@ -164,7 +134,7 @@ pub fn fnv1a64(bytes: &[u8]) -> u64 {
 /// Serialized FMU states start with this.
 const STATE_FORMAT_MAGIC: &[u8; 8] = b"STEWFMU\x00";
 /// Version of the format; a state of another version is refused with a message.
-pub const STATE_FORMAT_VERSION: u32 = 2;
+pub const STATE_FORMAT_VERSION: u32 = 3;
 
 /// Wraps a payload in the envelope: magic, version, model kind, token hash, length, payload,
 /// checksum.

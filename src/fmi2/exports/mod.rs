@@ -12,6 +12,12 @@
 
 use std::ffi::{CStr, CString, c_char};
 
+mod co_simulation;
+mod model_exchange;
+
+pub use co_simulation::*;
+pub use model_exchange::*;
+
 use super::state_machine::Fmi2Function as F;
 use super::types::*;
 use crate::fmi::boundary::{boundary, free_instance, no_instance, show, try_out, try_slice, try_slice_mut};
@@ -41,7 +47,7 @@ pub extern "C" fn fmi2GetVersion() -> *const c_char {
 }
 
 /// # Safety
-/// See the module documentation.
+/// See the documentation of the `exports` module.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SetDebugLogging(
     c: fmi2Component,
@@ -117,7 +123,7 @@ pub unsafe extern "C" fn fmi2Instantiate(
 }
 
 /// # Safety
-/// See the module documentation.
+/// See the documentation of the `exports` module.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
     // SAFETY: the handle is looked up in the registry before any use.
@@ -125,7 +131,7 @@ pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
 }
 
 /// # Safety
-/// See the module documentation.
+/// See the documentation of the `exports` module.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SetupExperiment(
     c: fmi2Component,
@@ -152,35 +158,35 @@ pub unsafe extern "C" fn fmi2SetupExperiment(
 }
 
 /// # Safety
-/// See the module documentation.
+/// See the documentation of the `exports` module.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2Status {
     boundary!(c, F::EnterInitializationMode, |inst| inst.enter_initialization_mode())
 }
 
 /// # Safety
-/// See the module documentation.
+/// See the documentation of the `exports` module.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status {
     boundary!(c, F::ExitInitializationMode, |inst| inst.exit_initialization_mode())
 }
 
 /// # Safety
-/// See the module documentation.
+/// See the documentation of the `exports` module.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
     boundary!(c, F::Terminate, |inst| inst.terminate())
 }
 
 /// # Safety
-/// See the module documentation.
+/// See the documentation of the `exports` module.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
     boundary!(c, F::Reset, |inst| inst.reset())
 }
 
 /// # Safety
-/// See the module documentation.
+/// See the documentation of the `exports` module.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetReal(
     c: fmi2Component,
@@ -196,7 +202,7 @@ pub unsafe extern "C" fn fmi2GetReal(
 }
 
 /// # Safety
-/// See the module documentation.
+/// See the documentation of the `exports` module.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetInteger(
     c: fmi2Component,
@@ -212,7 +218,7 @@ pub unsafe extern "C" fn fmi2GetInteger(
 }
 
 /// # Safety
-/// See the module documentation.
+/// See the documentation of the `exports` module.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetBoolean(
     c: fmi2Component,
@@ -228,7 +234,7 @@ pub unsafe extern "C" fn fmi2GetBoolean(
 }
 
 /// # Safety
-/// See the module documentation.
+/// See the documentation of the `exports` module.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetString(
     c: fmi2Component,
@@ -244,7 +250,7 @@ pub unsafe extern "C" fn fmi2GetString(
 }
 
 /// # Safety
-/// See the module documentation.
+/// See the documentation of the `exports` module.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SetReal(
     c: fmi2Component,
@@ -260,7 +266,7 @@ pub unsafe extern "C" fn fmi2SetReal(
 }
 
 /// # Safety
-/// See the module documentation.
+/// See the documentation of the `exports` module.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SetInteger(
     c: fmi2Component,
@@ -276,7 +282,7 @@ pub unsafe extern "C" fn fmi2SetInteger(
 }
 
 /// # Safety
-/// See the module documentation.
+/// See the documentation of the `exports` module.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SetBoolean(
     c: fmi2Component,
@@ -292,7 +298,7 @@ pub unsafe extern "C" fn fmi2SetBoolean(
 }
 
 /// # Safety
-/// See the module documentation.
+/// See the documentation of the `exports` module.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SetString(
     c: fmi2Component,
@@ -308,7 +314,7 @@ pub unsafe extern "C" fn fmi2SetString(
 }
 
 /// # Safety
-/// See the module documentation.
+/// See the documentation of the `exports` module.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
     boundary!(c, F::GetFMUstate, args("FMUstate = {state:?}"), |inst| {
@@ -318,14 +324,14 @@ pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, state: *mut fmi2FMUst
 }
 
 /// # Safety
-/// See the module documentation.
+/// See the documentation of the `exports` module.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, state: fmi2FMUstate) -> fmi2Status {
     boundary!(c, F::SetFMUstate, args("FMUstate = {state:?}"), |inst| { inst.set_fmu_state(state) })
 }
 
 /// # Safety
-/// See the module documentation.
+/// See the documentation of the `exports` module.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2FreeFMUstate(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
     boundary!(c, F::FreeFMUstate, args("FMUstate = {state:?}"), |inst| {
@@ -335,7 +341,7 @@ pub unsafe extern "C" fn fmi2FreeFMUstate(c: fmi2Component, state: *mut fmi2FMUs
 }
 
 /// # Safety
-/// See the module documentation.
+/// See the documentation of the `exports` module.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
     c: fmi2Component,
@@ -355,7 +361,7 @@ pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
 }
 
 /// # Safety
-/// See the module documentation.
+/// See the documentation of the `exports` module.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SerializeFMUstate(
     c: fmi2Component,
@@ -370,7 +376,7 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
 }
 
 /// # Safety
-/// See the module documentation.
+/// See the documentation of the `exports` module.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
     c: fmi2Component,
@@ -386,7 +392,7 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
 }
 
 /// # Safety
-/// See the module documentation.
+/// See the documentation of the `exports` module.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
     c: fmi2Component,
@@ -415,280 +421,4 @@ pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
             inst.get_directional_derivative(unknowns, knowns, seeds, out)
         }
     )
-}
-
-// ----- Co-Simulation ----------------------------------------------------------------------
-
-/// # Safety
-/// See the module documentation.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
-    c: fmi2Component,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    order: *const fmi2Integer,
-    value: *const fmi2Real,
-) -> fmi2Status {
-    boundary!(
-        c,
-        F::SetRealInputDerivatives,
-        args("vr = {}, order = {}, value = {}", show(vr, nvr), show(order, nvr), show(value, nvr)),
-        |inst| {
-            let vrs = try_slice!(inst, vr, nvr, "vr");
-            let orders = try_slice!(inst, order, nvr, "order");
-            let values = try_slice!(inst, value, nvr, "value");
-            inst.set_real_input_derivatives(vrs, orders, values)
-        }
-    )
-}
-
-/// # Safety
-/// See the module documentation.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
-    c: fmi2Component,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    order: *const fmi2Integer,
-    value: *mut fmi2Real,
-) -> fmi2Status {
-    boundary!(
-        c,
-        F::GetRealOutputDerivatives,
-        args("vr = {}, order = {}, value = {}", show(vr, nvr), show(order, nvr), show(value, nvr)),
-        |inst| {
-            let vrs = try_slice!(inst, vr, nvr, "vr");
-            let orders = try_slice!(inst, order, nvr, "order");
-            let values = try_slice_mut!(inst, value, nvr, "value");
-            inst.get_output_derivatives(vrs, orders, values)
-        }
-    )
-}
-
-/// # Safety
-/// See the module documentation.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2DoStep(
-    c: fmi2Component,
-    current_communication_point: fmi2Real,
-    communication_step_size: fmi2Real,
-    _no_set_fmu_state_prior_to_current_point: fmi2Boolean,
-) -> fmi2Status {
-    boundary!(
-        c,
-        F::DoStep,
-        args(
-            "currentCommunicationPoint = {current_communication_point}, communicationStepSize = {communication_step_size}"
-        ),
-        |inst| inst.do_step(current_communication_point, communication_step_size).0
-    )
-}
-
-/// # Safety
-/// See the module documentation.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
-    // Only allowed in stepInProgress, which this synchronous FMU never enters: the state
-    // table refuses it.
-    boundary!(c, F::CancelStep, |inst| inst.error("no asynchronous step to cancel"))
-}
-
-/// # Safety
-/// See the module documentation.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetStatus(c: fmi2Component, kind: fmi2StatusKind, value: *mut fmi2Status) -> fmi2Status {
-    boundary!(c, F::GetStatus, args("s = {kind}"), |inst| {
-        let _ = try_out!(inst, value, "value");
-        status_not_available(inst, kind)
-    })
-}
-
-/// # Safety
-/// See the module documentation.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetRealStatus(c: fmi2Component, kind: fmi2StatusKind, value: *mut fmi2Real) -> fmi2Status {
-    boundary!(c, F::GetRealStatus, args("s = {kind}"), |inst| {
-        let out = try_out!(inst, value, "value");
-        if kind != fmi2LastSuccessfulTime {
-            return status_not_available(inst, kind);
-        }
-        *out = inst.last_successful_time;
-        Status::Ok
-    })
-}
-
-/// # Safety
-/// See the module documentation.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetIntegerStatus(
-    c: fmi2Component,
-    kind: fmi2StatusKind,
-    value: *mut fmi2Integer,
-) -> fmi2Status {
-    boundary!(c, F::GetIntegerStatus, args("s = {kind}"), |inst| {
-        let _ = try_out!(inst, value, "value");
-        status_not_available(inst, kind)
-    })
-}
-
-/// # Safety
-/// See the module documentation.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetBooleanStatus(
-    c: fmi2Component,
-    kind: fmi2StatusKind,
-    value: *mut fmi2Boolean,
-) -> fmi2Status {
-    boundary!(c, F::GetBooleanStatus, args("s = {kind}"), |inst| {
-        let out = try_out!(inst, value, "value");
-        if kind != fmi2Terminated {
-            return status_not_available(inst, kind);
-        }
-        *out = if inst.terminated { fmi2True } else { fmi2False };
-        Status::Ok
-    })
-}
-
-/// # Safety
-/// See the module documentation.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetStringStatus(
-    c: fmi2Component,
-    kind: fmi2StatusKind,
-    value: *mut fmi2String,
-) -> fmi2Status {
-    boundary!(c, F::GetStringStatus, args("s = {kind}"), |inst| {
-        let _ = try_out!(inst, value, "value");
-        status_not_available(inst, kind)
-    })
-}
-
-// ----- Model Exchange -------------------------------------------------------------------------
-
-/// # Safety
-/// See the module documentation.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2EnterEventMode(c: fmi2Component) -> fmi2Status {
-    boundary!(c, F::EnterEventMode, |inst| inst.enter_event_mode())
-}
-
-/// # Safety
-/// See the module documentation.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2NewDiscreteStates(c: fmi2Component, event_info: *mut fmi2EventInfo) -> fmi2Status {
-    boundary!(c, F::NewDiscreteStates, |inst| {
-        let info = try_out!(inst, event_info, "fmi2EventInfo");
-        let update = inst.update_discrete_states();
-        *info = fmi2EventInfo {
-            newDiscreteStatesNeeded: update.discrete_states_need_update as fmi2Boolean,
-            terminateSimulation: update.terminate_simulation as fmi2Boolean,
-            nominalsOfContinuousStatesChanged: update.nominals_changed as fmi2Boolean,
-            valuesOfContinuousStatesChanged: update.values_changed as fmi2Boolean,
-            nextEventTimeDefined: update.next_event_time.is_some() as fmi2Boolean,
-            nextEventTime: update.next_event_time.unwrap_or(0.0),
-        };
-        Status::Ok
-    })
-}
-
-/// # Safety
-/// See the module documentation.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2EnterContinuousTimeMode(c: fmi2Component) -> fmi2Status {
-    boundary!(c, F::EnterContinuousTimeMode, |inst| inst.enter_continuous_time_mode())
-}
-
-/// # Safety
-/// See the module documentation.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2CompletedIntegratorStep(
-    c: fmi2Component,
-    _no_set_fmu_state_prior: fmi2Boolean,
-    enter_event_mode: *mut fmi2Boolean,
-    terminate_simulation: *mut fmi2Boolean,
-) -> fmi2Status {
-    boundary!(c, F::CompletedIntegratorStep, |inst| {
-        let enter = try_out!(inst, enter_event_mode, "enterEventMode");
-        let terminate = try_out!(inst, terminate_simulation, "terminateSimulation");
-        let (e, t) = inst.completed_integrator_step();
-        (*enter, *terminate) = (e as fmi2Boolean, t as fmi2Boolean);
-        Status::Ok
-    })
-}
-
-/// # Safety
-/// See the module documentation.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2SetTime(c: fmi2Component, time: fmi2Real) -> fmi2Status {
-    boundary!(c, F::SetTime, args("time = {time}"), |inst| inst.set_time(time))
-}
-
-/// # Safety
-/// See the module documentation.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2SetContinuousStates(c: fmi2Component, x: *const fmi2Real, nx: usize) -> fmi2Status {
-    boundary!(c, F::SetContinuousStates, args("x = {}", show(x, nx)), |inst| {
-        let states = try_slice!(inst, x, nx, "x");
-        inst.set_continuous_states(states)
-    })
-}
-
-/// # Safety
-/// See the module documentation.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetDerivatives(c: fmi2Component, derivatives: *mut fmi2Real, nx: usize) -> fmi2Status {
-    boundary!(c, F::GetDerivatives, args("derivatives = {}", show(derivatives, nx)), |inst| {
-        let dx = try_slice_mut!(inst, derivatives, nx, "derivatives");
-        inst.get_derivatives(dx)
-    })
-}
-
-/// # Safety
-/// See the module documentation.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetEventIndicators(c: fmi2Component, indicators: *mut fmi2Real, ni: usize) -> fmi2Status {
-    boundary!(c, F::GetEventIndicators, args("eventIndicators = {}", show(indicators, ni)), |inst| {
-        let z = try_slice_mut!(inst, indicators, ni, "eventIndicators");
-        inst.get_event_indicators(z)
-    })
-}
-
-/// # Safety
-/// See the module documentation.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetContinuousStates(c: fmi2Component, x: *mut fmi2Real, nx: usize) -> fmi2Status {
-    boundary!(c, F::GetContinuousStates, args("x = {}", show(x, nx)), |inst| {
-        let states = try_slice_mut!(inst, x, nx, "x");
-        inst.get_continuous_states(states)
-    })
-}
-
-/// # Safety
-/// See the module documentation.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetNominalsOfContinuousStates(
-    c: fmi2Component,
-    x_nominal: *mut fmi2Real,
-    nx: usize,
-) -> fmi2Status {
-    boundary!(c, F::GetNominalsOfContinuousStates, |inst| {
-        let nominals = try_slice_mut!(inst, x_nominal, nx, "x_nominal");
-        inst.get_nominals(nominals)
-    })
-}
-
-// ----- status queries (FMI 2 Co-Simulation) --------------------------------------------------
-
-/// Status kinds this synchronous FMU cannot answer: logged, `fmi2Discard` (as the standard
-/// prescribes).
-fn status_not_available(inst: &Instance, kind: fmi2StatusKind) -> Status {
-    inst.log(
-        Status::Discard,
-        &format!(
-            "{}: status kind {kind} is not available (this FMU steps synchronously; it answers fmi2LastSuccessfulTime \
-             with fmi2GetRealStatus and fmi2Terminated with fmi2GetBooleanStatus)",
-            inst.function()
-        ),
-    );
-    Status::Discard
 }
