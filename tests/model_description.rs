@@ -3,7 +3,10 @@
 //! tables names a variable that exists, and each token selects its own model.
 
 use stewart_fmu::fmi::FmiVersion;
-use stewart_fmu::fmi::description::{documentation_html, instantiation_token, model_description_xml, model_of_token};
+use stewart_fmu::fmi::description::{
+    documentation_html, instantiation_token, interface_markdown, model_description_xml, model_of_token,
+    with_interface_table,
+};
 use stewart_fmu::models::ModelKind;
 use stewart_fmu::models::variables::Dependency;
 
@@ -34,6 +37,23 @@ fn committed_model_descriptions_match_the_code() {
             let html = documentation_html(kind, version);
             assert!(html.contains("<table>") && html.contains(id));
         }
+    }
+}
+
+/// `docs/model.md`'s interface tables are what the declarations generate.
+#[test]
+fn the_interface_tables_of_the_documentation_match_the_code() {
+    let path = format!("{}/docs/model.md", env!("CARGO_MANIFEST_DIR"));
+    let text = committed(&path);
+    for kind in ModelKind::ALL.into_iter().filter(|k| !k.is_benchmark_floor()) {
+        let generated = with_interface_table(&text, kind).expect("the table's markers");
+        assert!(
+            generated == text,
+            "{path}: the {} table is out of date: run `cargo run --release --bin build-fmu -- \
+             --update-model-description`",
+            kind.info().model_name
+        );
+        assert!(text.contains(&interface_markdown(kind)));
     }
 }
 

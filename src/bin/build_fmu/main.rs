@@ -26,7 +26,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
 
 use stewart_fmu::fmi::FmiVersion;
-use stewart_fmu::fmi::description::{documentation_html, instantiation_token, model_description_xml};
+use stewart_fmu::fmi::description::{
+    documentation_html, instantiation_token, model_description_xml, with_interface_table,
+};
 use stewart_fmu::models::ModelKind;
 
 fn main() -> ExitCode {
@@ -71,6 +73,8 @@ fn run() -> Result<(), String> {
     for kind in ModelKind::ALL.into_iter().filter(|k| !k.is_benchmark_floor()) {
         build_one_fmi3(kind, &root, &library, &out_dir.join("fmi3"), update)?;
     }
+
+    interface_tables(&root.join("docs").join("model.md"), update)?;
 
     let ssd_path = root.join("modelDescription").join("StewartSystem.ssd");
     let ssd = std::fs::read_to_string(&ssd_path).map_err(|e| format!("cannot read {}: {e}", ssd_path.display()))?;
@@ -157,5 +161,30 @@ fn build_one_fmi3(kind: ModelKind, root: &Path, library: &Path, out_dir: &Path, 
         summary.event_indicators,
         fmu.display()
     );
+    Ok(())
+}
+
+/// The interface tables of `docs/model.md`, which must be those the declarations generate
+/// (with `update`, they are written first).
+fn interface_tables(page: &Path, update: bool) -> Result<(), String> {
+    let text = std::fs::read_to_string(page).map_err(|e| format!("cannot read {}: {e}", page.display()))?;
+    let mut generated = text.clone();
+    for kind in ModelKind::ALL.into_iter().filter(|k| !k.is_benchmark_floor()) {
+        generated = with_interface_table(&generated, kind).ok_or_else(|| {
+            format!("{}: the markers of the {} interface table are missing", page.display(), kind.info().model_name)
+        })?;
+    }
+    if generated == text {
+        return Ok(());
+    }
+    if !update {
+        return Err(format!(
+            "{}: the interface tables are out of date with the variable declarations (run `cargo run --release \
+             --bin build-fmu -- --update-model-description` and review the diff)",
+            page.display()
+        ));
+    }
+    std::fs::write(page, generated).map_err(|e| format!("cannot write {}: {e}", page.display()))?;
+    println!("build-fmu: wrote the interface tables of {}", page.display());
     Ok(())
 }

@@ -5,8 +5,8 @@ use std::fmt::Write;
 use super::*;
 use crate::fmi::FmiVersion;
 use crate::fmi::log::LogCategory;
-use crate::models::ModelKind;
-use crate::models::variables::{VariableTable, VariableType};
+use crate::models::variables::{Causality, VariableGroup, VariableTable, VariableType};
+use crate::models::{AnyModel, ModelKind};
 
 /// `documentation/index.html`: the variable table with units, starts and meanings, plus the
 /// model's own notes.
@@ -50,34 +50,9 @@ pub fn documentation_html(kind: ModelKind, version: FmiVersion) -> String {
             FmiVersion::Fmi2 if g.len() > 1 => format!("{}..{}", g.first_vr, g.vr(g.len() - 1)),
             _ => g.first_vr.to_string(),
         };
-        let starts = if g.has_start() {
-            let vals: Vec<String> = (0..g.len())
-                .filter_map(|i| table.lookup(g.vr(i)))
-                .map(|(_, r)| {
-                    if g.var_type.is_real() {
-                        format_real(model.get_real(r))
-                    } else if g.var_type.is_boolean() {
-                        model.get_boolean(r).to_string()
-                    } else {
-                        model.get_integer(r).to_string()
-                    }
-                })
-                .collect();
-            vals.join(", ")
-        } else {
-            String::new()
-        };
-        let ty = match g.var_type {
-            VariableType::Real => "Real".to_string(),
-            VariableType::Integer => "Integer".to_string(),
-            VariableType::Boolean => "Boolean".to_string(),
-            VariableType::Enumeration(t) => format!("Enumeration {t}"),
-        };
-        let unit = match (g.unit, g.display_unit) {
-            (Some(u), Some(d)) => format!("{u} (display {d})"),
-            (Some(u), None) => u.to_string(),
-            _ => String::new(),
-        };
+        let starts = start_values(&mut model, &table, g).join(", ");
+        let ty = type_name(g);
+        let unit = unit_text(g);
         let _ = writeln!(
             h,
             "<tr><td><code>{}</code></td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
@@ -105,4 +80,110 @@ pub fn documentation_html(kind: ModelKind, version: FmiVersion) -> String {
     }
     let _ = writeln!(h, "</ul>\n</body></html>");
     h
+}
+
+/// The start values of a variable's elements as text (none without a start value).
+fn start_values(model: &mut AnyModel, table: &VariableTable, g: &VariableGroup) -> Vec<String> {
+    if !g.has_start() {
+        return vec![];
+    }
+    (0..g.len())
+        .filter_map(|i| table.lookup(g.vr(i)))
+        .map(|(_, r)| {
+            if g.var_type.is_real() {
+                format_real(model.get_real(r))
+            } else if g.var_type.is_boolean() {
+                model.get_boolean(r).to_string()
+            } else {
+                model.get_integer(r).to_string()
+            }
+        })
+        .collect()
+}
+
+fn type_name(g: &VariableGroup) -> String {
+    match g.var_type {
+        VariableType::Real => "Real".to_string(),
+        VariableType::Integer => "Integer".to_string(),
+        VariableType::Boolean => "Boolean".to_string(),
+        VariableType::Enumeration(t) => format!("Enumeration {t}"),
+    }
+}
+
+fn unit_text(g: &VariableGroup) -> String {
+    match (g.unit, g.display_unit) {
+        (Some(u), Some(d)) => format!("{u} (display {d})"),
+        (Some(u), None) => u.to_string(),
+        _ => String::new(),
+    }
+}
+
+/// The first line of the generated interface table of `kind` in `docs/model.md`.
+pub fn interface_table_begin(kind: ModelKind) -> String {
+    format!(
+        "<!-- the variables of {0}: generated from src/models/*/variables.rs by `build-fmu --update-model-description`; \
+         do not edit -->",
+        kind.info().model_identifier
+    )
+}
+
+/// The last line of the generated interface table of `kind` in `docs/model.md`.
+pub fn interface_table_end(kind: ModelKind) -> String {
+    format!("<!-- end of the variables of {} -->", kind.info().model_identifier)
+}
+
+/// The interface table of `kind` for `docs/model.md` (Markdown, between the markers): every
+/// variable with its FMI 2 names, causality, type, unit, start and meaning, from the
+/// declarations.
+pub fn interface_markdown(kind: ModelKind) -> String {
+    let info = kind.info();
+    let table = VariableTable::new(info.groups);
+    let mut model = kind.instantiate();
+    let mut md = String::new();
+    let _ = writeln!(md, "{}", interface_table_begin(kind));
+    let _ = writeln!(md, "| name | causality | type | unit | start | meaning |");
+    let _ = writeln!(md, "|---|---|---|---|---|---|");
+    // Inputs, parameters, outputs, locals, each in declaration order.
+    let rank = |g: &&VariableGroup| match g.causality {
+        Causality::Input => 0,
+        Causality::Parameter => 1,
+        Causality::Output => 2,
+        Causality::Local => 3,
+        Causality::Independent => 4,
+    };
+    let mut groups: Vec<&VariableGroup> = info.groups.iter().collect();
+    groups.sort_by_key(rank);
+    for g in groups {
+        let ranges: Vec<String> = g.shape.iter().map(|n| format!("1..{n}")).collect();
+        let base = g.display_base.map_or(g.name, |(b, _)| b);
+        let element = if ranges.is_empty() { base.to_string() } else { format!("{base}[{}]", ranges.join(",")) };
+        let name = match g.display_base {
+            Some((_, 1)) => format!("der({element})"),
+            Some((_, order)) => format!("der({element},{order})"),
+            None => element,
+        };
+        let mut causality = g.causality.xml().to_string();
+        if g.variability == crate::models::variables::Variability::Tunable {
+            causality = format!("tunable {causality}");
+        }
+        if g.fmi3_only {
+            causality.push_str(" (FMI 3 only)");
+        }
+        let starts = start_values(&mut model, &table, g);
+        let start = match starts.as_slice() {
+            [] => String::new(),
+            [first, rest @ ..] if rest.iter().all(|x| x == first) && !rest.is_empty() => format!("{first} (each)"),
+            values if values.len() <= 6 => values.join(", "),
+            values => format!("{} values (the FMU's documentation page lists them)", values.len()),
+        };
+        let _ = writeln!(
+            md,
+            "| `{name}` | {causality} | {} | {} | {start} | {} |",
+            type_name(g),
+            unit_text(g),
+            g.description.replace('|', "\\|")
+        );
+    }
+    let _ = writeln!(md, "{}", interface_table_end(kind));
+    md
 }

@@ -17,7 +17,7 @@ mod documentation;
 mod fmi2;
 mod fmi3;
 
-pub use documentation::documentation_html;
+pub use documentation::{documentation_html, interface_markdown, interface_table_begin, interface_table_end};
 pub use fmi3::fmi3_state_order;
 
 /// A digest of everything the model description of `kind` is made of (identity, every
@@ -138,7 +138,7 @@ impl Digest {
 /// Length of a token: `{8-4-4-4-12}` hexadecimal digits.
 const TOKEN_LEN: usize = 38;
 
-/// The tokens, computed on first use (the digest reads every start value, about 27 us) and
+/// The tokens, computed on first use (the digest reads every start value) and
 /// then only read: a write-once cache per model and FMI version, without heap memory, so
 /// `fmi2Instantiate`/`fmi3Instantiate*` compare against a fixed string.
 static TOKENS: [[OnceLock<[u8; TOKEN_LEN]>; 2]; ModelKind::ALL.len()] =
@@ -247,4 +247,13 @@ pub(super) fn log_categories_and_experiment(x: &mut String, info: &ModelInfo) {
         format_real(d.stop_time),
         format_real(d.step_size)
     );
+}
+
+/// `text` (a page of `docs/`) with the generated interface table of `kind` put in place of
+/// the one between its markers; `None` if the markers are missing.
+pub fn with_interface_table(text: &str, kind: ModelKind) -> Option<String> {
+    let (begin, end) = (interface_table_begin(kind), interface_table_end(kind));
+    let start = text.find(&begin)?;
+    let stop = text[start..].find(&end)? + start + end.len() + 1;
+    Some(format!("{}{}{}", &text[..start], interface_markdown(kind), text.get(stop..).unwrap_or("")))
 }

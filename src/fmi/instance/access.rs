@@ -183,9 +183,8 @@ pub(super) static COUNTING: [u32; 1024] = {
 };
 
 /// Whether value references are consecutive (`vrs[i] = vrs[0] + i`, wrapping): compared with
-/// the run of [`COUNTING`] that starts at `vrs[0]`, beyond it with the counting itself.
-/// (Counts built in registers instead of read from the table: the read of twelve leg values
-/// 166 -> 177 instructions.)
+/// the run of [`COUNTING`] that starts at `vrs[0]`, beyond it with the counting itself (a
+/// table read is cheaper than counts built in registers).
 #[inline(always)]
 pub(super) fn consecutive(vrs: &[u32]) -> bool {
     let Some(&first) = vrs.first() else { return false };

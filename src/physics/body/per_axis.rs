@@ -5,11 +5,9 @@
 //! actuator power's `L.omega` (cross products `e_a x e_a'`) and the projection onto the
 //! constraints (`e_a.e_b`, `e_a.e_b'`, Newton-Schulz combinations). Held as rows
 //! (lane `a` holds axis `a+1`'s value), the dot products are lanewise products and sums,
-//! and the combination is lane rotations: no sums across a register. Measured with callgrind
-//! on the RK4 co-simulation cycle (four right-hand sides): 4,254 instructions with
-//! `nalgebra` three-vectors, 4,202 with plain four-element arrays (which the compiler splits
-//! into scalars, shuffles and spills), 3,945 with these lanes. As for [`super::per_leg`], the
-//! lanes are written out by hand:
+//! and the combination is lane rotations: no sums across a register (fewer instructions than
+//! `nalgebra` three-vectors or plain arrays, which the compiler splits into scalars, shuffles
+//! and spills). As for [`crate::physics::legs::per_leg`], the lanes are written out by hand:
 //! `Pair` holds the three lanes (and a padding lane) in two SSE2 registers, for every x86-64;
 //! `Quad` in one AVX register, for the integrators' AVX2 copy only. Every operation is
 //! lanewise and exactly rounded, and [`AxisLanes::sum3`] adds in one fixed order, so both

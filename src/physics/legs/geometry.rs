@@ -96,9 +96,8 @@ impl JointArrays {
 
     /// [`JointArrays::legs`] as plain arrays, with the inverse lengths, for the checks at the
     /// end of a step (the guard, the switching functions, the outputs). Written as loops over
-    /// arrays rather than through [`PerLeg`]: the checks then compile to 70 fewer
-    /// instructions per RK4 cycle (callgrind); the same arithmetic in the same order, so the
-    /// two are equal to the bit (tested).
+    /// arrays rather than through [`PerLeg`], which compile to fewer instructions here; the
+    /// same arithmetic in the same order, so the two are equal to the bit (tested).
     #[inline(always)]
     pub fn kinematics(&self, state: &BodyState) -> LegKinematics {
         let (a, b) = (&self.platform, &self.base);

@@ -10,12 +10,8 @@
 //!
 //! Writing the lanes out by hand, rather than leaving loops over arrays to the compiler, is
 //! what keeps them in registers: the compiler's vectoriser splits such loops into scalars and
-//! shuffles as soon as a branch or a padded lane appears. Measured with callgrind on the RK4
-//! co-simulation cycle: loops over eight-lane arrays 5,166 instructions, the same right-hand
-//! side over `PerLeg` 4,966, and plain eight-lane loops for every operation 6,263. The AVX
-//! registers took the cycle from 4,650 to 4,567 instructions and the adaptive step's
-//! right-hand sides further (criterion: 0.97 us per adaptive step in the previous release's
-//! run, 0.91 us in this one).
+//! shuffles as soon as a branch or a padded lane appears (the measurements are in the git log
+//! and `benches/results/`).
 
 use crate::physics::body::per_axis::AxisLanes;
 use crate::physics::stand::LEG_COUNT;
