@@ -9,7 +9,7 @@
 //! `nalgebra` three-vectors or plain arrays, which the compiler splits into scalars, shuffles
 //! and spills). As for [`crate::physics::legs::per_leg`], the lanes are written out by hand:
 //! `Pair` holds the three lanes (and a padding lane) in two SSE2 registers, for every x86-64;
-//! `Quad` in one AVX register, for the integrators' AVX2 copy only. Every operation is
+//! `Quad` in one AVX register, for the steps' AVX2 path only. Every operation is
 //! lanewise and exactly rounded, and [`AxisLanes::sum3`] adds in one fixed order, so both
 //! give the same bits.
 
@@ -89,10 +89,11 @@ mod lanes {
 
     /// The three axes (and the padding lane) in one AVX register.
     ///
-    /// Only for code compiled with AVX2 enabled and run where the processor has it: the
-    /// right-hand side's AVX2 copy (see `crate::physics::legs::per_leg::Wide`, which names this type
-    /// as its axes). Written without closures, so that all of it inlines into that copy.
+    /// Only for code compiled with AVX2 enabled and run where the processor has it: the steps'
+    /// AVX2 path (see `crate::physics::legs::per_leg::Wide`, which names this type as its
+    /// axes). Written without closures, so that all of it inlines there.
     #[derive(Clone, Copy)]
+    #[cfg_attr(not(feature = "avx2"), allow(dead_code))]
     pub struct Quad(__m256d);
 
     // SAFETY (every `unsafe` block of this impl): a `Quad` exists only where AVX2 runs (above).
@@ -241,6 +242,7 @@ pub trait AxisLanes: Copy {
 
 pub use lanes::Pair;
 // Crate-private: its operations execute AVX2 instructions.
+#[cfg_attr(not(feature = "avx2"), allow(unused_imports))]
 pub(crate) use lanes::Quad;
 
 /// Three vectors given one per axis (`e1, e2, e3`, or their rates) as rows: `x` holds their

@@ -3,8 +3,8 @@
 //! The right-hand side computes the six legs with the same arithmetic, so it is written once
 //! over `PerLeg` values, generic over how the six are held ([`Lanes`]): [`Narrow`] is three
 //! pairs in SSE2 registers, which every x86-64 processor has; `Wide` is legs 1-4 and 5-6 in
-//! two AVX registers, used only by the integrators' AVX2 copy (chosen at run time where the
-//! processor has it). Elsewhere both are six plain values. Every operation is per leg and
+//! two AVX registers, used only on the steps' AVX2 path (`crate::simulation::vector`, chosen at
+//! run time where the processor has it). Elsewhere both are six plain values. Every operation is per leg and
 //! exactly rounded (IEEE 754 `+ - * / sqrt`), and [`PerLeg::sum`] adds in one fixed order, so
 //! all forms give the same bits.
 //!
@@ -132,13 +132,14 @@ mod lanes {
 
     /// Legs 1-4 and 5-6 (and two unused lanes) in two AVX registers.
     ///
-    /// Only for code compiled with AVX enabled and run where the processor has it: the
-    /// right-hand side's AVX2 copy ([`crate::integration::OdeSystem::derivative_wide`], an
-    /// `unsafe fn` with that contract). Written without closures or loops, so that all of it
-    /// inlines into that copy (an intrinsic inlines only into code compiled with AVX). The
+    /// Only for code compiled with AVX enabled and run where the processor has it: the steps'
+    /// AVX2 path (`crate::simulation::vector`, behind an `unsafe fn` with that contract).
+    /// Written without closures or loops, so that all of it inlines there (an intrinsic
+    /// inlines only into code compiled with AVX). The
     /// unused lanes take part in the arithmetic (no trap: exceptions are masked) and are
     /// ignored by `any_outside`, `sum` and `to_array`.
     #[derive(Clone, Copy)]
+    #[cfg_attr(not(feature = "avx2"), allow(dead_code))]
     pub struct Wide(__m256d, __m256d);
 
     // SAFETY (every `unsafe` block of this impl): a `Wide` exists only where AVX runs (above).
@@ -364,14 +365,15 @@ pub trait Lanes: Copy {
 }
 
 pub use lanes::Narrow;
-// Crate-private: its operations execute AVX instructions, so only the AVX2 copy of the
-// right-hand side (behind `unsafe fn derivative_wide`) may make one.
+// Crate-private: its operations execute AVX instructions, so only the steps' AVX2 path
+// (behind `unsafe fn integrate_avx2`) may make one.
+#[cfg_attr(not(feature = "avx2"), allow(unused_imports))]
 pub(crate) use lanes::Wide;
 
 /// `components!(|c| expr)` is `[expr with c = 0, 1, 2]`: a vector's three components, each
-/// given per leg, written out. A macro rather than an array `map` or a closure: the AVX2 copy
-/// of the right-hand side needs all of it inlined, and the compiler does not inline a closure
-/// full of AVX intrinsics into it.
+/// given per leg, written out. A macro rather than an array `map` or a closure: the AVX2 path
+/// needs all of it inlined, and the compiler does not inline a closure full of AVX intrinsics
+/// into it.
 macro_rules! components {
     (|$c:ident| $e:expr) => {
         [
