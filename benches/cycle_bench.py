@@ -64,15 +64,15 @@ def instructions(host, version, binary, token, method, folder, scenario="hover")
     subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", host, version, binary, token,
                     method, "count", str(COUNT_CYCLES)], check=True, capture_output=True,
                    env=dict(os.environ, CYCLE_SCENARIO=scenario))
-    report = subprocess.run(["callgrind_annotate", "--inclusive=yes", str(out)], check=True, capture_output=True,
-                            text=True).stdout
+    report = subprocess.run(["callgrind_annotate", "--inclusive=yes", "--threshold=100", str(out)], check=True,
+                            capture_output=True, text=True).stdout
     counts = {}
     for name in ("run_cycles", "set_forces", "do_step", "get_outputs"):
         m = re.search(r"^\s*([\d,]+) \([^)]*\)\s+\S*cycle_host\.c:" + name + r" \[", report, re.M)
         counts[name] = int(m.group(1).replace(",", "")) / COUNT_CYCLES
     # The FMU's own share of each host function: the exported function it calls, per call
     # (without the host's force law, call and status check).
-    tree = subprocess.run(["callgrind_annotate", "--tree=calling", "--inclusive=yes", str(out)], check=True,
+    tree = subprocess.run(["callgrind_annotate", "--tree=calling", "--inclusive=yes", "--threshold=100", str(out)], check=True,
                           capture_output=True, text=True).stdout
     for name in ("set_forces", "do_step", "get_outputs"):
         m = re.search(r"\*\s+\S*cycle_host\.c:" + name + r" \[.*\n\s*([\d,]+) \([^)]*\)\s+>\s+\S*:(fmi\w+) "
@@ -147,7 +147,8 @@ def instruction_table(host, fmus, folder):
     """The callgrind table: its lines and the counts by (version, method, motion)."""
     lines = ["Instructions per cycle (callgrind, 5000 cycles): set 6 forces + fmi2DoStep/fmi3DoStep 1 ms + get 12 values",
              "(hover: leg feedback, no stop touched; contact: resting on all six lower stops; nostops: hover with "
-             "stops = false; logevents: hover with logEvents delivered, singular passages tracked)",
+             "stops = false; nojoints: hover with joints = false; heavylegs: hover with 40 kg cylinders and 15 kg "
+             "rods; logevents: hover with logEvents delivered, singular passages tracked)",
              "(set, step, get: the host's functions, each around one call; in the FMU: that exported call alone, "
              "per call)",
              f"{'FMU':6} {'method':7} {'motion':9} {'cycle':>8} {'set':>7} {'step':>8} {'get':>7}   "
@@ -155,7 +156,8 @@ def instruction_table(host, fmus, folder):
     cycles = {}
     for version, (binary, token) in fmus.items():
         for method in ("rk4", "dopri5"):
-            scenarios = ("hover", "contact", "nostops", "logevents") if version == "fmi2" else ("hover", "contact")
+            scenarios = (("hover", "contact", "nostops", "nojoints", "heavylegs", "logevents") if version == "fmi2"
+                         else ("hover", "contact"))
             for scenario in scenarios:
                 c = instructions(host, version, binary, token, method, folder, scenario)
                 cycles[(version, method, scenario)] = c

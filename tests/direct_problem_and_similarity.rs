@@ -11,6 +11,7 @@ use stewart_fmu::integration::SolverSettings;
 use stewart_fmu::physics::body::kinematics::angles_from_rotation;
 use stewart_fmu::physics::body::state::BodyState;
 use stewart_fmu::physics::direct_problem::solve_direct_problem;
+use stewart_fmu::physics::legs::bodies::LegBodies;
 use stewart_fmu::physics::legs::geometry::LegGeometry;
 use stewart_fmu::physics::programme::{PoseProgramme, SoftStartSinusoid};
 use stewart_fmu::physics::scaling::Scales;
@@ -34,7 +35,7 @@ fn round_trip(stand: &Stand, programme: &PoseProgramme, t_end: f64, dt: f64) -> 
     let mut sim =
         simulation(stand.clone(), programme_start(programme), SolverSettings::tight(), Stabilisation::Projection);
     let law = |t: f64, _s: &BodyState, _l: &LegGeometry| {
-        solve_direct_problem(stand, &programme.point(t)).expect("direct problem").forces
+        solve_direct_problem(stand, &LegBodies::default(), &programme.point(t)).expect("direct problem").forces
     };
     let mut samples = vec![];
     let n = (t_end / dt).round() as usize;
@@ -63,7 +64,7 @@ fn heave_programme_forces_reproduce_the_heave_until_the_instability_grows() {
     // All six forces are equal by symmetry and stay in the band of the paper's Fig. 4.
     let (mut lo, mut hi, mut spread) = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64);
     for i in 0..=4000 {
-        let u = solve_direct_problem(&stand, &programme.point(i as f64 * 0.01)).unwrap().forces;
+        let u = solve_direct_problem(&stand, &LegBodies::default(), &programme.point(i as f64 * 0.01)).unwrap().forces;
         let (mn, mx) = u.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
         lo = lo.min(mn);
         hi = hi.max(mx);

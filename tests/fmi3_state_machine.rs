@@ -157,7 +157,7 @@ const FUNCTIONS: [&str; 45] = [
 
 /// Continuous states of the platform and its event indicators (Model Exchange).
 const NX: usize = 26;
-const NZ: usize = 13;
+const NZ: usize = stewart_fmu::simulation::platform::switching::COUNT;
 
 /// A fresh instance driven into `state` (Co-Simulation instances use Event Mode).
 fn instance_in(state: &str, kind: Kind) -> Host3 {
@@ -179,7 +179,7 @@ fn instance_in(state: &str, kind: Kind) -> Host3 {
                 assert_eq!(fmi3EnterContinuousTimeMode(h.c), fmi3OK);
             }
             "stepDiscarded" => {
-                initialise(&mut h, &[("stops", &[0.0])]);
+                initialise(&mut h, &[("stops", &[0.0]), ("joints", &[0.0])]);
                 assert_eq!(fmi3EnterStepMode(h.c), fmi3OK);
                 h.set("F", &[-1.0e6; 6]); // pulls the platform through the base (no end stops)
                 assert_eq!(h.step(1.0).0, fmi3Discard, "{:?}", h.messages());

@@ -226,7 +226,7 @@ fn bad_parameter_sets_are_refused_at_exit_initialization_mode() {
         ),
         (
             "singular initial pose (yaw 90 degrees) with stopAtSingularity",
-            vec![("stops", 0.0), ("stopAtSingularity", 1.0), ("angles0[3]", std::f64::consts::FRAC_PI_2)],
+            vec![("stops", 0.0), ("joints", 0.0), ("stopAtSingularity", 1.0), ("angles0[3]", std::f64::consts::FRAC_PI_2)],
             "the initial pose is a singular leg arrangement",
         ),
         ("initial pose outside the stroke", vec![("r0[3]", 1.5)], "parameter r0: in the initial pose leg 1 has length"),
@@ -243,10 +243,10 @@ fn bad_parameter_sets_are_refused_at_exit_initialization_mode() {
             vec![("stops.damping", -1.0)],
             "parameter stops.damping: the contact damping must be >= 0",
         ),
-        ("platform joints on the base plane", vec![("stops", 0.0), ("r0[3]", 0.5)], "on or across the base plane"),
+        ("platform joints on the base plane", vec![("stops", 0.0), ("joints", 0.0), ("r0[3]", 0.5)], "on or across the base plane"),
         (
             "platform joints across the base plane",
-            vec![("stops", 0.0), ("r0[3]", 0.6), ("angles0[1]", 0.5)],
+            vec![("stops", 0.0), ("joints", 0.0), ("r0[3]", 0.6), ("angles0[1]", 0.5)],
             "on or across the base plane",
         ),
         ("zero relative tolerance", vec![("solver.relTol", 0.0)], "parameter solver.relTol: must be in (0, 1)"),
@@ -284,13 +284,13 @@ fn bad_parameter_sets_are_refused_at_exit_initialization_mode() {
     let mut h = Host::platform("cond");
     h.setup(None);
     h.enter();
-    for (n, v) in [("stops", 0.0), ("stopAtSingularity", 1.0), ("angles0[3]", std::f64::consts::FRAC_PI_2)] {
+    for (n, v) in [("stops", 0.0), ("joints", 0.0), ("stopAtSingularity", 1.0), ("angles0[3]", std::f64::consts::FRAC_PI_2)] {
         h.set(n, v);
     }
     h.exit();
     assert!(h.last_message().contains("condition number"), "{}", h.last_message());
     let mut h = Host::platform("singular start");
-    assert_eq!(h.initialise(&[("stops", 0.0), ("angles0[3]", std::f64::consts::FRAC_PI_2)]), fmi2OK);
+    assert_eq!(h.initialise(&[("stops", 0.0), ("joints", 0.0), ("angles0[3]", std::f64::consts::FRAC_PI_2)]), fmi2OK);
     assert!(h.get("kappa") > 1e8, "kappa {}", h.get("kappa"));
 }
 
@@ -300,10 +300,10 @@ fn bad_parameter_sets_are_refused_at_exit_initialization_mode() {
 fn impossible_motions_are_discarded_with_roll_back() {
     let cases: Vec<(&str, Vec<(&str, f64)>, [f64; 6], f64, &str)> = vec![
         // Without end stops nothing stops the legs; with them, see the workspace tests.
-        ("platform pulled through the base", vec![("stops", 0.0)], [-1.0e6; 6], 1.0, "passed through the base plane"),
+        ("platform pulled through the base", vec![("stops", 0.0), ("joints", 0.0)], [-1.0e6; 6], 1.0, "passed through the base plane"),
         (
             "platform turned through a singular yaw, stopAtSingularity",
-            vec![("stops", 0.0), ("stopAtSingularity", 1.0), ("g", 0.0), ("angles0[3]", 1.35), ("w0[3]", 1.0)],
+            vec![("stops", 0.0), ("joints", 0.0), ("stopAtSingularity", 1.0), ("g", 0.0), ("angles0[3]", 1.35), ("w0[3]", 1.0)],
             [0.0; 6],
             0.5,
             "passed through a singular arrangement",
@@ -331,9 +331,10 @@ fn impossible_motions_are_discarded_with_roll_back() {
         assert_eq!(last, 0.01, "{name}: last successful time");
         assert_eq!(terminated, fmi2True);
         // Outputs (and everything else) as before the step, apart from the new force inputs
-        // and what they determine directly (the accelerations der(v), der(R,2)).
+        // and what they determine directly (the accelerations der(v), der(R,2), the power
+        // der(work.F) and the joints' forces jointForce).
         let after = h.all_reals();
-        let f_vrs: Vec<u32> = (1..=6).chain(140..=142).chain(152..=160).chain([210]).collect();
+        let f_vrs: Vec<u32> = (1..=6).chain(140..=142).chain(152..=160).chain([210]).chain(352..=369).collect();
         let real_vrs: Vec<u32> = h
             .table
             .elements()
@@ -496,6 +497,7 @@ fn a_platform_starting_below_its_base_is_warned_about() {
     h.setup(None);
     h.enter();
     h.set("stops", 0.0);
+    h.set("joints", 0.0);
     h.set("r0[3]", 0.25);
     h.clear_log();
     assert_eq!(h.exit(), fmi2Warning);

@@ -95,7 +95,7 @@ const FUNCTIONS: [&str; 43] = [
 /// Continuous states of the platform (24 special-form coordinates, work.F, work.dissipated).
 const NX: usize = 26;
 /// Event indicators: twelve stroke limits and the force/moment determinant.
-const NZ: usize = 13;
+const NZ: usize = stewart_fmu::simulation::platform::switching::COUNT;
 
 /// A fresh instance driven into `state`.
 fn instance_in(state: &str) -> Host {
@@ -108,7 +108,7 @@ fn instance_in(state: &str) -> Host {
         }
         "stepComplete" => assert_eq!(h.initialise(&[]), fmi2OK),
         "stepFailed" => {
-            assert_eq!(h.initialise(&[("stops", 0.0)]), fmi2OK);
+            assert_eq!(h.initialise(&[("stops", 0.0), ("joints", 0.0)]), fmi2OK);
             h.set_forces([-1.0e6; 6]); // pulls the platform through the base (no end stops)
             assert_eq!(h.step(1.0), fmi2Discard);
         }

@@ -131,7 +131,7 @@ fn output_tangent_matches_central_differences() {
         let h = 1e-6;
         let at = |sign: f64| {
             let yy: SimulationState = std::array::from_fn(|i| y[i] + sign * h * dy[i]);
-            let mut v = flatten(&PlatformOutputs::compute(&form, &yy));
+            let mut v = flatten(&PlatformOutputs::compute(&form, &yy, None));
             v.push(condition_number(&form.stand, &yy));
             v
         };

@@ -31,7 +31,7 @@ fn with_stops(settings: SolverSettings, stops: EndStops) -> PlatformSimulation {
 
 /// `E(t) - E(0) - (work.F - work.dissipated)`, J.
 fn balance_residual(sim: &PlatformSimulation, e0: f64) -> f64 {
-    let o = PlatformOutputs::compute(&sim.form, &sim.state);
+    let o = PlatformOutputs::compute(&sim.form, &sim.state, None);
     o.energy - e0 - (o.work_of_forces - o.dissipated_energy)
 }
 
@@ -60,7 +60,7 @@ fn static_rest_height(stiffness: f64, lmin: f64) -> f64 {
 fn power_loss_lands_the_platform_on_its_lower_stops_at_the_static_rest_pose() {
     let stops = EndStops::default();
     let mut sim = with_stops(SolverSettings::default(), stops);
-    let e0 = PlatformOutputs::compute(&sim.form, &sim.state).energy;
+    let e0 = PlatformOutputs::compute(&sim.form, &sim.state, None).energy;
     let (h, t_cut, t_end) = (1e-3, 0.5, 5.0);
     let (mut peak_deceleration, mut t_peak, mut max_penetration, mut first_contact) = (0.0f64, 0.0, 0.0f64, None);
     let mut worst_balance = 0.0f64;
@@ -78,12 +78,12 @@ fn power_loss_lands_the_platform_on_its_lower_stops_at_the_static_rest_pose() {
         if dy[5] > peak_deceleration {
             (peak_deceleration, t_peak) = (dy[5], t);
         }
-        let o = PlatformOutputs::compute(&sim.form, &sim.state);
+        let o = PlatformOutputs::compute(&sim.form, &sim.state, None);
         max_penetration = max_penetration.max(o.l.iter().map(|l| stops.lower[0] - l).fold(0.0, f64::max));
         worst_balance = worst_balance.max(balance_residual(&sim, e0).abs());
     }
     let s = sim.body_state();
-    let o = PlatformOutputs::compute(&sim.form, &sim.state);
+    let o = PlatformOutputs::compute(&sim.form, &sim.state, None);
     let z_static = static_rest_height(stops.stiffness, stops.lower[0]);
     let rest_penetration = stops.lower[0] - o.l[0];
     println!(
@@ -139,7 +139,7 @@ fn energy_balance_holds_through_contacts_for_forced_motion() {
         ("RK4, 0.1 ms", SolverSettings { method: Method::RungeKutta4, fixed_step: 1e-4, ..Default::default() }),
     ] {
         let mut sim = with_stops(settings, EndStops::default());
-        let e0 = PlatformOutputs::compute(&sim.form, &sim.state).energy;
+        let e0 = PlatformOutputs::compute(&sim.form, &sim.state, None).energy;
         let (mut worst, mut contacts, mut t) = (0.0f64, 0usize, 0.0);
         let h = 1e-3;
         while t < DURATION - 1e-12 {
@@ -149,7 +149,7 @@ fn energy_balance_holds_through_contacts_for_forced_motion() {
                 sim.crossings.as_slice().iter().filter(|c| c.index < switching::DETERMINANT && !c.rising).count();
             worst = worst.max(balance_residual(&sim, e0).abs());
         }
-        let o = PlatformOutputs::compute(&sim.form, &sim.state);
+        let o = PlatformOutputs::compute(&sim.form, &sim.state, None);
         println!(
             "{name:>22}: {contacts} contact onsets in {DURATION} s, work.F {:.1} J, work.dissipated {:.1} J, max |E - E0 - \
              (W_F - W_d)| = {worst:.2e} J ({:.1e} of M g R_b)",
@@ -170,7 +170,7 @@ fn energy_balance_holds_through_contacts_for_forced_motion() {
 fn bounce(settings: SolverSettings, t_end: f64) -> (Vec<f64>, f64, usize, Vec<f64>) {
     let stops = EndStops { damping: 0.0, ..Default::default() };
     let mut sim = with_stops(settings, stops);
-    let e0 = PlatformOutputs::compute(&sim.form, &sim.state).energy;
+    let e0 = PlatformOutputs::compute(&sim.form, &sim.state, None).energy;
     let (mut z, mut worst, mut landings, mut t) = (vec![], 0.0f64, vec![], 0.0);
     let h = 1e-2;
     while t < t_end - 1e-9 {
@@ -183,7 +183,7 @@ fn bounce(settings: SolverSettings, t_end: f64) -> (Vec<f64>, f64, usize, Vec<f6
             landings.push(s.angular_velocity_body().norm());
         }
         z.push(sim.body_state().r.z);
-        worst = worst.max(((PlatformOutputs::compute(&sim.form, &sim.state).energy - e0) / e0).abs());
+        worst = worst.max(((PlatformOutputs::compute(&sim.form, &sim.state, None).energy - e0) / e0).abs());
     }
     (z, worst, landings.len(), landings)
 }
@@ -239,7 +239,7 @@ fn tumbling_through_singular_arrangements_matches_newton_euler() {
     let mut fmu = Host::platform("tumble");
     let category = std::ffi::CString::new("logEvents").unwrap();
     assert_eq!(unsafe { fmi2SetDebugLogging(fmu.c, fmi2True, 1, &category.as_ptr()) }, fmi2OK);
-    assert_eq!(fmu.initialise(&[("stops", 0.0), ("solver.relTol", 1e-12), ("solver.absTol", 1e-14)]), fmi2OK);
+    assert_eq!(fmu.initialise(&[("stops", 0.0), ("joints", 0.0), ("solver.relTol", 1e-12), ("solver.absTol", 1e-14)]), fmi2OK);
     let held = std::cell::Cell::new([0.0; 6]);
     let law = |_t: f64, _l: &[f64; 6], _ld: &[f64; 6]| held.get();
     let ne = NewtonEuler { stand: Stand::truck_cabin(), law: &law };
@@ -291,7 +291,7 @@ fn stop_at_singularity_finds_the_passage_inside_the_step() {
     let forces: [f64; 6] = std::array::from_fn(|k| u * (1.05 + 0.5 * (1.1 * k as f64).sin()));
     let located = |h: f64| -> (f64, String) {
         let mut fmu = Host::platform("stop at singularity");
-        assert_eq!(fmu.initialise(&[("stops", 0.0), ("stopAtSingularity", 1.0)]), fmi2OK);
+        assert_eq!(fmu.initialise(&[("stops", 0.0), ("joints", 0.0), ("stopAtSingularity", 1.0)]), fmi2OK);
         assert_eq!(fmu.set_forces(forces), fmi2OK);
         while fmu.time < 3.0 {
             match fmu.step(h) {
@@ -337,7 +337,7 @@ fn singular_passages_are_tracked_only_while_reported_and_the_motion_is_the_same(
         let mut fmu = Host::platform("tracking");
         let off = unsafe { fmi2SetDebugLogging(fmu.c, fmi2False, 1, &category.as_ptr()) };
         assert_eq!(off, fmi2OK);
-        assert_eq!(fmu.initialise(&[("stops", 0.0)]), fmi2OK);
+        assert_eq!(fmu.initialise(&[("stops", 0.0), ("joints", 0.0)]), fmi2OK);
         let (mut positions, mut passages) = (vec![], vec![]);
         for i in 0..300 {
             if i == log_from_step {

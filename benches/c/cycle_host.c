@@ -22,6 +22,8 @@
  * stop touched), contact (power loss: zero forces; the platform falls onto its lower stops and
  * rests on them; count mode first runs 1500 uncounted cycles, so that every counted cycle is in
  * contact), nostops (hover with the end stops switched off: parameter stops = false),
+ * nojoints (hover with the joint limits switched off: parameter joints = false), heavylegs
+ * (hover with legs of 40 kg cylinders and 15 kg rods: leg.cylinderMass, leg.rodMass),
  * logevents (FMI 2: hover with a logger that drops messages and logEvents on, so that the FMU
  * tracks passages through singular arrangements, which it skips when nobody can be told).
  */
@@ -71,12 +73,14 @@ static Status1 fmi3ExitInitializationMode;
 
 static const double H = 1e-3, L0 = 1.7550860729486566;
 static double U0 = 5900.715, G = 2e5, D = 2e4;
-static int stops_on = 1, log_events = 0;
+static int stops_on = 1, joints_on = 1, log_events = 0;
+static double leg_masses[2] = {0.0, 0.0};
 static const unsigned FORCES2[6] = {1, 2, 3, 4, 5, 6};
 static const unsigned LEGS2[12] = {121, 122, 123, 124, 125, 126, 127, 128, 129, 130, 131, 132};
 static const unsigned FORCES3[1] = {1};
 static const unsigned LEGS3[2] = {121, 127};
-static const unsigned METHOD_VR = 80, STOPS_VR = 170;
+static const unsigned METHOD_VR = 80, STOPS_VR = 170, JOINTS_VR = 310;
+static const unsigned LEG_MASS_VRS[2] = {300, 301};
 
 /* A logger that drops every message: the FMU can deliver logEvents, nothing is printed. */
 static void ignore_message(void *env, const char *name, int status, const char *category, const char *message, ...) {
@@ -89,8 +93,11 @@ static Instance make(void) {
         c = fmi3InstantiateCoSimulation("cycle", guid, NULL, 0, 0, 0, 0, NULL, 0, NULL, NULL, NULL);
         if (!c || fmi3EnterInitializationMode(c, 0, 0.0, 0.0, 0, 0.0)) exit(3);
         fmi3SetInt32(c, &METHOD_VR, 1, &method, 1);
-        _Bool on = stops_on;
+        _Bool on = stops_on, joints = joints_on;
         fmi3SetBoolean(c, &STOPS_VR, 1, &on, 1);
+        fmi3SetBoolean(c, &JOINTS_VR, 1, &joints, 1);
+        fmi3SetFloat64(c, &LEG_MASS_VRS[0], 1, &leg_masses[0], 1);
+        fmi3SetFloat64(c, &LEG_MASS_VRS[1], 1, &leg_masses[1], 1);
         if (fmi3ExitInitializationMode(c)) exit(3);
     } else {
         static const Callbacks2 quiet = {0};
@@ -103,6 +110,8 @@ static Instance make(void) {
         if (!c || fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0) || fmi2EnterInitializationMode(c)) exit(3);
         fmi2SetInteger(c, &METHOD_VR, 1, &method);
         fmi2SetBoolean(c, &STOPS_VR, 1, &stops_on);
+        fmi2SetBoolean(c, &JOINTS_VR, 1, &joints_on);
+        fmi2SetReal(c, LEG_MASS_VRS, 2, leg_masses);
         if (fmi2ExitInitializationMode(c)) exit(3);
     }
     return c;
@@ -215,11 +224,16 @@ int main(int argc, char **argv) {
         warm_up = 1500;
     } else if (scenario && strcmp(scenario, "nostops") == 0) {
         stops_on = 0;
+    } else if (scenario && strcmp(scenario, "nojoints") == 0) {
+        joints_on = 0;
+    } else if (scenario && strcmp(scenario, "heavylegs") == 0) {
+        leg_masses[0] = 40.0;
+        leg_masses[1] = 15.0;
     } else if (scenario && strcmp(scenario, "logevents") == 0) {
         if (fmi3) { fprintf(stderr, "CYCLE_SCENARIO=logevents is for FMI 2\n"); return 2; }
         log_events = 1;
     } else if (scenario && strcmp(scenario, "hover") != 0) {
-        fprintf(stderr, "CYCLE_SCENARIO must be hover, contact, nostops or logevents\n");
+        fprintf(stderr, "CYCLE_SCENARIO must be hover, contact, nostops, nojoints, heavylegs or logevents\n");
         return 2;
     }
     if (fmi3) {

@@ -29,7 +29,8 @@ EQUILIBRIUM_FORCE = 0.2005  # units of M g
 def stand_parameters(nondimensional=True):
     """FMI parameter values of the default stand, in the paper's units (R_b, M, M g,
     sqrt(R_b/g)) or in SI. The paper's experiments use its idealised legs: in
-    non-dimensional units the end stops are off (`stops` false)."""
+    non-dimensional units the end stops and the joint limits are off (`stops`, `joints`
+    false)."""
     length = R_B if nondimensional else 1.0
     mass = MASS if nondimensional else 1.0
     p = {
@@ -49,6 +50,7 @@ def stand_parameters(nondimensional=True):
             p[f"A[{k + 1},{i + 1}]"] = x / length
     if nondimensional:
         p["stops"] = False
+        p["joints"] = False
     return p
 
 

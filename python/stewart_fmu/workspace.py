@@ -158,7 +158,7 @@ def tumble(t_end=3.0, h=1e-2, rel_tol=1e-12):
     events = []
     record = ["r[1]", "r[2]", "r[3]", "kappa"] + [f"R[{a},{b}]" for a in range(1, 4) for b in range(1, 4)]
     data = _platform_run(tumble_forces, t_end, h, events=events, record=record,
-                         parameters={"stops": False, "solver.relTol": rel_tol, "solver.absTol": rel_tol * 1e-2})
+                         parameters={"stops": False, "joints": False, "solver.relTol": rel_tol, "solver.absTol": rel_tol * 1e-2})
     data["singular"] = singular_passages(events)
     return data
 

@@ -26,7 +26,7 @@ pub mod settings;
 pub use settings::{Method, SolverSettings};
 
 /// Most switching functions a system may declare.
-pub const MAX_SWITCHING: usize = 16;
+pub const MAX_SWITCHING: usize = 32;
 
 /// What a sign change of a switching function means to the integrator.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -123,7 +123,7 @@ impl SwitchingSides {
     #[inline]
     pub fn changed(&self, g: &[f64; MAX_SWITCHING], count: usize) -> u32 {
         // Functions past `count` are not evaluated: whatever side they had, they did not change.
-        (Self::of(g, count).bits ^ self.bits) & ((1u32 << count) - 1)
+        (Self::of(g, count).bits ^ self.bits) & 1u32.checked_shl(count as u32).map_or(u32::MAX, |b| b - 1)
     }
 }
 

@@ -121,6 +121,20 @@ impl IntegerStorage for bool {
 /// row-major order.
 pub trait OutputValues<T> {
     fn element(&self, i: usize) -> Option<T>;
+
+    /// Every element into `slots` (as many as the variable has); `true` if one is NaN.
+    #[inline]
+    fn write(&self, slots: &mut [f64]) -> bool
+    where
+        T: Into<f64>,
+    {
+        let mut nan = false;
+        for (i, slot) in slots.iter_mut().enumerate() {
+            *slot = self.element(i).map_or(f64::NAN, Into::into);
+            nan |= slot.is_nan();
+        }
+        nan
+    }
 }
 
 impl<T: Copy> OutputValues<T> for T {
@@ -133,11 +147,30 @@ impl<T: Copy, const N: usize> OutputValues<T> for [T; N] {
     fn element(&self, i: usize) -> Option<T> {
         self.get(i).copied()
     }
+
+    /// One copy (the legs' block is filled every step), then a check without early exit.
+    #[inline]
+    fn write(&self, slots: &mut [f64]) -> bool
+    where
+        T: Into<f64>,
+    {
+        for (slot, &x) in slots.iter_mut().zip(self) {
+            *slot = x.into();
+        }
+        slots.iter().fold(false, |nan, x| nan | x.is_nan())
+    }
 }
 
 impl<T: Scalar + Copy> OutputValues<T> for Vector3<T> {
     fn element(&self, i: usize) -> Option<T> {
         self.get(i).copied()
+    }
+}
+
+/// One vector per row: `jointForce[k,c]` is `joint_force[k-1][c-1]`.
+impl<T: Scalar + Copy, const N: usize> OutputValues<T> for [Vector3<T>; N] {
+    fn element(&self, i: usize) -> Option<T> {
+        self.get(i / 3)?.get(i % 3).copied()
     }
 }
 
@@ -152,12 +185,8 @@ impl<T: Scalar + Copy> OutputValues<T> for Matrix3<T> {
 /// them is NaN.
 #[inline]
 pub fn fill<V: OutputValues<f64> + ?Sized>(cache: &mut [f64], first: u32, len: usize, values: &V) -> bool {
-    let mut nan = false;
-    for (i, slot) in cache.iter_mut().skip(first as usize).take(len).enumerate() {
-        *slot = values.element(i).unwrap_or(f64::NAN);
-        nan |= slot.is_nan();
-    }
-    nan
+    let Some(slots) = cache.get_mut(first as usize..first as usize + len) else { return false };
+    values.write(slots)
 }
 
 /// A stored value of an FMU state that is not one of the variable's.

@@ -20,6 +20,8 @@ pub static UNITS: &[UnitDefinition] = &[
     UnitDefinition { name: "N.s/m", base: [1, 0, -1, 0, 0, 0, 0, 0], display_units: &[] },
     UnitDefinition { name: "J", base: [1, 2, -2, 0, 0, 0, 0, 0], display_units: &[] },
     UnitDefinition { name: "W", base: [1, 2, -3, 0, 0, 0, 0, 0], display_units: &[] },
+    UnitDefinition { name: "N.m/rad", base: [1, 2, -2, 0, 0, 0, 0, -1], display_units: &[] },
+    UnitDefinition { name: "N.m.s/rad", base: [1, 2, -1, 0, 0, 0, 0, -1], display_units: &[] },
     UnitDefinition { name: "rad", base: [0, 0, 0, 0, 0, 0, 0, 1], display_units: &[("deg", DEG_PER_RAD)] },
     UnitDefinition { name: "rad/s", base: [0, 0, -1, 0, 0, 0, 0, 1], display_units: &[("deg/s", DEG_PER_RAD)] },
     UnitDefinition { name: "rad/s2", base: [0, 0, -2, 0, 0, 0, 0, 1], display_units: &[("deg/s2", DEG_PER_RAD)] },

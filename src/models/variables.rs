@@ -251,15 +251,22 @@ impl VariableTable {
         self.groups.iter().enumerate().find(|(_, g)| g.name == name)
     }
 
-    /// Every element in declaration order with its 1-based index in `<ModelVariables>`.
+    /// Every element of FMI 2's `<ModelVariables>` (the variables only FMI 3 declares left out)
+    /// in declaration order, with its 1-based index there.
     pub fn elements(&self) -> impl Iterator<Item = (usize, &'static VariableGroup, usize)> + '_ {
-        self.groups.iter().flat_map(|g| (0..g.len()).map(move |i| (g, i))).enumerate().map(|(n, (g, i))| (n + 1, g, i))
+        self.groups
+            .iter()
+            .filter(|g| !g.fmi3_only)
+            .flat_map(|g| (0..g.len()).map(move |i| (g, i)))
+            .enumerate()
+            .map(|(n, (g, i))| (n + 1, g, i))
     }
 
-    /// 1-based `<ModelVariables>` index of an element.
+    /// 1-based index of an element in FMI 2's `<ModelVariables>` (`None` for a variable only
+    /// FMI 3 declares).
     pub fn model_index(&self, group_name: &str, index: usize) -> Option<usize> {
         let mut n = 0;
-        for g in self.groups {
+        for g in self.groups.iter().filter(|g| !g.fmi3_only) {
             if g.name == group_name {
                 return if index < g.len() { Some(n + index + 1) } else { None };
             }

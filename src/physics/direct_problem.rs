@@ -9,11 +9,16 @@
 //! ```text
 //! sum_k u_k n_k = F,   sum_k u_k (R A_k) x n_k = L.
 //! ```
+//!
+//! Legs with mass ([`LegBodies`]) carry their own weight and inertia: their forces on the
+//! platform at the joints for the prescribed motion (all known then) are taken from `F` and
+//! `L` before the system is solved.
 
 use nalgebra::{Matrix6, Vector3, Vector6};
 
 use super::body::kinematics::PoseTrajectoryPoint;
 use super::body::state::BodyState;
+use super::legs::bodies::{LegBodies, LegMotion};
 use super::legs::geometry::{LegGeometry, LegKinematics};
 use super::stand::{LEG_COUNT, Stand};
 
@@ -210,9 +215,10 @@ pub struct DirectProblemSolution {
     pub condition_number: f64,
 }
 
-/// Solves the direct problem for one instant of a programme motion.
+/// Solves the direct problem for one instant of a programme motion, with legs `bodies`.
 pub fn solve_direct_problem(
     stand: &Stand,
+    bodies: &LegBodies,
     point: &PoseTrajectoryPoint,
 ) -> Result<DirectProblemSolution, DirectProblemError> {
     let state = BodyState::from_pose(point.r, point.v, &point.rotation, &point.w);
@@ -221,7 +227,23 @@ pub fn solve_direct_problem(
         return Err(DirectProblemError::LegCollapsed { leg: k + 1 });
     }
     let matrix = ForceMomentMatrix::new(stand, &legs);
-    let (force, moment) = required_wrench(stand, point);
+    let (mut force, mut moment) = required_wrench(stand, point);
+    if bodies.has_mass() {
+        // The legs' own forces on the platform for this motion: each joint's velocity and
+        // acceleration a' = v + omega x rho, a'' = r'' + omega' x rho + omega x (omega x rho).
+        let omega = point.rotation * point.w;
+        let omega_dot = point.rotation * point.w_dot;
+        for k in 0..LEG_COUNT {
+            let rho = legs.arm[k];
+            let a_dot = point.v + omega.cross(&rho);
+            let a_ddot = point.a + omega_dot.cross(&rho) + omega.cross(&omega.cross(&rho));
+            let motion = LegMotion::new(&legs.leg[k], legs.length[k], &a_dot);
+            let inertia = bodies.inertia(&motion, stand.gravity);
+            let own = inertia.bias - inertia.times(&motion.n, &a_ddot);
+            force -= own;
+            moment -= rho.cross(&own);
+        }
+    }
     let forces = matrix.solve(&force, &moment)?;
     Ok(DirectProblemSolution {
         forces,
@@ -242,7 +264,7 @@ mod tests {
     fn neutral_pose_of_the_default_stand_needs_the_papers_equilibrium_force_in_every_leg() {
         let stand = Stand::truck_cabin();
         let point = PoseTrajectoryPoint::at_rest(Stand::truck_cabin_neutral_position(), Matrix3::identity());
-        let sol = solve_direct_problem(&stand, &point).unwrap();
+        let sol = solve_direct_problem(&stand, &LegBodies::default(), &point).unwrap();
         let mg = stand.mass * stand.gravity;
         for u in sol.forces {
             assert!((u / mg - PAPER_EQUILIBRIUM_LEG_FORCE).abs() < 1e-13, "{}", u / mg);
@@ -270,7 +292,7 @@ mod tests {
         let mut stand = Stand::truck_cabin();
         stand.platform_joints = stand.base_joints.map(|b| Vector3::new(b.x, b.y, -0.5));
         let point = PoseTrajectoryPoint::at_rest(Vector3::new(0.0, 0.0, 2.0), Matrix3::identity());
-        match solve_direct_problem(&stand, &point) {
+        match solve_direct_problem(&stand, &LegBodies::default(), &point) {
             Err(DirectProblemError::Singular { condition_number }) => {
                 assert!(condition_number >= SINGULAR_CONDITION_NUMBER)
             }

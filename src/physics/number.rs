@@ -37,6 +37,8 @@ pub trait Real:
     fn sqrt(self) -> Self;
     fn abs(self) -> Self;
     fn asin(self) -> Self;
+    fn acos(self) -> Self;
+    fn sin(self) -> Self;
     fn atan2(self, x: Self) -> Self;
     fn exp(self) -> Self;
     fn tanh(self) -> Self;
@@ -80,6 +82,14 @@ impl Real for f64 {
     #[inline(always)]
     fn asin(self) -> Self {
         f64::asin(self)
+    }
+    #[inline(always)]
+    fn acos(self) -> Self {
+        f64::acos(self)
+    }
+    #[inline(always)]
+    fn sin(self) -> Self {
+        f64::sin(self)
     }
     #[inline(always)]
     fn atan2(self, x: Self) -> Self {
@@ -263,6 +273,16 @@ impl Real for Dual {
         Dual::new(self.re.asin(), self.eps * slope)
     }
     #[inline(always)]
+    fn acos(self) -> Self {
+        // Infinite at |x| = 1: 0 there, never NaN.
+        let slope = if self.re.abs() < 1.0 { -1.0 / (1.0 - self.re * self.re).sqrt() } else { 0.0 };
+        Dual::new(self.re.acos(), self.eps * slope)
+    }
+    #[inline(always)]
+    fn sin(self) -> Self {
+        Dual::new(self.re.sin(), self.re.cos() * self.eps)
+    }
+    #[inline(always)]
     fn atan2(self, x: Self) -> Self {
         let d = x.re * x.re + self.re * self.re;
         let eps = if d > 0.0 { (x.re * self.eps - self.re * x.eps) / d } else { 0.0 };
@@ -306,7 +326,9 @@ mod tests {
         let x = 0.37;
         let h = 1e-6;
         type Case = (&'static str, fn(Dual) -> Dual, fn(f64) -> f64);
-        let cases: [Case; 8] = [
+        let cases: [Case; 10] = [
+            ("acos", |d| (d * 0.9).acos(), |v| (v * 0.9).acos()),
+            ("sin", |d| (d * 3.0).sin(), |v| (v * 3.0).sin()),
             ("product and quotient", |d| d * d / (d + 2.0), |v| v * v / (v + 2.0)),
             ("sqrt", |d| (d * 3.0 + 1.0).sqrt(), |v| (v * 3.0 + 1.0).sqrt()),
             ("abs", |d| (d - 1.0).abs(), |v| (v - 1.0).abs()),

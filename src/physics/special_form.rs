@@ -1,24 +1,34 @@
 //! The loaded platform's equations of motion: the special form of the rigid body
 //! ([`super::body::accelerations`]) driven by the legs. Each leg acts on the body at `A_k`
 //! along its direction with the actuator force `u_k` plus, outside its stroke, its end stop's
-//! force ([`super::legs::end_stops`]). With the forces given, nothing here is singular at a
-//! singular leg arrangement: only a collapsed leg (no direction) is, and it carries nothing.
+//! force ([`super::legs::end_stops`]); the machine adds cylinder friction along the leg
+//! ([`super::legs::friction`]), the joint limits' moments ([`super::legs::joint_limits`]) and
+//! the legs' inertia and weight ([`super::legs::bodies`]). Legs with mass make the joints'
+//! forces depend on the platform's accelerations: those then solve a 6x6 linear system (the
+//! platform's Newton-Euler equations with the legs' inertia at the joints), and the wrench of
+//! the legs' forces goes into the special form. With the forces given, nothing here is
+//! singular at a singular leg arrangement: only a collapsed leg (no direction) is, and it
+//! carries nothing.
 //!
 //! [`SpecialForm::rate`] is the definition, written once and generic over the number type:
 //! in `f64` it is the right-hand side, in [`Dual`] its exact directional derivative
 //! ([`SpecialForm::derivative_tangent`]). [`SpecialForm::derivative`] is the step's fast
-//! path: the same operations in the same order with the six legs side by side in vector
-//! registers ([`PerLeg`]) and the three axes likewise ([`AxisRows`]), pinned to the
-//! definition bit for bit by a test.
+//! path for massless legs without friction: the same operations in the same order with the six
+//! legs side by side in vector registers ([`PerLeg`]) and the three axes likewise
+//! ([`AxisRows`]), pinned to the definition bit for bit by a test; other machines take the
+//! definition itself.
 
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 
 use super::actuators::LegForceLaw;
 use super::body::accelerations::RigidBody;
 use super::body::per_axis::AxisRows;
 use super::body::state::{BodyState, STATE_DIM, StateVector, axes_rates};
+use super::legs::bodies::{LegBodies, LegInertia, LegMotion};
 use super::legs::end_stops::EndStops;
-use super::legs::geometry::{JointArrays, LegGeometry, LegLanes};
+use super::legs::friction::Friction;
+use super::legs::geometry::{JointArrays, LegGeometry, LegKinematics, LegLanes};
+use super::legs::joint_limits::JointLimits;
 use super::legs::per_leg::{Lanes, Narrow, PerLeg, components};
 use super::number::{Dual, Real};
 use super::stand::{LEG_COUNT, Stand};
@@ -37,6 +47,21 @@ pub struct SpecialForm {
     stroke: [[f64; LEG_COUNT]; 2],
     /// The joints as arrays over the legs, for the fast path.
     pub joints: JointArrays,
+    /// The legs as bodies (massless: the paper's).
+    legs: LegBodies,
+    /// Cylinder friction (none: the paper's).
+    friction: Friction,
+    /// The joint limits, or `None` (the paper's).
+    joint_limits: Option<JointLimits>,
+    /// For the fast path's check and the switching functions of the joint limits: `n0_k` and
+    /// `m0_k` as `[component][leg]`, and the reference pose's axes `e0_a`.
+    base_reference: [[f64; LEG_COUNT]; 3],
+    platform_reference: [[f64; LEG_COUNT]; 3],
+    reference_axes: [Vector3<f64>; 3],
+    /// `cos thetaMax` of the base joints, `cos` and `sin thetaMax` of the platform joints.
+    joint_cosines: [f64; 3],
+    /// Whether the fast path applies: massless legs without friction.
+    fast: bool,
 }
 
 /// The sum over the six legs in the fixed order `((x1 + x3) + x5) + ((x2 + x4) + x6)`, that of
@@ -61,7 +86,70 @@ impl SpecialForm {
             stops: None,
             stroke: [[f64::NEG_INFINITY; LEG_COUNT], [f64::INFINITY; LEG_COUNT]],
             joints: JointArrays::new(&stand),
+            legs: LegBodies::default(),
+            friction: Friction::default(),
+            joint_limits: None,
+            base_reference: [[0.0; LEG_COUNT]; 3],
+            platform_reference: [[0.0; LEG_COUNT]; 3],
+            reference_axes: [Vector3::x(), Vector3::y(), Vector3::z()],
+            joint_cosines: [-1.0, -1.0, 0.0],
+            fast: true,
             stand,
+        }
+    }
+
+    /// The same form with the machine's legs: bodies, friction and joint limits (`None`:
+    /// without).
+    pub fn with_machine(mut self, legs: LegBodies, friction: Friction, joint_limits: Option<JointLimits>) -> Self {
+        self.legs = legs;
+        self.friction = friction;
+        if let Some(j) = &joint_limits {
+            self.base_reference = std::array::from_fn(|c| j.base_reference.map(|n| n[c]));
+            self.platform_reference = std::array::from_fn(|c| j.platform_reference.map(|m| m[c]));
+            self.reference_axes = j.reference_axes;
+            self.joint_cosines = [j.base_max.cos(), j.platform_max.cos(), j.platform_max.sin()];
+        }
+        self.joint_limits = joint_limits;
+        self.fast = !legs.has_mass() && friction.is_zero();
+        self
+    }
+
+    /// The legs as bodies.
+    pub fn legs(&self) -> &LegBodies {
+        &self.legs
+    }
+
+    /// The cylinder friction.
+    pub fn friction(&self) -> &Friction {
+        &self.friction
+    }
+
+    /// The joint limits, if on.
+    pub fn joint_limits(&self) -> Option<&JointLimits> {
+        self.joint_limits.as_ref()
+    }
+
+    /// The joint limits' switching functions `cos thetaB_k - cos thetaMax_B` into
+    /// `base[k]` and `cos thetaA_k - cos thetaMax_A` into `platform[k]`, from the legs of a
+    /// state (the leg by leg loops run side by side in vector registers).
+    #[inline(always)]
+    pub fn joint_margins(
+        &self,
+        state: &BodyState,
+        legs: &LegKinematics,
+        base: &mut [f64; LEG_COUNT],
+        platform: &mut [f64; LEG_COUNT],
+    ) {
+        let [cos_base, cos_platform, _] = self.joint_cosines;
+        let (n0, m0) = (&self.base_reference, &self.platform_reference);
+        let [e1, e2, e3] = &state.e;
+        for k in 0..LEG_COUNT {
+            let q = [legs.leg[0][k], legs.leg[1][k], legs.leg[2][k]];
+            let w: [f64; 3] = std::array::from_fn(|c| e1[c] * m0[0][k] + e2[c] * m0[1][k] + e3[c] * m0[2][k]);
+            let along_n0 = q[0] * n0[0][k] + q[1] * n0[1][k] + q[2] * n0[2][k];
+            let along_w = q[0] * w[0] + q[1] * w[1] + q[2] * w[2];
+            base[k] = along_n0 * legs.inverse_length[k] - cos_base;
+            platform[k] = along_w * legs.inverse_length[k] - cos_platform;
         }
     }
 
@@ -95,12 +183,15 @@ impl SpecialForm {
     /// powers (the integrands of `work.F` and `work.dissipated`): the definition.
     pub fn rate<T: Real>(&self, y: &[T; STATE_DIM], u: &[T; LEG_COUNT]) -> ([T; STATE_DIM], LegPower<T>) {
         let state = BodyState::from_vector(y);
-        let w = self.wrench(&state, u);
+        let w = self.loads(&state, u).wrench();
         let c = std::array::from_fn::<_, 3, _>(|a| state.e[a].cross(&state.e_dot[a]).dot(&w.moment));
-        // `F.v + L.omega` with the inertial angular velocity `omega = 1/2 sum_a e_a x e_a'`.
-        let power =
-            LegPower { actuator: w.force.dot(&state.v) + (c[0] + c[1] + c[2]) * 0.5, dissipation: w.stop.dissipation };
-        let (a, e_dd) = self.body.accelerations(&state, &(w.force + w.stop.force), &(w.moment + w.stop.moment));
+        // `F.v + L.omega` of the actuator forces alone, with the inertial angular velocity
+        // `omega = 1/2 sum_a e_a x e_a'`: `sum_k u_k ldot_k`.
+        let power = LegPower {
+            actuator: w.force.dot(&state.v) + (c[0] + c[1] + c[2]) * 0.5,
+            dissipation: w.dissipation(),
+        };
+        let (a, e_dd) = self.body.accelerations(&state, &w.total_force(), &w.total_moment());
         let mut dy = [T::zero(); STATE_DIM];
         let rates = [state.v, a, state.e_dot[0], state.e_dot[1], state.e_dot[2], e_dd[0], e_dd[1], e_dd[2]];
         for (i, v) in rates.iter().enumerate() {
@@ -109,37 +200,148 @@ impl SpecialForm {
         (dy, power)
     }
 
-    /// The legs' resultant about the centre of mass for actuator forces `u`, actuators and
-    /// stops apart, leg by leg and summed in [`sum_over_legs`]'s order. A collapsed (or
-    /// non-finite) leg carries nothing.
-    fn wrench<T: Real>(&self, state: &BodyState<T>, u: &[T; LEG_COUNT]) -> LegWrench<T> {
+    /// The force of each leg on the platform at its joint `A_k` (inertial components, N): what
+    /// the joint must be sized for.
+    pub fn joint_forces<T: Real>(&self, y: &[T; STATE_DIM], u: &[T; LEG_COUNT]) -> [Vector3<T>; LEG_COUNT] {
+        let loads = self.loads(&BodyState::from_vector(y), u);
+        std::array::from_fn(|k| loads.actuator[k] + loads.stop[k] + loads.machine[k])
+    }
+
+    /// Each leg's load on the platform, by cause, leg by leg. A collapsed (or non-finite) leg
+    /// carries nothing.
+    fn loads<T: Real>(&self, state: &BodyState<T>, u: &[T; LEG_COUNT]) -> Loads<T> {
         let legs = LegGeometry::new(&self.stand, state);
-        let zero = Vector3::zeros();
-        let (mut f, mut m, mut fs, mut ms) =
-            ([zero; LEG_COUNT], [zero; LEG_COUNT], [zero; LEG_COUNT], [zero; LEG_COUNT]);
-        let mut dissipation = T::zero();
+        let mut loads = Loads::new(legs.arm);
+        let mut inertia = [None; LEG_COUNT];
         for k in 0..LEG_COUNT {
-            let (arm, leg, l) = (legs.arm[k], legs.leg[k], legs.length[k]);
+            let (leg, l) = (legs.leg[k], legs.length[k]);
             if !(l > T::zero()) {
                 continue;
             }
-            f[k] = leg * (u[k] / l);
-            m[k] = arm.cross(&f[k]);
+            loads.actuator[k] = leg * (u[k] / l);
             if let Some(stops) = &self.stops
                 && stops.is_outside(k, l.value())
             {
                 let n = leg * (T::one() / l);
                 let ldot = n.dot(&(state.v + state.body_vector_rate(&self.stand.platform_joints[k])));
                 let contact = stops.contact(k, l, ldot);
-                fs[k] = n * contact.force;
-                ms[k] = arm.cross(&fs[k]);
-                dissipation += contact.dissipation;
+                loads.stop[k] = n * contact.force;
+                loads.stop_dissipation += contact.dissipation;
+            }
+            if !self.fast || self.joint_limits.is_some() {
+                let a_dot = state.v + state.body_vector_rate(&self.stand.platform_joints[k]);
+                let motion = LegMotion::new(&leg, l, &a_dot);
+                let leg_inertia = self.legs.has_mass().then(|| self.legs.inertia(&motion, self.stand.gravity));
+                let machine = self.machine_load(k, state, &motion, leg_inertia.as_ref());
+                loads.add_machine(k, &machine);
+                inertia[k] = leg_inertia.map(|m| (m, motion.n));
             }
         }
-        LegWrench {
-            force: sum_vectors(&f),
-            moment: sum_vectors(&m),
-            stop: StopWrench { force: sum_vectors(&fs), moment: sum_vectors(&ms), dissipation },
+        if self.legs.has_mass() {
+            self.solve_inertia(state, &mut loads, &inertia);
+        }
+        loads
+    }
+
+    /// Friction, the joint limits and the leg's weight and motion (`inertia`'s bias, without
+    /// the inertia itself) on the platform, for leg `k` in motion `leg`.
+    #[inline]
+    fn machine_load<T: Real>(
+        &self,
+        k: usize,
+        state: &BodyState<T>,
+        leg: &LegMotion<T>,
+        inertia: Option<&LegInertia<T>>,
+    ) -> MachineLoad<T> {
+        let mut load = MachineLoad { force: Vector3::zeros(), moment: Vector3::zeros(), dissipation: T::zero(), acts: false };
+        if !self.friction.is_zero() {
+            let f = self.friction.force(leg.l_dot);
+            load.force += leg.n * f;
+            load.dissipation -= f * leg.l_dot;
+            load.acts = true;
+        }
+        if let Some(limits) = &self.joint_limits {
+            if let Some(c) = limits.base(k, &leg.n, &leg.n_dot) {
+                load.force += c.on_leg / leg.l;
+                load.dissipation += c.dissipation;
+                load.acts = true;
+            }
+            let m0 = &limits.platform_reference[k];
+            if let Some(c) = limits.platform(&leg.n, &leg.n_dot, &state.body_vector(m0), || state.body_vector_rate(m0)) {
+                load.force += c.on_leg / leg.l;
+                load.moment += c.on_platform;
+                load.dissipation += c.dissipation;
+                load.acts = true;
+            }
+        }
+        if let Some(inertia) = inertia {
+            load.force += inertia.bias;
+            load.acts = true;
+        }
+        load
+    }
+
+    /// The legs' inertia: the platform's accelerations `(r'', omega')` from its Newton-Euler
+    /// equations with each joint's force `F0_k - M_k a_k''` (`a_k'' = r'' + omega' x rho_k +
+    /// omega x (omega x rho_k)`), a symmetric positive definite 6x6 system; each leg's inertial
+    /// force `-M_k a_k''` then joins its load.
+    fn solve_inertia<T: Real>(
+        &self,
+        state: &BodyState<T>,
+        loads: &mut Loads<T>,
+        inertia: &[Option<(LegInertia<T>, Vector3<T>)>; LEG_COUNT],
+    ) {
+        let omega = state.angular_velocity_inertial();
+        let j = &self.stand.inertia;
+        let e = &state.e;
+        let j_w = |x: &Vector3<T>| e[0] * (e[0].dot(x) * j[0]) + e[1] * (e[1].dot(x) * j[1]) + e[2] * (e[2].dot(x) * j[2]);
+        // The system [[M I + sum M_k, -sum M_k [rho]x], [., J_w - sum [rho]x M_k [rho]x]], with
+        // M_k = a I + c n n^T (a = I_t / l^2, c = m_r - a):
+        // -M_k [rho]x = -a [rho]x + c n (rho x n)^T and
+        // -[rho]x M_k [rho]x = a (|rho|^2 I - rho rho^T) + c (rho x n)(rho x n)^T.
+        let zero = T::zero();
+        let identity = Matrix3::from_diagonal_element(T::one());
+        let mut a11 = identity * T::constant(self.stand.mass);
+        let mut a12 = Matrix3::from_element(zero);
+        let mut a22 = Matrix3::from_fn(|r, c| e[0][r] * e[0][c] * j[0] + e[1][r] * e[1][c] * j[1] + e[2][r] * e[2][c] * j[2]);
+        let mut force = Vector3::new(zero, zero, -T::constant(self.stand.mass * self.stand.gravity));
+        let mut moment = -omega.cross(&j_w(&omega));
+        for k in 0..LEG_COUNT {
+            let rho = loads.arm[k];
+            let f0 = loads.actuator[k] + loads.stop[k] + loads.machine[k];
+            let Some((m, n)) = &inertia[k] else {
+                force += f0;
+                moment += rho.cross(&f0) + loads.machine_moment[k];
+                continue;
+            };
+            let f = f0 - m.times(n, &omega.cross(&omega.cross(&rho)));
+            force += f;
+            moment += rho.cross(&f) + loads.machine_moment[k];
+            let (across, along) = (m.across, m.along - m.across);
+            let rn = rho.cross(n);
+            let n_along = n * along;
+            a11 += identity * across + n_along * n.transpose();
+            let skew = Matrix3::new(zero, -rho.z, rho.y, rho.z, zero, -rho.x, -rho.y, rho.x, zero);
+            a12 += n_along * rn.transpose() - skew * across;
+            a22 += (identity * rho.dot(&rho) - rho * rho.transpose()) * across + (rn * along) * rn.transpose();
+        }
+        let mut a = [[zero; 6]; 6];
+        for r in 0..3 {
+            for c in 0..3 {
+                a[r][c] = a11[(r, c)];
+                a[r][3 + c] = a12[(r, c)];
+                a[3 + c][r] = a12[(r, c)];
+                a[3 + r][3 + c] = a22[(r, c)];
+            }
+        }
+        let q = solve_spd6(a, [force.x, force.y, force.z, moment.x, moment.y, moment.z]);
+        let (alpha, beta) = (Vector3::new(q[0], q[1], q[2]), Vector3::new(q[3], q[4], q[5]));
+        for k in 0..LEG_COUNT {
+            if let Some((m, n)) = &inertia[k] {
+                let rho = loads.arm[k];
+                let acceleration = alpha + beta.cross(&rho) + omega.cross(&omega.cross(&rho));
+                loads.machine[k] -= m.times(n, &acceleration);
+            }
         }
     }
 
@@ -158,9 +360,9 @@ impl SpecialForm {
         (Dual::tangents(&rate), LegPower { actuator: power.actuator.eps, dissipation: power.dissipation.eps })
     }
 
-    /// The right-hand side `dy/dt` for leg forces given by `law` at time `t`, end stops
-    /// included, and the leg powers: [`SpecialForm::rate`]'s numbers, computed in vector
-    /// registers (the step's fast path).
+    /// The right-hand side `dy/dt` for leg forces given by `law` at time `t`, and the leg
+    /// powers: [`SpecialForm::rate`]'s numbers, computed in vector registers where the legs are
+    /// massless and frictionless (the step's fast path), by the definition otherwise.
     #[inline(always)]
     pub fn derivative<L: LegForceLaw + ?Sized>(
         &self,
@@ -187,14 +389,18 @@ impl SpecialForm {
         } else {
             law.leg_forces_at(t)
         };
+        if !self.fast {
+            let (rate, power) = self.rate(y, &u);
+            *dy = rate;
+            return power;
+        }
         let w = self.wrench_in::<V>(&state, &u);
         let (e, e_dot) = (AxisRows::<V::Axes>::of(&state.e), AxisRows::of(&state.e_dot));
         let power = LegPower {
             actuator: w.force.dot(&state.v) + e.cross_sum_dot(&e_dot, &w.moment) * 0.5,
-            dissipation: w.stop.dissipation,
+            dissipation: w.dissipation(),
         };
-        let (a, e_dd) =
-            self.body.accelerations_in(&state, &e, &e_dot, &(w.force + w.stop.force), &(w.moment + w.stop.moment));
+        let (a, e_dd) = self.body.accelerations_in(&state, &e, &e_dot, &w.total_force(), &w.total_moment());
         // One array written whole, not piece by piece: the method reads it back at once in
         // wide loads, which a load spanning several smaller stores would stall.
         let [e1, e2, e3] = e_dd;
@@ -206,8 +412,8 @@ impl SpecialForm {
         power
     }
 
-    /// [`SpecialForm::wrench`] with the six legs side by side. The end stops' forces are
-    /// computed only when a leg is outside its stroke, by the one contact law leg by leg.
+    /// The legs' wrench with the six legs side by side. The end stops' and the joint limits'
+    /// loads are computed only when a leg may touch them, by the one law leg by leg.
     #[inline(always)]
     fn wrench_in<V: Lanes>(&self, state: &BodyState, u: &[f64; LEG_COUNT]) -> LegWrench {
         let LegLanes { arm, leg, length } = self.joints.legs::<V>(state);
@@ -223,10 +429,18 @@ impl SpecialForm {
             }
             _ => StopWrench::default(),
         };
+        let machine = match &self.joint_limits {
+            Some(_) if self.joints_may_touch(state, &leg, length) => {
+                std::hint::cold_path();
+                self.machine_wrench(state)
+            }
+            _ => None,
+        };
         LegWrench {
             force: Vector3::new(f[0].sum(), f[1].sum(), f[2].sum()),
             moment: Vector3::new(moment[0].sum(), moment[1].sum(), moment[2].sum()),
             stop,
+            machine,
         }
     }
 
@@ -260,6 +474,158 @@ impl SpecialForm {
             dissipation,
         }
     }
+
+    /// Whether a joint may be beyond its limit: `false` proves that none is. Every base joint
+    /// angle `thetaB_k` is checked side by side (`q_k . n0_k >= cos(thetaMax) l_k`), and the
+    /// platform joints through the bound `thetaA_k <= thetaB_k + phi`, `phi` the angle of the
+    /// platform's rotation from the reference pose (`cos phi = (trace(R R0^T) - 1) / 2`).
+    #[inline(always)]
+    fn joints_may_touch<V: Lanes>(
+        &self,
+        state: &BodyState,
+        leg: &[PerLeg<V>; 3],
+        length: PerLeg<V>,
+    ) -> bool {
+        let [cos_base, cos_platform, sin_platform] = self.joint_cosines;
+        let trace = state.e[0].dot(&self.reference_axes[0])
+            + state.e[1].dot(&self.reference_axes[1])
+            + state.e[2].dot(&self.reference_axes[2]);
+        let cos_phi = (trace - 1.0) * 0.5;
+        if !(cos_phi > cos_platform) {
+            return true;
+        }
+        let sin_phi = (1.0 - cos_phi * cos_phi).max(0.0).sqrt();
+        // cos(thetaMax_A - phi), and a margin for round-off: near a limit the exact check runs.
+        let threshold = cos_base.max(cos_platform * cos_phi + sin_platform * sin_phi) + JOINT_CHECK_MARGIN;
+        let n0 = components!(|c| PerLeg::<V>::new(&self.base_reference[c]));
+        let dot = leg[0] * n0[0] + leg[1] * n0[1] + leg[2] * n0[2];
+        dot.any_outside(PerLeg::splat(threshold) * length, PerLeg::splat(f64::INFINITY))
+    }
+
+    /// The machine's loads (the joint limits here) leg by leg, as [`SpecialForm::loads`]
+    /// computes them, summed as [`Loads::wrench`] does; `None` if none acts.
+    #[inline(never)]
+    fn machine_wrench(&self, state: &BodyState) -> Option<MachineWrench> {
+        let legs = LegGeometry::new(&self.stand, state);
+        let mut loads = Loads::new(legs.arm);
+        for k in 0..LEG_COUNT {
+            let (leg, l) = (legs.leg[k], legs.length[k]);
+            if l > 0.0 {
+                let a_dot = state.v + state.body_vector_rate(&self.stand.platform_joints[k]);
+                loads.add_machine(k, &self.machine_load(k, state, &LegMotion::new(&leg, l, &a_dot), None));
+            }
+        }
+        loads.machine_wrench()
+    }
+}
+
+/// The fast path's joint check counts a joint within this of its limit's cosine as touching.
+const JOINT_CHECK_MARGIN: f64 = 1e-9;
+
+/// Solves `A x = b` for a symmetric positive definite 6x6 `A` (Cholesky); not numbers if `A`
+/// is not positive definite.
+fn solve_spd6<T: Real>(a: [[T; 6]; 6], b: [T; 6]) -> [T; 6] {
+    let mut l = [[T::zero(); 6]; 6];
+    for i in 0..6 {
+        for j in 0..=i {
+            let mut sum = a[i][j];
+            for k in 0..j {
+                sum -= l[i][k] * l[j][k];
+            }
+            l[i][j] = if i == j { sum.sqrt() } else { sum / l[j][j] };
+        }
+    }
+    let mut y = [T::zero(); 6];
+    for i in 0..6 {
+        let mut sum = b[i];
+        for k in 0..i {
+            sum -= l[i][k] * y[k];
+        }
+        y[i] = sum / l[i][i];
+    }
+    let mut x = [T::zero(); 6];
+    for i in (0..6).rev() {
+        let mut sum = y[i];
+        for k in i + 1..6 {
+            sum -= l[k][i] * x[k];
+        }
+        x[i] = sum / l[i][i];
+    }
+    x
+}
+
+/// Each leg's load on the platform at its joint, by cause.
+struct Loads<T: nalgebra::Scalar> {
+    /// `rho_k = R A_k`.
+    arm: [Vector3<T>; LEG_COUNT],
+    /// `u_k n_k`.
+    actuator: [Vector3<T>; LEG_COUNT],
+    /// The end stops' forces.
+    stop: [Vector3<T>; LEG_COUNT],
+    stop_dissipation: T,
+    /// Friction, the joint limits' forces and the legs' weight and inertia.
+    machine: [Vector3<T>; LEG_COUNT],
+    /// The platform joints' limit moments.
+    machine_moment: [Vector3<T>; LEG_COUNT],
+    machine_dissipation: T,
+    /// Whether any of the machine's loads acts.
+    machine_acts: bool,
+}
+
+/// One leg's machine load (see [`Loads::machine`]), without the leg's inertia.
+struct MachineLoad<T: nalgebra::Scalar> {
+    force: Vector3<T>,
+    moment: Vector3<T>,
+    dissipation: T,
+    acts: bool,
+}
+
+impl<T: Real> Loads<T> {
+    fn new(arm: [Vector3<T>; LEG_COUNT]) -> Self {
+        let zero = [Vector3::zeros(); LEG_COUNT];
+        Loads {
+            arm,
+            actuator: zero,
+            stop: zero,
+            stop_dissipation: T::zero(),
+            machine: zero,
+            machine_moment: zero,
+            machine_dissipation: T::zero(),
+            machine_acts: false,
+        }
+    }
+
+    fn add_machine(&mut self, k: usize, load: &MachineLoad<T>) {
+        self.machine[k] += load.force;
+        self.machine_moment[k] += load.moment;
+        self.machine_dissipation += load.dissipation;
+        self.machine_acts |= load.acts;
+    }
+
+    /// The machine's resultant, if it acts.
+    fn machine_wrench(&self) -> Option<MachineWrench<T>> {
+        self.machine_acts.then(|| MachineWrench {
+            force: sum_vectors(&self.machine),
+            moment: sum_vectors(&std::array::from_fn(|k| self.arm[k].cross(&self.machine[k]) + self.machine_moment[k])),
+            dissipation: self.machine_dissipation,
+        })
+    }
+
+    /// The resultant about the centre of mass, by cause, each summed over the legs in
+    /// [`sum_over_legs`]'s order.
+    fn wrench(&self) -> LegWrench<T> {
+        let moments = |f: &[Vector3<T>; LEG_COUNT]| sum_vectors(&std::array::from_fn(|k| self.arm[k].cross(&f[k])));
+        LegWrench {
+            force: sum_vectors(&self.actuator),
+            moment: moments(&self.actuator),
+            stop: StopWrench {
+                force: sum_vectors(&self.stop),
+                moment: moments(&self.stop),
+                dissipation: self.stop_dissipation,
+            },
+            machine: self.machine_wrench(),
+        }
+    }
 }
 
 /// The powers of a right-hand-side evaluation (or their changes, from
@@ -268,21 +634,60 @@ impl SpecialForm {
 pub struct LegPower<T = f64> {
     /// Power of the actuator forces, `sum_k F_k ldot_k = F.v + L.omega`, W.
     pub actuator: T,
-    /// Power taken by the end stops' damping, W (>= 0).
+    /// Power taken by the end stops' and joint limits' damping and by friction, W (>= 0).
     pub dissipation: T,
 }
 
-/// Resultant of the legs about the centre of mass: actuators and end stops apart.
+/// Resultant of the legs about the centre of mass: actuators, end stops and the machine
+/// (friction, joint limits, the legs' weight and inertia) apart.
 #[derive(Clone, Copy, Debug, Default)]
 struct LegWrench<T: nalgebra::Scalar = f64> {
     force: Vector3<T>,
     moment: Vector3<T>,
     stop: StopWrench<T>,
+    machine: Option<MachineWrench<T>>,
+}
+
+impl<T: Real> LegWrench<T> {
+    /// `(actuators + stops) + machine`.
+    #[inline(always)]
+    fn total_force(&self) -> Vector3<T> {
+        let f = self.force + self.stop.force;
+        match &self.machine {
+            Some(m) => f + m.force,
+            None => f,
+        }
+    }
+
+    #[inline(always)]
+    fn total_moment(&self) -> Vector3<T> {
+        let m = self.moment + self.stop.moment;
+        match &self.machine {
+            Some(machine) => m + machine.moment,
+            None => m,
+        }
+    }
+
+    #[inline(always)]
+    fn dissipation(&self) -> T {
+        match &self.machine {
+            Some(m) => self.stop.dissipation + m.dissipation,
+            None => self.stop.dissipation,
+        }
+    }
 }
 
 /// Resultant of the end stops' forces and the power their damping takes.
 #[derive(Clone, Copy, Debug, Default)]
 struct StopWrench<T: nalgebra::Scalar = f64> {
+    force: Vector3<T>,
+    moment: Vector3<T>,
+    dissipation: T,
+}
+
+/// Resultant of the machine's loads and the power they take.
+#[derive(Clone, Copy, Debug, Default)]
+struct MachineWrench<T: nalgebra::Scalar = f64> {
     force: Vector3<T>,
     moment: Vector3<T>,
     dissipation: T,

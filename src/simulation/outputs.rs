@@ -10,7 +10,9 @@ use crate::physics::body::kinematics::angles_from_rotation;
 use crate::physics::body::state::{BodyState, STATE_DIM};
 use crate::physics::direct_problem::ForceMomentMatrix;
 use crate::physics::legs::geometry::LegGeometry;
-use crate::physics::number::{Dual, Real};
+use crate::physics::legs::bodies::LegMotion;
+use crate::physics::legs::joint_limits::angle;
+use crate::physics::number::{Dual, Real, lift};
 use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::{LEG_COUNT, Stand};
 
@@ -41,8 +43,15 @@ pub struct PlatformOutputs<T: Scalar = f64> {
     pub stop_force: [T; LEG_COUNT],
     /// Work of the actuator forces since the start, J.
     pub work_of_forces: T,
-    /// Energy taken by the stops' damping since the start, J.
+    /// Energy taken by the stops' and joint limits' damping and by friction since the start, J.
     pub dissipated_energy: T,
+    /// Base joint angles from the reference pose, rad (0 without joint limits' reference).
+    pub theta_b: [T; LEG_COUNT],
+    /// Platform joint angles from the reference pose, rad.
+    pub theta_a: [T; LEG_COUNT],
+    /// The force of each leg on the platform at `A_k`, inertial frame, N (not numbers where
+    /// the leg forces were not given: see [`PlatformOutputs::compute`]).
+    pub joint_force: [Vector3<T>; LEG_COUNT],
 }
 
 /// Leg lengths and rates alone: what a controller reads every step, computed without the
@@ -62,21 +71,46 @@ impl LegOutputs {
 }
 
 impl<T: Real> PlatformOutputs<T> {
-    /// The outputs of the simulation state `y`.
-    pub fn compute(form: &SpecialForm, y: &[T; SIMULATION_DIM]) -> Self {
+    /// The outputs of the simulation state `y`; with the leg forces `u`, the joints' forces
+    /// too (they depend on them), else those are not numbers.
+    pub fn compute(form: &SpecialForm, y: &[T; SIMULATION_DIM], u: Option<&[T; LEG_COUNT]>) -> Self {
         let stand = &form.stand;
-        let state = BodyState::from_vector(y.first_chunk::<STATE_DIM>().unwrap_or(&[T::zero(); STATE_DIM]));
+        let zero = [T::zero(); STATE_DIM];
+        let body = y.first_chunk::<STATE_DIM>().unwrap_or(&zero);
+        let state = BodyState::from_vector(body);
         let legs = LegGeometry::new(stand, &state);
         let rotation = state.rotation();
         let ldot = legs.length_rates(stand, &state);
         let mut stop_force = [T::zero(); LEG_COUNT];
-        let mut stop_energy = T::zero();
+        let mut energy = mechanical_energy(stand, &state);
         if let Some(stops) = form.stops() {
             for k in 0..LEG_COUNT {
                 stop_force[k] = stops.contact(k, legs.length[k], ldot[k]).force;
             }
-            stop_energy = stops.potential_energy(&legs.length);
+            energy += stops.potential_energy(&legs.length);
         }
+        let (mut theta_b, mut theta_a) = ([T::zero(); LEG_COUNT], [T::zero(); LEG_COUNT]);
+        let has_mass = form.legs().has_mass();
+        for k in 0..LEG_COUNT {
+            if !(legs.length[k] > T::zero()) || (form.joint_limits().is_none() && !has_mass) {
+                continue;
+            }
+            let a_dot = state.v + state.body_vector_rate(&stand.platform_joints[k]);
+            let motion = LegMotion::new(&legs.leg[k], legs.length[k], &a_dot);
+            if has_mass {
+                energy += form.legs().energy(&motion, stand.base_joints[k].z, stand.gravity);
+            }
+            if let Some(limits) = form.joint_limits() {
+                theta_b[k] = angle(motion.n.dot(&lift(&limits.base_reference[k])));
+                theta_a[k] = angle(motion.n.dot(&state.body_vector(&limits.platform_reference[k])));
+                energy += limits.potential(theta_b[k], limits.base_max) + limits.potential(theta_a[k], limits.platform_max);
+            }
+        }
+        let nan = Vector3::from_element(T::constant(f64::NAN));
+        let joint_force = match u {
+            Some(u) => form.joint_forces(body, u),
+            None => [nan; LEG_COUNT],
+        };
         PlatformOutputs {
             r: state.r,
             v: state.v,
@@ -85,11 +119,14 @@ impl<T: Real> PlatformOutputs<T> {
             w: state.angular_velocity_body(),
             l: legs.length,
             ldot,
-            energy: mechanical_energy(stand, &state) + stop_energy,
+            energy,
             constraint_error: state.constraint_residual(),
             stop_force,
             work_of_forces: y[quadrature::WORK_F],
             dissipated_energy: y[quadrature::WORK_DISSIPATED],
+            theta_b,
+            theta_a,
+            joint_force,
         }
     }
 }
@@ -101,7 +138,7 @@ impl PlatformOutputs {
     /// derivatives. The entry for `constraint_error` is the change of the largest residual
     /// `|e_a.e_b - delta_ab|`.
     pub fn tangent(form: &SpecialForm, y: &SimulationState, dy: &SimulationState) -> Self {
-        PlatformOutputs::<Dual>::compute(form, &Dual::seeded(y, dy)).map(|d| d.eps)
+        PlatformOutputs::<Dual>::compute(form, &Dual::seeded(y, dy), None).map(|d| d.eps)
     }
 }
 
@@ -122,6 +159,9 @@ impl<T: Real> PlatformOutputs<T> {
             stop_force: self.stop_force.map(&f),
             work_of_forces: f(self.work_of_forces),
             dissipated_energy: f(self.dissipated_energy),
+            theta_b: self.theta_b.map(&f),
+            theta_a: self.theta_a.map(&f),
+            joint_force: self.joint_force.map(|v| v.map(&f)),
         }
     }
 }

@@ -16,7 +16,7 @@ use crate::physics::legs::end_stops::{EndStops, STROKE_LIMITS};
 use crate::physics::legs::geometry::{LegGeometry, LegKinematics};
 use crate::physics::legs::per_leg::{Lanes, Narrow};
 use crate::physics::special_form::SpecialForm;
-use crate::physics::stand::Stand;
+use crate::physics::stand::{LEG_COUNT, Stand};
 use std::marker::PhantomData;
 
 use super::vector::VectorPath;
@@ -47,7 +47,12 @@ pub mod switching {
     /// Determinant of the force/moment matrix: a sign change is a passage through a singular
     /// leg arrangement.
     pub const DETERMINANT: usize = 12;
-    pub const COUNT: usize = 13;
+    /// `cos thetaB_k - cos thetaMax_B`, k = 0..5 (a sign change is a base joint reaching or
+    /// leaving its angle limit).
+    pub const BASE_JOINT: usize = 13;
+    /// `cos thetaA_k - cos thetaMax_A`, k = 0..5 (the platform joints).
+    pub const PLATFORM_JOINT: usize = 19;
+    pub const COUNT: usize = 25;
 }
 
 /// The special-form body coordinates of a simulation state.
@@ -157,12 +162,13 @@ impl<L: LegForceLaw + ?Sized, V: Lanes> PlatformDynamics<'_, L, V> {
     /// determinant included whether it is tracked or not (Model Exchange event indicators).
     #[inline(always)]
     pub fn switching_values(&self, y: &StateVector, g: &mut [f64]) {
-        let legs = self.form.joints.kinematics(&BodyState::from_vector(y));
-        self.switching_of(&legs, g, true);
+        let state = BodyState::from_vector(y);
+        let legs = self.form.joints.kinematics(&state);
+        self.switching_of(&state, &legs, g, true);
     }
 
     #[inline(always)]
-    fn switching_of(&self, legs: &LegKinematics, g: &mut [f64], with_determinant: bool) {
+    fn switching_of(&self, state: &BodyState, legs: &LegKinematics, g: &mut [f64], with_determinant: bool) {
         match self.form.stops() {
             Some(stops) => stops.stroke_margins(&legs.lengths(), g),
             None => {
@@ -171,8 +177,19 @@ impl<L: LegForceLaw + ?Sized, V: Lanes> PlatformDynamics<'_, L, V> {
                 }
             }
         }
-        if with_determinant && let Some(x) = g.get_mut(switching::DETERMINANT) {
-            *x = force_moment_determinant(legs, self.guard.characteristic_length);
+        if let Some(x) = g.get_mut(switching::DETERMINANT) {
+            *x = if with_determinant { force_moment_determinant(legs, self.guard.characteristic_length) } else { 1.0 };
+        }
+        if let Some(joints) = g.get_mut(switching::BASE_JOINT..switching::COUNT)
+            && let Some((base, platform)) = joints.split_first_chunk_mut::<LEG_COUNT>()
+            && let Some(platform) = platform.first_chunk_mut::<LEG_COUNT>()
+        {
+            if self.form.joint_limits().is_some() {
+                self.form.joint_margins(state, legs, base, platform);
+            } else {
+                *base = [1.0; LEG_COUNT];
+                *platform = [1.0; LEG_COUNT];
+            }
         }
     }
 
@@ -193,7 +210,7 @@ impl<L: LegForceLaw + ?Sized, V: Lanes> PlatformDynamics<'_, L, V> {
         let ldot = self.form.joints.length_rates_in::<V>(&state, &legs);
         self.checked_legs.set(Some(LegOutputs { l: legs.lengths(), ldot }));
         if let Some(g) = g {
-            self.switching_of(&legs, g, self.tracks_singularities());
+            self.switching_of(&state, &legs, g, self.tracks_singularities());
         }
         Ok(())
     }
@@ -244,13 +261,20 @@ impl<L: LegForceLaw + ?Sized, V: Lanes> OdeSystem<SIMULATION_DIM> for PlatformDy
     }
 
     fn switching_count(&self) -> usize {
-        if self.tracks_singularities() { switching::COUNT } else { switching::DETERMINANT }
+        if self.form.joint_limits().is_some() {
+            switching::COUNT
+        } else if self.tracks_singularities() {
+            switching::DETERMINANT + 1
+        } else {
+            switching::DETERMINANT
+        }
     }
 
     #[inline(always)]
     fn switching(&self, _t: f64, y: &SimulationState, g: &mut [f64; MAX_SWITCHING]) {
-        let legs = self.form.joints.kinematics(&BodyState::from_vector(body(y)));
-        self.switching_of(&legs, g, self.tracks_singularities());
+        let state = BodyState::from_vector(body(y));
+        let legs = self.form.joints.kinematics(&state);
+        self.switching_of(&state, &legs, g, self.tracks_singularities());
     }
 
     fn switching_kind(&self, index: usize) -> SwitchingKind {

@@ -36,7 +36,8 @@ def platform(name, messages, forces=None, stops=True):
     fmu.enterInitializationMode()
     fmu.setInteger([vr["solver.method"]], [2])
     fmu.setReal([vr["solver.fixedStep"]], [1e-6])
-    fmu.setBoolean([vr["stops"]], [stops])
+    # Without stops, the paper's idealised machine: no joint limits either.
+    fmu.setBoolean([vr["stops"], vr["joints"]], [stops, stops])
     if forces is not None:
         fmu.setReal([vr[f"F[{k}]"] for k in range(1, 7)], list(forces))
     fmu.exitInitializationMode()
@@ -95,7 +96,7 @@ def test_the_recipe_gives_up_when_the_motion_cannot_go_on():
 
 def test_simulate_fmu_ends_the_run_at_a_discard_and_repeats_the_last_row():
     result = simulate_fmu(str(PLATFORM_FMU), stop_time=1.0, output_interval=0.05, output=["r[3]"],
-                          start_values={"stops": False, **{f"F[{k}]": -1.0e5 for k in range(1, 7)}})
+                          start_values={"stops": False, "joints": False, **{f"F[{k}]": -1.0e5 for k in range(1, 7)}})
     print(f"simulate_fmu after a discard: rows {[(round(r[0], 3), round(r[1], 6)) for r in result]}")
     assert result["time"][-1] == result["time"][-2] == 0.1
     assert result["r[3]"][-1] == result["r[3]"][-2]

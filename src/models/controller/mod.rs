@@ -17,6 +17,7 @@ use super::{DefaultExperiment, FmuModel, ModelInfo, StepError, StepReport};
 use crate::control::{Disturbance, LegFeedback};
 use crate::physics::body::kinematics::{PoseTrajectoryPoint, angles_from_rotation};
 use crate::physics::direct_problem::solve_direct_problem;
+use crate::physics::legs::bodies::LegBodies;
 use crate::physics::legs::end_stops::EndStops;
 use crate::physics::programme::{PoseProgramme, SoftStartSinusoid, StartUp};
 use crate::physics::stand::{LEG_COUNT, Stand};
@@ -93,6 +94,8 @@ pub struct ControllerParameters {
     pub f_min: f64,
     /// Actuator saturation `Fmax`, N.
     pub f_max: f64,
+    /// `leg.*`: the legs' masses, whose weight and inertia the programme forces carry.
+    pub legs: LegBodies,
 }
 
 /// Programme 1: `z = z0 + a sin(Omega t)(1 - exp(-t/T))^2`.
@@ -150,6 +153,7 @@ impl Default for ControllerParameters {
             startup_duration: DEFAULT_STARTUP_DURATION,
             f_min: -DEFAULT_FORCE_LIMIT,
             f_max: DEFAULT_FORCE_LIMIT,
+            legs: LegBodies::default(),
             stand,
         }
     }
@@ -208,6 +212,7 @@ impl Default for ControllerModel {
         let centre = parameters.heave_centre;
         let neutral = solve_direct_problem(
             &parameters.stand,
+            &parameters.legs,
             &PoseTrajectoryPoint::at_rest(centre, nalgebra::Matrix3::identity()),
         )
         .map(|s| s.lengths)
@@ -267,7 +272,7 @@ impl ControllerModel {
     /// Direct problem and feedback at the current time and inputs.
     pub fn compute(&self) -> Result<ControllerOutputs, String> {
         let point = self.programme_point(self.time);
-        let solution = solve_direct_problem(&self.parameters.stand, &point)
+        let solution = solve_direct_problem(&self.parameters.stand, &self.parameters.legs, &point)
             .map_err(|e| format!("the programme pose at t = {} cannot be produced by the legs: {e}", self.time))?;
         let mut f = self.parameters.feedback.leg_forces(&solution, &self.l, &self.ldot);
         let d = self.parameters.disturbance.at(self.time);
@@ -297,6 +302,7 @@ impl ControllerModel {
     fn validate(&self) -> Result<(), String> {
         let p = &self.parameters;
         p.stand.validate().map_err(|e| e.to_string())?;
+        p.legs.validate().map_err(|e| e.to_string())?;
         for (name, value) in [
             ("heave.timeConstant", p.heave.time_constant),
             ("sine.timeConstant", p.sine.time_constant),

@@ -63,6 +63,12 @@ const ALL_KNOWNS: &[crate::models::variables::Dependency] = &[
     All("startup.duration"),
     All("Fmin"),
     All("Fmax"),
+    All("leg.cylinderMass"),
+    All("leg.rodMass"),
+    All("leg.cylinderCoM"),
+    All("leg.rodCoM"),
+    All("leg.cylinderInertia"),
+    All("leg.rodInertia"),
 ];
 
 declare_variables! {
@@ -182,5 +188,23 @@ declare_variables! {
             "Actuator saturation: the force command F_k is limited to [Fmin, Fmax] (real drives saturate)",
         ); real(parameters.f_min),
         FMAX => V::parameter("Fmax", &[], 133, Some("N"), "Actuator saturation: largest force command (see Fmin)"); real(parameters.f_max),
+        LEG_CYLINDER_MASS => V::parameter(
+            "leg.cylinderMass", &[], 190, Some("kg"),
+            "Mass m_c of each leg's cylinder: the programme forces F^p carry the legs' weight and inertia (as the \
+             platform's leg.* parameters)",
+        ); real(parameters.legs.cylinder_mass),
+        LEG_ROD_MASS => V::parameter("leg.rodMass", &[], 191, Some("kg"), "Mass m_r of each leg's rod"); real(parameters.legs.rod_mass),
+        LEG_CYLINDER_COM => V::parameter(
+            "leg.cylinderCoM", &[], 192, Some("m"), "Distance d_c of the cylinder's centre of mass from B_k along the leg",
+        ); real(parameters.legs.cylinder_com),
+        LEG_ROD_COM => V::parameter(
+            "leg.rodCoM", &[], 193, Some("m"), "Distance d_r of the rod's centre of mass from A_k back along the leg",
+        ); real(parameters.legs.rod_com),
+        LEG_CYLINDER_INERTIA => V::parameter(
+            "leg.cylinderInertia", &[], 194, Some("kg.m2"), "Transverse moment of inertia J_c of the cylinder",
+        ); real(parameters.legs.cylinder_inertia),
+        LEG_ROD_INERTIA => V::parameter(
+            "leg.rodInertia", &[], 195, Some("kg.m2"), "Transverse moment of inertia J_r of the rod",
+        ); real(parameters.legs.rod_inertia),
     }
 }

@@ -127,7 +127,7 @@ impl PlatformModel {
             let (yd, ud) = (Dual::seeded(y, &dy), Dual::seeded(&forces, &du));
             let rate = Self::state_rate(form, &yd, &ud);
             let dkappa = if needs_kappa { condition_number_tangent(&form.stand, y, &dy) } else { 0.0 };
-            (rate, PlatformOutputs::<Dual>::compute(form, &yd), dkappa)
+            (rate, PlatformOutputs::<Dual>::compute(form, &yd, Some(&ud)), dkappa)
         });
         for (value, u) in out.iter_mut().zip(unknowns) {
             let derivative = match BINDINGS.get(u.group) {
@@ -150,7 +150,8 @@ impl PlatformModel {
         if var.group == group::KAPPA {
             return condition_number_tangent(sim.stand(), &sim.state, &dy);
         }
-        let outputs = PlatformOutputs::<Dual>::compute(&sim.form, &Dual::seeded(&sim.state, &dy));
+        let forces = self.forces.map(Dual::constant);
+        let outputs = PlatformOutputs::<Dual>::compute(&sim.form, &Dual::seeded(&sim.state, &dy), Some(&forces));
         output_element(&outputs, var).map_or(0.0, |d| d.eps)
     }
 }

@@ -69,6 +69,9 @@ pub struct PlatformModel {
     legs: Option<LegOutputs>,
     /// `kappa` of the current state, computed on its first read after a change.
     kappa: Option<f64>,
+    /// The joints' forces of the current state and leg forces, computed on the first read
+    /// after a change.
+    joint_forces: Option<JointForceOutputs>,
     /// Whether passages through singular arrangements are reported (see
     /// [`FmuModel::set_event_reporting`]).
     events_reported: bool,
@@ -84,9 +87,17 @@ impl Default for PlatformModel {
             outputs: None,
             legs: None,
             kappa: None,
+            joint_forces: None,
             events_reported: true,
         }
     }
+}
+
+/// The joints' forces alone (the field of [`PlatformOutputs`] of the same name): they depend
+/// on the leg forces, so they are a cache block of their own.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JointForceOutputs {
+    pub joint_force: [nalgebra::Vector3<f64>; LEG_COUNT],
 }
 
 impl PlatformModel {
@@ -103,8 +114,21 @@ impl PlatformModel {
     fn outputs(&mut self) -> &PlatformOutputs {
         let (simulation, parameters) = (&self.simulation, &self.parameters);
         self.outputs.get_or_insert_with(|| match simulation {
-            Some((sim, _)) => PlatformOutputs::compute(&sim.form, &sim.state),
-            None => PlatformOutputs::compute(&parameters.special_form(), &parameters.initial_simulation_state()),
+            Some((sim, _)) => PlatformOutputs::compute(&sim.form, &sim.state, None),
+            None => PlatformOutputs::compute(&parameters.special_form(), &parameters.initial_simulation_state(), None),
+        })
+    }
+
+    /// The joints' forces of the current state and leg forces, computed on the first read
+    /// after a change.
+    fn joint_force_outputs(&mut self) -> &JointForceOutputs {
+        let (simulation, parameters, forces) = (&self.simulation, &self.parameters, &self.forces);
+        self.joint_forces.get_or_insert_with(|| {
+            let joint_force = match simulation {
+                Some((sim, _)) => sim.form.joint_forces(body(&sim.state), forces),
+                None => parameters.special_form().joint_forces(body(&parameters.initial_simulation_state()), forces),
+            };
+            JointForceOutputs { joint_force }
         })
     }
 
@@ -128,8 +152,10 @@ impl PlatformModel {
         })
     }
 
-    /// After a set of values: in Initialization Mode the outputs follow the parameters.
+    /// After a set of values: in Initialization Mode the outputs follow the parameters; the
+    /// joints' forces follow the leg forces always.
     fn values_set(&mut self) {
+        self.joint_forces = None;
         if self.simulation.is_none() {
             self.invalidate_outputs();
         }
@@ -140,6 +166,7 @@ impl PlatformModel {
         self.outputs = None;
         self.legs = None;
         self.kappa = None;
+        self.joint_forces = None;
     }
 
     fn held_forces(&self, t0: f64) -> HeldForces {
@@ -151,10 +178,11 @@ impl PlatformModel {
         let state = BodyState::from_vector(body(&c.y));
         let legs = LegGeometry::new(sim.stand(), &state);
         let rates = legs.length_rates(sim.stand(), &state);
+        let what = if c.rising { "left" } else { "reached" };
         let (stop, k) = match c.index {
             i if i < switching::UPPER => ("lower", i - switching::LOWER),
             i if i < switching::DETERMINANT => ("upper", i - switching::UPPER),
-            _ => {
+            switching::DETERMINANT => {
                 let involved = singular_legs(sim.stand(), &legs);
                 return format!(
                     "t = {}: the legs passed through a singular arrangement (determinant of the force/moment matrix \
@@ -163,9 +191,29 @@ impl PlatformModel {
                     leg_list(&involved)
                 );
             }
+            i => {
+                let o = PlatformOutputs::compute(&sim.form, &c.y, None);
+                let (joint, k, theta, max) = match sim.form.joint_limits() {
+                    Some(j) if i < switching::PLATFORM_JOINT => {
+                        let k = i - switching::BASE_JOINT;
+                        ("base", k, o.theta_b.get(k).copied().unwrap_or(f64::NAN), j.base_max)
+                    }
+                    Some(j) => {
+                        let k = i - switching::PLATFORM_JOINT;
+                        ("platform", k, o.theta_a.get(k).copied().unwrap_or(f64::NAN), j.platform_max)
+                    }
+                    None => return String::new(),
+                };
+                return format!(
+                    "t = {}: the {joint} joint of leg {} {what} its angle limit ({:.4} deg, limit {:.4} deg)",
+                    c.t,
+                    k + 1,
+                    theta.to_degrees(),
+                    max.to_degrees()
+                );
+            }
         };
         let (Some(l), Some(ldot)) = (legs.length.get(k), rates.get(k)) else { return String::new() };
-        let what = if c.rising { "left" } else { "reached" };
         format!("t = {}: leg {} {what} its {stop} end stop (l = {l} m, ldot = {ldot} m/s)", c.t, k + 1)
     }
 

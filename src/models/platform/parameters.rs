@@ -8,7 +8,10 @@ use crate::models::declare::IntegerStorage;
 use crate::physics::body::kinematics::rotation_from_angles;
 use crate::physics::body::state::{BodyState, STATE_DIM};
 use crate::physics::direct_problem::SINGULAR_CONDITION_NUMBER;
+use crate::physics::legs::bodies::LegBodies;
 use crate::physics::legs::end_stops::EndStops;
+use crate::physics::legs::friction::Friction;
+use crate::physics::legs::joint_limits::{self, JointLimits};
 use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::{LEG_COUNT, PAPER_EQUILIBRIUM_LEG_FORCE, Stand};
 use crate::simulation::outputs::condition_number;
@@ -32,6 +35,45 @@ pub struct PlatformParameters {
     pub stops: EndStops,
     /// `stopAtSingularity`.
     pub stop_at_singularity: bool,
+    /// `leg.*`: the legs as bodies.
+    pub legs: LegBodies,
+    /// `friction.*`.
+    pub friction: Friction,
+    /// `joints`: whether the joint limits act.
+    pub joints_enabled: bool,
+    /// `joints.*`.
+    pub joints: JointParameters,
+}
+
+/// The joint-limit parameters (`joints.*`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JointParameters {
+    /// `joints.baseMaxAngle`, rad.
+    pub base_max: f64,
+    /// `joints.platformMaxAngle`, rad.
+    pub platform_max: f64,
+    /// `joints.stiffness`, N m/rad.
+    pub stiffness: f64,
+    /// `joints.damping`, N m s/rad.
+    pub damping: f64,
+    /// `joints.r0`: the reference pose's centre of mass, m.
+    pub r0: Vector3<f64>,
+    /// `joints.angles0`: the reference pose's roll, pitch, yaw, rad.
+    pub angles0: Vector3<f64>,
+}
+
+impl Default for JointParameters {
+    /// The default limits about the default stand's neutral pose.
+    fn default() -> Self {
+        JointParameters {
+            base_max: joint_limits::DEFAULT_BASE_MAX_ANGLE,
+            platform_max: joint_limits::DEFAULT_PLATFORM_MAX_ANGLE,
+            stiffness: joint_limits::DEFAULT_STIFFNESS,
+            damping: joint_limits::DEFAULT_DAMPING,
+            r0: Stand::truck_cabin_neutral_position(),
+            angles0: Vector3::zeros(),
+        }
+    }
 }
 
 impl Default for PlatformParameters {
@@ -49,6 +91,10 @@ impl Default for PlatformParameters {
             stops_enabled: true,
             stops: EndStops::default(),
             stop_at_singularity: false,
+            legs: LegBodies::default(),
+            friction: Friction::default(),
+            joints_enabled: true,
+            joints: JointParameters::default(),
         }
     }
 }
@@ -91,9 +137,27 @@ impl PlatformParameters {
         self.stops_enabled.then_some(self.stops)
     }
 
+    /// The joint limits if they are on (about the reference pose; `None` where a leg
+    /// collapses at the reference pose, which [`PlatformParameters::simulation`] refuses).
+    pub fn joint_limits(&self) -> Option<JointLimits> {
+        if !self.joints_enabled {
+            return None;
+        }
+        let j = &self.joints;
+        let rotation0 = rotation_from_angles(&j.angles0);
+        let mut n0 = [Vector3::zeros(); LEG_COUNT];
+        for k in 0..LEG_COUNT {
+            let leg = j.r0 + rotation0 * self.stand.platform_joints[k] - self.stand.base_joints[k];
+            n0[k] = leg.try_normalize(0.0)?;
+        }
+        Some(JointLimits::new(j.base_max, j.platform_max, j.stiffness, j.damping, n0, &rotation0))
+    }
+
     /// The special form these parameters describe (before initialisation).
     pub fn special_form(&self) -> SpecialForm {
-        SpecialForm::new(self.stand.clone()).with_end_stops(self.end_stops())
+        SpecialForm::new(self.stand.clone())
+            .with_end_stops(self.end_stops())
+            .with_machine(self.legs, self.friction, self.joint_limits())
     }
 
     /// The simulation state these parameters describe (before initialisation).
@@ -121,6 +185,23 @@ impl PlatformParameters {
         )
         .and_then(|sim| sim.with_end_stops(self.end_stops()))
         .map_err(|e| e.to_string())?;
+        self.legs.validate().map_err(|e| e.to_string())?;
+        self.friction.validate().map_err(|e| e.to_string())?;
+        let joint_limits = if self.joints_enabled {
+            let limits = self.joint_limits().ok_or_else(|| {
+                "parameter joints.r0: a leg has zero length in the joint limits' reference pose (joints.r0, \
+                 joints.angles0)"
+                    .to_string()
+            })?;
+            limits.validate().map_err(|e| e.to_string())?;
+            Some(limits)
+        } else {
+            None
+        };
+        sim.form = sim.form.clone().with_machine(self.legs, self.friction, joint_limits);
+        if let Some(limits) = &joint_limits {
+            check_initial_joint_angles(limits, &sim)?;
+        }
         sim.stop_at_singularity = self.stop_at_singularity;
         if self.stop_at_singularity {
             let kappa = condition_number(sim.stand(), &sim.state);
@@ -235,4 +316,30 @@ impl IntegerStorage for Stabilisation {
             .ok_or_else(|| format!("{code} is not a stabilisation (1 = none, 2 = projection, 3 = Baumgarte)"))?;
         Ok(())
     }
+}
+
+/// Refuses an initial pose with a joint beyond its limit by more than the angle at which one
+/// joint's limit alone holds the platform's weight on a lever of the stand's characteristic
+/// length (a pose at rest on its limits is allowed, as on the end stops).
+fn check_initial_joint_angles(limits: &JointLimits, sim: &PlatformSimulation) -> Result<(), String> {
+    let stand = sim.stand();
+    let outputs = crate::simulation::PlatformOutputs::compute(&sim.form, &sim.state, None);
+    let allowed = stand.mass * stand.gravity * stand.characteristic_length() / limits.stiffness;
+    for k in 0..LEG_COUNT {
+        for (which, name, theta, max) in [
+            ("base", "joints.baseMaxAngle", outputs.theta_b[k], limits.base_max),
+            ("platform", "joints.platformMaxAngle", outputs.theta_a[k], limits.platform_max),
+        ] {
+            if theta - max > allowed {
+                return Err(format!(
+                    "parameter r0: in the initial pose the {which} joint of leg {} is at {theta:e} rad from the \
+                     reference pose (joints.r0, joints.angles0), beyond {name} = {max:e} rad by more than the \
+                     static deflection M g / joints.stiffness x the stand's size ({allowed:e} rad): move the initial \
+                     pose, the reference pose or the limit",
+                    k + 1
+                ));
+            }
+        }
+    }
+    Ok(())
 }

@@ -74,7 +74,82 @@ const ALL_PARAMETERS: &[crate::models::variables::Dependency] = &[
     All("lmax"),
     All("stops.stiffness"),
     All("stops.damping"),
+    All("leg.cylinderMass"),
+    All("leg.rodMass"),
+    All("leg.cylinderCoM"),
+    All("leg.rodCoM"),
+    All("leg.cylinderInertia"),
+    All("leg.rodInertia"),
+    All("joints"),
+    All("joints.baseMaxAngle"),
+    All("joints.platformMaxAngle"),
+    All("joints.stiffness"),
+    All("joints.damping"),
+    All("joints.r0"),
+    All("joints.angles0"),
+    All("friction.coulomb"),
+    All("friction.static"),
+    All("friction.stribeckVelocity"),
+    All("friction.smoothing"),
+    All("friction.viscous"),
 ];
+/// What the energy depends on in Initialization Mode: the stand, the initial state, the
+/// potentials' parameters and the legs' masses.
+const ENERGY_PARAMETERS: &[crate::models::variables::Dependency] = &[
+    All("M"),
+    All("J"),
+    All("g"),
+    All("A"),
+    All("B"),
+    All("r0"),
+    All("angles0"),
+    All("v0"),
+    All("w0"),
+    All("stops"),
+    All("lmin"),
+    All("lmax"),
+    All("stops.stiffness"),
+    All("leg.cylinderMass"),
+    All("leg.rodMass"),
+    All("leg.cylinderCoM"),
+    All("leg.rodCoM"),
+    All("leg.cylinderInertia"),
+    All("leg.rodInertia"),
+    All("joints"),
+    All("joints.baseMaxAngle"),
+    All("joints.platformMaxAngle"),
+    All("joints.stiffness"),
+    All("joints.r0"),
+    All("joints.angles0"),
+];
+/// What the dissipated power depends on in Initialization Mode.
+const DISSIPATION_PARAMETERS: &[crate::models::variables::Dependency] = &[
+    All("A"),
+    All("B"),
+    All("r0"),
+    All("angles0"),
+    All("v0"),
+    All("w0"),
+    All("stops"),
+    All("lmin"),
+    All("lmax"),
+    All("stops.stiffness"),
+    All("stops.damping"),
+    All("joints"),
+    All("joints.baseMaxAngle"),
+    All("joints.platformMaxAngle"),
+    All("joints.stiffness"),
+    All("joints.damping"),
+    All("joints.r0"),
+    All("joints.angles0"),
+    All("friction.coulomb"),
+    All("friction.static"),
+    All("friction.stribeckVelocity"),
+    All("friction.smoothing"),
+    All("friction.viscous"),
+];
+const JOINT_ANGLE_PARAMETERS: &[crate::models::variables::Dependency] =
+    &[All("A"), All("B"), All("r0"), All("angles0"), All("joints"), All("joints.r0"), All("joints.angles0")];
 
 declare_variables! {
     model: super::PlatformModel,
@@ -82,8 +157,10 @@ declare_variables! {
     cache_blocks: [
         // What a controller reads every step, computed alone.
         leg_outputs,
-        // Every other output of `PlatformOutputs`.
+        // Every other output of `PlatformOutputs` that depends on the state alone.
         outputs,
+        // The joints' forces: they depend on the leg forces too.
+        joint_force_outputs,
     ],
     variables: {
         TIME => V::time(0); computed,
@@ -209,23 +286,10 @@ declare_variables! {
             &[],
             133,
             Some("J"),
-            "Kinetic plus gravitational potential energy plus the end stops' potential energy M v^2/2 + w.J w/2 + M g z \
-             + sum_k V_k (E(t) - E(0) = work.F - work.dissipated)",
-            &[
-                All("M"),
-                All("J"),
-                All("g"),
-                All("A"),
-                All("B"),
-                All("r0"),
-                All("angles0"),
-                All("v0"),
-                All("w0"),
-                All("stops"),
-                All("lmin"),
-                All("lmax"),
-                All("stops.stiffness"),
-            ],
+            "Energy: the platform's kinetic and gravitational potential energy M v^2/2 + w.J w/2 + M g z, the legs' \
+             kinetic and potential energy, and the end stops' and joint limits' potentials (E(t) - E(0) = work.F - \
+             work.dissipated)",
+            ENERGY_PARAMETERS,
         )
         .depends_on(ALL_STATES); cached(outputs.energy),
         CONSTRAINT_ERROR => V::output(
@@ -351,7 +415,8 @@ declare_variables! {
             &[],
             208,
             Some("J"),
-            "Energy taken by the end stops' damping since the start (>= 0; Model Exchange state)",
+            "Energy taken since the start by the end stops' and joint limits' damping and by the cylinders' friction \
+             (>= 0; Model Exchange state)",
             &[],
         ); cached(outputs.dissipated_energy),
         DER_WORK_F => V::local(
@@ -368,21 +433,119 @@ declare_variables! {
             &[],
             211,
             Some("W"),
-            "Power taken by the end stops' damping (Model Exchange derivative of work.dissipated)",
-            STOP_PARAMETERS,
+            "Power taken by the end stops' and joint limits' damping and by friction (Model Exchange derivative of \
+             work.dissipated)",
+            DISSIPATION_PARAMETERS,
         )
         .derivative("work.dissipated", "work.dissipated", 1, ALL_STATES); derivative,
         EVENT_INDICATORS => V::local(
             "eventIndicators",
-            &[13],
+            &[25],
             220,
             Some("1"),
-            "Event indicators (FMI 3 Model Exchange): l_k - lmin_k (k = 1..6, m), lmax_k - l_k (m), and the determinant of \
-             the leg force/moment matrix (moment rows divided by the stand's characteristic length); a sign change is a \
-             contact onset or release, or a passage through a singular leg arrangement. Constant 1 for the stroke limits \
-             when the end stops are off",
+            "Event indicators (FMI 3 Model Exchange): l_k - lmin_k (k = 1..6, m), lmax_k - l_k (m), the determinant of \
+             the leg force/moment matrix (moment rows divided by the stand's characteristic length), cos thetaB_k - \
+             cos(joints.baseMaxAngle) and cos thetaA_k - cos(joints.platformMaxAngle); a sign change is a contact onset \
+             or release, a passage through a singular leg arrangement, or a joint reaching or leaving its limit. \
+             Constant 1 for the stroke limits when the end stops are off, and for the joints when the joint limits are off",
             &[],
         )
         .fmi3_only(); computed,
+        LEG_CYLINDER_MASS => V::parameter(
+            "leg.cylinderMass", &[], 300, Some("kg"),
+            "Mass m_c of each leg's cylinder (barrel), hinged at B_k; 0 with leg.rodMass and the inertias = the paper's \
+             massless legs",
+        ); real(parameters.legs.cylinder_mass),
+        LEG_ROD_MASS => V::parameter(
+            "leg.rodMass", &[], 301, Some("kg"), "Mass m_r of each leg's rod (piston), hinged at A_k",
+        ); real(parameters.legs.rod_mass),
+        LEG_CYLINDER_COM => V::parameter(
+            "leg.cylinderCoM", &[], 302, Some("m"), "Distance d_c of the cylinder's centre of mass from B_k along the leg",
+        ); real(parameters.legs.cylinder_com),
+        LEG_ROD_COM => V::parameter(
+            "leg.rodCoM", &[], 303, Some("m"), "Distance d_r of the rod's centre of mass from A_k back along the leg",
+        ); real(parameters.legs.rod_com),
+        LEG_CYLINDER_INERTIA => V::parameter(
+            "leg.cylinderInertia", &[], 304, Some("kg.m2"),
+            "Transverse moment of inertia J_c of the cylinder about its centre of mass (spin about the leg is ignored)",
+        ); real(parameters.legs.cylinder_inertia),
+        LEG_ROD_INERTIA => V::parameter(
+            "leg.rodInertia", &[], 305, Some("kg.m2"), "Transverse moment of inertia J_r of the rod about its centre of mass",
+        ); real(parameters.legs.rod_inertia),
+        JOINTS => V::parameter(
+            "joints", &[], 310, None,
+            "Joint limits on: each base and platform joint angle (from the reference pose joints.r0, joints.angles0) is \
+             limited by a unilateral virtual potential with contact damping. false = the paper's unlimited joints",
+        )
+        .boolean(); boolean(parameters.joints_enabled),
+        JOINTS_BASE_MAX => V::parameter(
+            "joints.baseMaxAngle", &[], 311, Some("rad"),
+            "Largest angle thetaB of a base joint from its direction at the reference pose",
+        )
+        .display("deg"); real(parameters.joints.base_max),
+        JOINTS_PLATFORM_MAX => V::parameter(
+            "joints.platformMaxAngle", &[], 312, Some("rad"),
+            "Largest angle thetaA of a platform joint from its direction (in the body frame) at the reference pose",
+        )
+        .display("deg"); real(parameters.joints.platform_max),
+        JOINTS_STIFFNESS => V::parameter(
+            "joints.stiffness", &[], 313, Some("N.m/rad"),
+            "Joint-limit stiffness k_j: beyond its limit a joint's moment is k_j times the excess angle (potential \
+             k_j delta^2 / 2)",
+        ); real(parameters.joints.stiffness),
+        JOINTS_DAMPING => V::parameter(
+            "joints.damping", &[], 314, Some("N.m.s/rad"),
+            "Joint-limit damping c_j: a damping moment c_j dtheta/dt in contact only, limited to the spring's k_j delta \
+             so that it starts from zero at the onset and never pulls back into the limit (0 = elastic limits)",
+        ); real(parameters.joints.damping),
+        JOINTS_R0 => V::parameter(
+            "joints.r0", &[3], 315, Some("m"),
+            "Centre of mass of the reference pose the joint angles are measured from (default: the neutral pose)",
+        ); real(parameters.joints.r0),
+        JOINTS_ANGLES0 => V::parameter(
+            "joints.angles0", &[3], 318, Some("rad"), "Roll, pitch, yaw of the joint angles' reference pose",
+        )
+        .display("deg"); real(parameters.joints.angles0),
+        FRICTION_COULOMB => V::parameter(
+            "friction.coulomb", &[], 330, Some("N"), "Coulomb friction force F_c of each cylinder (0 = no friction)",
+        ); real(parameters.friction.coulomb),
+        FRICTION_STATIC => V::parameter(
+            "friction.static", &[], 331, Some("N"),
+            "Static (breakaway) friction force F_s of each cylinder: the level at low speed, decaying to F_c (Stribeck)",
+        ); real(parameters.friction.static_),
+        FRICTION_STRIBECK => V::parameter(
+            "friction.stribeckVelocity", &[], 332, Some("m/s"),
+            "Stribeck velocity v_s: the friction level decays from F_s to F_c like exp(-(ldot/v_s)^2)",
+        ); real(parameters.friction.stribeck_velocity),
+        FRICTION_SMOOTHING => V::parameter(
+            "friction.smoothing", &[], 333, Some("m/s"),
+            "Smoothing velocity v_t of the friction's sign, tanh(ldot/v_t): the friction never sticks; smaller values \
+             approach sticking and make the equations stiffer",
+        ); real(parameters.friction.smoothing),
+        FRICTION_VISCOUS => V::parameter(
+            "friction.viscous", &[], 334, Some("N.s/m"), "Viscous friction coefficient sigma of each cylinder",
+        ); real(parameters.friction.viscous),
+        THETA_B => V::output(
+            "thetaB", &[6], 340, Some("rad"),
+            "Base joint angle thetaB_k: the angle between leg k and its direction at the joint limits' reference pose",
+            JOINT_ANGLE_PARAMETERS,
+        )
+        .display("deg")
+        .depends_on(POSE_STATES); cached(outputs.theta_b),
+        THETA_A => V::output(
+            "thetaA", &[6], 346, Some("rad"),
+            "Platform joint angle thetaA_k: the angle between leg k and its direction at the reference pose, both in \
+             the body frame",
+            JOINT_ANGLE_PARAMETERS,
+        )
+        .display("deg")
+        .depends_on(POSE_STATES); cached(outputs.theta_a),
+        JOINT_FORCE => V::output(
+            "jointForce", &[6, 3], 352, Some("N"),
+            "Force of leg k on the platform at its joint A_k (row k: x, y, z, inertial frame): the actuator, friction, \
+             end-stop and joint-limit forces and the leg's weight and inertia; what the joint must be sized for",
+            ALL_PARAMETERS,
+        )
+        .depends_on(MOTION_KNOWNS); cached(joint_force_outputs.joint_force),
     }
 }
