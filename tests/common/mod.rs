@@ -3,6 +3,7 @@
 
 pub mod fmi3_host;
 pub mod fmi_host;
+pub mod machine_oracle;
 pub mod newton_euler;
 pub mod rng;
 

@@ -1,0 +1,1185 @@
+//! An independent reference formulation ("oracle") of the whole machine of SPEC §1, §6, §8
+//! and §9: the loaded platform on six legs that are two bodies each (cylinder and rod), with
+//! end stops, joint limits, cylinder friction and optional DC drives.
+//!
+//! Formulation: Kane's equations (d'Alembert's principle in generalised speeds) with the
+//! generalised speeds `nu = (v, w)`: `v` the centre-of-mass velocity (inertial components),
+//! `w` the angular velocity (body components). Every leg is written as a set of "particles"
+//! whose kinetic energies add up to the leg's `T` of SPEC §8: the cylinder's centre of mass
+//! `c_k` (mass `m_c`), the rod's centre of mass `p_k` (mass `m_r`), the unit vector `n_k`
+//! itself (a fictitious particle of mass `J_c + J_r`: the transverse rotation energy is
+//! `1/2 (J_c + J_r) |n_k'|^2`) and, with drives, the leg length `l_k` (a 1-D particle of mass
+//! `J_m N^2`: the rotor's `1/2 J_m omega^2`). For each particle `x(q)`, `x' = P_x nu` (partial
+//! velocities `P_x`) and `x'' = P_x nu' + b_x(nu)`; Kane's equations read
+//!
+//!     [diag(M, M, M, J1, J2, J3) + sum_x m_x P_x^T P_x] nu' =
+//!         Q - (0, w x J w) - sum_x m_x P_x^T b_x
+//!
+//! with the generalised active forces `Q`: gravity (`-M g ez` on the platform, `-m g ez` on
+//! `c_k`, `p_k`), the leg's axial force `(u_k + f_k + stop_k) P_l^T`, the joint limits'
+//! `-(k_j delta + damping) P_theta^T`. The partial velocities and the velocity-product
+//! accelerations `b_x` come from second-order Taylor jets in time (value, first and second
+//! time derivative) pushed through the kinematics: the platform's jets `r(t)`, `R(t)` with
+//! `R' = R [w]x`, `R'' = R ([w']x + [w]x^2)`, evaluated once with `(nu, nu' = 0)` (giving
+//! `b_x`) and six times with `(nu = e_j, nu' = 0)` (giving the columns of `P_x`).
+//! Orientation: a unit quaternion, `q' = q (0, w) / 2`. Integration: classical RK4 at a fixed
+//! substep (at most `max_step`, an exact divisor of the communication step), inputs held over
+//! each communication step, with event location: a substep that would straddle a kink of the
+//! right-hand side (contact onset or release of an end stop or joint limit, a switch of the
+//! damping's clamp) is cut at the crossing. Work accumulators ride along as extra states.
+//!
+//! The joint forces (`joint_forces`) come from a separate Newton-Euler balance of each leg:
+//! the rod's axial equation and the whole leg's moment about `B_k`.
+//!
+//! Readings of SPEC §6/§8/§9 where it leaves room:
+//! - joint angles `theta = atan2(|n x n_ref|, n . n_ref)` in `[0, pi]`; reference directions
+//!   from the pose `(reference_r, R_ref = Rx Ry Rz(reference_angles))`: `nB_ref` the leg
+//!   direction there (inertial), `nA_ref = R_ref^T nB_ref` (body); the platform angle is
+//!   between `R^T n` and `nA_ref`;
+//! - joint-limit moment (magnitude, reducing `theta`): `k_j delta + clamp(c_j theta', -k_j
+//!   delta, k_j delta)`, `delta = theta - thetaMax > 0`, `theta'` the angle's own rate. The
+//!   base limit acts between ground and cylinder, the platform limit between platform and
+//!   rod (equal and opposite), about `n x n_ref`; in Kane's equations it is the generalised
+//!   force `-(moment) d theta'/d nu`;
+//! - end-stop force along the leg (sign as `u`): `+(k pen + clamp(c pen', -k pen, k pen))`
+//!   at the lower stop (`pen = lmin - l`), `-(...)` at the upper (`pen = l - lmax`);
+//! - the universal joint at `B_k` transmits no moment (with zero axial inertia and all other
+//!   moments on the leg transverse, the axial balance makes its constraint torque vanish);
+//! - drives: the rotor's inertia reaction passes through the screw, so the axial force the
+//!   rod receives is `u + f + stop - J_m N^2 l''`; no gyroscopic rotor terms (SPEC §9).
+
+use nalgebra::{Matrix3, Matrix6, Rotation3, UnitQuaternion, Vector3, Vector6};
+use std::ops::{Add, Mul, Neg, Sub};
+
+// ------------------------------------------------------------------------------------------
+// Parameters, state, inputs
+// ------------------------------------------------------------------------------------------
+
+#[derive(Clone, Copy, Debug)]
+pub struct OracleStops {
+    pub lmin: [f64; 6],
+    pub lmax: [f64; 6],
+    /// `k_s`, N/m.
+    pub stiffness: f64,
+    /// `c_s`, N.s/m: the damping force is `clamp(c_s * pen', -k_s pen, k_s pen)`.
+    pub damping: f64,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct OracleJoints {
+    /// Reference pose of the joint angles: centre of mass and 1-2-3 angles.
+    pub reference_r: [f64; 3],
+    pub reference_angles: [f64; 3],
+    pub base_max: f64,
+    pub platform_max: f64,
+    /// `k_j`, N.m/rad.
+    pub stiffness: f64,
+    /// `c_j`, N.m.s/rad: the damping moment is `clamp(c_j delta', -k_j delta, k_j delta)`.
+    pub damping: f64,
+}
+
+#[derive(Clone, Copy, Debug, Default)]
+pub struct OracleFriction {
+    pub coulomb: f64,
+    pub static_: f64,
+    pub stribeck_velocity: f64,
+    pub smoothing: f64,
+    pub viscous: f64,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct OracleDrives {
+    pub resistance: f64,
+    pub inductance: f64,
+    pub ke: f64,
+    pub kt: f64,
+    pub rotor_inertia: f64,
+    pub damping: f64,
+    pub gear_ratio: f64,
+    pub screw_lead: f64,
+}
+
+impl OracleDrives {
+    /// `N = 2 pi i / p`, rad/m.
+    pub fn n(&self) -> f64 {
+        2.0 * std::f64::consts::PI * self.gear_ratio / self.screw_lead
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct OracleMachine {
+    pub mass: f64,
+    pub inertia: [f64; 3],
+    pub gravity: f64,
+    pub base_joints: [[f64; 3]; 6],
+    pub platform_joints: [[f64; 3]; 6],
+    pub cylinder_mass: f64,
+    pub rod_mass: f64,
+    pub cylinder_com: f64,
+    pub rod_com: f64,
+    pub cylinder_inertia: f64,
+    pub rod_inertia: f64,
+    pub stops: Option<OracleStops>,
+    pub joints: Option<OracleJoints>,
+    pub friction: OracleFriction,
+    pub drives: Option<OracleDrives>,
+    /// Largest RK4 substep (s); each communication step is cut into equal substeps.
+    pub max_step: f64,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct OracleState {
+    pub r: [f64; 3],
+    /// `R[a][b]`, body -> inertial, column b = e_b.
+    pub rotation: [[f64; 3]; 3],
+    pub v: [f64; 3],
+    /// Angular velocity, body components.
+    pub w: [f64; 3],
+    pub currents: [f64; 6],
+}
+
+impl OracleState {
+    pub fn at_rest(r: [f64; 3], rotation: [[f64; 3]; 3]) -> Self {
+        OracleState { r, rotation, v: [0.0; 3], w: [0.0; 3], currents: [0.0; 6] }
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+pub enum OracleInputs {
+    /// Leg forces `u_k` (N), no drives.
+    Forces([f64; 6]),
+    /// Armature voltages `U_k` (V), drives required.
+    Voltages([f64; 6]),
+    /// Linear springs `u_k = -stiffness (l_k - rest_k)` evaluated inside the right-hand side
+    /// (a conservative leg law for the energy checks), no drives.
+    Springs { stiffness: f64, rest: [f64; 6] },
+}
+
+/// Work accumulated since the start of a run (J).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct OracleWork {
+    /// Work of the leg forces `u_k` (inputs `Forces` or `Springs`), `integral sum u_k ldot_k`.
+    pub forces: f64,
+    /// Electric energy supplied, `integral sum U_k I_k`.
+    pub electric: f64,
+    /// Dissipated: friction, end-stop and joint-limit damping, `R I^2`, `D omega^2` and the
+    /// conversion mismatch `(k_e - k_t) omega I`.
+    pub dissipated: f64,
+}
+
+/// The axial forces and joint-limit moments of one evaluation (diagnostics).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct OracleLegForces {
+    /// `u_k` (from the input, the spring law or the drive).
+    pub actuator: [f64; 6],
+    pub friction: [f64; 6],
+    /// End-stop force along the leg (sign as `u_k`): elastic and damping parts.
+    pub stop_elastic: [f64; 6],
+    pub stop_damping: [f64; 6],
+    /// Joint-limit moments (magnitudes, acting to reduce the angle): elastic `k_j delta`
+    /// and damping `clamp(c_j delta', ...)`, base and platform joints.
+    pub base_elastic: [f64; 6],
+    pub base_damping: [f64; 6],
+    pub platform_elastic: [f64; 6],
+    pub platform_damping: [f64; 6],
+}
+
+// ------------------------------------------------------------------------------------------
+// Second-order Taylor jets in time
+// ------------------------------------------------------------------------------------------
+
+/// `x(t0)`, `x'(t0)`, `x''(t0)`.
+#[derive(Clone, Copy, Debug, Default)]
+struct Jet {
+    v: f64,
+    d: f64,
+    dd: f64,
+}
+
+impl Jet {
+    fn cst(v: f64) -> Jet {
+        Jet { v, d: 0.0, dd: 0.0 }
+    }
+    fn scale(self, a: f64) -> Jet {
+        Jet { v: self.v * a, d: self.d * a, dd: self.dd * a }
+    }
+    /// `f(x(t))` from `f(x)`, `f'(x)`, `f''(x)`.
+    fn chain(self, f0: f64, f1: f64, f2: f64) -> Jet {
+        Jet { v: f0, d: f1 * self.d, dd: f2 * self.d * self.d + f1 * self.dd }
+    }
+    fn sqrt(self) -> Jet {
+        let s = self.v.sqrt();
+        self.chain(s, 0.5 / s, -0.25 / (s * s * s))
+    }
+    fn recip(self) -> Jet {
+        let r = 1.0 / self.v;
+        self.chain(r, -r * r, 2.0 * r * r * r)
+    }
+}
+
+impl Add for Jet {
+    type Output = Jet;
+    fn add(self, o: Jet) -> Jet {
+        Jet { v: self.v + o.v, d: self.d + o.d, dd: self.dd + o.dd }
+    }
+}
+impl Sub for Jet {
+    type Output = Jet;
+    fn sub(self, o: Jet) -> Jet {
+        Jet { v: self.v - o.v, d: self.d - o.d, dd: self.dd - o.dd }
+    }
+}
+impl Neg for Jet {
+    type Output = Jet;
+    fn neg(self) -> Jet {
+        Jet { v: -self.v, d: -self.d, dd: -self.dd }
+    }
+}
+impl Mul for Jet {
+    type Output = Jet;
+    fn mul(self, o: Jet) -> Jet {
+        Jet { v: self.v * o.v, d: self.d * o.v + self.v * o.d, dd: self.dd * o.v + 2.0 * self.d * o.d + self.v * o.dd }
+    }
+}
+
+type JV = [Jet; 3];
+
+fn jv_const(x: &Vector3<f64>) -> JV {
+    [Jet::cst(x.x), Jet::cst(x.y), Jet::cst(x.z)]
+}
+fn jv_add(a: &JV, b: &JV) -> JV {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+fn jv_sub(a: &JV, b: &JV) -> JV {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+fn jv_mul(a: &JV, s: Jet) -> JV {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
+fn jv_scale(a: &JV, s: f64) -> JV {
+    [a[0].scale(s), a[1].scale(s), a[2].scale(s)]
+}
+fn jv_dot(a: &JV, b: &JV) -> Jet {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+fn jv_val(a: &JV) -> Vector3<f64> {
+    Vector3::new(a[0].v, a[1].v, a[2].v)
+}
+fn jv_d(a: &JV) -> Vector3<f64> {
+    Vector3::new(a[0].d, a[1].d, a[2].d)
+}
+fn jv_dd(a: &JV) -> Vector3<f64> {
+    Vector3::new(a[0].dd, a[1].dd, a[2].dd)
+}
+
+/// The platform's pose as jets: `r(t)` and `R(t)`.
+struct PlatformJet {
+    r: JV,
+    rot: [[Jet; 3]; 3],
+}
+
+fn skew(w: &Vector3<f64>) -> Matrix3<f64> {
+    Matrix3::new(0.0, -w.z, w.y, w.z, 0.0, -w.x, -w.y, w.x, 0.0)
+}
+
+fn platform_jet(
+    r: &Vector3<f64>,
+    rot: &Matrix3<f64>,
+    v: &Vector3<f64>,
+    w: &Vector3<f64>,
+    vd: &Vector3<f64>,
+    wd: &Vector3<f64>,
+) -> PlatformJet {
+    let ww = skew(w);
+    let rd = rot * ww;
+    let rdd = rot * (skew(wd) + ww * ww);
+    let mut m = [[Jet::default(); 3]; 3];
+    for a in 0..3 {
+        for b in 0..3 {
+            m[a][b] = Jet { v: rot[(a, b)], d: rd[(a, b)], dd: rdd[(a, b)] };
+        }
+    }
+    PlatformJet {
+        r: [Jet { v: r.x, d: v.x, dd: vd.x }, Jet { v: r.y, d: v.y, dd: vd.y }, Jet { v: r.z, d: v.z, dd: vd.z }],
+        rot: m,
+    }
+}
+
+/// `R x` for a constant body vector `x`.
+fn rot_const(rot: &[[Jet; 3]; 3], x: &Vector3<f64>) -> JV {
+    let mut out = [Jet::default(); 3];
+    for a in 0..3 {
+        out[a] = rot[a][0].scale(x.x) + rot[a][1].scale(x.y) + rot[a][2].scale(x.z);
+    }
+    out
+}
+
+/// `R^T x`.
+fn rot_t(rot: &[[Jet; 3]; 3], x: &JV) -> JV {
+    let mut out = [Jet::default(); 3];
+    for b in 0..3 {
+        out[b] = rot[0][b] * x[0] + rot[1][b] * x[1] + rot[2][b] * x[2];
+    }
+    out
+}
+
+/// One leg's kinematic quantities as jets.
+#[derive(Clone, Copy, Default)]
+struct LegJet {
+    l: Jet,
+    n: JV,
+    c: JV,
+    p: JV,
+    /// `cos thetaB = n . nB_ref`, `cos thetaA = (R^T n) . nA_ref`.
+    cos_b: Jet,
+    cos_a: Jet,
+}
+
+/// The joint angles' reference directions: inertial (base joints) and body (platform joints).
+#[derive(Clone, Copy)]
+struct Refs {
+    base: [Vector3<f64>; 6],
+    platform: [Vector3<f64>; 6],
+}
+
+// ------------------------------------------------------------------------------------------
+// Helpers
+// ------------------------------------------------------------------------------------------
+
+/// `R = Rx(roll) Ry(pitch) Rz(yaw)`, counter-clockwise positive.
+pub fn rotation_from_angles(angles: [f64; 3]) -> [[f64; 3]; 3] {
+    let (s1, c1) = angles[0].sin_cos();
+    let (s2, c2) = angles[1].sin_cos();
+    let (s3, c3) = angles[2].sin_cos();
+    let rx = Matrix3::new(1.0, 0.0, 0.0, 0.0, c1, -s1, 0.0, s1, c1);
+    let ry = Matrix3::new(c2, 0.0, s2, 0.0, 1.0, 0.0, -s2, 0.0, c2);
+    let rz = Matrix3::new(c3, -s3, 0.0, s3, c3, 0.0, 0.0, 0.0, 1.0);
+    to_arr(&(rx * ry * rz))
+}
+
+pub fn identity_rotation() -> [[f64; 3]; 3] {
+    [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+}
+
+/// SPEC §2: the neutral centre of mass of the default stand.
+pub const NEUTRAL_R: [f64; 3] = [0.0, 0.0, 1.9589244164161732];
+/// SPEC §2: the paper's equilibrium leg force, in units of `M g`.
+pub const EQUILIBRIUM_LEG_FORCE: f64 = 0.2005;
+
+fn to_mat(m: &[[f64; 3]; 3]) -> Matrix3<f64> {
+    Matrix3::new(m[0][0], m[0][1], m[0][2], m[1][0], m[1][1], m[1][2], m[2][0], m[2][1], m[2][2])
+}
+fn to_arr(m: &Matrix3<f64>) -> [[f64; 3]; 3] {
+    let mut a = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            a[i][j] = m[(i, j)];
+        }
+    }
+    a
+}
+fn v3(a: [f64; 3]) -> Vector3<f64> {
+    Vector3::new(a[0], a[1], a[2])
+}
+fn angle_between(a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
+    a.cross(b).norm().atan2(a.dot(b))
+}
+fn clamp(x: f64, lo: f64, hi: f64) -> f64 {
+    x.max(lo).min(hi)
+}
+
+/// Quaternion (w, x, y, z), normalised inside, to the rotation matrix body -> inertial.
+fn quat_to_mat(q: &[f64]) -> Matrix3<f64> {
+    let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
+    let (w, x, y, z) = (q[0] / n, q[1] / n, q[2] / n, q[3] / n);
+    Matrix3::new(
+        1.0 - 2.0 * (y * y + z * z),
+        2.0 * (x * y - w * z),
+        2.0 * (x * z + w * y),
+        2.0 * (x * y + w * z),
+        1.0 - 2.0 * (x * x + z * z),
+        2.0 * (y * z - w * x),
+        2.0 * (x * z - w * y),
+        2.0 * (y * z + w * x),
+        1.0 - 2.0 * (x * x + y * y),
+    )
+}
+
+/// Layout of the integrated vector.
+const NX: usize = 22;
+const IR: usize = 0; // r: 3
+const IQ: usize = 3; // quaternion: 4
+const IV: usize = 7; // v: 3
+const IW: usize = 10; // w: 3
+const II: usize = 13; // currents: 6
+const IWF: usize = 19; // work of the forces
+const IWE: usize = 20; // electric work
+const IWD: usize = 21; // dissipated
+
+type Unpacked = (Vector3<f64>, Matrix3<f64>, Vector3<f64>, Vector3<f64>, [f64; 6]);
+
+/// Everything one evaluation of the dynamics gives.
+struct Dynamics {
+    nu_dot: Vector6<f64>,
+    current_dot: [f64; 6],
+    forces: OracleLegForces,
+    power_forces: f64,
+    power_electric: f64,
+    power_dissipated: f64,
+}
+
+// ------------------------------------------------------------------------------------------
+// The machine
+// ------------------------------------------------------------------------------------------
+
+impl OracleMachine {
+    /// SPEC §2 truck-cabin stand; legs massless, no stops, joints, friction or drives.
+    pub fn default_stand() -> Self {
+        let (rb, rp, hc) = (1.5, 1.0, 0.5);
+        let base_deg = [-10.0f64, 10.0, 110.0, 130.0, 230.0, 250.0];
+        let plat_deg = [-50.0f64, 50.0, 70.0, 170.0, 190.0, 290.0];
+        let mut base_joints = [[0.0; 3]; 6];
+        let mut platform_joints = [[0.0; 3]; 6];
+        for k in 0..6 {
+            let (pb, pp) = (base_deg[k].to_radians(), plat_deg[k].to_radians());
+            base_joints[k] = [rb * pb.cos(), rb * pb.sin(), 0.0];
+            platform_joints[k] = [rp * pp.cos(), rp * pp.sin(), -hc];
+        }
+        OracleMachine {
+            mass: 3000.0,
+            inertia: [1500.0, 1500.0, 2200.0],
+            gravity: 9.81,
+            base_joints,
+            platform_joints,
+            cylinder_mass: 0.0,
+            rod_mass: 0.0,
+            cylinder_com: 0.0,
+            rod_com: 0.0,
+            cylinder_inertia: 0.0,
+            rod_inertia: 0.0,
+            stops: None,
+            joints: None,
+            friction: OracleFriction::default(),
+            drives: None,
+            max_step: 1e-5,
+        }
+    }
+
+    fn b(&self, k: usize) -> Vector3<f64> {
+        v3(self.base_joints[k])
+    }
+    fn a(&self, k: usize) -> Vector3<f64> {
+        v3(self.platform_joints[k])
+    }
+
+    fn refs(&self) -> Option<Refs> {
+        let j = self.joints.as_ref()?;
+        Some(self.refs_at(j.reference_r, j.reference_angles))
+    }
+
+    fn refs_at(&self, reference_r: [f64; 3], reference_angles: [f64; 3]) -> Refs {
+        let rot = to_mat(&rotation_from_angles(reference_angles));
+        let r = v3(reference_r);
+        let mut refs = Refs { base: [Vector3::zeros(); 6], platform: [Vector3::zeros(); 6] };
+        for k in 0..6 {
+            let n = (r + rot * self.a(k) - self.b(k)).normalize();
+            refs.base[k] = n;
+            refs.platform[k] = rot.transpose() * n;
+        }
+        refs
+    }
+
+    fn leg_jet(&self, k: usize, pj: &PlatformJet, refs: &Option<Refs>) -> LegJet {
+        let a = jv_add(&pj.r, &rot_const(&pj.rot, &self.a(k)));
+        let d = jv_sub(&a, &jv_const(&self.b(k)));
+        let l = jv_dot(&d, &d).sqrt();
+        let n = jv_mul(&d, l.recip());
+        let c = jv_add(&jv_const(&self.b(k)), &jv_scale(&n, self.cylinder_com));
+        let p = jv_sub(&a, &jv_scale(&n, self.rod_com));
+        let (cos_b, cos_a) = match refs {
+            Some(refs) => {
+                let m = rot_t(&pj.rot, &n);
+                (jv_dot(&n, &jv_const(&refs.base[k])), jv_dot(&m, &jv_const(&refs.platform[k])))
+            }
+            None => (Jet::cst(1.0), Jet::cst(1.0)),
+        };
+        LegJet { l, n, c, p, cos_b, cos_a }
+    }
+
+    fn legs(&self, pj: &PlatformJet, refs: &Option<Refs>) -> [LegJet; 6] {
+        let mut out = [LegJet::default(); 6];
+        for k in 0..6 {
+            out[k] = self.leg_jet(k, pj, refs);
+        }
+        out
+    }
+
+    /// The legs' jets for `nu = e_j`, `nu' = 0`, j = 0..6: their first derivatives are the
+    /// partial velocities.
+    fn unit_legs(&self, r: &Vector3<f64>, rot: &Matrix3<f64>, refs: &Option<Refs>) -> [[LegJet; 6]; 6] {
+        let z = Vector3::zeros();
+        let mut out = [[LegJet::default(); 6]; 6];
+        for j in 0..6 {
+            let mut nu = [0.0; 6];
+            nu[j] = 1.0;
+            let pj =
+                platform_jet(r, rot, &Vector3::new(nu[0], nu[1], nu[2]), &Vector3::new(nu[3], nu[4], nu[5]), &z, &z);
+            out[j] = self.legs(&pj, refs);
+        }
+        out
+    }
+
+    fn rotor_mass(&self) -> f64 {
+        self.drives.map_or(0.0, |d| d.rotor_inertia * d.n() * d.n())
+    }
+
+    /// A joint-limit angle's rate and partial rates (`d theta' / d nu_j`) from the cosine's
+    /// jets, when beyond the limit: `theta = acos(cos)`, `theta' = -cos' / sin theta`.
+    fn limit(cos0: &Jet, cos_unit: [f64; 6], sin: f64) -> (f64, [f64; 6]) {
+        let rate = -cos0.d / sin;
+        let mut partial = [0.0; 6];
+        for j in 0..6 {
+            partial[j] = -cos_unit[j] / sin;
+        }
+        (rate, partial)
+    }
+
+    /// Kane's equations: the accelerations, the currents' rates and the powers.
+    fn dynamics(
+        &self,
+        r: &Vector3<f64>,
+        rot: &Matrix3<f64>,
+        v: &Vector3<f64>,
+        w: &Vector3<f64>,
+        currents: &[f64; 6],
+        inputs: &OracleInputs,
+    ) -> Dynamics {
+        let refs = self.refs();
+        let z = Vector3::zeros();
+        let legs0 = self.legs(&platform_jet(r, rot, v, w, &z, &z), &refs);
+        let unit = self.unit_legs(r, rot, &refs);
+        let g = self.gravity;
+        let jt = self.cylinder_inertia + self.rod_inertia;
+        let jm = self.rotor_mass();
+        let jb = v3(self.inertia);
+
+        let mut mm = Matrix6::zeros();
+        for i in 0..3 {
+            mm[(i, i)] = self.mass;
+            mm[(3 + i, 3 + i)] = jb[i];
+        }
+        let mut rhs = Vector6::zeros();
+        rhs[2] = -self.mass * g;
+        let gyro = w.cross(&jb.component_mul(w));
+        for i in 0..3 {
+            rhs[3 + i] = -gyro[i];
+        }
+
+        let mut f = OracleLegForces::default();
+        let (mut p_forces, mut p_electric, mut p_diss) = (0.0, 0.0, 0.0);
+        let mut current_dot = [0.0; 6];
+        let ld: [f64; 6] = std::array::from_fn(|k| legs0[k].l.d);
+        let l: [f64; 6] = std::array::from_fn(|k| legs0[k].l.v);
+
+        // Actuator forces.
+        match (inputs, &self.drives) {
+            (OracleInputs::Forces(u), None) => {
+                f.actuator = *u;
+                p_forces = (0..6).map(|k| u[k] * ld[k]).sum();
+            }
+            (OracleInputs::Springs { stiffness, rest }, None) => {
+                for k in 0..6 {
+                    f.actuator[k] = -stiffness * (l[k] - rest[k]);
+                    p_forces += f.actuator[k] * ld[k];
+                }
+            }
+            (OracleInputs::Voltages(u), Some(d)) => {
+                let nn = d.n();
+                for k in 0..6 {
+                    let om = nn * ld[k];
+                    let i = currents[k];
+                    f.actuator[k] = nn * (d.kt * i - d.damping * om);
+                    current_dot[k] = (u[k] - d.resistance * i - d.ke * om) / d.inductance;
+                    p_electric += u[k] * i;
+                    p_diss += d.resistance * i * i + d.damping * om * om + (d.ke - d.kt) * om * i;
+                }
+            }
+            (inp, d) => {
+                panic!("inputs {inp:?} do not fit the drives {d:?}: forces and springs without drives, voltages with")
+            }
+        }
+
+        // Friction.
+        let fr = &self.friction;
+        for k in 0..6 {
+            let x = ld[k];
+            let mut fk = -fr.viscous * x;
+            if fr.coulomb != 0.0 || fr.static_ != 0.0 {
+                fk -= (fr.coulomb + (fr.static_ - fr.coulomb) * (-(x / fr.stribeck_velocity).powi(2)).exp())
+                    * (x / fr.smoothing).tanh();
+            }
+            f.friction[k] = fk;
+            p_diss -= fk * x;
+        }
+
+        // End stops.
+        if let Some(s) = &self.stops {
+            for k in 0..6 {
+                let (pen, pen_rate, sign) = if l[k] < s.lmin[k] {
+                    (s.lmin[k] - l[k], -ld[k], 1.0)
+                } else if l[k] > s.lmax[k] {
+                    (l[k] - s.lmax[k], ld[k], -1.0)
+                } else {
+                    continue;
+                };
+                let el = s.stiffness * pen;
+                let dmp = clamp(s.damping * pen_rate, -el, el);
+                f.stop_elastic[k] = sign * el;
+                f.stop_damping[k] = sign * dmp;
+                p_diss += dmp * pen_rate;
+            }
+        }
+
+        for k in 0..6 {
+            let lg = &legs0[k];
+            let pc = Matrix3x6::from_fn(|i, j| unit[j][k].c[i].d);
+            let pp = Matrix3x6::from_fn(|i, j| unit[j][k].p[i].d);
+            let pn = Matrix3x6::from_fn(|i, j| unit[j][k].n[i].d);
+            let pl = Vector6::from_fn(|j, _| unit[j][k].l.d);
+            // Generalised inertia.
+            mm += pc.transpose() * pc * self.cylinder_mass
+                + pp.transpose() * pp * self.rod_mass
+                + pn.transpose() * pn * jt
+                + pl * pl.transpose() * jm;
+            // Velocity-product accelerations.
+            rhs -= pc.transpose() * jv_dd(&lg.c) * self.cylinder_mass
+                + pp.transpose() * jv_dd(&lg.p) * self.rod_mass
+                + pn.transpose() * jv_dd(&lg.n) * jt
+                + pl * (lg.l.dd * jm);
+            // Gravity on the leg bodies.
+            rhs += pc.transpose() * Vector3::new(0.0, 0.0, -self.cylinder_mass * g)
+                + pp.transpose() * Vector3::new(0.0, 0.0, -self.rod_mass * g);
+            // Axial force between cylinder and rod.
+            let axial = f.actuator[k] + f.friction[k] + f.stop_elastic[k] + f.stop_damping[k];
+            rhs += pl * axial;
+        }
+
+        // Joint limits.
+        if let (Some(j), Some(refs)) = (&self.joints, &refs) {
+            for k in 0..6 {
+                let lg = &legs0[k];
+                let n = jv_val(&lg.n);
+                let rot_n = rot.transpose() * n;
+                for (base, theta, sin) in [
+                    (true, angle_between(&n, &refs.base[k]), n.cross(&refs.base[k]).norm()),
+                    (false, angle_between(&rot_n, &refs.platform[k]), rot_n.cross(&refs.platform[k]).norm()),
+                ] {
+                    let max = if base { j.base_max } else { j.platform_max };
+                    if theta <= max {
+                        continue;
+                    }
+                    let delta = theta - max;
+                    let cos0 = if base { lg.cos_b } else { lg.cos_a };
+                    let cos_unit =
+                        std::array::from_fn(|jj| if base { unit[jj][k].cos_b.d } else { unit[jj][k].cos_a.d });
+                    let (rate, partial) = Self::limit(&cos0, cos_unit, sin);
+                    let el = j.stiffness * delta;
+                    let dmp = clamp(j.damping * rate, -el, el);
+                    if base {
+                        f.base_elastic[k] = el;
+                        f.base_damping[k] = dmp;
+                    } else {
+                        f.platform_elastic[k] = el;
+                        f.platform_damping[k] = dmp;
+                    }
+                    p_diss += dmp * rate;
+                    for jj in 0..6 {
+                        rhs[jj] -= (el + dmp) * partial[jj];
+                    }
+                }
+            }
+        }
+
+        let nu_dot = mm.cholesky().expect("generalised mass matrix positive definite").solve(&rhs);
+        Dynamics {
+            nu_dot,
+            current_dot,
+            forces: f,
+            power_forces: p_forces,
+            power_electric: p_electric,
+            power_dissipated: p_diss,
+        }
+    }
+
+    /// `(r, R, v, w, currents)`.
+    fn unpack(x: &[f64; NX]) -> Unpacked {
+        (
+            Vector3::new(x[IR], x[IR + 1], x[IR + 2]),
+            quat_to_mat(&x[IQ..IQ + 4]),
+            Vector3::new(x[IV], x[IV + 1], x[IV + 2]),
+            Vector3::new(x[IW], x[IW + 1], x[IW + 2]),
+            std::array::from_fn(|k| x[II + k]),
+        )
+    }
+
+    fn pack(s: &OracleState) -> [f64; NX] {
+        let mut x = [0.0; NX];
+        let q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(to_mat(&s.rotation)));
+        let q = q.quaternion();
+        x[IR..IR + 3].copy_from_slice(&s.r);
+        x[IQ..IQ + 4].copy_from_slice(&[q.w, q.i, q.j, q.k]);
+        x[IV..IV + 3].copy_from_slice(&s.v);
+        x[IW..IW + 3].copy_from_slice(&s.w);
+        x[II..II + 6].copy_from_slice(&s.currents);
+        x
+    }
+
+    fn state_of(x: &[f64; NX]) -> OracleState {
+        let (r, rot, v, w, currents) = Self::unpack(x);
+        OracleState { r: r.into(), rotation: to_arr(&rot), v: v.into(), w: w.into(), currents }
+    }
+
+    fn derivative(&self, x: &[f64; NX], inputs: &OracleInputs) -> [f64; NX] {
+        let (r, rot, v, w, currents) = Self::unpack(x);
+        let dy = self.dynamics(&r, &rot, &v, &w, &currents, inputs);
+        let mut dx = [0.0; NX];
+        dx[IR..IR + 3].copy_from_slice(v.as_slice());
+        // q' = q (0, w) / 2.
+        let (q0, qv) = (x[IQ], Vector3::new(x[IQ + 1], x[IQ + 2], x[IQ + 3]));
+        let qvd = (w * q0 + qv.cross(&w)) * 0.5;
+        dx[IQ] = -0.5 * qv.dot(&w);
+        dx[IQ + 1..IQ + 4].copy_from_slice(qvd.as_slice());
+        for i in 0..3 {
+            dx[IV + i] = dy.nu_dot[i];
+            dx[IW + i] = dy.nu_dot[3 + i];
+        }
+        dx[II..II + 6].copy_from_slice(&dy.current_dot);
+        dx[IWF] = dy.power_forces;
+        dx[IWE] = dy.power_electric;
+        dx[IWD] = dy.power_dissipated;
+        dx
+    }
+
+    fn rk4(&self, x: &mut [f64; NX], h: f64, inputs: &OracleInputs) {
+        let stage = |x: &[f64; NX], k: &[f64; NX], a: f64| -> [f64; NX] { std::array::from_fn(|i| x[i] + a * k[i]) };
+        let k1 = self.derivative(x, inputs);
+        let k2 = self.derivative(&stage(x, &k1, h / 2.0), inputs);
+        let k3 = self.derivative(&stage(x, &k2, h / 2.0), inputs);
+        let k4 = self.derivative(&stage(x, &k3, h), inputs);
+        for i in 0..NX {
+            x[i] += h / 6.0 * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
+        }
+        let n = (x[IQ..IQ + 4].iter().map(|q| q * q).sum::<f64>()).sqrt();
+        for q in &mut x[IQ..IQ + 4] {
+            *q /= n;
+        }
+    }
+
+    /// The switching functions of the non-smooth terms (positive where a term is on): per leg
+    /// the lower and upper end-stop contact, the saturation of the stop damping's clamp at
+    /// its upper and lower bound, and the same three for the base and the platform joint
+    /// limit. The right-hand side is smooth (and the forces continuous) between sign changes.
+    fn switches(&self, x: &[f64; NX]) -> [f64; 60] {
+        let (r, rot, v, w, _) = Self::unpack(x);
+        let mut out = [-1.0; 60];
+        // The clamp's switches: `c pen' - k pen` and `-c pen' - k pen` while in contact.
+        let clamp_switches = |pen: f64, rate: f64, k: f64, c: f64| -> (f64, f64) {
+            if pen > 0.0 && c != 0.0 { (c * rate - k * pen, -c * rate - k * pen) } else { (-1.0, -1.0) }
+        };
+        let refs = self.refs();
+        for k in 0..6 {
+            let o = &mut out[10 * k..10 * k + 10];
+            let (_, _, l, n, ld, nd) = self.plain_leg(k, &r, &rot, &v, &w);
+            if let Some(s) = &self.stops {
+                o[0] = s.lmin[k] - l;
+                o[1] = l - s.lmax[k];
+                let (pen, rate) = if o[0] > o[1] { (o[0], -ld) } else { (o[1], ld) };
+                (o[2], o[3]) = clamp_switches(pen, rate, s.stiffness, s.damping);
+            }
+            if let (Some(j), Some(refs)) = (&self.joints, &refs) {
+                // thetaB' = -(n'.ref)/sin, thetaA' = -(m'.ref)/sin with m = R^T n,
+                // m' = R^T n' - w x m.
+                let m = rot.transpose() * n;
+                let md = rot.transpose() * nd - w.cross(&m);
+                for (i, (dir, dird, reference, max)) in
+                    [(n, nd, refs.base[k], j.base_max), (m, md, refs.platform[k], j.platform_max)]
+                        .into_iter()
+                        .enumerate()
+                {
+                    let theta = angle_between(&dir, &reference);
+                    let rate = -dird.dot(&reference) / dir.cross(&reference).norm();
+                    let delta = theta - max;
+                    o[4 + 3 * i] = delta;
+                    (o[5 + 3 * i], o[6 + 3 * i]) = clamp_switches(delta, rate, j.stiffness, j.damping);
+                }
+            }
+        }
+        out
+    }
+
+    /// One substep of `h` with event location: where a switching function changes sign
+    /// within the step, the step is cut at the (earliest) crossing, found by the Illinois
+    /// variant of regula falsi on the RK4 step length, so that no RK4 step straddles a kink of
+    /// the right-hand side (which would cost an O(h^2) local error).
+    fn advance(&self, x: &mut [f64; NX], h: f64, inputs: &OracleInputs) {
+        let mut rem = h;
+        let mut guard = 0;
+        while rem > 0.0 {
+            let g0 = self.switches(x);
+            let mut x1 = *x;
+            self.rk4(&mut x1, rem, inputs);
+            let g1 = self.switches(&x1);
+            let changed: Vec<usize> = (0..60).filter(|&i| (g0[i] > 0.0) != (g1[i] > 0.0)).collect();
+            guard += 1;
+            if changed.is_empty() || guard > 50 {
+                *x = x1;
+                return;
+            }
+            let mut best: Option<(f64, [f64; NX])> = None;
+            for &i in &changed {
+                let (b, xb) = self.locate(x, rem, i, g0[i], g1[i], &x1, inputs);
+                if best.as_ref().is_none_or(|(bb, _)| b < *bb) {
+                    best = Some((b, xb));
+                }
+            }
+            let (b, xb) = best.unwrap();
+            *x = xb;
+            if b >= rem {
+                return;
+            }
+            rem -= b;
+        }
+    }
+
+    /// The step length `b` in `(0, h]` just past the sign change of switching function `i`,
+    /// bracketed to `1e-12 h`, and the state there.
+    #[allow(clippy::too_many_arguments)]
+    fn locate(
+        &self,
+        x: &[f64; NX],
+        h: f64,
+        i: usize,
+        g0: f64,
+        g1: f64,
+        x1: &[f64; NX],
+        inputs: &OracleInputs,
+    ) -> (f64, [f64; NX]) {
+        let old = g0 > 0.0;
+        let (mut a, mut fa) = (0.0, g0);
+        let (mut b, mut fb, mut xb) = (h, g1, *x1);
+        let mut last_side = 0;
+        for _ in 0..200 {
+            if b - a <= 1e-12 * h {
+                break;
+            }
+            let mut c = b - fb * (b - a) / (fb - fa);
+            if !(c > a && c < b) {
+                c = 0.5 * (a + b);
+            }
+            let mut xc = *x;
+            self.rk4(&mut xc, c, inputs);
+            let fc = self.switches(&xc)[i];
+            if (fc > 0.0) == old {
+                (a, fa) = (c, fc);
+                if last_side == -1 {
+                    fb *= 0.5;
+                }
+                last_side = -1;
+            } else {
+                (b, fb, xb) = (c, fc, xc);
+                if last_side == 1 {
+                    fa *= 0.5;
+                }
+                last_side = 1;
+            }
+        }
+        (b, xb)
+    }
+
+    /// Integrates from `start` (t = 0) over `steps` communication steps of `h`; `inputs(t)`
+    /// is called at each communication point and held over the step; returns the state at
+    /// every communication point (start included).
+    pub fn simulate(
+        &self,
+        start: &OracleState,
+        h: f64,
+        steps: usize,
+        inputs: &dyn Fn(f64) -> OracleInputs,
+    ) -> Vec<OracleState> {
+        self.simulate_with_work(start, h, steps, inputs).into_iter().map(|(s, _)| s).collect()
+    }
+
+    /// As `simulate`, with the work accumulated since the start at every communication point.
+    pub fn simulate_with_work(
+        &self,
+        start: &OracleState,
+        h: f64,
+        steps: usize,
+        inputs: &dyn Fn(f64) -> OracleInputs,
+    ) -> Vec<(OracleState, OracleWork)> {
+        let mut x = Self::pack(start);
+        let work = |x: &[f64; NX]| OracleWork { forces: x[IWF], electric: x[IWE], dissipated: x[IWD] };
+        // The start as given (not through the quaternion), so that out[0] == start.
+        let mut out = vec![(*start, work(&x))];
+        let sub = ((h / self.max_step) * (1.0 - 1e-12)).ceil().max(1.0) as usize;
+        let hs = h / sub as f64;
+        for i in 0..steps {
+            let u = inputs(i as f64 * h);
+            for _ in 0..sub {
+                self.advance(&mut x, hs, &u);
+            }
+            out.push((Self::state_of(&x), work(&x)));
+        }
+        out
+    }
+
+    /// The accelerations `(v', w')` (inertial, body) at a state under the inputs.
+    pub fn accelerations(&self, s: &OracleState, inputs: &OracleInputs) -> ([f64; 3], [f64; 3]) {
+        let dy = self.dynamics(&v3(s.r), &to_mat(&s.rotation), &v3(s.v), &v3(s.w), &s.currents, inputs);
+        ([dy.nu_dot[0], dy.nu_dot[1], dy.nu_dot[2]], [dy.nu_dot[3], dy.nu_dot[4], dy.nu_dot[5]])
+    }
+
+    /// The currents' rates `I'` (zero without drives).
+    pub fn current_rates(&self, s: &OracleState, inputs: &OracleInputs) -> [f64; 6] {
+        self.dynamics(&v3(s.r), &to_mat(&s.rotation), &v3(s.v), &v3(s.w), &s.currents, inputs).current_dot
+    }
+
+    /// The axial forces and joint-limit moments at a state under the inputs.
+    pub fn leg_forces(&self, s: &OracleState, inputs: &OracleInputs) -> OracleLegForces {
+        self.dynamics(&v3(s.r), &to_mat(&s.rotation), &v3(s.v), &v3(s.w), &s.currents, inputs).forces
+    }
+
+    // --- plain (jet-free) kinematics and energies ---------------------------------------
+
+    /// Leg k: `a_k`, `a_k'`, `l_k`, `n_k`, `l_k'`, `n_k'` by direct formulas.
+    #[allow(clippy::type_complexity)]
+    fn plain_leg(
+        &self,
+        k: usize,
+        r: &Vector3<f64>,
+        rot: &Matrix3<f64>,
+        v: &Vector3<f64>,
+        w: &Vector3<f64>,
+    ) -> (Vector3<f64>, Vector3<f64>, f64, Vector3<f64>, f64, Vector3<f64>) {
+        let arm = rot * self.a(k);
+        let a = r + arm;
+        let ad = v + rot * w.cross(&self.a(k));
+        let d = a - self.b(k);
+        let l = d.norm();
+        let n = d / l;
+        let ld = n.dot(&ad);
+        let nd = (ad - n * ld) / l;
+        (a, ad, l, n, ld, nd)
+    }
+
+    pub fn leg_lengths(&self, s: &OracleState) -> [f64; 6] {
+        let (r, rot) = (v3(s.r), to_mat(&s.rotation));
+        std::array::from_fn(|k| (r + rot * self.a(k) - self.b(k)).norm())
+    }
+
+    pub fn leg_rates(&self, s: &OracleState) -> [f64; 6] {
+        let (r, rot, v, w) = (v3(s.r), to_mat(&s.rotation), v3(s.v), v3(s.w));
+        std::array::from_fn(|k| self.plain_leg(k, &r, &rot, &v, &w).4)
+    }
+
+    /// `(thetaB, thetaA)`, each `atan2(|n x n_ref|, n . n_ref)` in `[0, pi]`, from the joint
+    /// limits' reference pose, or without joint limits from SPEC §8's default reference (the
+    /// neutral pose `NEUTRAL_R`, no rotation).
+    pub fn joint_angles(&self, s: &OracleState) -> ([f64; 6], [f64; 6]) {
+        let refs = self.refs().unwrap_or_else(|| self.refs_at(NEUTRAL_R, [0.0; 3]));
+        let (r, rot) = (v3(s.r), to_mat(&s.rotation));
+        let mut tb = [0.0; 6];
+        let mut ta = [0.0; 6];
+        for k in 0..6 {
+            let n = (r + rot * self.a(k) - self.b(k)).normalize();
+            tb[k] = angle_between(&n, &refs.base[k]);
+            ta[k] = angle_between(&(rot.transpose() * n), &refs.platform[k]);
+        }
+        (tb, ta)
+    }
+
+    /// Kinetic energy of platform, leg bodies and rotors.
+    pub fn kinetic_energy(&self, r: [f64; 3], rotation: [[f64; 3]; 3], v: [f64; 3], w: [f64; 3]) -> f64 {
+        let (r, rot, v, w) = (v3(r), to_mat(&rotation), v3(v), v3(w));
+        let jb = v3(self.inertia);
+        let mut t = 0.5 * self.mass * v.norm_squared() + 0.5 * w.dot(&jb.component_mul(&w));
+        let jm = self.rotor_mass();
+        for k in 0..6 {
+            let (_, ad, _, _, ld, nd) = self.plain_leg(k, &r, &rot, &v, &w);
+            let cd = nd * self.cylinder_com;
+            let pd = ad - nd * self.rod_com;
+            t += 0.5 * self.cylinder_mass * cd.norm_squared()
+                + 0.5 * self.rod_mass * pd.norm_squared()
+                + 0.5 * (self.cylinder_inertia + self.rod_inertia) * nd.norm_squared()
+                + 0.5 * jm * ld * ld;
+        }
+        t
+    }
+
+    /// Potential energy: gravity (platform and leg bodies), end stops and joint limits.
+    pub fn potential_energy(&self, r: [f64; 3], rotation: [[f64; 3]; 3]) -> f64 {
+        let (rv, rot) = (v3(r), to_mat(&rotation));
+        let g = self.gravity;
+        let mut e = self.mass * g * rv.z;
+        for k in 0..6 {
+            let (a, _, l, n, _, _) = self.plain_leg(k, &rv, &rot, &Vector3::zeros(), &Vector3::zeros());
+            let c = self.b(k) + n * self.cylinder_com;
+            let p = a - n * self.rod_com;
+            e += g * (self.cylinder_mass * c.z + self.rod_mass * p.z);
+            if let Some(s) = &self.stops {
+                let pen = (s.lmin[k] - l).max(l - s.lmax[k]).max(0.0);
+                e += 0.5 * s.stiffness * pen * pen;
+            }
+        }
+        if let Some(j) = &self.joints {
+            let (tb, ta) = self.joint_angles(&OracleState::at_rest(r, rotation));
+            for k in 0..6 {
+                let (db, da) = ((tb[k] - j.base_max).max(0.0), (ta[k] - j.platform_max).max(0.0));
+                e += 0.5 * j.stiffness * (db * db + da * da);
+            }
+        }
+        e
+    }
+
+    /// Total energy: kinetic (platform, legs, rotors) + gravity + stops + joint limits +
+    /// magnetic `1/2 L I^2`.
+    pub fn energy(&self, s: &OracleState) -> f64 {
+        let magnetic = self.drives.map_or(0.0, |d| 0.5 * d.inductance * s.currents.iter().map(|i| i * i).sum::<f64>());
+        self.kinetic_energy(s.r, s.rotation, s.v, s.w) + self.potential_energy(s.r, s.rotation) + magnetic
+    }
+
+    // --- joint forces and statics --------------------------------------------------------
+
+    /// The force of leg k on the platform at `A_k` (inertial frame), from the Newton-Euler
+    /// balance of each leg with the accelerations of `accelerations`: the rod's axial
+    /// equation gives `G.n = F - J_m N^2 l'' - m_r (p''.n + g n_z)` (`F` the axial force
+    /// between cylinder and rod, less the rotor's inertia with drives), the whole leg's moment balance about
+    /// `B_k` gives `l n x G = gravity moments + joint-limit moments - dH_B/dt`,
+    /// `H_B = m_c (c - B) x c' + m_r (p - B) x p' + (J_c + J_r) n x n'`.
+    pub fn joint_forces(&self, s: &OracleState, inputs: &OracleInputs) -> [[f64; 3]; 6] {
+        let (r, rot, v, w) = (v3(s.r), to_mat(&s.rotation), v3(s.v), v3(s.w));
+        let dy = self.dynamics(&r, &rot, &v, &w, &s.currents, inputs);
+        let vd = Vector3::new(dy.nu_dot[0], dy.nu_dot[1], dy.nu_dot[2]);
+        let wd = Vector3::new(dy.nu_dot[3], dy.nu_dot[4], dy.nu_dot[5]);
+        let refs = self.refs();
+        let legs = self.legs(&platform_jet(&r, &rot, &v, &w, &vd, &wd), &refs);
+        let moments = self.joint_limit_moments_from(&rot, &legs, &dy.forces, &refs);
+        let g = self.gravity;
+        let ez = Vector3::z();
+        let jt = self.cylinder_inertia + self.rod_inertia;
+        let jm = self.rotor_mass();
+        let f = &dy.forces;
+        std::array::from_fn(|k| {
+            let lg = &legs[k];
+            let (n, c, p) = (jv_val(&lg.n), jv_val(&lg.c), jv_val(&lg.p));
+            let b = self.b(k);
+            // The screw delivers the axial force less the rotor's inertial force `J_m N^2 l''`.
+            let axial = f.actuator[k] + f.friction[k] + f.stop_elastic[k] + f.stop_damping[k] - jm * lg.l.dd;
+            let g_n = axial - self.rod_mass * (jv_dd(&lg.p).dot(&n) + g * n.z);
+            let dh = (c - b).cross(&jv_dd(&lg.c)) * self.cylinder_mass
+                + (p - b).cross(&jv_dd(&lg.p)) * self.rod_mass
+                + n.cross(&jv_dd(&lg.n)) * jt;
+            let grav = (c - b).cross(&(-ez * (self.cylinder_mass * g))) + (p - b).cross(&(-ez * (self.rod_mass * g)));
+            let (m_base, m_rod) = moments[k];
+            let n_x_g = (grav + m_base + m_rod - dh) / lg.l.v;
+            let gk = n * g_n + n_x_g.cross(&n);
+            gk.into()
+        })
+    }
+
+    /// Joint-limit moments (inertial) of leg k: on the cylinder from the base-joint limit, on
+    /// the rod from the platform-joint limit (the platform receives its opposite).
+    fn joint_limit_moments_from(
+        &self,
+        rot: &Matrix3<f64>,
+        legs: &[LegJet; 6],
+        f: &OracleLegForces,
+        refs: &Option<Refs>,
+    ) -> [(Vector3<f64>, Vector3<f64>); 6] {
+        let mut out = [(Vector3::zeros(), Vector3::zeros()); 6];
+        let Some(refs) = refs else { return out };
+        for k in 0..6 {
+            let n = jv_val(&legs[k].n);
+            let mb = f.base_elastic[k] + f.base_damping[k];
+            if mb != 0.0 {
+                let axis = n.cross(&refs.base[k]);
+                out[k].0 = axis * (mb / axis.norm());
+            }
+            let ma = f.platform_elastic[k] + f.platform_damping[k];
+            if ma != 0.0 {
+                let axis = n.cross(&(rot * refs.platform[k]));
+                out[k].1 = axis * (ma / axis.norm());
+            }
+        }
+        out
+    }
+
+    /// The moment (inertial) of each platform-joint limit on the platform.
+    pub fn platform_joint_moments(&self, s: &OracleState, inputs: &OracleInputs) -> [[f64; 3]; 6] {
+        let (r, rot, v, w) = (v3(s.r), to_mat(&s.rotation), v3(s.v), v3(s.w));
+        let dy = self.dynamics(&r, &rot, &v, &w, &s.currents, inputs);
+        let refs = self.refs();
+        let z = Vector3::zeros();
+        let legs = self.legs(&platform_jet(&r, &rot, &v, &w, &z, &z), &refs);
+        let m = self.joint_limit_moments_from(&rot, &legs, &dy.forces, &refs);
+        std::array::from_fn(|k| (-m[k].1).into())
+    }
+
+    /// Leg forces `u_k` that hold the platform at rest in the pose (legs with mass, gravity,
+    /// elastic end-stop and joint-limit forces where in contact): the virtual-work balance
+    /// `P_l^T u = -Q(q)` with the partial velocities `P_l` of the leg lengths.
+    pub fn static_leg_forces(&self, r: [f64; 3], rotation: [[f64; 3]; 3]) -> [f64; 6] {
+        let (rv, rot) = (v3(r), to_mat(&rotation));
+        let refs = self.refs();
+        let unit = self.unit_legs(&rv, &rot, &refs);
+        let g = self.gravity;
+        let mut q = Vector6::zeros();
+        q[2] = -self.mass * g;
+        let mut jl_t = Matrix6::zeros();
+        let l = self.leg_lengths(&OracleState::at_rest(r, rotation));
+        for k in 0..6 {
+            let pc = Matrix3x6::from_fn(|i, j| unit[j][k].c[i].d);
+            let pp = Matrix3x6::from_fn(|i, j| unit[j][k].p[i].d);
+            let pl = Vector6::from_fn(|j, _| unit[j][k].l.d);
+            jl_t.set_column(k, &pl);
+            q += pc.transpose() * Vector3::new(0.0, 0.0, -self.cylinder_mass * g)
+                + pp.transpose() * Vector3::new(0.0, 0.0, -self.rod_mass * g);
+            if let Some(s) = &self.stops {
+                let stop = if l[k] < s.lmin[k] {
+                    s.stiffness * (s.lmin[k] - l[k])
+                } else if l[k] > s.lmax[k] {
+                    -s.stiffness * (l[k] - s.lmax[k])
+                } else {
+                    0.0
+                };
+                q += pl * stop;
+            }
+        }
+        if let (Some(j), Some(refs)) = (&self.joints, &refs) {
+            let (tb, ta) = self.joint_angles(&OracleState::at_rest(r, rotation));
+            let rest = self.legs(
+                &platform_jet(&rv, &rot, &Vector3::zeros(), &Vector3::zeros(), &Vector3::zeros(), &Vector3::zeros()),
+                &Some(*refs),
+            );
+            for k in 0..6 {
+                let n = jv_val(&rest[k].n);
+                let rot_n = rot.transpose() * n;
+                for (base, theta, max, sin) in [
+                    (true, tb[k], j.base_max, n.cross(&refs.base[k]).norm()),
+                    (false, ta[k], j.platform_max, rot_n.cross(&refs.platform[k]).norm()),
+                ] {
+                    if theta > max {
+                        for jj in 0..6 {
+                            let dcos = if base { unit[jj][k].cos_b.d } else { unit[jj][k].cos_a.d };
+                            q[jj] -= j.stiffness * (theta - max) * (-dcos / sin);
+                        }
+                    }
+                }
+            }
+        }
+        let u = jl_t.lu().solve(&(-q)).expect("non-singular leg arrangement");
+        std::array::from_fn(|k| u[k])
+    }
+}
+
+type Matrix3x6 = nalgebra::Matrix3x6<f64>;
