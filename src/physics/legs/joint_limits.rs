@@ -25,17 +25,22 @@ use crate::physics::error::ParameterError;
 use crate::physics::number::Real;
 use crate::physics::stand::LEG_COUNT;
 
-/// Default largest base joint angle from the reference pose, rad (25 degrees): the default
-/// heave programme and the start-up from the parked pose stay well inside.
+/// Default largest base joint angle from the reference pose, rad (25 degrees). The default
+/// stand's shipped motions stay clear: the heave programme reaches 6.3 degrees, the start-up
+/// from the parked pose 8.5, a power loss onto the stops 9.1, the actuator failure 16.2.
 pub const DEFAULT_BASE_MAX_ANGLE: f64 = 25.0 * std::f64::consts::PI / 180.0;
-/// Default largest platform joint angle from the reference pose, rad (25 degrees).
-pub const DEFAULT_PLATFORM_MAX_ANGLE: f64 = 25.0 * std::f64::consts::PI / 180.0;
-/// Default joint-limit stiffness `k_j`, N m/rad: about what a joint stop of a
-/// 3-tonne simulator takes (the default platform tipped onto its limits rests a few hundredths
-/// of a degree into them).
+/// Default largest platform joint angle from the reference pose, rad (35 degrees): the
+/// actuator failure's tilt onto the stops reaches 26.3; open-loop forces that tip the platform
+/// over (a 5 % ripple per leg) leave it resting on these limits, pitched about 28 degrees.
+pub const DEFAULT_PLATFORM_MAX_ANGLE: f64 = 35.0 * std::f64::consts::PI / 180.0;
+/// Default joint-limit stiffness `k_j`, N m/rad: the default platform tipped onto its limits
+/// by its weight (about 3e4 N m about a tipping axis, shared by two or three joints) rests
+/// about a degree into them.
 pub const DEFAULT_STIFFNESS: f64 = 1.0e6;
-/// Default joint-limit damping `c_j`, N m s/rad.
-pub const DEFAULT_DAMPING: f64 = 1.0e4;
+/// Default joint-limit damping `c_j`, N m s/rad: about a third of the critical damping of the
+/// platform tipping on two or three joint limits (its moment of inertia about a tipping axis
+/// near a joint, about 1.2e4 kg m², against 2-3 k_j), so that it settles within a few swings.
+pub const DEFAULT_DAMPING: f64 = 5.0e4;
 
 /// The joint limits of the six legs.
 #[derive(Clone, Copy, Debug, PartialEq)]
