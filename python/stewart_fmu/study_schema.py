@@ -205,7 +205,7 @@ def check_value(param, value, where):
         if param.kind == "time" and isinstance(value, str):
             return (f"{where} = {value!r}: write a number of {param.unit} "
                     f"(the study's units; a time with a unit in a string is not read)")
-        return f"{where} = {number(value)}: a number{' of ' + param.unit if param.unit else ''} is expected"
+        return f"{where} = {number(value)}: a number is expected{' (unit: ' + param.unit + ')' if param.unit else ''}"
     elif not math.isfinite(value):
         return f"{where} = {value}: a finite number is expected"
     unit = f" {param.unit}" if param.unit else ""
@@ -303,7 +303,7 @@ class Plan:
 
 def check(spec, path="", max_runs=DEFAULT_MAX_RUNS, variables=None):
     """The Plan of a study file's dict (defaults filled in); raises StudyError with every problem."""
-    problems = []
+    problems, structure = [], []
     if not isinstance(spec, dict):
         raise StudyError(path, ["the study file must be a TOML table"])
     for key, value in spec.items():
@@ -314,14 +314,14 @@ def check(spec, path="", max_runs=DEFAULT_MAX_RUNS, variables=None):
                 problems.append(f"unknown section [{key}] (known: {', '.join(SECTIONS)}){nearest(key, SECTIONS)}")
     for key in ("study", "fixed", "grid", "random"):
         if not isinstance(spec.get(key, {}), dict):
-            problems.append(f"[{key}] must be a table (a [{key}] header with key = value lines)")
+            structure.append(f"[{key}] must be a table (a [{key}] header with key = value lines)")
     plots = spec.get("plot", [])
     if isinstance(plots, dict):
-        problems.append("plots are an array of tables: write [[plot]], not [plot]")
+        structure.append("plots are an array of tables: write [[plot]], not [plot]")
     elif not isinstance(plots, list) or not all(isinstance(p, dict) for p in plots):
-        problems.append("plots are an array of tables: write each as a [[plot]] section")
-    if problems:
-        raise StudyError(path, problems)
+        structure.append("plots are an array of tables: write each as a [[plot]] section")
+    if structure:  # the sections' contents cannot be read
+        raise StudyError(path, problems + structure)
 
     study = spec.setdefault("study", {})
     study.setdefault("name", PurePosixPath(str(path)).stem or "study")
@@ -404,7 +404,7 @@ def _check_study(study):
     unit = "s" if study.get("units") == "si" else "time units"
     for key in REQUIRED_STUDY_KEYS:
         if key not in study:
-            problems.append(f"study.{key} is missing: the {STUDY_KEYS[key]}")
+            problems.append(f"study.{key} is missing: {STUDY_KEYS[key]}")
         else:
             what = "communication step" if key == "step" else "end of the run"
             problems += filter(None, [check_value(Param("time", 0.0, lo_open=True, unit=unit, what=what), study[key],
