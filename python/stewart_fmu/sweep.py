@@ -1,6 +1,10 @@
 """`stewart-sweep STUDY.toml --out DIR [--scheduler ADDRESS] [--workers N] [--limit N] [--serial]`:
 runs a design study (see `stewart_fmu.study`) on Dask.
 
+- The study file is checked first (`stewart_fmu.study_schema`; docs/studies.md): a file with
+  problems, or of more than `--max-runs` runs, is refused before anything runs.
+  `--check` prints the plan and exits.
+- One sweep per `DIR` at a time: `DIR/.stewart-sweep.lock` (`StudyLock`).
 - Without `--scheduler` it starts a `LocalCluster` on this machine (`--workers` processes, one
   thread each; default: one per core). With it, it connects to a running scheduler (`dask
   scheduler` and `dask worker` elsewhere, dask-jobqueue, Kubernetes); the FMUs travel to the
@@ -13,6 +17,8 @@ runs a design study (see `stewart_fmu.study`) on Dask.
   the study's plots (`DIR/*.png`).
 - A failed run is a row with its status and message. A worker that dies has its runs
   re-executed elsewhere by Dask; each run's row is written once.
+- Exit status: 0 done, 1 every run failed (the first error is printed) or a plot could not be
+  written, 2 the study could not start (the message says why).
 """
 
 import argparse
@@ -231,8 +237,8 @@ def parser():
                         "running anything")
     p.add_argument("--max-runs", type=_positive_int, default=st.DEFAULT_MAX_RUNS,
                    help=f"refuse a study of more runs (default {st.DEFAULT_MAX_RUNS}: on a 2-core, 24 GiB machine the "
-                        "shipped studies run at 7-40 runs/s, so that is 1-4 hours, and the run list and rows stay "
-                        "under 1 GiB; raise it for a bigger cluster)")
+                        "shipped studies run at 5-40 runs/s, so that is 1-6 hours, and the run list (about 0.4 kB a "
+                        "run) and the rows stay far below the memory; raise it for a bigger cluster)")
     p.add_argument("--scheduler", help="address of a running Dask scheduler (tcp://host:port)")
     p.add_argument("--connect-timeout", type=_positive_float, default=CONNECT_TIMEOUT,
                    help=f"seconds to wait for --scheduler to answer (default {CONNECT_TIMEOUT:g})")
