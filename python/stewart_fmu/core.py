@@ -3,6 +3,7 @@ default stand (docs/model.md §3) in SI or the paper's non-dimensional units, co
 independently of the Rust code, the paper's heave programme and its direct problem, and a thin
 driver around FMPy's FMU2Slave."""
 
+import difflib
 import math
 import os
 from pathlib import Path
@@ -54,21 +55,82 @@ def stand_parameters(nondimensional=True):
     return p
 
 
-def set_values(slave, md, values):
+def nearest(name, candidates):
+    """'; did you mean X?' for the closest of `candidates` to a mistyped name, or ''."""
+    match = difflib.get_close_matches(str(name), list(candidates), n=1, cutoff=0.6)
+    return f"; did you mean {match[0]!r}?" if match else ""
+
+
+def check_names(names, known, owner, what):
+    """ValueError if `owner` (a model) has no variable of one of `names`; `what` names the
+    argument they came in."""
+    for name in names:
+        if name not in known:
+            raise ValueError(f"{what}: {owner} has no variable {name!r}{nearest(name, known)}")
+
+
+def check_times(t_end, h, t_end_name="t_end", h_name="h"):
+    """ValueError unless the end time and the communication step are positive and finite and
+    the step fits in the end time (no run of zero steps that would look like a valid result)."""
+    for name, value in ((t_end_name, t_end), (h_name, h)):
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
+            raise ValueError(f"{name} = {value!r}: a number of seconds (or time units) is expected")
+        if not (math.isfinite(value) and value > 0):
+            raise ValueError(f"{name} = {value}: must be a positive, finite number of seconds (or time units)")
+    if round(t_end / h) < 1:
+        raise ValueError(f"{h_name} = {h} is longer than {t_end_name} = {t_end}: no step would run")
+
+
+def set_values(slave, md, values, what="values"):
     """Sets parameters or inputs by name through the setter of each variable's type (Real,
-    Integer or Boolean); names the model does not have are skipped."""
+    Integer or Boolean). A name the model does not have, or a value of the wrong kind, raises
+    ValueError naming it (`what`: the argument the values came in)."""
     types = {v.name: (v.valueReference, v.type) for v in md.modelVariables}
+    check_names(values, types, md.modelName, what)
     groups = {"Real": [], "Integer": [], "Boolean": []}
     for name, value in values.items():
-        if name in types:
-            vr, kind = types[name]
-            groups["Integer" if kind == "Enumeration" else kind].append((vr, value))
+        vr, kind = types[name]
+        kind = "Integer" if kind == "Enumeration" else kind
+        if kind not in groups:
+            raise ValueError(f"{what}: {name} is a {kind} variable, which cannot be set here")
+        try:
+            if isinstance(value, (str, bytes)):
+                raise ValueError
+            if kind == "Real":
+                value = float(value)
+            elif kind == "Integer":
+                if isinstance(value, (bool, np.bool_)) or float(value) != int(value):
+                    raise ValueError
+                value = int(value)
+            elif isinstance(value, (bool, np.bool_)) or value in (0, 1):
+                value = bool(value)
+            else:
+                raise ValueError
+        except (TypeError, ValueError, OverflowError):
+            expected = {"Real": "a number", "Integer": "an integer", "Boolean": "true or false"}[kind]
+            raise ValueError(f"{what}: {name} = {value!r}: {expected} is expected") from None
+        groups[kind].append((vr, value))
     if groups["Real"]:
-        slave.setReal([vr for vr, _ in groups["Real"]], [float(x) for _, x in groups["Real"]])
+        slave.setReal([vr for vr, _ in groups["Real"]], [x for _, x in groups["Real"]])
     if groups["Integer"]:
-        slave.setInteger([vr for vr, _ in groups["Integer"]], [int(x) for _, x in groups["Integer"]])
+        slave.setInteger([vr for vr, _ in groups["Integer"]], [x for _, x in groups["Integer"]])
     if groups["Boolean"]:
-        slave.setBoolean([vr for vr, _ in groups["Boolean"]], [bool(x) for _, x in groups["Boolean"]])
+        slave.setBoolean([vr for vr, _ in groups["Boolean"]], [x for _, x in groups["Boolean"]])
+
+
+def vector_of(values, n, what, names):
+    """`values` as a float array of length `n`, or ValueError naming `what` and the element."""
+    try:
+        array = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{what}: {n} numbers ({names(0)} .. {names(n - 1)}) are expected, got {values!r}") from None
+    if array.shape != (n,):
+        raise ValueError(f"{what}: {n} values ({names(0)} .. {names(n - 1)}) are expected, got "
+                         f"{array.size} (shape {array.shape})")
+    for i, x in enumerate(array):
+        if not math.isfinite(x):
+            raise ValueError(f"{what}: {names(i)} = {x} is not a finite number")
+    return array
 
 
 def neutral_leg_geometry(nondimensional=True):
@@ -142,32 +204,41 @@ class Platform:
             self.slave.setDebugLogging(True, ["logEvents"])
         self.slave.setupExperiment(tolerance=tolerance, startTime=start_time, stopTime=stop_time)
         self.slave.enterInitializationMode()
-        if parameters:
-            self.set(parameters)
-        if integers:
-            names = list(integers)
-            self.slave.setInteger([self.vr[n] for n in names], [int(integers[n]) for n in names])
+        try:
+            set_values(self.slave, self.md, dict(parameters or {}), "parameters")
+            set_values(self.slave, self.md, dict(integers or {}), "integers")
+        except ValueError:
+            self.slave.freeInstance()
+            raise
         self.slave.exitInitializationMode()
         self.time = start_time
 
     def set(self, values):
-        unknown = [n for n in values if n not in self.vr]
-        assert not unknown, f"the platform has no variables {unknown}"
-        set_values(self.slave, self.md, values)
+        """Sets variables by name; ValueError for a name the platform does not have."""
+        set_values(self.slave, self.md, values, "set")
 
     def set_forces(self, forces, rates=None):
-        self.slave.setReal([self.vr[f"F[{k + 1}]"] for k in range(6)], [float(f) for f in forces])
+        """The six leg forces F[1] .. F[6] (and their time derivatives); ValueError unless six
+        finite numbers each."""
+        forces = vector_of(forces, 6, "set_forces: forces", lambda i: f"F[{i + 1}]")
+        vrs = [self.vr[f"F[{k + 1}]"] for k in range(6)]
         if rates is not None:
-            self.slave.setRealInputDerivatives([self.vr[f"F[{k + 1}]"] for k in range(6)], [1] * 6,
-                                               [float(r) for r in rates])
+            rates = vector_of(rates, 6, "set_forces: rates", lambda i: f"der(F[{i + 1}])")
+        self.slave.setReal(vrs, [float(f) for f in forces])
+        if rates is not None:
+            self.slave.setRealInputDerivatives(vrs, [1] * 6, [float(r) for r in rates])
 
     def get(self, *names):
+        check_names(names, self.vr, self.md.modelName, "get")
         return self.slave.getReal([self.vr[n] for n in names])
 
     def vector(self, base, n):
         return np.array(self.get(*[f"{base}[{i + 1}]" for i in range(n)]))
 
     def step(self, h):
+        if isinstance(h, bool) or not isinstance(h, (int, float, np.floating, np.integer)) or not (
+                math.isfinite(h) and h > 0):
+            raise ValueError(f"step: h = {h!r}: the communication step must be a positive, finite number of seconds")
         self.slave.doStep(currentCommunicationPoint=self.time, communicationStepSize=h)
         self.time += h
 

@@ -19,15 +19,21 @@ import numpy as np
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
 
-from .core import CONTROLLER_FMU, PLATFORM_FMU, recording_callbacks, set_values
+from fmpy.fmi1 import FMICallException
+
+from .core import CONTROLLER_FMU, PLATFORM_FMU, check_names, check_times, recording_callbacks, set_values, vector_of
 
 SYSTEM_SSP = Path(PLATFORM_FMU).parent / "StewartSystem.ssp"
 LEGS = range(1, 7)
 _extracted = {}
 
 
+SCHEMES = ("gauss-seidel", "jacobi")
+
+
 class Component:
-    def __init__(self, fmu, name, reals=None, integers=None, start_time=0.0, events=None):
+    def __init__(self, fmu, name, reals=None, integers=None, start_time=0.0, events=None, what=None):
+        """`what`: the names of the arguments `reals` and `integers` came in, for messages."""
         fmu = str(fmu)
         self.md = read_model_description(fmu)
         if fmu not in _extracted:
@@ -41,7 +47,13 @@ class Component:
             self.fmu.instantiate(callbacks=recording_callbacks(events))
             self.fmu.setDebugLogging(True, ["logEvents"])
         self.fmu.setupExperiment(startTime=start_time)
-        set_values(self.fmu, self.md, dict(reals or {}, **(integers or {})))
+        reals_name, integers_name = what or ("reals", "integers")
+        try:
+            set_values(self.fmu, self.md, dict(reals or {}), reals_name)
+            set_values(self.fmu, self.md, dict(integers or {}), integers_name)
+        except ValueError:
+            self.fmu.freeInstance()
+            raise
         self.fmu.enterInitializationMode()
         self.fmu.exitInitializationMode()
 
@@ -65,11 +77,32 @@ LP = [f"lp[{k}]" for k in LEGS]
 def closed_loop(t_end, h, scheme="gauss-seidel", platform_reals=None, controller_reals=None, controller_integers=None,
                 record=("r[3]",), force_hook=None, events=None):
     """Runs the coupled system; returns (times, recorded platform outputs, max |l - l^p| per
-    step, status) with status "ok" or the exception text if a step failed. `force_hook(t, F)`
+    step, status) with status "ok" or the FMU's message if a step failed. `force_hook(t, F)`
     may change the forces on their way to the platform (an actuator failure); `events`
-    receives the platform's logEvents messages."""
-    platform = Component(PLATFORM_FMU, "platform", reals=platform_reals, events=events)
-    controller = Component(CONTROLLER_FMU, "controller", reals=controller_reals, integers=controller_integers)
+    receives the platform's logEvents messages. Raises ValueError, before anything runs, for
+    an end time or step that is not positive and finite, an unknown scheme, or a variable name
+    the FMUs do not have."""
+    check_times(t_end, h, "t_end", "h")
+    if scheme not in SCHEMES:
+        raise ValueError(f"scheme = {scheme!r}: 'gauss-seidel' or 'jacobi'")
+    record = list(record)
+    platform = Component(PLATFORM_FMU, "platform", reals=platform_reals, events=events,
+                         what=("platform_reals", "platform_integers"))
+    try:
+        check_names(record, platform.vr, platform.md.modelName, "record")
+        controller = Component(CONTROLLER_FMU, "controller", reals=controller_reals, integers=controller_integers,
+                               what=("controller_reals", "controller_integers"))
+    except ValueError:
+        platform.free()
+        raise
+    try:
+        return _run(platform, controller, t_end, h, scheme, record, force_hook)
+    finally:
+        platform.free()
+        controller.free()
+
+
+def _run(platform, controller, t_end, h, scheme, record, force_hook):
     times, rows, errors, status = [], [], [], "ok"
     n = int(round(t_end / h))
     time = 0.0
@@ -81,11 +114,13 @@ def closed_loop(t_end, h, scheme="gauss-seidel", platform_reals=None, controller
             if scheme == "gauss-seidel":
                 controller.set(L + LDOT, np.concatenate([platform.get(L), platform.get(LDOT)]))
                 forces = controller.get(F)
-                platform.set(F, force_hook(time, forces) if force_hook else forces)
+                if force_hook:
+                    forces = vector_of(force_hook(time, forces), 6, "force_hook's forces", lambda i: f"F[{i + 1}]")
+                platform.set(F, forces)
                 platform.fmu.doStep(currentCommunicationPoint=time, communicationStepSize=h)
                 controller.fmu.doStep(currentCommunicationPoint=time, communicationStepSize=h)
                 time += h
-            elif scheme == "jacobi":
+            else:
                 # fmpy.ssp.simulation: platform first (the SSD's element order), then controller.
                 platform.set(F, connection_f)
                 platform.fmu.doStep(currentCommunicationPoint=time, communicationStepSize=h)
@@ -95,13 +130,9 @@ def closed_loop(t_end, h, scheme="gauss-seidel", platform_reals=None, controller
                 out_f = controller.get(F)
                 connection_f, connection_l, connection_ldot = out_f, out_l, out_ldot
                 time += h
-            else:
-                raise ValueError(scheme)
             times.append(time)
-            rows.append(platform.get(list(record)))
+            rows.append(platform.get(record))
             errors.append(np.max(np.abs(platform.get(L) - controller.get(LP))))
-    except Exception as e:  # a discarded step ends the run
+    except FMICallException as e:  # a discarded or failed step ends the run; a bug in Python is raised
         status = str(e)
-    platform.free()
-    controller.free()
     return np.array(times), np.array(rows), np.array(errors), status

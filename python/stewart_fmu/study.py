@@ -35,43 +35,29 @@ from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave, fmi2Terminated
 
+from . import study_schema
 from .core import CONTROLLER_FMU, PLATFORM_FMU, recording_callbacks, set_values, stand_parameters
+from .study_schema import DEFAULT_MAX_RUNS, StudyError
+
 
 METRICS = ["max_leg_error", "max_pose_error", "stable", "discard_time", "min_kappa", "max_stop_force",
            "energy_residual", "peak_deceleration", "final_z"]
 
 
-class StudyError(ValueError):
-    """A study file that cannot be run, with the reason."""
-
-
-def load(path):
-    """The study file as a dict, checked."""
+def plan(path, max_runs=DEFAULT_MAX_RUNS):
+    """The study file's Plan, checked against the schema (`stewart_fmu.study_schema`) and the
+    FMUs before anything runs; raises StudyError naming every problem."""
     path = Path(path)
     try:
         spec = tomllib.loads(path.read_text())
-    except (OSError, tomllib.TOMLDecodeError) as e:
-        raise StudyError(f"{path}: {e}") from e
-    study = spec.setdefault("study", {})
-    study.setdefault("name", path.stem)
-    system = study.setdefault("system", "closed-loop")
-    if system not in ("platform", "closed-loop"):
-        raise StudyError(f"{path}: study.system must be 'platform' or 'closed-loop', not {system!r}")
-    if study.setdefault("units", "si") not in ("si", "nondimensional"):
-        raise StudyError(f"{path}: study.units must be 'si' or 'nondimensional'")
-    for key in ("stop_time", "step"):
-        if not isinstance(study.get(key), (int, float)) or study[key] <= 0:
-            raise StudyError(f"{path}: study.{key} must be a positive number of seconds (or time units)")
-    for name, values in spec.get("grid", {}).items():
-        if not isinstance(values, list) or not values:
-            raise StudyError(f"{path}: grid.{name} must be a non-empty list")
-    random = spec.get("random", {})
-    for name, dist in random.items():
-        if name in ("samples", "seed"):
-            continue
-        if not (isinstance(dist, dict) and len(dist) == 1 and next(iter(dist)) in ("uniform", "normal")):
-            raise StudyError(f"{path}: random.{name} must be {{ uniform = [low, high] }} or {{ normal = [mean, sd] }}")
-    return spec
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as e:
+        raise StudyError(path, [f"cannot read the study file: {e}"]) from e
+    return study_schema.check(spec, path, max_runs)
+
+
+def load(path, max_runs=DEFAULT_MAX_RUNS):
+    """The study file as a dict, checked (defaults filled in)."""
+    return plan(path, max_runs).spec
 
 
 def runs(spec):
@@ -110,6 +96,7 @@ class _Component:
     def __init__(self, unzipped, md, name):
         self.md = md
         self.vr = {v.name: v.valueReference for v in md.modelVariables}
+        self.variables = study_schema.variables_of(md)
         self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.coSimulation.modelIdentifier,
                              instanceName=name)
         # The FMU's messages are kept, not printed: a failed run's row carries its message.
@@ -128,9 +115,6 @@ class _Component:
         self.fresh = False
         self.fmu.setupExperiment(startTime=0.0)
         self.fmu.enterInitializationMode()
-        unknown = [n for n in values if n not in self.vr]
-        if unknown:
-            raise StudyError(f"{self.md.coSimulation.modelIdentifier} has no variables {unknown}")
         set_values(self.fmu, self.md, values)
         self.fmu.exitInitializationMode()
 
@@ -141,7 +125,8 @@ class _Component:
         self.fmu.setReal([self.vr[n] for n in names], [float(v) for v in values])
 
 
-_PROCESS = {}  # per worker process: unpacked FMUs and their components, by content hash
+_PROCESS = {}  # per worker process: components by role and FMU content hash
+_FOLDERS = {}  # per worker process: where each FMU is unpacked (kept when a component is dropped)
 
 
 def _component(role, fmu):
@@ -149,13 +134,23 @@ def _component(role, fmu):
     data = fmu if isinstance(fmu, bytes) else Path(fmu).read_bytes()
     key = (role, hashlib.sha256(data).hexdigest())
     if key not in _PROCESS:
-        folder = tempfile.mkdtemp(prefix=f"stewart-{role}-")
-        path = Path(folder) / f"{role}.fmu"
-        path.write_bytes(data)
-        with zipfile.ZipFile(path) as z:
-            z.extractall(folder)
-        _PROCESS[key] = _Component(folder, read_model_description(str(path)), role)
+        if key not in _FOLDERS:
+            folder = tempfile.mkdtemp(prefix=f"stewart-{role}-")
+            path = Path(folder) / f"{role}.fmu"
+            path.write_bytes(data)
+            with zipfile.ZipFile(path) as z:
+                z.extractall(folder)
+            _FOLDERS[key] = (folder, read_model_description(str(path)))
+        folder, md = _FOLDERS[key]
+        _PROCESS[key] = _Component(folder, md, role)
     return _PROCESS[key]
+
+
+def _drop_components():
+    """After a run failed in an unforeseen way its instances may be in any state: free them, so
+    the next run on this worker starts from new ones."""
+    for key in list(_PROCESS):
+        _safe(_PROCESS.pop(key).fmu.freeInstance, None)
 
 
 def fmus_for(spec):
@@ -215,28 +210,51 @@ def _start_values(fmu):
     return _STARTS[fmu]
 
 
+def failed_metrics(message):
+    """The row of a run that could not run: status "error", its message, no metrics."""
+    row = {m: math.nan for m in METRICS}
+    row.update(status="error", message=message, stable=False)
+    return row
+
+
 def execute(spec, run, fmus):
     """Runs one point of the study; returns its row (parameters are added by the caller):
-    status "ok", "discard" or "error", the message, and the metrics. Never raises for a run
-    that fails: that is data."""
-    study = spec["study"]
-    h = float(run.get("step", study["step"]))
-    stop = float(run.get("stop_time", study["stop_time"]))
-    closed = study["system"] == "closed-loop"
+    status "ok", "discard" or "error", the message, and the metrics. Never raises: a run that
+    fails for any reason (a value the FMU refuses, a bad value that reached here without the
+    study's check, a bug) is an error row with its message."""
     row = {m: math.nan for m in METRICS}
     row.update(status="ok", message="")
     try:
+        _execute(spec, run, fmus, row)
+    except Exception as e:  # noqa: BLE001 - a failed run is data, never the study's crash
+        _drop_components()
+        row.update(status="error", message=f"{type(e).__name__}: {e}", stable=False)
+    return row
+
+
+def _execute(spec, run, fmus, row):
+    study = spec["study"]
+    closed = study["system"] == "closed-loop"
+    platform = _component("platform", fmus["platform"])
+    controller = _component("controller", fmus["controller"]) if closed else None
+    # The schema's value checks again, here where the run executes: the FMUs' variables are
+    # the workers' own, and a run given through the API has not been checked.
+    problems = study_schema.check_run(spec, run, {"platform": platform.variables,
+                                                  "controller": controller.variables if closed else {}})
+    if problems:
+        row.update(status="error", message="; ".join(problems), stable=False)
+        return
+    h = float(run.get("step", study["step"]))
+    stop = float(run.get("stop_time", study["stop_time"]))
+    try:
         platform_values, controller_values = _parameters(spec, run)
-        platform = _component("platform", fmus["platform"])
         platform.start(platform_values)
-        controller = None
         if closed:
-            controller = _component("controller", fmus["controller"])
             controller.start(controller_values)
-    except (FMICallException, StudyError) as e:
-        problems = [c.last_problem() for c in _PROCESS.values() if c.last_problem()]
+    except FMICallException as e:
+        problems = [c.last_problem() for c in (platform, controller) if c is not None and c.last_problem()]
         row.update(status="error", message=problems[-1] if problems else str(e), stable=False)
-        return row
+        return
     power_loss = run.get("scenario.power_loss_at")
     failed_leg = run.get("scenario.failed_leg")
     failure_time = float(run.get("scenario.failure_time", 0.0))
@@ -286,7 +304,6 @@ def execute(spec, run, fmus):
     threshold = float(study.get("stable_error", math.inf))
     touched = bool(study.get("stop_contact_unstable", False)) and stop_force > 0.0
     row["stable"] = bool(row["status"] == "ok" and (not closed or leg_error < threshold) and not touched)
-    return row
 
 
 def _safe(f, default):

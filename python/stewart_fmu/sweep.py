@@ -1,6 +1,10 @@
 """`stewart-sweep STUDY.toml --out DIR [--scheduler ADDRESS] [--workers N] [--limit N] [--serial]`:
 runs a design study (see `stewart_fmu.study`) on Dask.
 
+- The study file is checked first (`stewart_fmu.study_schema`; docs/studies.md): a file with
+  problems, or of more than `--max-runs` runs, is refused before anything runs.
+  `--check` prints the plan and exits.
+- One sweep per `DIR` at a time: `DIR/.stewart-sweep.lock` (`StudyLock`).
 - Without `--scheduler` it starts a `LocalCluster` on this machine (`--workers` processes, one
   thread each; default: one per core). With it, it connects to a running scheduler (`dask
   scheduler` and `dask worker` elsewhere, dask-jobqueue, Kubernetes); the FMUs travel to the
@@ -13,12 +17,18 @@ runs a design study (see `stewart_fmu.study`) on Dask.
   the study's plots (`DIR/*.png`).
 - A failed run is a row with its status and message. A worker that dies has its runs
   re-executed elsewhere by Dask; each run's row is written once.
+- Exit status: 0 done, 1 every run failed (the first error is printed) or a plot could not be
+  written, 2 the study could not start (the message says why).
 """
 
 import argparse
+import fcntl
+import itertools
+import json
 import math
 import os
 import shutil
+import socket
 import sys
 import time
 import uuid
@@ -99,74 +109,299 @@ def run_and_time(spec, run, fmus):
     return make_row(run, metrics, time.perf_counter() - start, st.worker_name())
 
 
-def main(argv=None):
-    parser = argparse.ArgumentParser(prog="stewart-sweep", description=__doc__.split("\n\n")[0])
-    parser.add_argument("study", help="the study file (TOML)")
-    parser.add_argument("--out", required=True, help="output folder (results.parquet/, summary, plots)")
-    parser.add_argument("--scheduler", help="address of a running Dask scheduler (tcp://host:port)")
-    parser.add_argument("--workers", type=int, default=os.cpu_count(), help="local worker processes (default: cores)")
-    parser.add_argument("--limit", type=int, help="run at most this many of the missing runs")
-    parser.add_argument("--serial", action="store_true", help="run in this process, without Dask")
-    args = parser.parse_args(argv)
+class SweepError(Exception):
+    """A study that cannot start (its --out, its lock, its scheduler), with what to change."""
+
+
+LOCK_NAME = ".stewart-sweep.lock"
+
+
+def _process_alive(pid):
     try:
-        spec = st.load(args.study)
-    except st.StudyError as e:
-        sys.exit(f"stewart-sweep: {e}")
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    shutil.copyfile(args.study, out / "study.toml")
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+class StudyLock:
+    """One stewart-sweep per --out at a time. An exclusive `flock` on OUT/.stewart-sweep.lock,
+    which the kernel releases when the holder ends however it ends, so a lock left by a killed
+    sweep never blocks the next one; the file records the holder (pid, host, start, study) for
+    the message, and on file systems without `flock` the recorded pid decides whether the
+    holder still runs."""
+
+    def __init__(self, out, study_name):
+        self.path, self.study, self.fd = Path(out) / LOCK_NAME, study_name, None
+        self.taken_over = None  # the record of a dead holder whose lock file was left behind
+
+    def _open(self):
+        try:
+            return os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError as e:
+            raise SweepError(f"cannot write in --out {self.path.parent} ({e.strerror}): give a folder you can "
+                             f"write to") from None
+
+    def _record(self, fd):
+        try:
+            return json.loads(os.pread(fd, 4096, 0).decode() or "null")
+        except (OSError, ValueError):
+            return None
+
+    def _busy(self, record):
+        who = (f"pid {record.get('pid')} on {record.get('host')}, started {record.get('started')}, study "
+               f"{record.get('study')!r}") if isinstance(record, dict) else "a process that has not written its name yet"
+        return SweepError(f"--out {self.path.parent} is in use by another stewart-sweep ({who}): wait for it to "
+                          f"finish or give another --out (the lock {self.path} is released when that process ends)")
+
+    def __enter__(self):
+        while True:
+            fd = self._open()
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                record = self._record(fd)
+                os.close(fd)
+                raise self._busy(record) from None
+            except OSError:  # no flock here (some network file systems): the recorded pid decides
+                record = self._record(fd)
+                if (isinstance(record, dict) and record.get("host") == socket.gethostname()
+                        and isinstance(record.get("pid"), int) and record["pid"] != os.getpid()
+                        and _process_alive(record["pid"])):
+                    os.close(fd)
+                    raise self._busy(record) from None
+            # The holder may have removed the file between our open and our flock: hold the file
+            # that is there now, or try again.
+            try:
+                same = os.fstat(fd).st_ino == os.stat(self.path).st_ino
+            except FileNotFoundError:
+                same = False
+            if same:
+                break
+            os.close(fd)
+        record = self._record(fd)
+        if isinstance(record, dict):
+            self.taken_over = record
+        self.fd = fd
+        text = json.dumps({"pid": os.getpid(), "host": socket.gethostname(), "study": self.study,
+                           "started": time.strftime("%Y-%m-%d %H:%M:%S")})
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, text.encode(), 0)
+        return self
+
+    def __exit__(self, *exc):
+        # Unlink before unlocking: a sweep that opened the old file sees it is gone and retries.
+        try:
+            os.unlink(self.path)
+        except OSError:
+            pass
+        os.close(self.fd)
+        self.fd = None
+
+
+def prepare_out(out):
+    """The --out folder, created if missing; a clear SweepError if it cannot be."""
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise SweepError(f"--out {out} is a file, not a folder: give a folder (it is created if missing)")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise SweepError(f"cannot create --out {out} ({e.strerror}): give a folder you can write to") from None
+    return out
+
+
+def _positive_int(text):
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text}: at least 1")
+    return value
+
+
+def _positive_float(text):
+    value = float(text)
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"{text}: a positive number of seconds")
+    return value
+
+
+def parser():
+    p = argparse.ArgumentParser(prog="stewart-sweep", description=__doc__.split("\n\n")[0],
+                                epilog="docs/studies.md describes the study file and these options.")
+    p.add_argument("study", help="the study file (TOML)")
+    p.add_argument("--out", help="output folder (results.parquet/, summary, plots); required unless --check")
+    p.add_argument("--check", action="store_true",
+                   help="check the study file, print its plan (parameters, run count, plots) and exit without "
+                        "running anything")
+    p.add_argument("--max-runs", type=_positive_int, default=st.DEFAULT_MAX_RUNS,
+                   help=f"refuse a study of more runs (default {st.DEFAULT_MAX_RUNS}: on a 2-core, 24 GiB machine the "
+                        "shipped studies run at 5-40 runs/s, so that is 1-6 hours, and the run list (about 0.4 kB a "
+                        "run) and the rows stay far below the memory; raise it for a bigger cluster)")
+    p.add_argument("--scheduler", help="address of a running Dask scheduler (tcp://host:port)")
+    p.add_argument("--connect-timeout", type=_positive_float, default=CONNECT_TIMEOUT,
+                   help=f"seconds to wait for --scheduler to answer (default {CONNECT_TIMEOUT:g})")
+    p.add_argument("--workers", type=_positive_int, default=os.cpu_count(),
+                   help="local worker processes (default: cores)")
+    p.add_argument("--limit", type=int, help="run at most this many of the missing runs")
+    p.add_argument("--serial", action="store_true", help="run in this process, without Dask")
+    return p
+
+
+CONNECT_TIMEOUT = 5.0
+
+
+def main(argv=None):
+    """The command; returns its exit status: 0 done, 1 every run failed (or a plot could not be
+    written), 2 the study could not start (a message says why)."""
+    args = parser().parse_args(argv)
+    if args.out is None and not args.check:
+        parser().error("--out is required (except with --check)")
+    try:
+        return sweep(args)
+    except (st.StudyError, SweepError) as e:
+        print(f"stewart-sweep: {e}", file=sys.stderr, flush=True)
+        return 2
+    except KeyboardInterrupt:
+        print("\nstewart-sweep: interrupted; the rows written are kept: the same command resumes", file=sys.stderr)
+        return 130
+
+
+def sweep(args):
+    plan = st.plan(args.study, args.max_runs)
+    spec = plan.spec
+    if args.check:
+        print(plan.text())
+        if args.out and results_dir(args.out).is_dir():
+            ids = {st.run_id(r) for r in st.runs(spec)}
+            done = len(ids & set(load_results(args.out).get("run_id", pd.Series(dtype=str))))
+            print(f"  --out {args.out}: {done} of {plan.runs} runs done already")
+        print("stewart-sweep: --check: the study is valid; nothing was run")
+        return 0
+    out = prepare_out(args.out)
+    with StudyLock(out, spec["study"]["name"]) as lock:
+        if lock.taken_over:
+            print(f"stewart-sweep: the lock of a sweep that ended without releasing it (pid "
+                  f"{lock.taken_over.get('pid')}, started {lock.taken_over.get('started')}) was taken over",
+                  file=sys.stderr)
+        return _sweep_locked(spec, plan, args, out)
+
+
+def _sweep_locked(spec, plan, args, out):
+    try:
+        if not (out / "study.toml").exists() or not os.path.samefile(args.study, out / "study.toml"):
+            shutil.copyfile(args.study, out / "study.toml")
+    except OSError as e:
+        raise SweepError(f"cannot write in --out {out} ({e.strerror}): give a folder you can write to") from None
     all_runs = st.runs(spec)
-    done = set(load_results(out).get("run_id", pd.Series(dtype=str)))
+    order = {st.run_id(r): i for i, r in enumerate(all_runs)}
+    done = set(load_results(out).get("run_id", pd.Series(dtype=str))) & set(order)
     todo = [r for r in all_runs if st.run_id(r) not in done]
     if args.limit is not None:
-        todo = todo[: args.limit]
+        todo = todo[: max(args.limit, 0)]
     print(f"stewart-sweep: study {spec['study']['name']}: {len(all_runs)} runs, {len(done)} done already, "
           f"running {len(todo)}", flush=True)
     writer = Writer(out)
     progress = Progress(len(all_runs), len(done))
     started = time.monotonic()
-    if todo:
-        fmus = st.fmus_for(spec)
-        if args.serial:
-            for run in todo:
-                writer.add(run_and_time(spec, run, fmus))
-                progress.tick()
-        else:
-            run_on_dask(spec, todo, fmus, args, writer, progress)
-    writer.flush()
-    progress.close()
+    try:
+        if todo:
+            fmus = st.fmus_for(spec)
+            if args.serial:
+                for run in todo:
+                    writer.add(run_and_time(spec, run, fmus))
+                    progress.tick()
+            else:
+                run_on_dask(spec, todo, fmus, args, writer, progress)
+    finally:
+        writer.flush()  # what finished is kept, whatever stopped the study
+        progress.close()
     elapsed = time.monotonic() - started
     results = load_results(out)
-    summary = summarise(spec, results, len(todo), elapsed)
+    if len(results):
+        results = results[results["run_id"].isin(order)].reset_index(drop=True)
+    summary = summarise(spec, results, len(todo), elapsed, order)
     (out / "summary.txt").write_text(summary + "\n")
     print(summary)
-    for path in plot(spec, results, out):
-        print(f"wrote {path}")
+    status = 0
+    for path, problem in plot(spec, results, out):
+        if problem:
+            print(f"stewart-sweep: {path.name} not written: {problem}", file=sys.stderr)
+            status = 1
+        else:
+            print(f"wrote {path}")
+    failed = results[results["status"] == "error"] if len(results) else results
+    if len(results) and len(failed) == len(results):
+        print(f"stewart-sweep: every run failed ({len(failed)} of {len(results)}); the first error: "
+              f"{first_error(failed, order)}", file=sys.stderr)
+        status = 1
+    return status
+
+
+def first_error(failed, order):
+    """The message of the first failed run in the study's order, with its parameters."""
+    row = failed.assign(_order=failed["run_id"].map(order)).sort_values("_order").iloc[0]
+    params = ", ".join(f"{k[6:]} = {row[k]}" for k in row.index if k.startswith("param:") and not pd.isna(row[k]))
+    return f"{row['message']} (run {row['run_id']}{': ' + params if params else ''})"
+
+
+# At most this many runs wait at the scheduler at a time: enough to keep a large cluster busy,
+# and the client's and scheduler's memory stay bounded whatever the number of runs.
+WINDOW = 1000
 
 
 def run_on_dask(spec, todo, fmus, args, writer, progress):
     from distributed import Client, LocalCluster, as_completed
     if args.scheduler:
-        client, cluster = Client(args.scheduler), None
+        try:
+            client, cluster = Client(args.scheduler, timeout=args.connect_timeout), None
+        except ValueError as e:
+            raise SweepError(f"--scheduler {args.scheduler} is not a scheduler address ({e}): write tcp://host:port")
+        except (OSError, TimeoutError) as e:
+            raise SweepError(f"no Dask scheduler answered at {args.scheduler} within {args.connect_timeout:g} s "
+                             f"(the connection timeout, --connect-timeout): check the address and that `dask "
+                             f"scheduler` runs there, or leave out --scheduler to run on this machine ({e})") from None
+        if not client.scheduler_info().get("workers"):
+            print(f"stewart-sweep: the scheduler at {args.scheduler} has no workers yet; waiting for them (start "
+                  f"`dask worker {args.scheduler}`)", file=sys.stderr, flush=True)
     else:
-        cluster = LocalCluster(n_workers=max(args.workers, 1), threads_per_worker=1, processes=True,
+        cluster = LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True,
                                dashboard_address=None)
         client = Client(cluster)
     try:
         shared = client.scatter(fmus, broadcast=True)
-        futures = [client.submit(run_and_time, spec, run, shared, key=f"run-{st.run_id(run)}-{uuid.uuid4().hex[:6]}",
-                                 pure=False) for run in todo]
-        for future in as_completed(futures):
-            writer.add(future.result())
+        pending = iter(todo)
+        runs = {}
+
+        def submit(run):
+            future = client.submit(run_and_time, spec, run, shared, key=f"run-{st.run_id(run)}-{uuid.uuid4().hex[:6]}",
+                                   pure=False)
+            runs[future] = run
+            return future
+
+        window = max(WINDOW, 4 * len(client.scheduler_info().get("workers", {})))
+        futures = as_completed([submit(run) for run in itertools.islice(pending, window)])
+        for future in futures:
+            run = runs.pop(future)
+            try:
+                row = future.result()
+            except Exception as e:  # noqa: BLE001 - e.g. KilledWorker: the run is a row, not the study's crash
+                metrics = st.failed_metrics(f"{type(e).__name__}: {e}")
+                row = make_row(run, metrics, math.nan, "none")
+            writer.add(row)
             progress.tick()
             future.release()
+            following = next(pending, None)
+            if following is not None:
+                futures.add(submit(following))
     finally:
         client.close()
         if cluster is not None:
             cluster.close()
 
 
-def summarise(spec, results, executed, elapsed):
+def summarise(spec, results, executed, elapsed, order=None):
     lines = [f"study {spec['study']['name']}: {len(results)} rows in results.parquet; this call ran {executed} in "
              f"{elapsed:.1f} s ({executed / elapsed if elapsed > 0 else 0:.2f} runs/s)"]
     if len(results):
@@ -177,68 +412,89 @@ def summarise(spec, results, executed, elapsed):
             column = results[metric].dropna()
             if len(column):
                 lines.append(f"{metric}: min {column.min():.3g}, median {column.median():.3g}, max {column.max():.3g}")
+        failed = results[results["status"] == "error"]
+        if len(failed):
+            lines.append(f"first error: {first_error(failed, order or {})}")
     return "\n".join(lines)
 
 
 def plot(spec, results, out):
     """The study's `[[plot]]` figures: `map` (a metric over two parameters, one panel per value
-    of a third), `histogram` of a metric, `scatter` of a metric against a parameter."""
+    of a third), `histogram` of a metric, `scatter` of a metric against a parameter. Yields
+    (path, None) for each figure written, (path, reason) for one that could not be: rows are
+    never lost to a plot."""
     if not len(results) or not spec.get("plot"):
-        return []
+        return
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    import numpy as np
-    paths = []
     for i, p in enumerate(spec["plot"]):
-        kind = p.get("kind", "histogram")
-        column = lambda name: results[f"param:{name}"] if f"param:{name}" in results else results[name]  # noqa: E731
-        value = p.get("value", "max_leg_error")
-        title = p.get("title", f"{spec['study']['name']}: {value}")
-        if kind == "map":
-            facets = sorted(column(p["facet"]).unique()) if p.get("facet") else [None]
-            fig, axes = plt.subplots(1, len(facets), figsize=(max(6.5, 4.2 * len(facets)), 4.2), squeeze=False)
-            for ax, facet in zip(axes[0], facets):
-                part = results if facet is None else results[column(p["facet"]) == facet]
-                xs, ys = sorted(column(p["x"])[part.index].unique()), sorted(column(p["y"])[part.index].unique())
-                grid = np.full((len(ys), len(xs)), np.nan)
-                for _, r in part.iterrows():
-                    x, y = r.get(f"param:{p['x']}", r.get(p["x"])), r.get(f"param:{p['y']}", r.get(p["y"]))
-                    v = r[value] if r["stable"] or not p.get("unstable_blank", True) else np.nan
-                    grid[ys.index(y), xs.index(x)] = v
-                shown = np.log10(grid) if p.get("log") else grid
-                im = ax.imshow(shown, origin="lower", aspect="auto", cmap="viridis")
-                ax.set_xticks(range(len(xs)), [f"{x:g}" for x in xs], rotation=45)
-                ax.set_yticks(range(len(ys)), [f"{y:g}" for y in ys])
-                ax.set_xlabel(p["x"])
-                ax.set_ylabel(p["y"])
-                if facet is not None:
-                    ax.set_title(f"{p['facet']} = {facet:g}")
-                for (yi, xi), v in np.ndenumerate(grid):
-                    if np.isnan(v):
-                        ax.text(xi, yi, "x", ha="center", va="center", color="red")
-                fig.colorbar(im, ax=ax, label=("log10 " if p.get("log") else "") + value)
-            fig.suptitle(title + " (x: unstable or failed)")
-        elif kind == "scatter":
-            fig, ax = plt.subplots(figsize=(6, 4))
-            ax.scatter(column(p["x"]), results[value], s=12)
-            ax.set_xlabel(p["x"])
-            ax.set_ylabel(value)
-            ax.set_title(title)
-            ax.grid(True, alpha=0.3)
-        else:
-            fig, ax = plt.subplots(figsize=(6, 4))
-            ax.hist(results[value].dropna(), bins=p.get("bins", 30))
-            ax.set_xlabel(value)
-            ax.set_ylabel("runs")
-            ax.set_title(title)
-        fig.tight_layout()
         path = out / p.get("file", f"plot{i + 1}.png")
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
-        paths.append(path)
-    return paths
+        # The schema refuses names that leave --out; a symbolic link inside it could still.
+        if out.resolve() not in path.resolve().parents:
+            yield path, f"{path} is outside --out {out}"
+            continue
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            fig = _figure(plt, spec, results, p)
+            fig.savefig(path, dpi=110)
+            plt.close(fig)
+        except Exception as e:  # noqa: BLE001 - a figure that fails is reported; the rows are kept
+            plt.close("all")
+            yield path, f"{type(e).__name__}: {e}"
+            continue
+        yield path, None
+
+
+def _figure(plt, spec, results, p):
+    import numpy as np
+    kind = p.get("kind", "histogram")
+
+    def column(name):
+        return results[f"param:{name}"] if f"param:{name}" in results else results[name]
+
+    value = p.get("value", "max_leg_error")
+    title = p.get("title", f"{spec['study']['name']}: {value}")
+    if kind == "map":
+        facets = sorted(column(p["facet"]).unique()) if p.get("facet") else [None]
+        fig, axes = plt.subplots(1, len(facets), figsize=(max(6.5, 4.2 * len(facets)), 4.2), squeeze=False)
+        for ax, facet in zip(axes[0], facets):
+            part = results if facet is None else results[column(p["facet"]) == facet]
+            xs, ys = sorted(column(p["x"])[part.index].unique()), sorted(column(p["y"])[part.index].unique())
+            grid = np.full((len(ys), len(xs)), np.nan)
+            for _, r in part.iterrows():
+                x, y = r.get(f"param:{p['x']}", r.get(p["x"])), r.get(f"param:{p['y']}", r.get(p["y"]))
+                v = r[value] if r["stable"] or not p.get("unstable_blank", True) else np.nan
+                grid[ys.index(y), xs.index(x)] = v
+            shown = np.log10(grid) if p.get("log") else grid
+            im = ax.imshow(shown, origin="lower", aspect="auto", cmap="viridis")
+            ax.set_xticks(range(len(xs)), [f"{x:g}" for x in xs], rotation=45)
+            ax.set_yticks(range(len(ys)), [f"{y:g}" for y in ys])
+            ax.set_xlabel(p["x"])
+            ax.set_ylabel(p["y"])
+            if facet is not None:
+                ax.set_title(f"{p['facet']} = {facet:g}")
+            for (yi, xi), v in np.ndenumerate(grid):
+                if np.isnan(v):
+                    ax.text(xi, yi, "x", ha="center", va="center", color="red")
+            fig.colorbar(im, ax=ax, label=("log10 " if p.get("log") else "") + value)
+        fig.suptitle(title + " (x: unstable or failed)")
+    elif kind == "scatter":
+        fig, ax = plt.subplots(figsize=(6, 4))
+        ax.scatter(column(p["x"]), results[value], s=12)
+        ax.set_xlabel(p["x"])
+        ax.set_ylabel(value)
+        ax.set_title(title)
+        ax.grid(True, alpha=0.3)
+    else:
+        fig, ax = plt.subplots(figsize=(6, 4))
+        ax.hist(results[value].dropna(), bins=p.get("bins", 30))
+        ax.set_xlabel(value)
+        ax.set_ylabel("runs")
+        ax.set_title(title)
+    fig.tight_layout()
+    return fig
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

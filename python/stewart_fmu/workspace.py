@@ -21,7 +21,8 @@ import numpy as np
 from fmpy import read_model_description, simulate_fmu
 
 from .cosim import closed_loop
-from .core import BASE_AZIMUTHS, GRAVITY, H_C, MASS, PLATFORM_AZIMUTHS, PLATFORM_FMU, R_B, R_P, Platform
+from .core import (BASE_AZIMUTHS, GRAVITY, H_C, MASS, PLATFORM_AZIMUTHS, PLATFORM_FMU, R_B, R_P, Platform, check_names,
+                   check_times)
 
 LEGS = range(1, 7)
 EQUILIBRIUM_FORCE_SI = 0.2005 * MASS * GRAVITY
@@ -31,6 +32,7 @@ def start_values(names, fmu=PLATFORM_FMU):
     """Start values of the FMU's own model description (the defaults the FMU runs with)."""
     md = read_model_description(str(fmu))
     values = {v.name: v.start for v in md.modelVariables}
+    check_names(names, values, md.modelName, "start_values")
     return {n: float(values[n]) for n in names}
 
 
@@ -80,6 +82,7 @@ RECORD = (["r[1]", "r[2]", "r[3]", "v[3]", "der(v[3])", "angles[1]", "angles[2]"
 
 def _platform_run(force_of_t, t_end, h, parameters=None, record=RECORD, events=None):
     """Open loop through FMU2Slave: forces held over each step; returns a dict of arrays."""
+    check_times(t_end, h, "t_end", "h")
     pl = Platform(parameters=parameters, events=events)
     rows = [pl.get(*record)]
     times = [0.0]

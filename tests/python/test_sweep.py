@@ -154,3 +154,132 @@ def test_the_stability_study_reproduces_the_communication_step_limit(tmp_path):
     assert pick.loc[0.29, "stable"] and not pick.loc[0.30, "stable"]
     assert pick.loc[0.30, "status"] == "discard" and "base plane" in pick.loc[0.30, "message"]
     assert (out / "stability_map.png").stat().st_size > 10_000
+
+
+# ----- issue 28: failed runs, the lock, --out and --scheduler problems -----------------------------
+
+FAILING = """
+[study]
+name = "failing"
+system = "closed-loop"
+units = "nondimensional"
+stop_time = 0.05
+step = 0.01
+
+[grid]
+"platform.M" = [-1.0, -2.0]
+"""
+
+
+def test_a_study_whose_every_run_fails_exits_non_zero_with_the_first_error_and_resumes(tmp_path):
+    """Every run refused by the FMU: rows with the message, exit 1 with the first error; the
+    same command again runs nothing, says the same and does not crash."""
+    path = tmp_path / "failing.toml"
+    path.write_text(FAILING)
+    out = tmp_path / "out"
+    for attempt in range(2):
+        run = subprocess.run([SWEEP, str(path), "--out", str(out), "--serial"], capture_output=True, text=True,
+                             timeout=120)
+        print(f"call {attempt + 1}: exit {run.returncode}; {run.stdout.splitlines()[0]}; {run.stderr.strip()[-300:]}")
+        assert run.returncode == 1, run.stdout + run.stderr
+        assert "Traceback" not in run.stderr
+        assert "every run failed (2 of 2); the first error: " in run.stderr
+        assert "parameter M: mass must be positive, got -1" in run.stderr and "platform.M = -1.0" in run.stderr
+        assert f"2 runs, {2 * attempt} done already, running {2 - 2 * attempt}" in run.stdout
+    rows = load_results(out)
+    assert len(rows) == 2 and rows["run_id"].is_unique and set(rows["status"]) == {"error"}
+    assert rows["message"].str.contains("mass must be positive").all()
+
+
+def test_a_study_with_some_failed_runs_exits_zero_and_names_the_first_error(tmp_path):
+    path = tmp_path / "mixed.toml"
+    path.write_text(FAILING.replace("[-1.0, -2.0]", "[1.0, -2.0]"))
+    run = subprocess.run([SWEEP, str(path), "--out", str(tmp_path / "out"), "--serial"], capture_output=True,
+                         text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    assert "first error: fmi2ExitInitializationMode: parameter M: mass must be positive, got -2" in run.stdout
+
+
+def test_two_sweeps_on_one_out_run_one_at_a_time(study_file, tmp_path):
+    """The second sweep on the same --out is refused while the first runs, naming it; the
+    first writes every row once."""
+    out = tmp_path / "shared"
+    first = subprocess.Popen([SWEEP, str(study_file), "--out", str(out), "--serial"], stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while rows_written(out) < 1 and first.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    second = subprocess.run([SWEEP, str(study_file), "--out", str(out), "--workers", "2"], capture_output=True,
+                            text=True, timeout=300)
+    still_running = first.poll() is None
+    first.communicate(timeout=300)
+    print(f"second sweep while the first ran: exit {second.returncode}: {second.stderr.strip()}")
+    assert still_running, "the first sweep ended before the second started: make the study longer"
+    assert first.returncode == 0
+    assert second.returncode == 2 and "Traceback" not in second.stderr
+    assert f"is in use by another stewart-sweep (pid {first.pid} on " in second.stderr
+    rows = load_results(out)
+    assert len(rows) == 40 and rows["run_id"].is_unique
+    assert not (out / ".stewart-sweep.lock").exists()
+
+
+def test_the_lock_of_a_killed_sweep_does_not_block_the_next(study_file, tmp_path):
+    out = tmp_path / "killed"
+    first = subprocess.Popen([SWEEP, str(study_file), "--out", str(out), "--serial"], stdout=subprocess.DEVNULL,
+                             stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 120
+    while rows_written(out) < 3 and first.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    first.kill()
+    first.wait()
+    lock = out / ".stewart-sweep.lock"
+    assert f'"pid": {first.pid}' in lock.read_text()
+    second = subprocess.run([SWEEP, str(study_file), "--out", str(out), "--serial"], capture_output=True, text=True,
+                            timeout=300)
+    assert second.returncode == 0, second.stderr
+    assert f"the lock of a sweep that ended without releasing it (pid {first.pid}" in second.stderr
+    rows = load_results(out)
+    assert len(rows) == 40 and rows["run_id"].is_unique
+
+
+def test_out_that_is_a_file_or_read_only_gets_a_message(study_file, tmp_path):
+    afile = tmp_path / "afile"
+    afile.write_text("not a folder")
+    run = subprocess.run([SWEEP, str(study_file), "--out", str(afile), "--serial"], capture_output=True, text=True,
+                         timeout=60)
+    assert run.returncode == 2 and "Traceback" not in run.stderr
+    assert f"--out {afile} is a file, not a folder" in run.stderr
+    readonly = tmp_path / "readonly"
+    readonly.mkdir()
+    # root writes through permission bits: make the folder immutable instead
+    made = subprocess.run(["chattr", "+i", str(readonly)], capture_output=True) if os.geteuid() == 0 else None
+    if made is None:
+        readonly.chmod(0o555)
+    elif made.returncode != 0:
+        pytest.skip(f"cannot make a read-only folder here: {made.stderr.decode().strip()}")
+    try:
+        for out in (readonly, readonly / "sub"):
+            run = subprocess.run([SWEEP, str(study_file), "--out", str(out), "--serial"], capture_output=True,
+                                 text=True, timeout=60)
+            print(f"--out {out}: exit {run.returncode}: {run.stderr.strip()}")
+            assert run.returncode == 2 and "Traceback" not in run.stderr
+            assert f"{out} (" in run.stderr and "give a folder you can write to" in run.stderr
+    finally:
+        if made is not None:
+            subprocess.run(["chattr", "-i", str(readonly)])
+        readonly.chmod(0o755)
+
+
+def test_an_unreachable_scheduler_is_reported_within_the_connection_timeout(study_file, tmp_path):
+    import socket
+    with socket.socket() as s:  # a port nothing listens on
+        s.bind(("127.0.0.1", 0))
+        address = f"tcp://127.0.0.1:{s.getsockname()[1]}"
+    started = time.monotonic()
+    run = subprocess.run([SWEEP, str(study_file), "--out", str(tmp_path / "out"), "--scheduler", address],
+                         capture_output=True, text=True, timeout=120)
+    took = time.monotonic() - started
+    print(f"unreachable scheduler: exit {run.returncode} after {took:.1f} s: {run.stderr.strip()}")
+    assert run.returncode == 2 and "Traceback" not in run.stderr
+    assert f"no Dask scheduler answered at {address} within 5 s" in run.stderr
+    assert took < 20
