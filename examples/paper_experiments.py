@@ -54,7 +54,7 @@ def run_forces(force_of_t, t_end, h, derivative_of_t=None):
 def controller_parameters(gain, damping, disturbance=1e-4):
     """StewartController in the paper's units: heave 0.2 sin t (1 - exp(-t/2))^2, the paper's
     perturbation 0.0001 sin 2t (1 - exp(-t/2)) added to every leg."""
-    c = {k: v for k, v in P.items() if not k.startswith("r0") and k != "stops"}  # the controller has neither
+    c = {k: v for k, v in P.items() if not k.startswith("r0") and k not in ("stops", "joints")}  # the controller has none of these
     c.update({"G": gain, "D": damping, "heave.centre[3]": Z0, "heave.amplitude": 0.2, "heave.frequency": 1.0,
               "heave.timeConstant": 2.0, "disturbance.amplitude": disturbance, "disturbance.frequency": 2.0,
               "disturbance.timeConstant": 2.0})

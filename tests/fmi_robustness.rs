@@ -226,7 +226,12 @@ fn bad_parameter_sets_are_refused_at_exit_initialization_mode() {
         ),
         (
             "singular initial pose (yaw 90 degrees) with stopAtSingularity",
-            vec![("stops", 0.0), ("joints", 0.0), ("stopAtSingularity", 1.0), ("angles0[3]", std::f64::consts::FRAC_PI_2)],
+            vec![
+                ("stops", 0.0),
+                ("joints", 0.0),
+                ("stopAtSingularity", 1.0),
+                ("angles0[3]", std::f64::consts::FRAC_PI_2),
+            ],
             "the initial pose is a singular leg arrangement",
         ),
         ("initial pose outside the stroke", vec![("r0[3]", 1.5)], "parameter r0: in the initial pose leg 1 has length"),
@@ -243,7 +248,11 @@ fn bad_parameter_sets_are_refused_at_exit_initialization_mode() {
             vec![("stops.damping", -1.0)],
             "parameter stops.damping: the contact damping must be >= 0",
         ),
-        ("platform joints on the base plane", vec![("stops", 0.0), ("joints", 0.0), ("r0[3]", 0.5)], "on or across the base plane"),
+        (
+            "platform joints on the base plane",
+            vec![("stops", 0.0), ("joints", 0.0), ("r0[3]", 0.5)],
+            "on or across the base plane",
+        ),
         (
             "platform joints across the base plane",
             vec![("stops", 0.0), ("joints", 0.0), ("r0[3]", 0.6), ("angles0[1]", 0.5)],
@@ -284,7 +293,9 @@ fn bad_parameter_sets_are_refused_at_exit_initialization_mode() {
     let mut h = Host::platform("cond");
     h.setup(None);
     h.enter();
-    for (n, v) in [("stops", 0.0), ("joints", 0.0), ("stopAtSingularity", 1.0), ("angles0[3]", std::f64::consts::FRAC_PI_2)] {
+    for (n, v) in
+        [("stops", 0.0), ("joints", 0.0), ("stopAtSingularity", 1.0), ("angles0[3]", std::f64::consts::FRAC_PI_2)]
+    {
         h.set(n, v);
     }
     h.exit();
@@ -300,10 +311,23 @@ fn bad_parameter_sets_are_refused_at_exit_initialization_mode() {
 fn impossible_motions_are_discarded_with_roll_back() {
     let cases: Vec<(&str, Vec<(&str, f64)>, [f64; 6], f64, &str)> = vec![
         // Without end stops nothing stops the legs; with them, see the workspace tests.
-        ("platform pulled through the base", vec![("stops", 0.0), ("joints", 0.0)], [-1.0e6; 6], 1.0, "passed through the base plane"),
+        (
+            "platform pulled through the base",
+            vec![("stops", 0.0), ("joints", 0.0)],
+            [-1.0e6; 6],
+            1.0,
+            "passed through the base plane",
+        ),
         (
             "platform turned through a singular yaw, stopAtSingularity",
-            vec![("stops", 0.0), ("joints", 0.0), ("stopAtSingularity", 1.0), ("g", 0.0), ("angles0[3]", 1.35), ("w0[3]", 1.0)],
+            vec![
+                ("stops", 0.0),
+                ("joints", 0.0),
+                ("stopAtSingularity", 1.0),
+                ("g", 0.0),
+                ("angles0[3]", 1.35),
+                ("w0[3]", 1.0),
+            ],
             [0.0; 6],
             0.5,
             "passed through a singular arrangement",

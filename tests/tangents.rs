@@ -144,3 +144,67 @@ fn output_tangent_matches_central_differences() {
     }
     println!("outputs: max relative error of the exact tangent vs central differences: {worst:.1e}");
 }
+
+/// The machine's terms (legs with mass, friction, joint limits in contact) in the exact
+/// derivatives of the right-hand side and of the joints' forces, against central differences.
+#[test]
+fn machine_tangent_matches_central_differences() {
+    use nalgebra::Matrix3;
+    use stewart_fmu::physics::legs::bodies::LegBodies;
+    use stewart_fmu::physics::legs::friction::Friction;
+    use stewart_fmu::physics::legs::joint_limits::JointLimits;
+    use stewart_fmu::physics::number::Dual;
+    let stand = Stand::truck_cabin();
+    let r0 = Stand::truck_cabin_neutral_position();
+    let n0 = std::array::from_fn(|k| (r0 + stand.platform_joints[k] - stand.base_joints[k]).normalize());
+    let legs = LegBodies {
+        cylinder_mass: 40.0,
+        rod_mass: 15.0,
+        cylinder_com: 0.45,
+        rod_com: 0.55,
+        cylinder_inertia: 2.5,
+        rod_inertia: 0.6,
+    };
+    let friction = Friction { coulomb: 150.0, static_: 250.0, viscous: 800.0, ..Friction::default() };
+    let mut rng = Rng(0x5eed_0000_1111_2222);
+    let (mut worst, mut worst_forces, mut contacts): (f64, f64, usize) = (0.0, 0.0, 0);
+    for case in 0..24 {
+        let (y, u, dy, du) = random_case(&mut rng, case % 4 >= 2);
+        // Limits from tight (joints in contact) to loose (none).
+        let limit = [0.03, 0.08, 1.0][case % 3];
+        let limits = JointLimits::new(limit, limit * 1.2, 1e6, 5e4, n0, &Matrix3::identity());
+        let form = SpecialForm::new(stand.clone())
+            .with_end_stops((case % 2 == 1).then(|| stops_around(&y, case)))
+            .with_machine(legs, friction, Some(limits));
+        let (exact, dpower) = form.derivative_tangent(&y, &u, &dy, &du);
+        let h = 1e-6;
+        let eval = |sign: f64| {
+            let yy: StateVector = std::array::from_fn(|i| y[i] + sign * h * dy[i]);
+            let uu: [f64; 6] = std::array::from_fn(|k| u[k] + sign * h * du[k]);
+            let (f, p) = form.rate(&yy, &uu);
+            let mut v = f.to_vec();
+            v.extend([p.actuator / 1e4, p.dissipation / 1e4]);
+            let forces = form.joint_forces(&yy, &uu);
+            (v, forces.iter().flat_map(|f| f.iter().map(|x| x / 1e4).collect::<Vec<_>>()).collect::<Vec<_>>())
+        };
+        let ((fp, jp), (fm, jm)) = (eval(1.0), eval(-1.0));
+        let fd: Vec<f64> = (0..26).map(|i| (fp[i] - fm[i]) / (2.0 * h)).collect();
+        let mut exact = exact.to_vec();
+        exact.extend([dpower.actuator / 1e4, dpower.dissipation / 1e4]);
+        let e = relative_error(&exact, &fd);
+        worst = worst.max(e);
+        assert!(e <= 1e-6, "case {case}: relative error {e:e}");
+        let forces = form.joint_forces(&Dual::seeded(&y, &dy), &Dual::seeded(&u, &du));
+        let exact_forces: Vec<f64> =
+            forces.iter().flat_map(|f| f.iter().map(|x| x.eps / 1e4).collect::<Vec<_>>()).collect();
+        let fd_forces: Vec<f64> = jp.iter().zip(&jm).map(|(a, b)| (a - b) / (2.0 * h)).collect();
+        let e = relative_error(&exact_forces, &fd_forces);
+        worst_forces = worst_forces.max(e);
+        assert!(e <= 1e-6, "case {case}: joint forces' relative error {e:e}");
+        contacts += usize::from(limit < 0.1);
+    }
+    println!(
+        "machine: max relative error of the exact tangent vs central differences {worst:.1e} (right-hand side), \
+         {worst_forces:.1e} (joint forces); {contacts} cases with joints in contact"
+    );
+}

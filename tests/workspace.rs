@@ -239,7 +239,10 @@ fn tumbling_through_singular_arrangements_matches_newton_euler() {
     let mut fmu = Host::platform("tumble");
     let category = std::ffi::CString::new("logEvents").unwrap();
     assert_eq!(unsafe { fmi2SetDebugLogging(fmu.c, fmi2True, 1, &category.as_ptr()) }, fmi2OK);
-    assert_eq!(fmu.initialise(&[("stops", 0.0), ("joints", 0.0), ("solver.relTol", 1e-12), ("solver.absTol", 1e-14)]), fmi2OK);
+    assert_eq!(
+        fmu.initialise(&[("stops", 0.0), ("joints", 0.0), ("solver.relTol", 1e-12), ("solver.absTol", 1e-14)]),
+        fmi2OK
+    );
     let held = std::cell::Cell::new([0.0; 6]);
     let law = |_t: f64, _l: &[f64; 6], _ld: &[f64; 6]| held.get();
     let ne = NewtonEuler { stand: Stand::truck_cabin(), law: &law };

@@ -187,10 +187,8 @@ impl SpecialForm {
         let c = std::array::from_fn::<_, 3, _>(|a| state.e[a].cross(&state.e_dot[a]).dot(&w.moment));
         // `F.v + L.omega` of the actuator forces alone, with the inertial angular velocity
         // `omega = 1/2 sum_a e_a x e_a'`: `sum_k u_k ldot_k`.
-        let power = LegPower {
-            actuator: w.force.dot(&state.v) + (c[0] + c[1] + c[2]) * 0.5,
-            dissipation: w.dissipation(),
-        };
+        let power =
+            LegPower { actuator: w.force.dot(&state.v) + (c[0] + c[1] + c[2]) * 0.5, dissipation: w.dissipation() };
         let (a, e_dd) = self.body.accelerations(&state, &w.total_force(), &w.total_moment());
         let mut dy = [T::zero(); STATE_DIM];
         let rates = [state.v, a, state.e_dot[0], state.e_dot[1], state.e_dot[2], e_dd[0], e_dd[1], e_dd[2]];
@@ -226,7 +224,7 @@ impl SpecialForm {
                 let ldot = n.dot(&(state.v + state.body_vector_rate(&self.stand.platform_joints[k])));
                 let contact = stops.contact(k, l, ldot);
                 loads.stop[k] = n * contact.force;
-                loads.stop_dissipation += contact.dissipation;
+                loads.stop_dissipation[k] = contact.dissipation;
             }
             if !self.fast || self.joint_limits.is_some() {
                 let a_dot = state.v + state.body_vector_rate(&self.stand.platform_joints[k]);
@@ -253,7 +251,8 @@ impl SpecialForm {
         leg: &LegMotion<T>,
         inertia: Option<&LegInertia<T>>,
     ) -> MachineLoad<T> {
-        let mut load = MachineLoad { force: Vector3::zeros(), moment: Vector3::zeros(), dissipation: T::zero(), acts: false };
+        let mut load =
+            MachineLoad { force: Vector3::zeros(), moment: Vector3::zeros(), dissipation: T::zero(), acts: false };
         if !self.friction.is_zero() {
             let f = self.friction.force(leg.l_dot);
             load.force += leg.n * f;
@@ -267,7 +266,8 @@ impl SpecialForm {
                 load.acts = true;
             }
             let m0 = &limits.platform_reference[k];
-            if let Some(c) = limits.platform(&leg.n, &leg.n_dot, &state.body_vector(m0), || state.body_vector_rate(m0)) {
+            if let Some(c) = limits.platform(&leg.n, &leg.n_dot, &state.body_vector(m0), || state.body_vector_rate(m0))
+            {
                 load.force += c.on_leg / leg.l;
                 load.moment += c.on_platform;
                 load.dissipation += c.dissipation;
@@ -294,7 +294,8 @@ impl SpecialForm {
         let omega = state.angular_velocity_inertial();
         let j = &self.stand.inertia;
         let e = &state.e;
-        let j_w = |x: &Vector3<T>| e[0] * (e[0].dot(x) * j[0]) + e[1] * (e[1].dot(x) * j[1]) + e[2] * (e[2].dot(x) * j[2]);
+        let j_w =
+            |x: &Vector3<T>| e[0] * (e[0].dot(x) * j[0]) + e[1] * (e[1].dot(x) * j[1]) + e[2] * (e[2].dot(x) * j[2]);
         // The system [[M I + sum M_k, -sum M_k [rho]x], [., J_w - sum [rho]x M_k [rho]x]], with
         // M_k = a I + c n n^T (a = I_t / l^2, c = m_r - a):
         // -M_k [rho]x = -a [rho]x + c n (rho x n)^T and
@@ -303,7 +304,8 @@ impl SpecialForm {
         let identity = Matrix3::from_diagonal_element(T::one());
         let mut a11 = identity * T::constant(self.stand.mass);
         let mut a12 = Matrix3::from_element(zero);
-        let mut a22 = Matrix3::from_fn(|r, c| e[0][r] * e[0][c] * j[0] + e[1][r] * e[1][c] * j[1] + e[2][r] * e[2][c] * j[2]);
+        let mut a22 =
+            Matrix3::from_fn(|r, c| e[0][r] * e[0][c] * j[0] + e[1][r] * e[1][c] * j[1] + e[2][r] * e[2][c] * j[2]);
         let mut force = Vector3::new(zero, zero, -T::constant(self.stand.mass * self.stand.gravity));
         let mut moment = -omega.cross(&j_w(&omega));
         for k in 0..LEG_COUNT {
@@ -456,13 +458,12 @@ impl SpecialForm {
     ) -> StopWrench {
         let (n, ldot) = self.joints.directions_and_rates(state, leg, length, PerLeg::splat(1.0) / length);
         let (l, ldot) = (length.to_array(), ldot.to_array());
-        let mut force = [0.0; LEG_COUNT];
-        let mut dissipation = 0.0;
+        let (mut force, mut dissipation) = ([0.0; LEG_COUNT], [0.0; LEG_COUNT]);
         for k in 0..LEG_COUNT {
             if l[k] > 0.0 && stops.is_outside(k, l[k]) {
                 let contact = stops.contact(k, l[k], ldot[k]);
                 force[k] = contact.force;
-                dissipation += contact.dissipation;
+                dissipation[k] = contact.dissipation;
             }
         }
         let force = PerLeg::new(&force);
@@ -471,7 +472,7 @@ impl SpecialForm {
         StopWrench {
             force: Vector3::new(fs[0].sum(), fs[1].sum(), fs[2].sum()),
             moment: Vector3::new(moment[0].sum(), moment[1].sum(), moment[2].sum()),
-            dissipation,
+            dissipation: sum_over_legs(&dissipation),
         }
     }
 
@@ -480,12 +481,7 @@ impl SpecialForm {
     /// platform joints through the bound `thetaA_k <= thetaB_k + phi`, `phi` the angle of the
     /// platform's rotation from the reference pose (`cos phi = (trace(R R0^T) - 1) / 2`).
     #[inline(always)]
-    fn joints_may_touch<V: Lanes>(
-        &self,
-        state: &BodyState,
-        leg: &[PerLeg<V>; 3],
-        length: PerLeg<V>,
-    ) -> bool {
+    fn joints_may_touch<V: Lanes>(&self, state: &BodyState, leg: &[PerLeg<V>; 3], length: PerLeg<V>) -> bool {
         let [cos_base, cos_platform, sin_platform] = self.joint_cosines;
         let trace = state.e[0].dot(&self.reference_axes[0])
             + state.e[1].dot(&self.reference_axes[1])
@@ -562,7 +558,8 @@ struct Loads<T: nalgebra::Scalar> {
     actuator: [Vector3<T>; LEG_COUNT],
     /// The end stops' forces.
     stop: [Vector3<T>; LEG_COUNT],
-    stop_dissipation: T,
+    /// Each leg's stop damping power.
+    stop_dissipation: [T; LEG_COUNT],
     /// Friction, the joint limits' forces and the legs' weight and inertia.
     machine: [Vector3<T>; LEG_COUNT],
     /// The platform joints' limit moments.
@@ -587,7 +584,7 @@ impl<T: Real> Loads<T> {
             arm,
             actuator: zero,
             stop: zero,
-            stop_dissipation: T::zero(),
+            stop_dissipation: [T::zero(); LEG_COUNT],
             machine: zero,
             machine_moment: zero,
             machine_dissipation: T::zero(),
@@ -621,7 +618,7 @@ impl<T: Real> Loads<T> {
             stop: StopWrench {
                 force: sum_vectors(&self.stop),
                 moment: moments(&self.stop),
-                dissipation: self.stop_dissipation,
+                dissipation: sum_over_legs(&self.stop_dissipation),
             },
             machine: self.machine_wrench(),
         }
@@ -702,6 +699,7 @@ mod tests {
     use crate::physics::body::kinematics::rotation_from_angles;
     use crate::physics::legs::end_stops::EndStops;
     use crate::physics::legs::per_leg::Wide;
+    use crate::physics::legs::{bodies::LegBodies, friction::Friction, joint_limits::JointLimits};
 
     /// The same held forces seen as a law that depends on the state (through `LegGeometry`).
     struct ThroughGeometry(HeldForces);
@@ -714,16 +712,23 @@ mod tests {
 
     /// The fast path is the definition to the bit: legs and axes side by side in SSE2 (and,
     /// where the processor has it, AVX) registers against [`SpecialForm::rate`] leg by leg,
-    /// inside the strokes and deep in both stops, with and without Baumgarte terms, for held
-    /// forces and for a law that depends on the state.
+    /// inside the strokes and deep in both stops, on and beyond the joint limits, with and
+    /// without Baumgarte terms, for held forces and for a law that depends on the state.
     #[test]
     fn the_fast_path_gives_the_bits_of_the_definition() {
         let stand = Stand::truck_cabin();
         let stops = EndStops::default();
         let law = HeldForces { value: [5900.0, -1200.0, 8000.0, 0.0, 3.5e4, 6100.0], slope: [10.0; 6], t0: 0.0 };
         let mut contacts = 0;
-        for rate in [0.0, 10.0] {
-            let form = SpecialForm::new(stand.clone()).with_end_stops(Some(stops)).with_baumgarte_rate(rate);
+        let r0 = Stand::truck_cabin_neutral_position();
+        let n0 = std::array::from_fn(|k| (r0 + stand.platform_joints[k] - stand.base_joints[k]).normalize());
+        let limits = JointLimits::new(0.1, 0.15, 1e6, 5e4, n0, &nalgebra::Matrix3::identity());
+        let mut joint_contacts = 0;
+        for (rate, joints) in [(0.0, None), (10.0, None), (0.0, Some(limits)), (10.0, Some(limits))] {
+            let form = SpecialForm::new(stand.clone())
+                .with_end_stops(Some(stops))
+                .with_baumgarte_rate(rate)
+                .with_machine(LegBodies::default(), Friction::default(), joints);
             for (dz, roll, w) in [(0.0, 0.0, 0.0), (0.02, 0.05, 0.3), (-0.45, 0.1, -1.0), (0.45, -0.2, 2.0)] {
                 let state = BodyState::from_pose(
                     Stand::truck_cabin_neutral_position() + Vector3::new(0.01, -0.02, dz),
@@ -735,6 +740,7 @@ mod tests {
                 y[10] += 1e-4; // off the constraint manifold: the Baumgarte terms act
                 let legs = LegGeometry::new(&stand, &BodyState::from_vector(&y));
                 contacts += (0..LEG_COUNT).filter(|&k| stops.is_outside(k, legs.length[k])).count();
+                joint_contacts += usize::from(form.loads(&BodyState::from_vector(&y), &[0.0; LEG_COUNT]).machine_acts);
                 let (reference, p) = form.rate(&y, &law.leg_forces_at(0.3));
                 let bits = |x: &[f64; 24]| x.map(f64::to_bits);
                 for held in [true, false] {
@@ -761,6 +767,7 @@ mod tests {
             }
         }
         assert!(contacts >= 12, "the end-stop branch was exercised ({contacts} legs in contact)");
+        assert!(joint_contacts >= 2, "the joint-limit branch was exercised ({joint_contacts} states)");
     }
 
     /// # Safety

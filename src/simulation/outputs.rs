@@ -9,8 +9,8 @@ use crate::physics::body::invariants::mechanical_energy;
 use crate::physics::body::kinematics::angles_from_rotation;
 use crate::physics::body::state::{BodyState, STATE_DIM};
 use crate::physics::direct_problem::ForceMomentMatrix;
-use crate::physics::legs::geometry::LegGeometry;
 use crate::physics::legs::bodies::LegMotion;
+use crate::physics::legs::geometry::LegGeometry;
 use crate::physics::legs::joint_limits::angle;
 use crate::physics::number::{Dual, Real, lift};
 use crate::physics::special_form::SpecialForm;
@@ -103,7 +103,8 @@ impl<T: Real> PlatformOutputs<T> {
             if let Some(limits) = form.joint_limits() {
                 theta_b[k] = angle(motion.n.dot(&lift(&limits.base_reference[k])));
                 theta_a[k] = angle(motion.n.dot(&state.body_vector(&limits.platform_reference[k])));
-                energy += limits.potential(theta_b[k], limits.base_max) + limits.potential(theta_a[k], limits.platform_max);
+                energy +=
+                    limits.potential(theta_b[k], limits.base_max) + limits.potential(theta_a[k], limits.platform_max);
             }
         }
         let nan = Vector3::from_element(T::constant(f64::NAN));

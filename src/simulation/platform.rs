@@ -12,8 +12,11 @@ use crate::physics::body::projection::project_onto_constraints_in;
 use crate::physics::configuration::ConfigurationGuard;
 use crate::physics::direct_problem::{force_moment_determinant, singular_legs};
 use crate::physics::error::{ParameterError, PhysicsFault};
+use crate::physics::legs::bodies::LegBodies;
 use crate::physics::legs::end_stops::{EndStops, STROKE_LIMITS};
+use crate::physics::legs::friction::Friction;
 use crate::physics::legs::geometry::{LegGeometry, LegKinematics};
+use crate::physics::legs::joint_limits::JointLimits;
 use crate::physics::legs::per_leg::{Lanes, Narrow};
 use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::{LEG_COUNT, Stand};
@@ -403,6 +406,23 @@ impl PlatformSimulation {
             s.validate_initial_lengths(self.stand(), &legs.length)?;
         }
         self.form.set_end_stops(stops);
+        self.integrator.sides = SwitchingSides::default();
+        Ok(self)
+    }
+
+    /// The same simulation with the machine's legs: bodies, friction, joint limits (validated).
+    pub fn with_machine(
+        mut self,
+        legs: LegBodies,
+        friction: Friction,
+        joint_limits: Option<JointLimits>,
+    ) -> Result<Self, ParameterError> {
+        legs.validate()?;
+        friction.validate()?;
+        if let Some(j) = &joint_limits {
+            j.validate()?;
+        }
+        self.form = self.form.clone().with_machine(legs, friction, joint_limits);
         self.integrator.sides = SwitchingSides::default();
         Ok(self)
     }

@@ -18,7 +18,7 @@ Z0 = P["r0[3]"]
 def paper_controller(gain, damping, disturbance=1e-4, amplitude=0.2):
     """Controller parameters in the paper's units: the same stand, the heave programme
     0.2 sin t (1 - exp(-t/2))^2 and the perturbation 0.0001 sin 2t (1 - exp(-t/2))."""
-    c = {k: v for k, v in P.items() if not k.startswith("r0") and k != "stops"}  # the controller has neither
+    c = {k: v for k, v in P.items() if not k.startswith("r0") and k not in ("stops", "joints")}  # the controller has none of these
     c.update({"G": gain, "D": damping, "heave.centre[3]": Z0, "heave.amplitude": amplitude, "heave.frequency": 1.0,
               "heave.timeConstant": 2.0, "disturbance.amplitude": disturbance, "disturbance.frequency": 2.0,
               "disturbance.timeConstant": 2.0})

@@ -111,7 +111,8 @@ def test_fmi3_fmus_validate_clean():
     md = read_model_description(str(PLATFORM3))
     shapes = {v.name: tuple(int(d.start) for d in v.dimensions) for v in md.modelVariables}
     assert shapes["F"] == (6,) and shapes["R"] == (3, 3) and shapes["B"] == (6, 3) and shapes["l"] == (6,)
-    assert md.numberOfContinuousStates == 26 and md.numberOfEventIndicators == 13
+    # 12 stroke margins, the determinant, 12 joint-limit margins
+    assert md.numberOfContinuousStates == 26 and md.numberOfEventIndicators == 25
     assert md.coSimulation.hasEventMode and md.coSimulation.canReturnEarlyAfterIntermediateUpdate
 
 

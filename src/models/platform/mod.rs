@@ -349,7 +349,7 @@ impl FmuModel for PlatformModel {
             Ok(Reached { t: t_end, legs: None })
         };
         let event =
-            sim.crossings.as_slice().iter().any(|c| c.index < switching::DETERMINANT) || sim.crossings.dropped > 0;
+            sim.crossings.as_slice().iter().any(|c| c.index != switching::DETERMINANT) || sim.crossings.dropped > 0;
         self.force_rates = [0.0; LEG_COUNT];
         match result {
             Ok(reached) => {

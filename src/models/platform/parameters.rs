@@ -155,9 +155,11 @@ impl PlatformParameters {
 
     /// The special form these parameters describe (before initialisation).
     pub fn special_form(&self) -> SpecialForm {
-        SpecialForm::new(self.stand.clone())
-            .with_end_stops(self.end_stops())
-            .with_machine(self.legs, self.friction, self.joint_limits())
+        SpecialForm::new(self.stand.clone()).with_end_stops(self.end_stops()).with_machine(
+            self.legs,
+            self.friction,
+            self.joint_limits(),
+        )
     }
 
     /// The simulation state these parameters describe (before initialisation).
@@ -176,7 +178,7 @@ impl PlatformParameters {
             settings.rel_tol = tol;
         }
         self.validate_settings(&settings, experiment.tolerance.is_some())?;
-        let mut sim = PlatformSimulation::new(
+        let sim = PlatformSimulation::new(
             self.stand.clone(),
             self.initial_state(),
             settings,
@@ -185,20 +187,16 @@ impl PlatformParameters {
         )
         .and_then(|sim| sim.with_end_stops(self.end_stops()))
         .map_err(|e| e.to_string())?;
-        self.legs.validate().map_err(|e| e.to_string())?;
-        self.friction.validate().map_err(|e| e.to_string())?;
         let joint_limits = if self.joints_enabled {
-            let limits = self.joint_limits().ok_or_else(|| {
+            Some(self.joint_limits().ok_or_else(|| {
                 "parameter joints.r0: a leg has zero length in the joint limits' reference pose (joints.r0, \
                  joints.angles0)"
                     .to_string()
-            })?;
-            limits.validate().map_err(|e| e.to_string())?;
-            Some(limits)
+            })?)
         } else {
             None
         };
-        sim.form = sim.form.clone().with_machine(self.legs, self.friction, joint_limits);
+        let mut sim = sim.with_machine(self.legs, self.friction, joint_limits).map_err(|e| e.to_string())?;
         if let Some(limits) = &joint_limits {
             check_initial_joint_angles(limits, &sim)?;
         }

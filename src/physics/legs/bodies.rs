@@ -133,7 +133,8 @@ impl LegBodies {
     pub fn inertia<T: Real>(&self, leg: &LegMotion<T>, g: f64) -> LegInertia<T> {
         let LegMotion { l, n, l_dot, n_dot } = *leg;
         let (m_r, d_r) = (self.rod_mass, self.rod_com);
-        let fixed = self.cylinder_mass * self.cylinder_com * self.cylinder_com + self.cylinder_inertia + self.rod_inertia;
+        let fixed =
+            self.cylinder_mass * self.cylinder_com * self.cylinder_com + self.cylinder_inertia + self.rod_inertia;
         let axial = -(n_dot.dot(&n_dot) * (m_r * d_r) + n.z * (m_r * g));
         let swing = (l_dot / (l * l)) * ((T::constant(fixed) - (l - d_r) * (m_r * d_r)) * 2.0);
         let lever = ((l - d_r) * m_r + self.cylinder_mass * self.cylinder_com) * g / l;
@@ -195,18 +196,14 @@ mod tests {
         let g = 9.81;
         let base = Vector3::new(0.3, -1.2, 0.1);
         // A joint path a(t) with velocity and acceleration, through duals in time.
-        let path = |t: Dual| {
-            Vector3::new(
-                (t * 1.3).tanh() * 0.4 + 0.5,
-                (t * t) * 0.2 - 1.0,
-                (t * 0.7).exp() * 0.3 + 1.5,
-            )
-        };
+        let path =
+            |t: Dual| Vector3::new((t * 1.3).tanh() * 0.4 + 0.5, (t * t) * 0.2 - 1.0, (t * 0.7).exp() * 0.3 + 1.5);
         for t in [0.0, 0.3, 1.1] {
             let p = path(Dual::new(t, 1.0));
             let (a, a_dot) = (p.map(|d| d.re), p.map(|d| d.eps));
             let h = 1e-5;
-            let acc = (path(Dual::new(t + h, 1.0)).map(|d| d.eps) - path(Dual::new(t - h, 1.0)).map(|d| d.eps)) / (2.0 * h);
+            let acc =
+                (path(Dual::new(t + h, 1.0)).map(|d| d.eps) - path(Dual::new(t - h, 1.0)).map(|d| d.eps)) / (2.0 * h);
             let energy = |t: f64| {
                 let p = path(Dual::new(t, 1.0));
                 let q = p.map(|d| d.re) - base;

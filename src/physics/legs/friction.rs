@@ -63,11 +63,9 @@ impl Friction {
 
     /// Checks the parameters (FMI names in the errors).
     pub fn validate(&self) -> Result<(), ParameterError> {
-        for (name, value) in [
-            ("friction.coulomb", self.coulomb),
-            ("friction.static", self.static_),
-            ("friction.viscous", self.viscous),
-        ] {
+        for (name, value) in
+            [("friction.coulomb", self.coulomb), ("friction.static", self.static_), ("friction.viscous", self.viscous)]
+        {
             crate::physics::stand::check_finite(name, value)?;
             if value < 0.0 {
                 return Err(ParameterError::new(name, format!("must be >= 0, got {value:e}")));

@@ -101,7 +101,11 @@ impl JointLimits {
             damping,
             base_reference: n0,
             platform_reference: n0.map(|n| rotation0.transpose() * n),
-            reference_axes: [rotation0.column(0).into_owned(), rotation0.column(1).into_owned(), rotation0.column(2).into_owned()],
+            reference_axes: [
+                rotation0.column(0).into_owned(),
+                rotation0.column(1).into_owned(),
+                rotation0.column(2).into_owned(),
+            ],
             cos_base_max: base_max.cos(),
             cos_platform_max: platform_max.cos(),
         }
@@ -222,7 +226,11 @@ mod tests {
                 j.potential(angle(m.dot(&r)), j.base_max)
             };
             let dv = moved(Dual::new(0.0, 1.0)).eps;
-            assert!((c.on_leg.dot(&tangent) + dv).abs() < 1e-6 * (1.0 + dv.abs()), "{} vs {dv}", c.on_leg.dot(&tangent));
+            assert!(
+                (c.on_leg.dot(&tangent) + dv).abs() < 1e-6 * (1.0 + dv.abs()),
+                "{} vs {dv}",
+                c.on_leg.dot(&tangent)
+            );
         }
         // It turns the leg back towards its reference.
         assert!(c.on_leg.dot(&(n0 - n)) > 0.0);
