@@ -1,10 +1,12 @@
-"""The main job's 3-D viewer: writes the built page and four results into output/viewer/ (or the
+"""The main job's 3-D viewer: writes the built page and six results into output/viewer/ (or the
 folder given), listed in its dataset menu, and prints how to serve it.
 
 - the default controller driving the heave programme (SI, 10 s at 1 ms);
 - power loss: the legs lose their force at 0.5 s and the platform drops onto its stops;
 - actuator failure: leg 1's force falls to 0 at 1 s under feedback;
-- start-up: the controller lifts the platform from its parked pose on the stops (programme 4).
+- start-up: the controller lifts the platform from its parked pose on the stops (programme 4);
+- heavy legs (40 kg cylinders, 15 kg rods) on the heave programme;
+- the open-loop 5 % ripple per leg tips the platform onto its joint limits (red joints).
 """
 
 import sys
@@ -14,6 +16,7 @@ import numpy as np
 
 from stewart_fmu import Platform
 from stewart_fmu.cosim import closed_loop
+from stewart_fmu.machine import HEAVY, ripple_run
 from stewart_fmu.viewer import VIEW_OUTPUTS, stand, view
 
 OUT = Path(sys.argv[1] if len(sys.argv) > 1 else "output/viewer")
@@ -30,7 +33,7 @@ def as_columns(times, rows):
 
 def loop(name, title, **kwargs):
     t, rows, _, status = closed_loop(record=tuple(RECORD), **kwargs)
-    url = view(as_columns(t, rows), stand(), OUT, name, title)
+    url = view(as_columns(t, rows), stand(kwargs.get("platform_reals")), OUT, name, title)
     print(f"viewer: {title}: {len(t)} rows ({status}) -> {url}")
 
 
@@ -56,6 +59,11 @@ def main():
     parked = {"r0[3]": 1.5717790024}
     loop("start_up", "start-up from the parked pose (programme 4, SI)", t_end=6.0, h=1e-3, platform_reals=parked,
          controller_integers={"programme": 4})
+    loop("heavy_legs", "heavy legs (40 kg cylinders, 15 kg rods), heave programme (SI)", t_end=10.0, h=1e-3,
+         platform_reals=HEAVY, controller_reals=HEAVY)
+    columns, events, status = ripple_run(10.0, 0.01)
+    url = view(columns, stand(), OUT, "ripple_joint_limits", "open-loop 5 % ripple per leg: resting on the joint limits (SI)")
+    print(f"viewer: ripple: {len(columns['time'])} rows ({status}, {len(events)} joint-limit events) -> {url}")
     print(f"viewer: serve it with  .venv/bin/python -m http.server --directory {OUT} 8000  and open "
           f"http://127.0.0.1:8000/")
 

@@ -3,9 +3,9 @@ the built page, the result as CSV and the stand as JSON into a folder, and retur
 to open once the folder is served (`python -m http.server`).
 
 A result is what `fmpy.simulate_fmu` returns (a structured array) or a dict of columns; it needs
-`time` and `r[1..3]` and either `R[a,b]` or `angles[1..3]`; `F[k]`, `Fstop[k]` and `l[k]`
-colour the legs and feed the plots when present (`VIEW_OUTPUTS` lists them all for
-`simulate_fmu(..., output=VIEW_OUTPUTS)`).
+`time` and `r[1..3]` and either `R[a,b]` or `angles[1..3]`; `F[k]`, `Fstop[k]`, `l[k]` and
+the joint angles `thetaB[k]`, `thetaA[k]` colour the legs and joints and feed the plots when
+present (`VIEW_OUTPUTS` lists them all for `simulate_fmu(..., output=VIEW_OUTPUTS)`).
 """
 
 import json
@@ -22,7 +22,11 @@ VIEWER = ROOT / "viewer"
 LEGS = range(1, 7)
 VIEW_OUTPUTS = ([f"r[{i}]" for i in (1, 2, 3)] + [f"R[{a},{b}]" for a in (1, 2, 3) for b in (1, 2, 3)]
                 + [f"angles[{i}]" for i in (1, 2, 3)] + [f"l[{k}]" for k in LEGS] + [f"F[{k}]" for k in LEGS]
-                + [f"Fstop[{k}]" for k in LEGS])
+                + [f"Fstop[{k}]" for k in LEGS] + [f"thetaB[{k}]" for k in LEGS] + [f"thetaA[{k}]" for k in LEGS])
+# The scalar parameters the viewer draws with: the legs' bodies (docs/model.md §8) and the
+# joint limits (a joint beyond its limit is drawn red).
+STAND_SCALARS = ("leg.cylinderMass", "leg.rodMass", "leg.cylinderCoM", "leg.rodCoM", "joints.baseMaxAngle",
+                 "joints.platformMaxAngle")
 
 
 def built_viewer():
@@ -39,15 +43,24 @@ def built_viewer():
 
 def stand(parameters=None, fmu=PLATFORM_FMU):
     """The stand of a run for the viewer: the FMU's start values of `B`, `A`, `lmin`, `lmax`,
-    overridden by `parameters` (FMI names, as given to `simulate_fmu`'s `start_values`)."""
-    start = {v.name: float(v.start) for v in read_model_description(str(fmu)).modelVariables
-             if v.start is not None and v.type == "Real"}
-    start.update({k: float(v) for k, v in (parameters or {}).items() if isinstance(v, (int, float))})
+    the legs' bodies and the joint limits, overridden by `parameters` (FMI names, as given to
+    `simulate_fmu`'s `start_values`)."""
+    variables = read_model_description(str(fmu)).modelVariables
+    start = {v.name: float(v.start) for v in variables if v.start is not None and v.type == "Real"}
+    joints = {v.name: v.start == "true" for v in variables if v.type == "Boolean"}.get("joints", False)
+    for k, v in (parameters or {}).items():
+        if k == "joints":
+            joints = bool(v)
+        elif isinstance(v, (int, float)):
+            start[k] = float(v)
+    scalars = {name.split(".")[-1]: start[name] for name in STAND_SCALARS if name in start}
     return {
         "B": [[start[f"B[{k},{i}]"] for i in (1, 2, 3)] for k in LEGS],
         "A": [[start[f"A[{k},{i}]"] for i in (1, 2, 3)] for k in LEGS],
         "lmin": [start[f"lmin[{k}]"] for k in LEGS],
         "lmax": [start[f"lmax[{k}]"] for k in LEGS],
+        "joints": joints,
+        **scalars,
         "source": f"{Path(fmu).name} start values" + (" with the run's parameters" if parameters else ""),
     }
 

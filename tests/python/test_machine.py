@@ -15,18 +15,12 @@ from fmpy import read_model_description, simulate_fmu
 
 from stewart_fmu import CONTROLLER_FMU, PLATFORM_FMU, ROOT, Platform
 from stewart_fmu.cosim import closed_loop
+from stewart_fmu.machine import HEAVY, joint_events, ripple
 
 sys.path.insert(0, str(Path(__file__).parent))
 import rigid_legs  # noqa: E402
 from test_importers import fmi_sim_binary  # noqa: E402
 
-EQUILIBRIUM = 0.2005 * 3000.0 * 9.81
-HEAVY = {"leg.cylinderMass": 40.0, "leg.rodMass": 15.0, "leg.cylinderInertia": 2.5, "leg.rodInertia": 0.6}
-
-
-def ripple(t):
-    """The issue's tipping forces: 5900.715 (1 + 0.05 sin(2t + k)) N on leg k."""
-    return [EQUILIBRIUM * (1.0 + 0.05 * math.sin(2.0 * t + k)) for k in range(1, 7)]
 
 
 def test_the_papers_machine_gives_the_previous_releases_numbers_to_the_bit():
@@ -73,8 +67,7 @@ def test_tipping_forces_leave_the_platform_on_its_joint_limits_in_every_host(tmp
         pl.step(h)
     finals["FMPy"] = pl.get(*record)
     pl.free()
-    joints = [(float(m.group(1)), m.group(2), int(m.group(3))) for _, _, text in events
-              if (m := __import__("re").match(r"t = ([-+0-9.eE]+): the (base|platform) joint of leg (\d) reached", text))]
+    joints = [(t, j, k) for t, j, k, what in joint_events(events) if what == "reached"]
     # libcosim: the forces through an override manipulator, step by step.
     vr = {v.name: v.valueReference for v in read_model_description(str(PLATFORM_FMU)).modelVariables}
     execution = CosimExecution.from_step_size(step_size=int(h * 1e9))

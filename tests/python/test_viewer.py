@@ -3,7 +3,9 @@ built page (viewer/dist) with a 10 s result at 1 ms written by `stewart_fmu.view
 to given times and reads back, through the page's test hook, the twelve leg end points and the
 platform pose: they equal the ones computed here from the same CSV to 1e-9. No console errors,
 a non-blank screenshot, and a file that is not a platform result gets a message naming the
-missing columns."""
+missing columns. The machine (docs/model.md §8): each leg drawn as a cylinder from its base
+joint and a rod to its platform joint, and the joints the open-loop ripple leaves beyond their
+angle limits drawn red, the same ones Python finds in the CSV."""
 
 import csv
 import functools
@@ -19,9 +21,15 @@ from matplotlib.image import imread
 
 from stewart_fmu import ROOT
 from stewart_fmu.cosim import closed_loop
+from stewart_fmu.machine import ripple_run
 from stewart_fmu.viewer import VIEW_OUTPUTS, stand, view
 
 TIMES = [0.0, 0.6049, 1.25, 3.3333, 7.0, 9.999]
+
+
+class QuietHandler(http.server.SimpleHTTPRequestHandler):
+    def log_message(self, *args):
+        pass
 
 
 @pytest.fixture(scope="module")
@@ -36,35 +44,48 @@ def served(tmp_path_factory):
     assert status == "ok"
     result = dict(time=t, **{n: rows[:, j] for j, n in enumerate(VIEW_OUTPUTS)})
     address = view(result, stand(start), folder, "tilted", "tilted start")
-    handler = functools.partial(http.server.SimpleHTTPRequestHandler, directory=str(folder))
-    handler.log_message = lambda *args: None
+    address = view(ripple_run(10.0, 0.01)[0], stand(), folder, "ripple", "ripple on the joint limits")
+    handler = functools.partial(QuietHandler, directory=str(folder))
     server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
     threading.Thread(target=server.serve_forever, daemon=True).start()
-    yield folder, f"http://127.0.0.1:{server.server_address[1]}/{address}", result
+    root = f"http://127.0.0.1:{server.server_address[1]}/"
+    yield folder, root + "index.html?data=data/tilted.csv&stand=data/tilted.stand.json", result, root + address
     server.shutdown()
 
 
-def expected(folder, t):
-    """Leg end points at the last row at or before t, from the CSV the page read."""
-    with open(folder / "data" / "tilted.csv") as f:
+def browse(url, shot, times):
+    """check.mjs's report of the page at `url`, seeking to `times`; the screenshot at the last."""
+    run = subprocess.run(["node", str(ROOT / "viewer" / "test" / "check.mjs"), url, str(shot),
+                          ",".join(map(str, times))], capture_output=True, text=True, cwd=ROOT / "viewer", timeout=180)
+    assert run.returncode == 0, run.stderr[-3000:]
+    report = json.loads(run.stdout.strip().splitlines()[-1])
+    assert report["loadError"] is None, report["loadError"]
+    assert report["errors"] == []
+    return report
+
+
+def row(folder, name, t):
+    """The columns of the CSV the page read and the last row at or before t."""
+    with open(folder / "data" / f"{name}.csv") as f:
         names = next(csv.reader(f))
-    data = np.loadtxt(folder / "data" / "tilted.csv", delimiter=",", skiprows=1)
+    data = np.loadtxt(folder / "data" / f"{name}.csv", delimiter=",", skiprows=1)
     col = {n: data[:, j] for j, n in enumerate(names)}
-    i = max(int(np.searchsorted(col["time"], t, side="right")) - 1, 0)
+    return col, max(int(np.searchsorted(col["time"], t, side="right")) - 1, 0)
+
+
+def expected(folder, t, name="tilted"):
+    """Leg end points at the last row at or before t, from the CSV the page read."""
+    col, i = row(folder, name, t)
     r = np.array([col[f"r[{a}]"][i] for a in (1, 2, 3)])
     rot = np.array([[col[f"R[{a},{b}]"][i] for b in (1, 2, 3)] for a in (1, 2, 3)])
-    s = json.loads((folder / "data" / "tilted.stand.json").read_text())
+    s = json.loads((folder / "data" / f"{name}.stand.json").read_text())
     return col["time"][i], [[s["B"][k], list(r + rot @ np.array(s["A"][k]))] for k in range(6)], r, rot
 
 
 def test_the_browser_shows_the_same_legs_as_python(served, tmp_path):
-    folder, url, result = served
+    folder, url, result, _ = served
     shot = tmp_path / "viewer.png"
-    run = subprocess.run(["node", str(ROOT / "viewer" / "test" / "check.mjs"), url, str(shot),
-                          ",".join(map(str, TIMES))], capture_output=True, text=True, cwd=ROOT / "viewer", timeout=180)
-    assert run.returncode == 0, run.stderr[-3000:]
-    report = json.loads(run.stdout.strip().splitlines()[-1])
-    assert report["loadError"] is None, report["loadError"]
+    report = browse(url, shot, TIMES)
     assert report["rows"] == len(result["time"]) == 10000
     worst = 0.0
     for sample in report["samples"]:
@@ -80,9 +101,52 @@ def test_the_browser_shows_the_same_legs_as_python(served, tmp_path):
           f"{image.shape[1]}x{image.shape[0]}, {distinct} distinct colours, std {pixels.std():.3f}; console errors "
           f"{report['errors']}; bad file: {report['badFile']['error']!r}")
     assert worst < 1e-9
-    assert report["errors"] == []
     assert distinct > 50 and pixels.std() > 0.05, "the screenshot is blank"
     message = report["badFile"]["error"]
     assert message.startswith("not a platform result: missing columns") and "r[2]" in message and "R[1,1]" in message
     assert report["badFile"]["shown"] == message
     shutil.copyfile(shot, ROOT / "target" / "viewer_screenshot.png")
+
+
+def red_pixels(shot):
+    """Pixels of the joint-limit red (0xd0021b, lit) in a screenshot."""
+    image = imread(shot)[..., :3]
+    return int(np.sum((image[..., 0] > 0.55) & (image[..., 1] < 0.2) & (image[..., 2] < 0.25)))
+
+
+def test_the_browser_draws_the_legs_as_two_bodies_and_the_joints_at_their_limits(served, tmp_path):
+    """The ripple result (open loop, joint limits on): at each time the page's joints beyond
+    their limit are those whose angle in the CSV exceeds the stand's limit, and the scene draws
+    exactly those red; before the tilt none is. Each leg is a cylinder from B_k and a rod to
+    a_k along the leg, of twice the centre-of-mass distances lengthened to overlap 5 % at the
+    longest leg."""
+    folder, _, _, url = served
+    s = json.loads((folder / "data" / "ripple.stand.json").read_text())
+    times = [0.5, 0.95, 1.4, 5.0, 9.99]
+    calm, limits = tmp_path / "calm.png", tmp_path / "limits.png"
+    browse(url, calm, [0.5])
+    report = browse(url, limits, times)
+    cylinder, rod = 2 * s["cylinderCoM"], 2 * s["rodCoM"]
+    grow = max(1.0, 1.05 * max(s["lmax"]) / (cylinder + rod))
+    cylinder, rod = cylinder * grow, rod * grow
+    worst, seen = 0.0, []
+    for sample in report["samples"]:
+        col, i = row(folder, "ripple", sample["t"])
+        want = {"base": [bool(col[f"thetaB[{k}]"][i] > s["baseMaxAngle"]) for k in range(1, 7)],
+                "platform": [bool(col[f"thetaA[{k}]"][i] > s["platformMaxAngle"]) for k in range(1, 7)]}
+        assert sample["jointsAtLimit"] == want, (sample["t"], sample["jointsAtLimit"], want)
+        assert sample["highlighted"] == want, (sample["t"], sample["highlighted"], want)
+        seen.append(sum(want["platform"]) + sum(want["base"]))
+        _, ends, _, _ = expected(folder, sample["t"], "ripple")
+        for (b, a), body in zip(ends, sample["bodies"]):
+            b, a = np.array(b), np.array(a)
+            n = (a - b) / np.linalg.norm(a - b)
+            worst = max(worst, np.max(np.abs(np.array(body["cylinder"]) - [b, b + cylinder * n])),
+                        np.max(np.abs(np.array(body["rod"]) - [a - rod * n, a])))
+    red_calm, red_limits = red_pixels(calm), red_pixels(limits)
+    print(f"viewer, ripple: joints beyond their limits at t = {times}: {seen}; leg bodies within {worst:.1e} m; "
+          f"limit-red pixels {red_calm} at t = 0.5 s, {red_limits} at t = 9.99 s")
+    assert worst < 1e-9
+    assert seen[0] == 0 and seen[-1] >= 1
+    assert red_limits > red_calm + 100
+    shutil.copyfile(limits, ROOT / "target" / "viewer_joint_limits_screenshot.png")

@@ -1,5 +1,6 @@
-// The viewer: a three.js scene of the stand (base, joints, legs coloured by force, platform
-// plate and axes, centre-of-mass trail), playback controls and small synchronised plots. Data
+// The viewer: a three.js scene of the stand (base, joints glowing red at their angle limits,
+// legs drawn as a cylinder coloured by force and a steel rod, platform plate and axes,
+// centre-of-mass trail), playback controls and small synchronised plots. Data
 // come from `?data=result.csv&stand=stand.json`, from `data/index.json` (a list the Python tools
 // write), or from files the user drops or picks. `window.stewartViewer` is the test hook.
 
@@ -66,21 +67,26 @@ function build(result) {
   base.rotation.x = Math.PI / 2;
   base.position.z = -0.02 * scale;
   world.add(base);
-  for (const b of s.B) {
-    const j = new THREE.Mesh(new THREE.SphereGeometry(jointRadius, 16, 12), new THREE.MeshStandardMaterial({ color: 0x323f4b }));
-    j.position.set(...b);
-    world.add(j);
-  }
-  parts.legs = s.B.map(() => {
-    const leg = new THREE.Mesh(new THREE.CylinderGeometry(0.025 * scale, 0.025 * scale, 1, 16), new THREE.MeshStandardMaterial({ color: 0x888888 }));
-    world.add(leg);
-    return leg;
-  });
-  parts.joints = s.A.map(() => {
-    const j = new THREE.Mesh(new THREE.SphereGeometry(jointRadius, 16, 12), new THREE.MeshStandardMaterial({ color: 0x323f4b }));
+  const joint = () => {
+    const j = new THREE.Mesh(new THREE.SphereGeometry(jointRadius, 16, 12), new THREE.MeshStandardMaterial({ color: JOINT_COLOUR }));
     world.add(j);
     return j;
+  };
+  parts.baseJoints = s.B.map((b) => {
+    const j = joint();
+    j.position.set(...b);
+    return j;
   });
+  // Each leg is two bodies (docs/model.md §8): the cylinder hinged at B_k, coloured by the
+  // leg's force, and the thinner steel rod hinged at A_k, sliding in it.
+  const tube = (radius, colour) => {
+    const mesh = new THREE.Mesh(new THREE.CylinderGeometry(radius, radius, 1, 16), new THREE.MeshStandardMaterial({ color: colour }));
+    world.add(mesh);
+    return mesh;
+  };
+  parts.cylinders = s.B.map(() => tube(0.04 * scale, 0x888888));
+  parts.rods = s.B.map(() => tube(0.02 * scale, 0xc8ccd0));
+  parts.joints = s.A.map(() => joint());
   // The platform plate through the six platform joints (a fan of triangles about their centre).
   parts.plate = new THREE.Mesh(new THREE.BufferGeometry(), new THREE.MeshStandardMaterial({ color: 0x3e7cb1, side: THREE.DoubleSide, transparent: true, opacity: 0.75 }));
   parts.plate.geometry.setAttribute("position", new THREE.BufferAttribute(new Float32Array(6 * 9), 3));
@@ -117,27 +123,44 @@ function legend(result) {
     g.fillRect(x, 0, 1, c.height);
   }
   el.innerHTML = "";
-  el.append("leg force F (N): pull", c, `${(-m).toPrecision(3)} .. 0 .. ${m.toPrecision(3)} push; a glowing leg is at an end stop`);
+  el.append("cylinder colour: leg force F (N), pull", c, `${(-m).toPrecision(3)} .. 0 .. ${m.toPrecision(3)} push; a glowing cylinder is at an end stop, a red joint at its angle limit`);
 }
 
 const yUp = new THREE.Vector3(0, 1, 0);
+const JOINT_COLOUR = 0x323f4b;
+const LIMIT_COLOUR = 0xd0021b;
+
+// A unit cylinder mesh stretched between two points.
+function stretch(mesh, from, to) {
+  const a = new THREE.Vector3(...from);
+  const dir = new THREE.Vector3(...to).sub(a);
+  mesh.position.copy(a).addScaledVector(dir, 0.5);
+  mesh.scale.set(1, dir.length(), 1);
+  mesh.quaternion.setFromUnitVectors(yUp, dir.clone().normalize());
+}
+
+function highlight(mesh, atLimit) {
+  mesh.material.color.setHex(atLimit ? LIMIT_COLOUR : JOINT_COLOUR);
+  mesh.material.emissive.setHex(atLimit ? 0x700010 : 0x000000);
+  mesh.scale.setScalar(atLimit ? 1.5 : 1);
+}
 
 function place(i) {
   const result = state.result;
   const ends = result.legEndpoints(i);
+  const bodies = result.legBodies(i);
+  const limits = result.jointsAtLimit(i);
   const { r, R } = result.pose(i);
-  ends.forEach(([b, a], k) => {
-    const from = new THREE.Vector3(...b);
-    const to = new THREE.Vector3(...a);
-    const dir = to.clone().sub(from);
-    const leg = parts.legs[k];
-    leg.position.copy(from).addScaledVector(dir, 0.5);
-    leg.scale.set(1, dir.length(), 1);
-    leg.quaternion.setFromUnitVectors(yUp, dir.clone().normalize());
+  ends.forEach(([, a], k) => {
+    const cylinder = parts.cylinders[k];
+    stretch(cylinder, ...bodies[k].cylinder);
+    stretch(parts.rods[k], ...bodies[k].rod);
     const atStop = result.stopForce(k, i) !== 0;
-    leg.material.color = forceColour(result.force(k, i), result.forceRange);
-    leg.material.emissive = new THREE.Color(atStop ? 0x8a6d00 : 0x000000);
-    parts.joints[k].position.copy(to);
+    cylinder.material.color = forceColour(result.force(k, i), result.forceRange);
+    cylinder.material.emissive = new THREE.Color(atStop ? 0x8a6d00 : 0x000000);
+    parts.joints[k].position.set(...a);
+    highlight(parts.baseJoints[k], limits.base[k]);
+    highlight(parts.joints[k], limits.platform[k]);
   });
   const positions = parts.plate.geometry.attributes.position;
   const centre = ends.reduce((c, [, a]) => c.map((x, j) => x + a[j] / 6), [0, 0, 0]);
@@ -152,7 +175,11 @@ function place(i) {
   parts.trail.geometry.setDrawRange(0, i + 1);
   $("clock").textContent = `t = ${result.time[i].toFixed(3)}`;
   const stops = ends.map((_, k) => result.stopForce(k, i)).filter((f) => f !== 0).length;
-  $("info").textContent = `row ${i + 1} of ${result.rows}; legs at an end stop: ${stops}; stand: ${result.stand.source || "from file"}`;
+  const atLimit = (list, what) => list.map((x, k) => (x ? `${what} ${k + 1}` : null)).filter(Boolean);
+  const joints = [...atLimit(limits.base, "base"), ...atLimit(limits.platform, "platform")];
+  const s = result.stand;
+  const legs = s.cylinderMass || s.rodMass ? `legs of ${s.cylinderMass || 0} kg + ${s.rodMass || 0} kg` : "massless legs";
+  $("info").textContent = `row ${i + 1} of ${result.rows}; legs at an end stop: ${stops}; joints at their angle limit: ${joints.length ? joints.join(", ") : "none"}; ${legs}; stand: ${s.source || "from file"}`;
   drawPlots(i);
 }
 
@@ -170,7 +197,12 @@ function preparePlots(result) {
   const heave = [idx.map((i) => result.pose(i).r[2])];
   const angles = [0, 1, 2].map((a) => idx.map((i) => result.angles(i)[a]));
   const legs = [0, 1, 2, 3, 4, 5].map((k) => idx.map((i) => result.legLengths(i)[k]));
-  plotSeries = { times, heave, angles, legs };
+  const deg = 180 / Math.PI;
+  const largest = (side) => idx.map((i) => deg * Math.max(...result.jointAngles(i)[side]));
+  const s = result.stand;
+  const limit = (value) => (s.joints !== false && Number.isFinite(value) ? [idx.map(() => deg * value)] : []);
+  const joints = result.jointAngles(0) ? [largest("base"), largest("platform"), ...limit(s.baseMaxAngle), ...limit(s.platformMaxAngle)] : null;
+  plotSeries = { times, heave, angles, legs, joints };
 }
 
 function drawPlot(id, series, t) {
@@ -178,6 +210,11 @@ function drawPlot(id, series, t) {
   const g = c.getContext("2d");
   const { times } = plotSeries;
   g.clearRect(0, 0, c.width, c.height);
+  if (!series) {
+    g.fillStyle = "#555";
+    g.fillText("not in the file", 4, 14);
+    return;
+  }
   const all = series.flat().filter(Number.isFinite);
   let lo = Math.min(...all);
   let hi = Math.max(...all);
@@ -209,6 +246,7 @@ function drawPlots(i) {
   drawPlot("plot-heave", plotSeries.heave, t);
   drawPlot("plot-angles", plotSeries.angles, t);
   drawPlot("plot-legs", plotSeries.legs, t);
+  drawPlot("plot-joints", plotSeries.joints, t);
 }
 
 // ----- loading -----------------------------------------------------------------------------
@@ -339,6 +377,13 @@ window.stewartViewer = {
   time: () => state.time,
   rows: () => (state.result ? state.result.rows : 0),
   legEndpoints: () => (state.result ? state.result.legEndpoints(state.index) : null),
+  legBodies: () => (state.result ? state.result.legBodies(state.index) : null),
+  jointsAtLimit: () => (state.result ? state.result.jointsAtLimit(state.index) : null),
+  // What the scene shows: the joints drawn in the limit colour.
+  highlightedJoints: () => (parts.joints ? {
+    base: parts.baseJoints.map((j) => j.material.color.getHex() === LIMIT_COLOUR),
+    platform: parts.joints.map((j) => j.material.color.getHex() === LIMIT_COLOUR),
+  } : null),
   pose: () => (state.result ? state.result.pose(state.index) : null),
 };
 

@@ -21,7 +21,11 @@ export function defaultStand() {
   };
 }
 
-/** Checks a stand object ({B: 6x3, A: 6x3, optional lmin, lmax}); returns it or throws. */
+/**
+ * Checks a stand object ({B: 6x3, A: 6x3, optional lmin, lmax, the legs' cylinderCoM, rodCoM,
+ * cylinderMass, rodMass, and the joint limits joints, baseMaxAngle, platformMaxAngle in rad});
+ * returns it or throws naming the bad field.
+ */
 export function checkStand(stand) {
   const matrix = (m, name) => {
     if (!Array.isArray(m) || m.length !== 6 || m.some((row) => !Array.isArray(row) || row.length !== 3 || row.some((x) => !Number.isFinite(x)))) {
@@ -30,7 +34,26 @@ export function checkStand(stand) {
   };
   matrix(stand.B, "B");
   matrix(stand.A, "A");
+  for (const name of ["cylinderCoM", "rodCoM", "cylinderMass", "rodMass", "baseMaxAngle", "platformMaxAngle"]) {
+    if (name in stand && !(Number.isFinite(stand[name]) && stand[name] >= 0)) {
+      throw new Error(`the stand file's ${name} must be a number >= 0 (got ${JSON.stringify(stand[name])})`);
+    }
+  }
   return stand;
+}
+
+/**
+ * The drawn lengths of a leg's cylinder and rod: uniform bodies, twice the distance of each
+ * body's centre of mass from its joint (docs/model.md §8's d_c, d_r; 0.5 m by default), both
+ * lengthened in proportion where needed so that the rod still reaches 5 % into the barrel at
+ * the longest leg (a drawing, not part of the model).
+ */
+export function legBodyLengths(stand) {
+  const cylinder = 2 * (stand.cylinderCoM ?? 0.5);
+  const rod = 2 * (stand.rodCoM ?? 0.5);
+  const longest = Math.max(...(stand.lmax || []), 0);
+  const scale = Math.max(1, (1.05 * longest) / (cylinder + rod || 1));
+  return { cylinder: cylinder * scale, rod: rod * scale };
 }
 
 /** Parses a result CSV (FMPy's write_csv: quoted names; or plain names). */
@@ -87,6 +110,9 @@ export class Result {
     const col = (n) => csv.columns[n];
     this.forces = LEGS.every((k) => `F[${k}]` in csv.columns) ? LEGS.map((k) => col(`F[${k}]`)) : null;
     this.stopForces = LEGS.every((k) => `Fstop[${k}]` in csv.columns) ? LEGS.map((k) => col(`Fstop[${k}]`)) : null;
+    this.thetaB = LEGS.every((k) => `thetaB[${k}]` in csv.columns) ? LEGS.map((k) => col(`thetaB[${k}]`)) : null;
+    this.thetaA = LEGS.every((k) => `thetaA[${k}]` in csv.columns) ? LEGS.map((k) => col(`thetaA[${k}]`)) : null;
+    this.bodyLengths = legBodyLengths(this.stand);
     let lo = Infinity;
     let hi = -Infinity;
     for (const series of [...(this.forces || []), ...(this.stopForces || [])]) {
@@ -129,6 +155,41 @@ export class Result {
       const a = [0, 1, 2].map((row) => r[row] + R[row][0] * A[0] + R[row][1] * A[1] + R[row][2] * A[2]);
       return [this.stand.B[k].slice(), a];
     });
+  }
+
+  /**
+   * The leg bodies at row i: for each leg the cylinder [B_k, B_k + L_c n_k] and the rod
+   * [a_k - L_r n_k, a_k] (`legBodyLengths`), each as [from, to].
+   */
+  legBodies(i) {
+    const { cylinder, rod } = this.bodyLengths;
+    return this.legEndpoints(i).map(([b, a]) => {
+      const d = [0, 1, 2].map((j) => a[j] - b[j]);
+      const l = Math.hypot(...d) || 1;
+      const n = d.map((x) => x / l);
+      return { cylinder: [b, b.map((x, j) => x + cylinder * n[j])], rod: [a.map((x, j) => x - rod * n[j]), a] };
+    });
+  }
+
+  /** Joint angles at row i, rad: {base: thetaB[1..6], platform: thetaA[1..6]}, or null. */
+  jointAngles(i) {
+    if (!this.thetaB || !this.thetaA) return null;
+    return { base: this.thetaB.map((c) => c[i]), platform: this.thetaA.map((c) => c[i]) };
+  }
+
+  /**
+   * Which joints are beyond their angle limit at row i (in contact: theta > thetaMax), from the
+   * result's joint angles and the stand's limits: {base: [6 booleans], platform: [6 booleans]},
+   * all false when the stand has the limits off or the file has no joint angles.
+   */
+  jointsAtLimit(i) {
+    const angles = this.jointAngles(i);
+    const s = this.stand;
+    const on = angles && s.joints !== false && Number.isFinite(s.baseMaxAngle) && Number.isFinite(s.platformMaxAngle);
+    return {
+      base: LEGS.map((_, k) => Boolean(on && angles.base[k] > s.baseMaxAngle)),
+      platform: LEGS.map((_, k) => Boolean(on && angles.platform[k] > s.platformMaxAngle)),
+    };
   }
 
   force(k, i) {

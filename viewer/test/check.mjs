@@ -1,6 +1,7 @@
 // Drives the built viewer in Debian's headless Chromium through Playwright (playwright-core:
-// no browser download). Prints one JSON object: load time, the leg end points and pose at the
-// requested times, console errors, and the message for a file that is not a platform result.
+// no browser download). Prints one JSON object: load time, the leg end points, leg bodies, pose
+// and joints at their limits (computed and as drawn) at the requested times, console errors,
+// and the message for a file that is not a platform result.
 //
 //   node viewer/test/check.mjs <page url> <screenshot.png> <t1,t2,...>
 import { chromium } from "playwright-core";
@@ -24,7 +25,8 @@ const samples = [];
 for (const t of times) {
   samples.push(await page.evaluate((tt) => {
     window.stewartViewer.seek(tt);
-    return { t: tt, time: window.stewartViewer.time(), ends: window.stewartViewer.legEndpoints(), pose: window.stewartViewer.pose() };
+    const v = window.stewartViewer;
+    return { t: tt, time: v.time(), ends: v.legEndpoints(), pose: v.pose(), bodies: v.legBodies(), jointsAtLimit: v.jointsAtLimit(), highlighted: v.highlightedJoints() };
   }, t));
 }
 await page.evaluate((t) => window.stewartViewer.seek(t), times[times.length - 1]);
