@@ -93,7 +93,7 @@ const FUNCTIONS: [&str; 43] = [
 ];
 
 /// Continuous states of the platform (24 special-form coordinates, work.F, work.dissipated).
-const NX: usize = 26;
+const NX: usize = 33;
 /// Event indicators: twelve stroke limits and the force/moment determinant.
 const NZ: usize = stewart_fmu::simulation::platform::switching::COUNT;
 

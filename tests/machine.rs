@@ -29,6 +29,7 @@ fn heavy_legs() -> LegBodies {
         rod_com: 0.55,
         cylinder_inertia: 2.5,
         rod_inertia: 0.6,
+        axial_mass: 0.0,
     }
 }
 

@@ -63,7 +63,7 @@ fn stops_around(y: &StateVector, case: usize) -> EndStops {
 }
 
 fn extended(y: &StateVector, work: [f64; 2]) -> SimulationState {
-    std::array::from_fn(|i| if i < 24 { y[i] } else { work[i - 24] })
+    std::array::from_fn(|i| if i < 24 { y[i] } else { work.get(i - 24).copied().unwrap_or(0.0) })
 }
 
 fn relative_error(exact: &[f64], fd: &[f64]) -> f64 {
@@ -164,6 +164,8 @@ fn machine_tangent_matches_central_differences() {
         rod_com: 0.55,
         cylinder_inertia: 2.5,
         rod_inertia: 0.6,
+        // A drive's rotor reflected along the leg (docs/model.md §9).
+        axial_mass: 120.0,
     };
     let friction = Friction { coulomb: 150.0, static_: 250.0, viscous: 800.0, ..Friction::default() };
     let mut rng = Rng(0x5eed_0000_1111_2222);

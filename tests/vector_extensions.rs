@@ -16,7 +16,11 @@ use stewart_fmu::simulation::{PlatformSimulation, Stabilisation, VectorPath};
 
 /// 2 s of 1 ms communication steps under forces that drive the platform through both stops
 /// and a tilt; returns every state and crossing time.
-fn run(method: Method, stops: bool, path: VectorPath) -> (Vec<[u64; 26]>, Vec<u64>) {
+fn run(
+    method: Method,
+    stops: bool,
+    path: VectorPath,
+) -> (Vec<[u64; stewart_fmu::simulation::SIMULATION_DIM]>, Vec<u64>) {
     let settings = SolverSettings { method, fixed_step: 1e-3, ..Default::default() };
     let start = pose(
         Vector3::new(0.01, -0.02, 0.0),

@@ -60,12 +60,13 @@ impl Default for Dopri5Memory {
     }
 }
 
-/// Hairer's error norm `sqrt(1/N sum_i (v_i / sc_i)²)`, `sc_i = atol + rtol max(|y0_i|, |y1_i|)`.
+/// Hairer's error norm `sqrt(1/n sum_i (v_i / sc_i)²)`, `sc_i = atol + rtol max(|y0_i|, |y1_i|)`,
+/// averaged over the system's `n` active components ([`OdeSystem::active_dimension`]).
 /// The squares are summed in four interleaved partial sums (element `i` into sum `i mod 4`,
 /// then `(s0 + s1) + (s2 + s3)`): a fixed order, so the same bits whatever registers the
 /// method is compiled for, and one that vectorises (a single running sum does not).
 #[inline(always)]
-fn scaled_rms<const N: usize>(v: &[f64; N], y0: &[f64; N], y1: &[f64; N], s: &SolverSettings) -> f64 {
+fn scaled_rms<const N: usize>(v: &[f64; N], y0: &[f64; N], y1: &[f64; N], s: &SolverSettings, n: usize) -> f64 {
     // `max` by comparison (a NaN in `y1` gives a NaN norm, which the caller treats as a
     // failed trial); `f64::max`'s NaN rule does not vectorise.
     let square = |i: usize| {
@@ -81,7 +82,7 @@ fn scaled_rms<const N: usize>(v: &[f64; N], y0: &[f64; N], y1: &[f64; N], s: &So
     for i in N / 4 * 4..N {
         sums[i % 4] += square(i);
     }
-    (((sums[0] + sums[1]) + (sums[2] + sums[3])) / N as f64).sqrt()
+    (((sums[0] + sums[1]) + (sums[2] + sums[3])) / n as f64).sqrt()
 }
 
 /// Hairer's initial step estimate. Inlined, so that a caller compiled for wider registers
@@ -96,8 +97,9 @@ fn initial_step<S: OdeSystem<N>, const N: usize>(
     f0: &[f64; N],
     h_max: f64,
 ) -> f64 {
-    let d0 = scaled_rms(y0, y0, y0, s);
-    let d1 = scaled_rms(f0, y0, y0, s);
+    let n = system.active_dimension();
+    let d0 = scaled_rms(y0, y0, y0, s, n);
+    let d1 = scaled_rms(f0, y0, y0, s, n);
     let mut h0 = if d0 < 1e-10 || d1 < 1e-10 { 1e-6 } else { 0.01 * d0 / d1 };
     h0 = h0.min(h_max);
     let mut y1 = [0.0; N];
@@ -111,7 +113,7 @@ fn initial_step<S: OdeSystem<N>, const N: usize>(
     for i in 0..N {
         df[i] = f1[i] - f0[i];
     }
-    let d2 = scaled_rms(&df, y0, y0, s) / h0;
+    let d2 = scaled_rms(&df, y0, y0, s, n) / h0;
     let dm = d1.max(d2);
     let h1 = if dm <= 1e-15 { (h0 * 1e-3).max(1e-6) } else { (0.01 / dm).powf(0.2) };
     (100.0 * h0).min(h1).min(h_max)
@@ -217,6 +219,7 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
     let h_max = if s.max_step > 0.0 { s.max_step.min(span) } else { span };
     let fsal = !system.modifies_state_after_step();
     let switching = system.switching_count().min(MAX_SWITCHING);
+    let active = system.active_dimension();
 
     let mut k1 = [0.0; N];
     system.derivative(t0, y, &mut k1);
@@ -267,7 +270,7 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
         stats.rhs_evaluations += 6;
         let err_vec: [f64; N] =
             std::array::from_fn(|i| h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i]));
-        let mut err = scaled_rms(&err_vec, y, &y_new, s);
+        let mut err = scaled_rms(&err_vec, y, &y_new, s, active);
         if !err.is_finite() {
             err = 1e10; // a non-finite trial (e.g. a stage through a singularity): shrink hard
         }

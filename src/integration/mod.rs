@@ -6,7 +6,7 @@
 //! |---|---|
 //! | [`settings`] | method choice, tolerances, step limits |
 //! | [`dopri5`] | adaptive Dormand-Prince 5(4) with PI step-size control |
-//! | [`rk4`] | classical fixed-step Runge-Kutta 4 |
+//! | [`rk4`] | classical fixed-step Runge-Kutta 4 (exponential for a system's [`LinearDecay`]) |
 //!
 //! Every call to [`Integrator::integrate`] ends exactly on the requested time, whatever the
 //! ratio of the interval to the internal step: co-simulation masters rely on that.
@@ -127,6 +127,20 @@ impl SwitchingSides {
     }
 }
 
+/// A block of components whose rates are linear in themselves with one constant rate:
+/// `y_i' = -rate y_i + n_i(t, y)` for `i` in `start..start + len`, with `n_i` not stiff. A fast
+/// electric circuit is such a block (`rate = R / L`). The fixed-step method integrates the
+/// linear part exactly (exponential time differencing, Krogstad's ETDRK4), so that its
+/// step is not bound by `1 / rate`; the adaptive method treats the block like any other
+/// component (its error control chooses steps that resolve or damp it).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LinearDecay {
+    pub start: usize,
+    pub len: usize,
+    /// 1/s, >= 0.
+    pub rate: f64,
+}
+
 /// A system of `N` first-order ODEs.
 pub trait OdeSystem<const N: usize> {
     /// Why a state is not admissible (see [`OdeSystem::check`]).
@@ -146,6 +160,18 @@ pub trait OdeSystem<const N: usize> {
 
     /// Called on every accepted step's end state; may move it (e.g. back onto constraints).
     fn after_step(&self, _y: &mut [f64; N]) {}
+
+    /// How many leading components the adaptive method's error norm averages over: a system
+    /// of fixed size whose trailing components stay constant (a part that is switched off)
+    /// steps as the smaller system would, to the bit.
+    fn active_dimension(&self) -> usize {
+        N
+    }
+
+    /// The block of components the fixed-step method integrates exponentially, if any.
+    fn linear_decay(&self) -> Option<LinearDecay> {
+        None
+    }
 
     /// Whether [`OdeSystem::after_step`] can change the state. If not, the adaptive method
     /// reuses its last stage as the next step's first (FSAL).

@@ -21,6 +21,7 @@
 use nalgebra::{Matrix3, Vector3};
 
 use super::actuators::LegForceLaw;
+use super::actuators::drives::{DriveRate, ElectricDrives};
 use super::body::accelerations::RigidBody;
 use super::body::per_axis::AxisRows;
 use super::body::state::{BodyState, STATE_DIM, StateVector, axes_rates};
@@ -53,6 +54,8 @@ pub struct SpecialForm {
     friction: Friction,
     /// The joint limits, or `None` (the paper's).
     joint_limits: Option<JointLimits>,
+    /// Electric drives in the legs, or `None`: the actuator forces are given (the paper's).
+    drives: Option<ElectricDrives>,
     /// For the fast path's check and the switching functions of the joint limits: `n0_k` and
     /// `m0_k` as `[component][leg]`, and the reference pose's axes `e0_a`.
     base_reference: [[f64; LEG_COUNT]; 3],
@@ -60,7 +63,7 @@ pub struct SpecialForm {
     reference_axes: [Vector3<f64>; 3],
     /// `cos thetaMax` of the base joints, `cos` and `sin thetaMax` of the platform joints.
     joint_cosines: [f64; 3],
-    /// Whether the fast path applies: massless legs without friction.
+    /// Whether the fast path applies: massless legs without friction, forces given.
     fast: bool,
 }
 
@@ -89,6 +92,7 @@ impl SpecialForm {
             legs: LegBodies::default(),
             friction: Friction::default(),
             joint_limits: None,
+            drives: None,
             base_reference: [[0.0; LEG_COUNT]; 3],
             platform_reference: [[0.0; LEG_COUNT]; 3],
             reference_axes: [Vector3::x(), Vector3::y(), Vector3::z()],
@@ -101,7 +105,8 @@ impl SpecialForm {
     /// The same form with the machine's legs: bodies, friction and joint limits (`None`:
     /// without).
     pub fn with_machine(mut self, legs: LegBodies, friction: Friction, joint_limits: Option<JointLimits>) -> Self {
-        self.legs = legs;
+        // The drives' reflected rotor mass stays (set by `with_drives`).
+        self.legs = LegBodies { axial_mass: self.legs.axial_mass, ..legs };
         self.friction = friction;
         if let Some(j) = &joint_limits {
             self.base_reference = std::array::from_fn(|c| j.base_reference.map(|n| n[c]));
@@ -110,8 +115,49 @@ impl SpecialForm {
             self.joint_cosines = [j.base_max.cos(), j.platform_max.cos(), j.platform_max.sin()];
         }
         self.joint_limits = joint_limits;
-        self.fast = !legs.has_mass() && friction.is_zero();
+        self.fast = self.takes_fast_path();
         self
+    }
+
+    /// The same form with electric drives in the legs (`None`: the actuator forces are given);
+    /// their rotors join the legs' inertia.
+    pub fn with_drives(mut self, drives: Option<ElectricDrives>) -> Self {
+        self.legs.axial_mass = drives.map_or(0.0, |d| d.reflected_mass());
+        self.drives = drives;
+        self.fast = self.takes_fast_path();
+        self
+    }
+
+    /// The electric drives, if on.
+    pub fn drives(&self) -> Option<&ElectricDrives> {
+        self.drives.as_ref()
+    }
+
+    /// Whether the step's fast path applies: massless legs without friction, forces given.
+    fn takes_fast_path(&self) -> bool {
+        !self.legs.has_mass() && self.friction.is_zero() && self.drives.is_none()
+    }
+
+    /// The drives' axial forces and rates at a body state: each leg's rate `l'_k` from the
+    /// state, its current `I_k` and voltage `U_k` (docs/model.md §9). `None` without drives.
+    pub fn drive_rates<T: Real>(
+        &self,
+        state: &BodyState<T>,
+        currents: &[T; LEG_COUNT],
+        voltages: &[T; LEG_COUNT],
+    ) -> Option<[DriveRate<T>; LEG_COUNT]> {
+        let drives = self.drives.as_ref()?;
+        let legs = LegGeometry::new(&self.stand, state);
+        Some(std::array::from_fn(|k| {
+            let l = legs.length[k];
+            // A collapsed leg has no rate (it carries nothing either: see `loads`).
+            let l_dot = if l > T::zero() {
+                legs.leg[k].dot(&(state.v + state.body_vector_rate(&self.stand.platform_joints[k]))) / l
+            } else {
+                T::zero()
+            };
+            drives.rate(voltages[k], currents[k], l_dot)
+        }))
     }
 
     /// The legs as bodies.

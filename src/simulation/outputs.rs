@@ -4,7 +4,7 @@
 
 use nalgebra::{Matrix3, Matrix6, Scalar, Vector3};
 
-use super::platform::{SIMULATION_DIM, SimulationState, body, quadrature};
+use super::platform::{CURRENTS, SIMULATION_DIM, SimulationState, actuator_forces, body, quadrature};
 use crate::physics::body::invariants::mechanical_energy;
 use crate::physics::body::kinematics::angles_from_rotation;
 use crate::physics::body::state::{BodyState, STATE_DIM};
@@ -35,7 +35,8 @@ pub struct PlatformOutputs<T: Scalar = f64> {
     pub l: [T; LEG_COUNT],
     /// Leg length rates, m/s.
     pub ldot: [T; LEG_COUNT],
-    /// Kinetic plus gravitational potential energy plus the stops' potential energy, J.
+    /// The platform's and the legs' kinetic and gravitational potential energy, the stops'
+    /// and joint limits' potentials and the drives' magnetic energy, J.
     pub energy: T,
     /// max over a, b of |e_a . e_b - delta_ab|.
     pub constraint_error: T,
@@ -50,8 +51,12 @@ pub struct PlatformOutputs<T: Scalar = f64> {
     /// Platform joint angles from the reference pose, rad.
     pub theta_a: [T; LEG_COUNT],
     /// The force of each leg on the platform at `A_k`, inertial frame, N (not numbers where
-    /// the leg forces were not given: see [`PlatformOutputs::compute`]).
+    /// the inputs were not given: see [`PlatformOutputs::compute`]).
     pub joint_force: [Vector3<T>; LEG_COUNT],
+    /// The drives' armature currents, A (0 without drives).
+    pub current: [T; LEG_COUNT],
+    /// Electric energy supplied to the drives since the start, J.
+    pub electric_work: T,
 }
 
 /// Leg lengths and rates alone: what a controller reads every step, computed without the
@@ -71,8 +76,9 @@ impl LegOutputs {
 }
 
 impl<T: Real> PlatformOutputs<T> {
-    /// The outputs of the simulation state `y`; with the leg forces `u`, the joints' forces
-    /// too (they depend on them), else those are not numbers.
+    /// The outputs of the simulation state `y`; with the inputs `u` (leg forces, or with
+    /// drives voltages), the joints' forces too (they depend on them), else those are not
+    /// numbers.
     pub fn compute(form: &SpecialForm, y: &[T; SIMULATION_DIM], u: Option<&[T; LEG_COUNT]>) -> Self {
         let stand = &form.stand;
         let zero = [T::zero(); STATE_DIM];
@@ -88,6 +94,10 @@ impl<T: Real> PlatformOutputs<T> {
                 stop_force[k] = stops.contact(k, legs.length[k], ldot[k]).force;
             }
             energy += stops.potential_energy(&legs.length);
+        }
+        let current: [T; LEG_COUNT] = std::array::from_fn(|k| y[CURRENTS + k]);
+        if let Some(drives) = form.drives() {
+            energy += drives.magnetic_energy(&current);
         }
         let (mut theta_b, mut theta_a) = ([T::zero(); LEG_COUNT], [T::zero(); LEG_COUNT]);
         let has_mass = form.legs().has_mass();
@@ -109,7 +119,7 @@ impl<T: Real> PlatformOutputs<T> {
         }
         let nan = Vector3::from_element(T::constant(f64::NAN));
         let joint_force = match u {
-            Some(u) => form.joint_forces(body, u),
+            Some(u) => form.joint_forces(body, &actuator_forces(form, y, u)),
             None => [nan; LEG_COUNT],
         };
         PlatformOutputs {
@@ -128,6 +138,8 @@ impl<T: Real> PlatformOutputs<T> {
             theta_b,
             theta_a,
             joint_force,
+            current,
+            electric_work: y[quadrature::WORK_ELECTRIC],
         }
     }
 }
@@ -163,6 +175,8 @@ impl<T: Real> PlatformOutputs<T> {
             theta_b: self.theta_b.map(&f),
             theta_a: self.theta_a.map(&f),
             joint_force: self.joint_force.map(|v| v.map(&f)),
+            current: self.current.map(&f),
+            electric_work: f(self.electric_work),
         }
     }
 }

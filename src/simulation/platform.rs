@@ -1,9 +1,12 @@
 //! [`PlatformSimulation`]: one stand, one state, one integrator.
 
 use crate::integration::{
-    CrossingLog, IntegrationError, Integrator, MAX_SWITCHING, OdeSystem, SolverSettings, SwitchingKind, SwitchingSides,
+    CrossingLog, IntegrationError, Integrator, LinearDecay, MAX_SWITCHING, OdeSystem, SolverSettings, SwitchingKind,
+    SwitchingSides,
 };
+use crate::physics::actuators::drives::{DriveRate, ElectricDrives};
 use crate::physics::body::state::{BodyState, STATE_DIM, StateVector, all_finite};
+use crate::physics::number::Real;
 use std::cell::Cell;
 
 use super::outputs::LegOutputs;
@@ -24,12 +27,17 @@ use std::marker::PhantomData;
 
 use super::vector::VectorPath;
 
-/// Length of the simulation state: the 24 special-form coordinates, then the work of the
-/// actuator forces and the energy taken by the stops' damping (quadratures integrated with
-/// the motion, so that the energy balance holds to the integration tolerance).
-pub const SIMULATION_DIM: usize = STATE_DIM + 2;
+/// Length of the simulation state: the 24 special-form coordinates, the work of the
+/// actuator forces and the energy dissipated (quadratures integrated with the motion, so that
+/// the energy balance holds to the integration tolerance), the drives' six armature currents
+/// and the electric energy supplied (constant 0 without drives).
+pub const SIMULATION_DIM: usize = STATE_DIM + 9;
 
-/// The simulation state, `r, v, e1, e2, e3, e1', e2', e3', W_F, W_d`.
+/// The length of the state without drives: the trailing components stay 0, and the methods
+/// step as they would without them ([`OdeSystem::active_dimension`]).
+const WITHOUT_DRIVES: usize = STATE_DIM + 2;
+
+/// The simulation state, `r, v, e1, e2, e3, e1', e2', e3', W_F, W_d, I_1..I_6, W_e`.
 pub type SimulationState = [f64; SIMULATION_DIM];
 
 /// Offsets of the quadratures in a [`SimulationState`].
@@ -38,6 +46,69 @@ pub mod quadrature {
     pub const WORK_F: usize = super::STATE_DIM;
     /// `work.dissipated = integral of P_d dt`, J.
     pub const WORK_DISSIPATED: usize = super::STATE_DIM + 1;
+    /// `work.electric = integral of sum_k U_k I_k dt`, J.
+    pub const WORK_ELECTRIC: usize = super::STATE_DIM + 8;
+}
+
+/// Offset of the drives' armature currents `I_1..I_6` (A) in a [`SimulationState`].
+pub const CURRENTS: usize = STATE_DIM + 2;
+
+/// The drives' forces and rates at the simulation state `y` and voltages `inputs` (`None`
+/// without drives).
+fn drive_rates<T: Real>(
+    form: &SpecialForm,
+    y: &[T; SIMULATION_DIM],
+    inputs: &[T; LEG_COUNT],
+) -> Option<[DriveRate<T>; LEG_COUNT]> {
+    form.drives()?;
+    let zero = [T::zero(); STATE_DIM];
+    let currents: [T; LEG_COUNT] = std::array::from_fn(|k| y[CURRENTS + k]);
+    form.drive_rates(&BodyState::from_vector(y.first_chunk::<STATE_DIM>().unwrap_or(&zero)), &currents, inputs)
+}
+
+/// The axial forces the actuators exert at the simulation state `y` for the inputs: the
+/// inputs themselves (leg forces `F`), or with drives the forces of their currents.
+pub fn actuator_forces<T: Real>(
+    form: &SpecialForm,
+    y: &[T; SIMULATION_DIM],
+    inputs: &[T; LEG_COUNT],
+) -> [T; LEG_COUNT] {
+    drive_rates(form, y, inputs).map_or(*inputs, |d| d.map(|k| k.force))
+}
+
+/// The rate of a simulation state `y` for the inputs `inputs` (the leg forces `F`, N, or with
+/// drives the voltages `U`, V), in any number type: the definition the steps, Model Exchange
+/// and the exact derivatives share. With drives, `work.F` stays 0: the drives' forces are
+/// internal, their energy comes in as `work.electric`.
+pub fn state_rate<T: Real>(
+    form: &SpecialForm,
+    y: &[T; SIMULATION_DIM],
+    inputs: &[T; LEG_COUNT],
+) -> [T; SIMULATION_DIM] {
+    let zero = [T::zero(); STATE_DIM];
+    let b = y.first_chunk::<STATE_DIM>().unwrap_or(&zero);
+    let drives = drive_rates(form, y, inputs);
+    let forces = drives.map_or(*inputs, |d| d.map(|k| k.force));
+    let (rate, power) = form.rate(b, &forces);
+    let mut dy = [T::zero(); SIMULATION_DIM];
+    if let Some(head) = dy.first_chunk_mut::<STATE_DIM>() {
+        *head = rate;
+    }
+    match drives {
+        None => {
+            dy[quadrature::WORK_F] = power.actuator;
+            dy[quadrature::WORK_DISSIPATED] = power.dissipation;
+        }
+        Some(d) => {
+            let sum = |f: &dyn Fn(&DriveRate<T>) -> T| d.iter().fold(T::zero(), |acc, k| acc + f(k));
+            dy[quadrature::WORK_DISSIPATED] = power.dissipation + sum(&|k| k.dissipation);
+            dy[quadrature::WORK_ELECTRIC] = sum(&|k| k.electric_power);
+            for k in 0..LEG_COUNT {
+                dy[CURRENTS + k] = d[k].current_rate;
+            }
+        }
+    }
+    dy
 }
 
 /// The switching functions of a platform: where the motion is not smooth or is worth
@@ -224,13 +295,37 @@ impl<L: LegForceLaw + ?Sized, V: Lanes> OdeSystem<SIMULATION_DIM> for PlatformDy
 
     #[inline(always)]
     fn derivative(&self, t: f64, y: &SimulationState, dy: &mut SimulationState) {
-        if let Some((body_rate, quadrature_rate)) = dy.split_first_chunk_mut::<STATE_DIM>() {
+        if self.form.drives().is_some() {
+            // The drives take the definition: the law gives the voltages.
+            std::hint::cold_path();
+            let inputs = if self.law.depends_on_state() {
+                let state = BodyState::from_vector(body(y));
+                self.law.leg_forces(t, &state, &LegGeometry::new(&self.form.stand, &state))
+            } else {
+                self.law.leg_forces_at(t)
+            };
+            *dy = state_rate(self.form, y, &inputs);
+            return;
+        }
+        if let Some((body_rate, rest)) = dy.split_first_chunk_mut::<STATE_DIM>() {
             let power = self.form.derivative_in::<L, V>(t, body(y), self.law, body_rate);
-            if let [work, dissipated] = quadrature_rate {
+            if let [work, dissipated, drives @ ..] = rest {
                 *work = power.actuator;
                 *dissipated = power.dissipation;
+                // No drives: the currents and the electric work stay as they are (0).
+                for x in drives {
+                    *x = 0.0;
+                }
             }
         }
+    }
+
+    fn active_dimension(&self) -> usize {
+        if self.form.drives().is_some() { SIMULATION_DIM } else { WITHOUT_DRIVES }
+    }
+
+    fn linear_decay(&self) -> Option<LinearDecay> {
+        self.form.drives().map(|d| LinearDecay { start: CURRENTS, len: LEG_COUNT, rate: d.current_decay_rate() })
     }
 
     #[inline(always)]
@@ -427,8 +522,38 @@ impl PlatformSimulation {
         Ok(self)
     }
 
+    /// The same simulation with electric drives in the legs (validated) and their initial
+    /// armature currents `I0`, A (`None`: the leg forces are given).
+    pub fn with_drives(
+        mut self,
+        drives: Option<ElectricDrives>,
+        initial_currents: [f64; LEG_COUNT],
+    ) -> Result<Self, ParameterError> {
+        if let Some(d) = &drives {
+            d.validate()?;
+            for (k, &i) in initial_currents.iter().enumerate() {
+                crate::physics::stand::check_finite(&format!("I0[{}]", k + 1), i)?;
+            }
+        }
+        self.form = self.form.clone().with_drives(drives);
+        for k in 0..LEG_COUNT {
+            self.state[CURRENTS + k] = if drives.is_some() { initial_currents[k] } else { 0.0 };
+        }
+        Ok(self)
+    }
+
     pub fn stand(&self) -> &Stand {
         &self.form.stand
+    }
+
+    /// The armature currents `I_k`, A (0 without drives).
+    pub fn currents(&self) -> [f64; LEG_COUNT] {
+        std::array::from_fn(|k| self.state[CURRENTS + k])
+    }
+
+    /// `work.electric`, J.
+    pub fn electric_work(&self) -> f64 {
+        self.state[quadrature::WORK_ELECTRIC]
     }
 
     /// Whether passages through singular arrangements are recorded (see the field).

@@ -2,8 +2,10 @@
 //! component. A programme pose (the paper's heave, a six-degree-of-freedom sinusoid, or a
 //! pose from inputs) goes through the direct problem and inverse kinematics of the same
 //! physics core as the platform; the leg forces are `F = F^p + G (l^p - l) + D (ldot^p -
-//! ldot)` (+ an optional disturbance). No states: outputs are functions of time, inputs and
-//! parameters (direct feed-through from `l`, `ldot` to `F`).
+//! ldot)` (+ an optional disturbance). With electric drives (`drive = 1`, docs/model.md §9)
+//! it also gives the voltages `U = R F / (N k_t) + k_e N ldot^p`: the force command through
+//! the drive's static model. No states: outputs are functions of time, inputs and parameters
+//! (direct feed-through from `l`, `ldot` to `F` and `U`).
 
 pub mod variables;
 
@@ -15,6 +17,7 @@ use super::snapshot::{ByteReader, ByteWriter, SnapshotError};
 use super::variables::VariableRef;
 use super::{DefaultExperiment, FmuModel, ModelInfo, StepError, StepReport};
 use crate::control::{Disturbance, LegFeedback};
+use crate::physics::actuators::drives::ElectricDrives;
 use crate::physics::body::kinematics::{PoseTrajectoryPoint, angles_from_rotation};
 use crate::physics::direct_problem::solve_direct_problem;
 use crate::physics::legs::bodies::LegBodies;
@@ -50,6 +53,8 @@ pub const DEFAULT_DAMPING: f64 = 2.0e4;
 /// Default actuator saturation, N: each drive can push or pull the whole default platform's
 /// weight (29.4 kN); the default heave programme needs at most 7.7 kN per leg.
 pub const DEFAULT_FORCE_LIMIT: f64 = 3.0e4;
+/// Default voltage limit `Umax`, V: the drives' 300 V supply (docs/model.md §9).
+pub const DEFAULT_VOLTAGE_LIMIT: f64 = 300.0;
 /// Default lift duration of the start-up programme, s.
 pub const DEFAULT_STARTUP_DURATION: f64 = 3.0;
 
@@ -96,6 +101,21 @@ pub struct ControllerParameters {
     pub f_max: f64,
     /// `leg.*`: the legs' masses, whose weight and inertia the programme forces carry.
     pub legs: LegBodies,
+    /// `drive`: output the drives' voltages `U` (and carry their rotors' inertia).
+    pub drives_enabled: bool,
+    /// `motor.*`, `gear.ratio`, `screw.lead`: the drives' parameters (as the platform's).
+    pub drives: ElectricDrives,
+    /// `Umax`, V: the voltage command is limited to `[-Umax, Umax]`.
+    pub u_max: f64,
+}
+
+impl ControllerParameters {
+    /// The legs the direct problem carries: with drives, their rotors move with the legs'
+    /// lengths.
+    pub fn leg_bodies(&self) -> LegBodies {
+        let axial_mass = if self.drives_enabled { self.drives.reflected_mass() } else { 0.0 };
+        LegBodies { axial_mass, ..self.legs }
+    }
 }
 
 /// Programme 1: `z = z0 + a sin(Omega t)(1 - exp(-t/T))^2`.
@@ -154,6 +174,9 @@ impl Default for ControllerParameters {
             f_min: -DEFAULT_FORCE_LIMIT,
             f_max: DEFAULT_FORCE_LIMIT,
             legs: LegBodies::default(),
+            drives_enabled: false,
+            drives: ElectricDrives::default(),
+            u_max: DEFAULT_VOLTAGE_LIMIT,
             stand,
         }
     }
@@ -174,6 +197,8 @@ pub struct ExternalPose {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ControllerOutputs {
     pub f: [f64; LEG_COUNT],
+    /// The drives' voltage command, V (0 without drives).
+    pub u: [f64; LEG_COUNT],
     pub fp: [f64; LEG_COUNT],
     pub lp: [f64; LEG_COUNT],
     pub ldotp: [f64; LEG_COUNT],
@@ -186,6 +211,7 @@ impl ControllerOutputs {
     /// to return them, naming the variable).
     const UNDEFINED: ControllerOutputs = ControllerOutputs {
         f: [f64::NAN; LEG_COUNT],
+        u: [f64::NAN; LEG_COUNT],
         fp: [f64::NAN; LEG_COUNT],
         lp: [f64::NAN; LEG_COUNT],
         ldotp: [f64::NAN; LEG_COUNT],
@@ -212,7 +238,7 @@ impl Default for ControllerModel {
         let centre = parameters.heave_centre;
         let neutral = solve_direct_problem(
             &parameters.stand,
-            &parameters.legs,
+            &parameters.leg_bodies(),
             &PoseTrajectoryPoint::at_rest(centre, nalgebra::Matrix3::identity()),
         )
         .map(|s| s.lengths)
@@ -272,7 +298,7 @@ impl ControllerModel {
     /// Direct problem and feedback at the current time and inputs.
     pub fn compute(&self) -> Result<ControllerOutputs, String> {
         let point = self.programme_point(self.time);
-        let solution = solve_direct_problem(&self.parameters.stand, &self.parameters.legs, &point)
+        let solution = solve_direct_problem(&self.parameters.stand, &self.parameters.leg_bodies(), &point)
             .map_err(|e| format!("the programme pose at t = {} cannot be produced by the legs: {e}", self.time))?;
         let mut f = self.parameters.feedback.leg_forces(&solution, &self.l, &self.ldot);
         let d = self.parameters.disturbance.at(self.time);
@@ -280,8 +306,18 @@ impl ControllerModel {
         for fk in f.iter_mut() {
             *fk = (*fk + d).clamp(f_min, f_max);
         }
+        let p = &self.parameters;
+        let u = if p.drives_enabled {
+            std::array::from_fn(|k| {
+                let (_, voltage) = p.drives.static_current_and_voltage(f[k], solution.rates[k]);
+                voltage.clamp(-p.u_max, p.u_max)
+            })
+        } else {
+            [0.0; LEG_COUNT]
+        };
         Ok(ControllerOutputs {
             f,
+            u,
             fp: solution.forces,
             lp: solution.lengths,
             ldotp: solution.rates,
@@ -303,6 +339,12 @@ impl ControllerModel {
         let p = &self.parameters;
         p.stand.validate().map_err(|e| e.to_string())?;
         p.legs.validate().map_err(|e| e.to_string())?;
+        if p.drives_enabled {
+            p.drives.validate().map_err(|e| e.to_string())?;
+        }
+        if !(p.u_max > 0.0 && p.u_max.is_finite()) {
+            return Err(format!("parameter Umax: must be a positive number of volts, got {:e}", p.u_max));
+        }
         for (name, value) in [
             ("heave.timeConstant", p.heave.time_constant),
             ("sine.timeConstant", p.sine.time_constant),
@@ -369,8 +411,16 @@ impl FmuModel for ControllerModel {
         }
         let p = &self.parameters;
         Ok(format!(
-            "initialised at t = {start_time}: programme {:?}, G = {} N/m, D = {} N.s/m, feedforward {}",
-            p.programme, p.feedback.gain, p.feedback.damping, p.feedback.feedforward
+            "initialised at t = {start_time}: programme {:?}, G = {} N/m, D = {} N.s/m, feedforward {}{}",
+            p.programme,
+            p.feedback.gain,
+            p.feedback.damping,
+            p.feedback.feedforward,
+            if p.drives_enabled {
+                format!(", voltage outputs U (drives: N = {:.4} rad/m, Umax = {} V)", p.drives.transmission(), p.u_max)
+            } else {
+                String::new()
+            }
         )
         .into())
     }

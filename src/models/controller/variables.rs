@@ -69,6 +69,16 @@ const ALL_KNOWNS: &[crate::models::variables::Dependency] = &[
     All("leg.rodCoM"),
     All("leg.cylinderInertia"),
     All("leg.rodInertia"),
+    All("drive"),
+    All("motor.R"),
+    All("motor.L"),
+    All("motor.ke"),
+    All("motor.kt"),
+    All("motor.J"),
+    All("motor.D"),
+    All("gear.ratio"),
+    All("screw.lead"),
+    All("Umax"),
 ];
 
 declare_variables! {
@@ -206,5 +216,32 @@ declare_variables! {
         LEG_ROD_INERTIA => V::parameter(
             "leg.rodInertia", &[], 195, Some("kg.m2"), "Transverse moment of inertia J_r of the rod",
         ); real(parameters.legs.rod_inertia),
+        DRIVE => V::parameter(
+            "drive", &[], 200, None,
+            "0 = force commands F only (U = 0); 1 = the platform's legs are electric drives: also the voltage commands \
+             U = R F / (N k_t) + k_e N ldot^p, the force command through the drive's static model (same motor.*, \
+             gear.ratio, screw.lead as the platform), and the programme forces carry the rotors' inertia",
+        )
+        .integer(0, 1); integer(parameters.drives_enabled),
+        MOTOR_R => V::parameter("motor.R", &[], 201, Some("Ohm"), "Armature resistance R of each drive's motor"); real(parameters.drives.resistance),
+        MOTOR_L => V::parameter("motor.L", &[], 202, Some("H"), "Armature inductance L"); real(parameters.drives.inductance),
+        MOTOR_KE => V::parameter("motor.ke", &[], 203, Some("V.s/rad"), "Back-EMF constant k_e"); real(parameters.drives.ke),
+        MOTOR_KT => V::parameter("motor.kt", &[], 204, Some("N.m/A"), "Torque constant k_t"); real(parameters.drives.kt),
+        MOTOR_J => V::parameter(
+            "motor.J", &[], 205, Some("kg.m2"), "Inertia J_m of rotor, reducer and screw at the motor shaft",
+        ); real(parameters.drives.rotor_inertia),
+        MOTOR_D => V::parameter("motor.D", &[], 206, Some("N.m.s/rad"), "Viscous friction D at the motor shaft"); real(parameters.drives.damping),
+        GEAR_RATIO => V::parameter("gear.ratio", &[], 207, Some("1"), "Reducer ratio i: motor turns per screw turn"); real(parameters.drives.gear_ratio),
+        SCREW_LEAD => V::parameter("screw.lead", &[], 208, Some("m"), "Ball screw lead p: leg travel per screw turn"); real(parameters.drives.screw_lead),
+        UMAX => V::parameter(
+            "Umax", &[], 209, Some("V"), "Voltage saturation: the voltage command U_k is limited to [-Umax, Umax] (the drives' supply)",
+        ); real(parameters.u_max),
+        U => V::output(
+            "U", &[6], 210, Some("V"),
+            "Voltage command U_k = R F_k / (N k_t) + k_e N ldot^p_k, limited to [-Umax, Umax] (to the platform's U; 0 \
+             when drive = 0)",
+            ALL_KNOWNS,
+        )
+        .depends_on(FORCE_DEPENDENCIES); output(outputs.u),
     }
 }

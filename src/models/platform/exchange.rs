@@ -10,32 +10,15 @@ use crate::models::EventUpdate;
 use crate::models::declare::Binding;
 use crate::models::variables::VariableRef;
 use crate::physics::actuators::HeldForces;
-use crate::physics::body::state::STATE_DIM;
 use crate::physics::configuration::ConfigurationGuard;
 use crate::physics::number::{Dual, Real};
 use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::LEG_COUNT;
 use crate::simulation::outputs::condition_number_tangent;
-use crate::simulation::platform::{SIMULATION_DIM, SimulationState, body, switching};
+use crate::simulation::platform::{SIMULATION_DIM, SimulationState, body, state_rate, switching};
 use crate::simulation::{PlatformDynamics, PlatformOutputs, Stabilisation};
 
 impl PlatformModel {
-    /// The rate of the simulation state `y` (body and work quadratures) for the leg forces
-    /// `u`, in any number type.
-    pub(super) fn state_rate<T: Real>(
-        form: &SpecialForm,
-        y: &[T; SIMULATION_DIM],
-        u: &[T; LEG_COUNT],
-    ) -> [T; SIMULATION_DIM] {
-        let zero = [T::zero(); STATE_DIM];
-        let (rate, power) = form.rate(y.first_chunk().unwrap_or(&zero), u);
-        std::array::from_fn(|i| match i.checked_sub(STATE_DIM) {
-            None => rate[i],
-            Some(0) => power.actuator,
-            Some(_) => power.dissipation,
-        })
-    }
-
     /// Runs `f` with the special form and the state the model is at: the simulation's, or
     /// before initialisation the one the parameters describe.
     fn with_current<R>(&self, f: impl FnOnce(&SpecialForm, &SimulationState) -> R) -> R {
@@ -48,13 +31,13 @@ impl PlatformModel {
     /// A derivative variable's value (`der(v)`, `der(R)`, ...): an element of the state rate.
     pub(super) fn derivative_value(&self, var: VariableRef) -> Option<f64> {
         let i = INFO.derivative_state_index(var)?;
-        let forces = self.forces;
-        self.with_current(|form, y| Self::state_rate(form, y, &forces).get(i).copied())
+        let inputs = self.inputs();
+        self.with_current(|form, y| state_rate(form, y, &inputs).get(i).copied())
     }
 
     /// The event indicators (the switching functions): stroke margins and the determinant.
     pub(super) fn switching_values(&self, z: &mut [f64]) {
-        let law = HeldForces::constant(self.forces);
+        let law = HeldForces::constant(self.inputs());
         match self.sim() {
             Some(sim) => sim.switching_values(&law, z),
             None => {
@@ -76,9 +59,9 @@ impl PlatformModel {
     /// An event update at the current time and state: the indicators' signs become the new
     /// reference; each change is described.
     pub(super) fn update_events(&mut self, sink: &mut dyn FnMut(&str)) -> EventUpdate {
-        let forces = self.forces;
+        let inputs = self.inputs();
         let Some(sim) = self.sim_mut() else { return EventUpdate::default() };
-        let law = HeldForces::constant(forces);
+        let law = HeldForces::constant(inputs);
         let now = switching_sides(&sim.dynamics(&law), sim.time, &sim.state);
         let changed = now.bits ^ sim.integrator.sides.bits;
         let mut update = EventUpdate::default();
@@ -107,25 +90,28 @@ impl PlatformModel {
         let mut dy = [0.0; SIMULATION_DIM];
         let mut du = [0.0; LEG_COUNT];
         for (k, &seed) in knowns.iter().zip(seeds) {
+            let input = if self.parameters.drives_enabled { group::U } else { group::F };
             let slot = match INFO.state_index(*k) {
                 Some(i) => dy.get_mut(i),
-                None if k.group == group::F => du.get_mut(k.index),
+                None if k.group == input => du.get_mut(k.index),
+                // The input not in use: nothing depends on it.
+                None if k.group == group::F || k.group == group::U => continue,
                 None => None,
             };
             let Some(slot) = slot else {
                 return Err(format!(
                     "known {} is neither a state nor an input (derivatives are with respect to r, v, R, der(R), \
-                     work.F, work.dissipated and F)",
+                     work.F, work.dissipated, I, work.electric and the inputs F or U)",
                     element_name(*k)
                 ));
             };
             *slot += seed;
         }
-        let forces = self.forces;
+        let inputs = self.inputs();
         let needs_kappa = unknowns.iter().any(|u| u.group == group::KAPPA);
         let (rate, outputs, dkappa) = self.with_current(|form, y| {
-            let (yd, ud) = (Dual::seeded(y, &dy), Dual::seeded(&forces, &du));
-            let rate = Self::state_rate(form, &yd, &ud);
+            let (yd, ud) = (Dual::seeded(y, &dy), Dual::seeded(&inputs, &du));
+            let rate = state_rate(form, &yd, &ud);
             let dkappa = if needs_kappa { condition_number_tangent(&form.stand, y, &dy) } else { 0.0 };
             (rate, PlatformOutputs::<Dual>::compute(form, &yd, Some(&ud)), dkappa)
         });
@@ -146,12 +132,13 @@ impl PlatformModel {
     /// derivative along the state's own rate.
     pub(super) fn output_time_derivative(&mut self, var: VariableRef) -> f64 {
         let Some(sim) = self.sim() else { return 0.0 };
-        let dy = Self::state_rate(&sim.form, &sim.state, &self.forces);
+        let inputs = self.inputs();
+        let dy = state_rate(&sim.form, &sim.state, &inputs);
         if var.group == group::KAPPA {
             return condition_number_tangent(sim.stand(), &sim.state, &dy);
         }
-        let forces = self.forces.map(Dual::constant);
-        let outputs = PlatformOutputs::<Dual>::compute(&sim.form, &Dual::seeded(&sim.state, &dy), Some(&forces));
+        let inputs = inputs.map(Dual::constant);
+        let outputs = PlatformOutputs::<Dual>::compute(&sim.form, &Dual::seeded(&sim.state, &dy), Some(&inputs));
         output_element(&outputs, var).map_or(0.0, |d| d.eps)
     }
 }

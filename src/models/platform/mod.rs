@@ -1,5 +1,6 @@
 //! The `StewartPlatform` model: the stand's parameters and initial pose as FMI parameters,
-//! the six leg forces as inputs, the pose, legs and energy as outputs (docs/model.md §5).
+//! the six leg forces (or with electric drives the six voltages) as inputs, the pose, legs
+//! and energy as outputs (docs/model.md §5).
 //!
 //! | module | what it holds |
 //! |---|---|
@@ -26,7 +27,7 @@ use crate::physics::error::leg_list;
 use crate::physics::legs::geometry::LegGeometry;
 use crate::physics::stand::LEG_COUNT;
 use crate::simulation::outputs::condition_number;
-use crate::simulation::platform::{Reached, SIMULATION_DIM, body, switching};
+use crate::simulation::platform::{Reached, SIMULATION_DIM, actuator_forces, body, state_rate, switching};
 use crate::simulation::{LegOutputs, PlatformOutputs, PlatformSimulation};
 pub use parameters::{Experiment, PlatformParameters, default_leg_force};
 use variables::{BINDINGS, group};
@@ -35,7 +36,7 @@ pub static INFO: ModelInfo = ModelInfo {
     model_name: "StewartPlatform",
     model_identifier: "StewartPlatform",
     description: "Loaded Stewart platform (hexapod): rigid-body dynamics in the special form of Zegzhda, Petrova and \
-                  Yushkov (2020), six axial leg forces in, pose and leg lengths out",
+                  Yushkov (2020), six axial leg forces (or drive voltages) in, pose and leg lengths out",
     groups: variables::GROUPS,
     enumerations: &[],
     units: super::units::UNITS,
@@ -60,6 +61,10 @@ pub struct PlatformModel {
     pub forces: [f64; LEG_COUNT],
     /// Their time derivatives for the next step, N/s (cleared after each step).
     pub force_rates: [f64; LEG_COUNT],
+    /// The drives' voltages `U[k]`, V (the inputs when `drive = 1`).
+    pub voltages: [f64; LEG_COUNT],
+    /// Their time derivatives for the next step, V/s (cleared after each step).
+    pub voltage_rates: [f64; LEG_COUNT],
     /// Present after Initialization Mode, with the experiment it was built for.
     pub simulation: Option<(PlatformSimulation, Experiment)>,
     /// Outputs of the current state, computed on the first read after a change.
@@ -83,6 +88,8 @@ impl Default for PlatformModel {
             parameters: PlatformParameters::default(),
             forces: [default_leg_force(); LEG_COUNT],
             force_rates: [0.0; LEG_COUNT],
+            voltages: [0.0; LEG_COUNT],
+            voltage_rates: [0.0; LEG_COUNT],
             simulation: None,
             outputs: None,
             legs: None,
@@ -122,14 +129,25 @@ impl PlatformModel {
     /// The joints' forces of the current state and leg forces, computed on the first read
     /// after a change.
     fn joint_force_outputs(&mut self) -> &JointForceOutputs {
-        let (simulation, parameters, forces) = (&self.simulation, &self.parameters, &self.forces);
+        let inputs = self.inputs();
+        let (simulation, parameters) = (&self.simulation, &self.parameters);
         self.joint_forces.get_or_insert_with(|| {
             let joint_force = match simulation {
-                Some((sim, _)) => sim.form.joint_forces(body(&sim.state), forces),
-                None => parameters.special_form().joint_forces(body(&parameters.initial_simulation_state()), forces),
+                Some((sim, _)) => {
+                    sim.form.joint_forces(body(&sim.state), &actuator_forces(&sim.form, &sim.state, &inputs))
+                }
+                None => {
+                    let (form, y) = (parameters.special_form(), parameters.initial_simulation_state());
+                    form.joint_forces(body(&y), &actuator_forces(&form, &y, &inputs))
+                }
             };
             JointForceOutputs { joint_force }
         })
+    }
+
+    /// The inputs in use: the leg forces `F`, or with drives the voltages `U`.
+    pub fn inputs(&self) -> [f64; LEG_COUNT] {
+        if self.parameters.drives_enabled { self.voltages } else { self.forces }
     }
 
     /// The legs' lengths and rates of the current state, computed on the first read after a
@@ -169,8 +187,14 @@ impl PlatformModel {
         self.joint_forces = None;
     }
 
-    fn held_forces(&self, t0: f64) -> HeldForces {
-        HeldForces { value: self.forces, slope: self.force_rates, t0 }
+    /// The inputs over the next step: the leg forces, or with drives the voltages, with
+    /// their rates.
+    fn held_inputs(&self, t0: f64) -> HeldForces {
+        if self.parameters.drives_enabled {
+            HeldForces { value: self.voltages, slope: self.voltage_rates, t0 }
+        } else {
+            HeldForces { value: self.forces, slope: self.force_rates, t0 }
+        }
     }
 
     /// What a crossing of switching function `c.index` means, in words.
@@ -223,7 +247,7 @@ impl PlatformModel {
         let mut sim = self.parameters.simulation(experiment)?;
         sim.set_track_singularities(self.events_reported);
         sim.integrator.sides = crate::integration::switching_sides(
-            &sim.dynamics(&HeldForces::constant(self.forces)),
+            &sim.dynamics(&HeldForces::constant(self.inputs())),
             experiment.start_time,
             &sim.state,
         );
@@ -280,11 +304,14 @@ impl FmuModel for PlatformModel {
 
     #[inline]
     fn set_real_run(&mut self, first: VariableRef, values: &[f64]) -> Result<(), String> {
-        // The leg forces, set every step: one copy.
-        if first.group == group::F
-            && let Some(forces) = self.forces.get_mut(first.index..first.index + values.len())
-        {
-            forces.copy_from_slice(values);
+        // The leg forces or voltages, set every step: one copy.
+        let inputs = match first.group {
+            group::F => Some(&mut self.forces),
+            group::U => Some(&mut self.voltages),
+            _ => None,
+        };
+        if let Some(inputs) = inputs.and_then(|v| v.get_mut(first.index..first.index + values.len())) {
+            inputs.copy_from_slice(values);
             self.values_set();
             return Ok(());
         }
@@ -337,7 +364,9 @@ impl FmuModel for PlatformModel {
     }
 
     fn do_step(&mut self, t: f64, h: f64, stop_at_event: bool) -> Result<StepReport, StepError> {
-        let law = self.held_forces(t);
+        let law = self.held_inputs(t);
+        let (inputs, unit) = if self.parameters.drives_enabled { ("voltages", "V") } else { ("leg forces", "N") };
+        let values = self.inputs();
         let Some(sim) = self.sim_mut() else {
             return Err(StepError { message: "the model is not initialised".into(), retry_shorter: false });
         };
@@ -351,6 +380,7 @@ impl FmuModel for PlatformModel {
         let event =
             sim.crossings.as_slice().iter().any(|c| c.index != switching::DETERMINANT) || sim.crossings.dropped > 0;
         self.force_rates = [0.0; LEG_COUNT];
+        self.voltage_rates = [0.0; LEG_COUNT];
         match result {
             Ok(reached) => {
                 self.invalidate_outputs();
@@ -365,7 +395,7 @@ impl FmuModel for PlatformModel {
                          communication steps"
                     )
                 } else {
-                    format!("step from t = {t} to {t_end} rolled back: {failure}; leg forces {:?} N", self.forces)
+                    format!("step from t = {t} to {t_end} rolled back: {failure}; {inputs} {values:?} {unit}")
                 },
                 retry_shorter: failure.is_step_limit(),
             }),
@@ -386,9 +416,12 @@ impl FmuModel for PlatformModel {
     }
 
     fn set_input_derivative(&mut self, var: VariableRef, value: f64) {
-        if var.group == group::F
-            && let Some(slot) = self.force_rates.get_mut(var.index)
-        {
+        let rates = match var.group {
+            group::F => &mut self.force_rates,
+            group::U => &mut self.voltage_rates,
+            _ => return,
+        };
+        if let Some(slot) = rates.get_mut(var.index) {
             *slot = value;
         }
     }
@@ -422,7 +455,7 @@ impl FmuModel for PlatformModel {
 
     fn derivatives(&mut self, dx: &mut [f64]) {
         let Some(sim) = self.sim() else { return };
-        let dy = Self::state_rate(&sim.form, &sim.state, &self.forces);
+        let dy = state_rate(&sim.form, &sim.state, &self.inputs());
         for (d, v) in dx.iter_mut().zip(dy) {
             *d = v;
         }
@@ -460,6 +493,7 @@ impl FmuModel for PlatformModel {
     fn save(&self, w: &mut ByteWriter) {
         self.save_variables(w);
         w.f64s(&self.force_rates);
+        w.f64s(&self.voltage_rates);
         match &self.simulation {
             None => w.bool(false),
             Some((sim, experiment)) => {
@@ -485,6 +519,7 @@ impl FmuModel for PlatformModel {
         let mut model = PlatformModel::default();
         model.restore_variables(r)?;
         model.force_rates = r.finite_array::<LEG_COUNT>("der(F)")?;
+        model.voltage_rates = r.finite_array::<LEG_COUNT>("der(U)")?;
         if r.bool()? {
             let start_time = r.finite("start time")?;
             let has_tolerance = r.bool()?;

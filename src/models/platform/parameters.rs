@@ -5,6 +5,7 @@ use nalgebra::Vector3;
 
 use crate::integration::{Method, SolverSettings};
 use crate::models::declare::IntegerStorage;
+use crate::physics::actuators::drives::ElectricDrives;
 use crate::physics::body::kinematics::rotation_from_angles;
 use crate::physics::body::state::{BodyState, STATE_DIM};
 use crate::physics::direct_problem::SINGULAR_CONDITION_NUMBER;
@@ -15,6 +16,7 @@ use crate::physics::legs::joint_limits::{self, JointLimits};
 use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::{LEG_COUNT, PAPER_EQUILIBRIUM_LEG_FORCE, Stand};
 use crate::simulation::outputs::condition_number;
+use crate::simulation::platform::CURRENTS;
 use crate::simulation::{PlatformSimulation, SIMULATION_DIM, SimulationState, Stabilisation};
 
 /// Everything set through parameters.
@@ -43,6 +45,12 @@ pub struct PlatformParameters {
     pub joints_enabled: bool,
     /// `joints.*`.
     pub joints: JointParameters,
+    /// `drive`: the legs driven by electric drives (voltages in) instead of forces.
+    pub drives_enabled: bool,
+    /// `motor.*`, `gear.ratio`, `screw.lead`.
+    pub drives: ElectricDrives,
+    /// `I0`: the drives' initial armature currents, A.
+    pub initial_currents: [f64; LEG_COUNT],
 }
 
 /// The joint-limit parameters (`joints.*`).
@@ -95,6 +103,9 @@ impl Default for PlatformParameters {
             friction: Friction::default(),
             joints_enabled: true,
             joints: JointParameters::default(),
+            drives_enabled: false,
+            drives: ElectricDrives::default(),
+            initial_currents: [0.0; LEG_COUNT],
         }
     }
 }
@@ -153,13 +164,17 @@ impl PlatformParameters {
         Some(JointLimits::new(j.base_max, j.platform_max, j.stiffness, j.damping, n0, &rotation0))
     }
 
+    /// The drives if they are on.
+    pub fn electric_drives(&self) -> Option<ElectricDrives> {
+        self.drives_enabled.then_some(self.drives)
+    }
+
     /// The special form these parameters describe (before initialisation).
     pub fn special_form(&self) -> SpecialForm {
-        SpecialForm::new(self.stand.clone()).with_end_stops(self.end_stops()).with_machine(
-            self.legs,
-            self.friction,
-            self.joint_limits(),
-        )
+        SpecialForm::new(self.stand.clone())
+            .with_end_stops(self.end_stops())
+            .with_machine(self.legs, self.friction, self.joint_limits())
+            .with_drives(self.electric_drives())
     }
 
     /// The simulation state these parameters describe (before initialisation).
@@ -167,6 +182,9 @@ impl PlatformParameters {
         let mut y = [0.0; SIMULATION_DIM];
         if let Some(b) = y.first_chunk_mut::<STATE_DIM>() {
             *b = self.initial_state().to_vector();
+        }
+        if self.drives_enabled {
+            y[CURRENTS..CURRENTS + LEG_COUNT].copy_from_slice(&self.initial_currents);
         }
         y
     }
@@ -196,7 +214,10 @@ impl PlatformParameters {
         } else {
             None
         };
-        let mut sim = sim.with_machine(self.legs, self.friction, joint_limits).map_err(|e| e.to_string())?;
+        let mut sim = sim
+            .with_machine(self.legs, self.friction, joint_limits)
+            .and_then(|sim| sim.with_drives(self.electric_drives(), self.initial_currents))
+            .map_err(|e| e.to_string())?;
         if let Some(limits) = &joint_limits {
             check_initial_joint_angles(limits, &sim)?;
         }
@@ -271,10 +292,21 @@ impl PlatformParameters {
             ),
             None => "end stops off".to_string(),
         };
+        let drives = match self.electric_drives() {
+            Some(d) => format!(
+                ", electric drives (voltage inputs U; N = {:.4} rad/m, rotor {:.1} kg along each leg, L/R = {:e} s, \
+                 initial currents {:?} A)",
+                d.transmission(),
+                d.reflected_mass(),
+                1.0 / d.current_decay_rate(),
+                self.initial_currents
+            ),
+            None => String::new(),
+        };
         let p = self;
         format!(
             "initialised at t = {}: M = {} kg, J = {:?} kg.m2, g = {} m/s2, leg lengths {:?} m, kappa {:.4}, \
-             {stops}, stopAtSingularity {}, method {:?}, relTol {:e}{}, stabilisation {}",
+             {stops}{drives}, stopAtSingularity {}, method {:?}, relTol {:e}{}, stabilisation {}",
             experiment.start_time,
             p.stand.mass,
             p.stand.inertia,

@@ -6,9 +6,11 @@ use crate::models::variables::Dependency::{All, SameIndex};
 use crate::models::variables::VariableGroup as V;
 use crate::simulation::PlatformOutputs;
 
-/// The 24 continuous states in the order of the special form's state vector
-/// `r, v, e1, e2, e3, e1', e2', e3'`: `e_b` is column `b` of `R` (elements `R[1,b], R[2,b],
-/// R[3,b]`, flat row-major indices `b-1, b+2, b+5`) and `e_b'` the same elements of `der(R)`.
+/// The continuous states in the order of the simulation state: the special form's 24
+/// `r, v, e1, e2, e3, e1', e2', e3'` (`e_b` is column `b` of `R`: elements `R[1,b], R[2,b],
+/// R[3,b]`, flat row-major indices `b-1, b+2, b+5`, and `e_b'` the same elements of
+/// `der(R)`), the work quadratures, the drives' currents and the electric work
+/// (`crate::simulation::platform`'s layout).
 pub static STATES: &[(&str, usize)] = &[
     ("r", 0),
     ("r", 1),
@@ -36,13 +38,40 @@ pub static STATES: &[(&str, usize)] = &[
     ("der(R)", 8),
     ("work.F", 0),
     ("work.dissipated", 0),
+    ("I", 0),
+    ("I", 1),
+    ("I", 2),
+    ("I", 3),
+    ("I", 4),
+    ("I", 5),
+    ("work.electric", 0),
 ];
 
 const POSE_STATES: &[crate::models::variables::Dependency] = &[All("r"), All("R")];
 const ALL_STATES: &[crate::models::variables::Dependency] = &[All("r"), All("v"), All("R"), All("der(R)")];
 /// The knowns of the accelerations and powers: the end stops' forces depend on the leg rates,
-/// so with stops every acceleration depends on the whole body state, and on the leg forces.
-const MOTION_KNOWNS: &[crate::models::variables::Dependency] = &[All("r"), All("v"), All("R"), All("der(R)"), All("F")];
+/// so with stops every acceleration depends on the whole body state, and on the leg forces
+/// (or with drives on the currents).
+const MOTION_KNOWNS: &[crate::models::variables::Dependency] =
+    &[All("r"), All("v"), All("R"), All("der(R)"), All("F"), All("I")];
+/// The knowns of the drives' currents' rates and losses: the leg rates, the currents, the
+/// voltages.
+const DRIVE_KNOWNS: &[crate::models::variables::Dependency] =
+    &[All("r"), All("v"), All("R"), All("der(R)"), All("I"), All("U")];
+/// The knowns of the energy: the body state and the currents (magnetic energy).
+const ENERGY_KNOWNS: &[crate::models::variables::Dependency] = &[All("r"), All("v"), All("R"), All("der(R)"), All("I")];
+/// The drives' parameters.
+const DRIVE_PARAMETERS: &[crate::models::variables::Dependency] = &[
+    All("drive"),
+    All("motor.R"),
+    All("motor.L"),
+    All("motor.ke"),
+    All("motor.kt"),
+    All("motor.J"),
+    All("motor.D"),
+    All("gear.ratio"),
+    All("screw.lead"),
+];
 const STOP_PARAMETERS: &[crate::models::variables::Dependency] = &[
     All("A"),
     All("B"),
@@ -92,6 +121,17 @@ const ALL_PARAMETERS: &[crate::models::variables::Dependency] = &[
     All("friction.stribeckVelocity"),
     All("friction.smoothing"),
     All("friction.viscous"),
+    All("drive"),
+    All("motor.R"),
+    All("motor.L"),
+    All("motor.ke"),
+    All("motor.kt"),
+    All("motor.J"),
+    All("motor.D"),
+    All("gear.ratio"),
+    All("screw.lead"),
+    All("I0"),
+    All("U"),
 ];
 /// What the energy depends on in Initialization Mode: the stand, the initial state, the
 /// potentials' parameters and the legs' masses.
@@ -121,6 +161,12 @@ const ENERGY_PARAMETERS: &[crate::models::variables::Dependency] = &[
     All("joints.stiffness"),
     All("joints.r0"),
     All("joints.angles0"),
+    All("drive"),
+    All("motor.L"),
+    All("motor.J"),
+    All("gear.ratio"),
+    All("screw.lead"),
+    All("I0"),
 ];
 /// What the dissipated power depends on in Initialization Mode.
 const DISSIPATION_PARAMETERS: &[crate::models::variables::Dependency] = &[
@@ -147,6 +193,15 @@ const DISSIPATION_PARAMETERS: &[crate::models::variables::Dependency] = &[
     All("friction.stribeckVelocity"),
     All("friction.smoothing"),
     All("friction.viscous"),
+    All("drive"),
+    All("motor.R"),
+    All("motor.ke"),
+    All("motor.kt"),
+    All("motor.D"),
+    All("gear.ratio"),
+    All("screw.lead"),
+    All("I0"),
+    All("U"),
 ];
 const JOINT_ANGLE_PARAMETERS: &[crate::models::variables::Dependency] =
     &[All("A"), All("B"), All("r0"), All("angles0"), All("joints"), All("joints.r0"), All("joints.angles0")];
@@ -287,11 +342,11 @@ declare_variables! {
             133,
             Some("J"),
             "Energy: the platform's kinetic and gravitational potential energy M v^2/2 + w.J w/2 + M g z, the legs' \
-             kinetic and potential energy, and the end stops' and joint limits' potentials (E(t) - E(0) = work.F - \
-             work.dissipated)",
+             (and the drives' rotors') kinetic and potential energy, the end stops' and joint limits' potentials and the \
+             drives' magnetic energy L I^2/2 (E(t) - E(0) = work.F + work.electric - work.dissipated)",
             ENERGY_PARAMETERS,
         )
-        .depends_on(ALL_STATES); cached(outputs.energy),
+        .depends_on(ENERGY_KNOWNS); cached(outputs.energy),
         CONSTRAINT_ERROR => V::output(
             "constraintError",
             &[],
@@ -407,7 +462,8 @@ declare_variables! {
             &[],
             207,
             Some("J"),
-            "Work done by the leg forces F since the start, the integral of sum_k F_k ldot_k (Model Exchange state)",
+            "Work done by the leg forces F since the start, the integral of sum_k F_k ldot_k (Model Exchange state; \
+             stays 0 with drive = 1, whose energy comes in as work.electric)",
             &[],
         ); cached(outputs.work_of_forces),
         WORK_DISSIPATED => V::output(
@@ -415,8 +471,8 @@ declare_variables! {
             &[],
             208,
             Some("J"),
-            "Energy taken since the start by the end stops' and joint limits' damping and by the cylinders' friction \
-             (>= 0; Model Exchange state)",
+            "Energy taken since the start by the end stops' and joint limits' damping, the cylinders' friction and the \
+             drives' losses R I^2 + D omega^2 (+ (k_e - k_t) omega I) (>= 0; Model Exchange state)",
             &[],
         ); cached(outputs.dissipated_energy),
         DER_WORK_F => V::local(
@@ -433,11 +489,11 @@ declare_variables! {
             &[],
             211,
             Some("W"),
-            "Power taken by the end stops' and joint limits' damping and by friction (Model Exchange derivative of \
-             work.dissipated)",
+            "Power taken by the end stops' and joint limits' damping, by friction and by the drives' losses (Model \
+             Exchange derivative of work.dissipated)",
             DISSIPATION_PARAMETERS,
         )
-        .derivative("work.dissipated", "work.dissipated", 1, ALL_STATES); derivative,
+        .derivative("work.dissipated", "work.dissipated", 1, DRIVE_KNOWNS); derivative,
         EVENT_INDICATORS => V::local(
             "eventIndicators",
             &[25],
@@ -547,5 +603,70 @@ declare_variables! {
             ALL_PARAMETERS,
         )
         .depends_on(MOTION_KNOWNS); cached(joint_force_outputs.joint_force),
+        DRIVE => V::parameter(
+            "drive", &[], 400, None,
+            "Actuators: 0 = the leg forces F are the inputs (ideal force actuators); 1 = each leg is an electric drive \
+             (a DC motor turning a ball screw) with the armature voltage U as its input, F ignored",
+        )
+        .integer(0, 1); integer(parameters.drives_enabled),
+        MOTOR_R => V::parameter(
+            "motor.R", &[], 401, Some("Ohm"), "Armature resistance R of each drive's motor",
+        ); real(parameters.drives.resistance),
+        MOTOR_L => V::parameter(
+            "motor.L", &[], 402, Some("H"), "Armature inductance L (L/R is the current's time constant)",
+        ); real(parameters.drives.inductance),
+        MOTOR_KE => V::parameter(
+            "motor.ke", &[], 403, Some("V.s/rad"), "Back-EMF constant k_e: the motor's voltage per shaft rate",
+        ); real(parameters.drives.ke),
+        MOTOR_KT => V::parameter(
+            "motor.kt", &[], 404, Some("N.m/A"),
+            "Torque constant k_t: the motor's torque per ampere (= k_e in SI units for an ideal machine)",
+        ); real(parameters.drives.kt),
+        MOTOR_J => V::parameter(
+            "motor.J", &[], 405, Some("kg.m2"),
+            "Inertia J_m of the rotor, reducer and screw at the motor shaft: a mass J_m N^2 moving with the leg's length",
+        ); real(parameters.drives.rotor_inertia),
+        MOTOR_D => V::parameter(
+            "motor.D", &[], 406, Some("N.m.s/rad"), "Viscous friction D at the motor shaft (bearings, screw)",
+        ); real(parameters.drives.damping),
+        GEAR_RATIO => V::parameter(
+            "gear.ratio", &[], 407, Some("1"), "Reducer ratio i: motor turns per screw turn",
+        ); real(parameters.drives.gear_ratio),
+        SCREW_LEAD => V::parameter(
+            "screw.lead", &[], 408, Some("m"),
+            "Ball screw lead p: leg travel per screw turn (the motor turns N = 2 pi i / p rad per metre of leg)",
+        ); real(parameters.drives.screw_lead),
+        I0 => V::parameter(
+            "I0", &[6], 410, Some("A"),
+            "Initial armature current of drive k (a run that starts holding the stand starts at the holding current)",
+        ); real(parameters.initial_currents),
+        U => V::input(
+            "U", &[6], 420, Some("V"),
+            "Armature voltage U_k of drive k (used when drive = 1; 0 = the windings shorted: dynamic braking). Held \
+             over each communication step, or interpolated to first order when fmi2SetRealInputDerivatives gave its \
+             derivative",
+        ); real(voltages),
+        I => V::output(
+            "I", &[6], 430, Some("A"), "Armature current I_k of drive k (Model Exchange state; 0 when drive = 0)",
+            &[All("drive"), SameIndex("I0")],
+        ); cached(outputs.current),
+        WORK_ELECTRIC => V::output(
+            "work.electric", &[], 436, Some("J"),
+            "Electric energy supplied to the drives since the start, the integral of sum_k U_k I_k (Model Exchange \
+             state; E(t) - E(0) = work.F + work.electric - work.dissipated)",
+            &[],
+        ); cached(outputs.electric_work),
+        DER_I => V::local(
+            "der(I)", &[6], 440, Some("A/s"),
+            "Rate of the armature currents (U - R I - k_e N ldot) / L (Model Exchange derivative of I)",
+            DRIVE_PARAMETERS,
+        )
+        .derivative("I", "I", 1, DRIVE_KNOWNS); derivative,
+        DER_WORK_ELECTRIC => V::local(
+            "der(work.electric)", &[], 446, Some("W"),
+            "Electric power supplied to the drives sum_k U_k I_k (Model Exchange derivative of work.electric)",
+            &[All("drive"), All("I0"), All("U")],
+        )
+        .derivative("work.electric", "work.electric", 1, &[All("I"), All("U")]); derivative,
     }
 }

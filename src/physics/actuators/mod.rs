@@ -1,6 +1,10 @@
-//! Leg force laws `u_k(t, state)`: what drives the special-form equations.
+//! What drives the legs: leg force laws `u_k(t, state)` (the inputs `F`, springs, feedback
+//! closures) and the electric drives of [`drives`] (voltages in, the force from the motor's
+//! current).
 //!
 //! `u_k > 0` pushes the platform away from the base (extension), N.
+
+pub mod drives;
 
 use crate::physics::body::state::BodyState;
 use crate::physics::legs::geometry::LegGeometry;

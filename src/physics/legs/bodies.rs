@@ -6,7 +6,7 @@
 //! kinetic and potential energy are
 //!
 //! ```text
-//! T_k = 1/2 m_r l'^2 + 1/2 I_t(l) |n'|^2,    I_t(l) = m_c d_c^2 + m_r (l - d_r)^2 + J_c + J_r
+//! T_k = 1/2 (m_r + m_a) l'^2 + 1/2 I_t(l) |n'|^2,    I_t(l) = m_c d_c^2 + m_r (l - d_r)^2 + J_c + J_r
 //! V_k = g (m_c c_k,z + m_r p_k,z)
 //! ```
 //!
@@ -16,8 +16,8 @@
 //! platform:
 //!
 //! ```text
-//! F = s n + b - (m_r n n^T + I_t / l^2 P) a''          P = I - n n^T
-//! b = -m_r (d_r |n'|^2 + g n_z) n + (2 l' / l^2)(m_c d_c^2 + J_c + J_r - m_r d_r (l - d_r)) n'
+//! F = s n + b - ((m_r + m_a) n n^T + I_t / l^2 P) a''          P = I - n n^T
+//! b = -(m_r d_r |n'|^2 + m_a l |n'|^2 + m_r g n_z) n + (2 l' / l^2)(m_c d_c^2 + J_c + J_r - m_r d_r (l - d_r)) n'
 //!     - (g / l)(m_r (l - d_r) + m_c d_c) P ez
 //! ```
 //!
@@ -54,6 +54,10 @@ pub struct LegBodies {
     pub cylinder_inertia: f64,
     /// `J_r`, kg m², transverse, about the rod's centre of mass.
     pub rod_inertia: f64,
+    /// `m_a`, kg: inertia moving with the leg's length alone, the electric drive's rotor
+    /// reflected along the leg (`J_m N²`, docs/model.md §9; set from the drives, 0 without):
+    /// kinetic energy `1/2 m_a l'²`.
+    pub axial_mass: f64,
 }
 
 impl Default for LegBodies {
@@ -66,6 +70,7 @@ impl Default for LegBodies {
             rod_com: DEFAULT_ROD_COM,
             cylinder_inertia: 0.0,
             rod_inertia: 0.0,
+            axial_mass: 0.0,
         }
     }
 }
@@ -96,7 +101,7 @@ impl<T: Real> LegMotion<T> {
 /// A leg's inertia seen at the platform joint: `F = ... + bias - (along n n^T + across P) a''`.
 #[derive(Clone, Copy, Debug)]
 pub struct LegInertia<T: nalgebra::Scalar> {
-    /// `m_r`, kg: the mass the joint drags along the leg.
+    /// `m_r + m_a`, kg: the mass the joint drags along the leg.
     pub along: T,
     /// `I_t / l^2`, kg: across the leg.
     pub across: T,
@@ -116,7 +121,11 @@ impl<T: Real> LegInertia<T> {
 impl LegBodies {
     /// Whether the legs have mass or inertia (else they are the paper's two-force members).
     pub fn has_mass(&self) -> bool {
-        self.cylinder_mass != 0.0 || self.rod_mass != 0.0 || self.cylinder_inertia != 0.0 || self.rod_inertia != 0.0
+        self.cylinder_mass != 0.0
+            || self.rod_mass != 0.0
+            || self.cylinder_inertia != 0.0
+            || self.rod_inertia != 0.0
+            || self.axial_mass != 0.0
     }
 
     /// `I_t(l)`, kg m².
@@ -135,12 +144,14 @@ impl LegBodies {
         let (m_r, d_r) = (self.rod_mass, self.rod_com);
         let fixed =
             self.cylinder_mass * self.cylinder_com * self.cylinder_com + self.cylinder_inertia + self.rod_inertia;
-        let axial = -(n_dot.dot(&n_dot) * (m_r * d_r) + n.z * (m_r * g));
+        // The rod's centripetal term and weight, and the axial mass's `m_a l |n'|^2` (its
+        // coordinate is `l`, with `l'' = n . a'' + l |n'|^2`).
+        let axial = -(n_dot.dot(&n_dot) * (l * self.axial_mass + m_r * d_r) + n.z * (m_r * g));
         let swing = (l_dot / (l * l)) * ((T::constant(fixed) - (l - d_r) * (m_r * d_r)) * 2.0);
         let lever = ((l - d_r) * m_r + self.cylinder_mass * self.cylinder_com) * g / l;
         let vertical = Vector3::new(T::zero(), T::zero(), T::one()) - n * n.z;
         LegInertia {
-            along: T::constant(m_r),
+            along: T::constant(m_r + self.axial_mass),
             across: self.transverse_inertia(l) / (l * l),
             bias: n * axial + n_dot * swing - vertical * lever,
         }
@@ -150,7 +161,8 @@ impl LegBodies {
     /// `B_k`).
     pub fn energy<T: Real>(&self, leg: &LegMotion<T>, base_z: f64, g: f64) -> T {
         let LegMotion { l, n, l_dot, n_dot } = *leg;
-        let kinetic = l_dot * l_dot * (0.5 * self.rod_mass) + self.transverse_inertia(l) * n_dot.dot(&n_dot) * 0.5;
+        let kinetic = l_dot * l_dot * (0.5 * (self.rod_mass + self.axial_mass))
+            + self.transverse_inertia(l) * n_dot.dot(&n_dot) * 0.5;
         let cylinder_z = n.z * self.cylinder_com + base_z;
         let rod_z = n.z * (l - self.rod_com) + base_z;
         kinetic + (cylinder_z * self.cylinder_mass + rod_z * self.rod_mass) * g
@@ -165,6 +177,7 @@ impl LegBodies {
             ("leg.rodCoM", self.rod_com),
             ("leg.cylinderInertia", self.cylinder_inertia),
             ("leg.rodInertia", self.rod_inertia),
+            ("motor.J", self.axial_mass),
         ] {
             crate::physics::stand::check_finite(name, value)?;
             if value < 0.0 {
@@ -192,6 +205,7 @@ mod tests {
             rod_com: 0.55,
             cylinder_inertia: 2.5,
             rod_inertia: 0.8,
+            axial_mass: 120.0,
         };
         let g = 9.81;
         let base = Vector3::new(0.3, -1.2, 0.1);
