@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The main job: build and package the FMU, then run the paper's experiments, the workspace
 # scenarios (end stops, singular arrangements) and the machine's (heavy legs, joint limits,
-# friction) through it with FMPy, and the design studies on
+# friction, electric drives) through it with FMPy, and the design studies on
 # Dask, writing CSV and Parquet data and PNG plots to output/ (or the folder given as the first
 # argument).
 set -euo pipefail
@@ -20,6 +20,7 @@ cargo run --release --bin build-fmu
 .venv/bin/python examples/paper_experiments.py "$OUT"
 .venv/bin/python examples/workspace_scenarios.py "$OUT"
 .venv/bin/python examples/machine_scenarios.py "$OUT"
+.venv/bin/python examples/drive_scenarios.py "$OUT"
 .venv/bin/python examples/linearise.py --output "$OUT"
 # Design studies on a local Dask cluster (one worker per core): results.parquet, summary, plots.
 for study in stability payload power_loss workspace; do

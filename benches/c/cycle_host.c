@@ -23,7 +23,9 @@
  * rests on them; count mode first runs 1500 uncounted cycles, so that every counted cycle is in
  * contact), nostops (hover with the end stops switched off: parameter stops = false),
  * nojoints (hover with the joint limits switched off: parameter joints = false), heavylegs
- * (hover with legs of 40 kg cylinders and 15 kg rods: leg.cylinderMass, leg.rodMass),
+ * (hover with legs of 40 kg cylinders and 15 kg rods: leg.cylinderMass, leg.rodMass), drives
+ * (hover with the default electric drives: drive = 1, I0 the holding current, the same feedback
+ * through the drive's static model set as the voltages U),
  * logevents (FMI 2: hover with a logger that drops messages and logEvents on, so that the FMU
  * tracks passages through singular arrangements, which it skips when nobody can be told).
  */
@@ -81,6 +83,14 @@ static const unsigned FORCES3[1] = {1};
 static const unsigned LEGS3[2] = {121, 127};
 static const unsigned METHOD_VR = 80, STOPS_VR = 170, JOINTS_VR = 310;
 static const unsigned LEG_MASS_VRS[2] = {300, 301};
+/* Electric drives: drive, I0, U; the default drive's holding current and volts per newton
+ * R / (N k_t) = 0.4 / (2 pi / 0.02). */
+static int drives_on = 0;
+static const unsigned DRIVE_VR = 400, I0_VRS[6] = {410, 411, 412, 413, 414, 415};
+static const unsigned VOLTAGES2[6] = {420, 421, 422, 423, 424, 425};
+static const unsigned VOLTAGES3[1] = {420};
+static const double HOLDING_CURRENT = 18.782559200529864, VOLTS_PER_NEWTON = 1.2732395447351628e-3;
+static const unsigned *inputs2 = FORCES2, *inputs3 = FORCES3;
 
 /* A logger that drops every message: the FMU can deliver logEvents, nothing is printed. */
 static void ignore_message(void *env, const char *name, int status, const char *category, const char *message, ...) {
@@ -98,6 +108,12 @@ static Instance make(void) {
         fmi3SetBoolean(c, &JOINTS_VR, 1, &joints, 1);
         fmi3SetFloat64(c, &LEG_MASS_VRS[0], 1, &leg_masses[0], 1);
         fmi3SetFloat64(c, &LEG_MASS_VRS[1], 1, &leg_masses[1], 1);
+        if (drives_on) {
+            double i0[6] = {HOLDING_CURRENT, HOLDING_CURRENT, HOLDING_CURRENT, HOLDING_CURRENT, HOLDING_CURRENT,
+                            HOLDING_CURRENT};
+            fmi3SetInt32(c, &DRIVE_VR, 1, &drives_on, 1);
+            fmi3SetFloat64(c, I0_VRS, 1, i0, 6);
+        }
         if (fmi3ExitInitializationMode(c)) exit(3);
     } else {
         static const Callbacks2 quiet = {0};
@@ -112,6 +128,12 @@ static Instance make(void) {
         fmi2SetBoolean(c, &STOPS_VR, 1, &stops_on);
         fmi2SetBoolean(c, &JOINTS_VR, 1, &joints_on);
         fmi2SetReal(c, LEG_MASS_VRS, 2, leg_masses);
+        if (drives_on) {
+            double i0[6] = {HOLDING_CURRENT, HOLDING_CURRENT, HOLDING_CURRENT, HOLDING_CURRENT, HOLDING_CURRENT,
+                            HOLDING_CURRENT};
+            fmi2SetInteger(c, &DRIVE_VR, 1, &drives_on);
+            fmi2SetReal(c, I0_VRS, 6, i0);
+        }
         if (fmi2ExitInitializationMode(c)) exit(3);
     }
     return c;
@@ -124,7 +146,7 @@ static void release(Instance c) {
 __attribute__((noinline)) static void set_forces(Instance c, const double *legs) {
     double f[6];
     for (int k = 0; k < 6; k++) f[k] = U0 + G * (L0 - legs[k]) - D * legs[6 + k];
-    int s = fmi3 ? fmi3SetFloat64(c, FORCES3, 1, f, 6) : fmi2SetReal(c, FORCES2, 6, f);
+    int s = fmi3 ? fmi3SetFloat64(c, inputs3, 1, f, 6) : fmi2SetReal(c, inputs2, 6, f);
     if (s) exit(4);
 }
 
@@ -229,11 +251,18 @@ int main(int argc, char **argv) {
     } else if (scenario && strcmp(scenario, "heavylegs") == 0) {
         leg_masses[0] = 40.0;
         leg_masses[1] = 15.0;
+    } else if (scenario && strcmp(scenario, "drives") == 0) {
+        drives_on = 1;
+        inputs2 = VOLTAGES2;
+        inputs3 = VOLTAGES3;
+        U0 = HOLDING_CURRENT * 0.4;
+        G *= VOLTS_PER_NEWTON;
+        D *= VOLTS_PER_NEWTON;
     } else if (scenario && strcmp(scenario, "logevents") == 0) {
         if (fmi3) { fprintf(stderr, "CYCLE_SCENARIO=logevents is for FMI 2\n"); return 2; }
         log_events = 1;
     } else if (scenario && strcmp(scenario, "hover") != 0) {
-        fprintf(stderr, "CYCLE_SCENARIO must be hover, contact, nostops, nojoints, heavylegs or logevents\n");
+        fprintf(stderr, "CYCLE_SCENARIO must be hover, contact, nostops, nojoints, heavylegs, drives or logevents\n");
         return 2;
     }
     if (fmi3) {

@@ -1,6 +1,7 @@
 """A Python co-simulation master over two FMU2Slave instances, StewartController and
-StewartPlatform: controller.F -> platform.F, platform.l -> controller.l, platform.ldot ->
-controller.ldot, at a fixed communication step.
+StewartPlatform: controller.F -> platform.F (or with electric drives, `drive = 1` in both,
+controller.U -> platform.U), platform.l -> controller.l, platform.ldot -> controller.ldot, at
+a fixed communication step.
 
 Two coupling schemes:
 - "gauss-seidel" (the default): at each communication point the platform's measured legs go
@@ -71,20 +72,29 @@ class Component:
 L = [f"l[{k}]" for k in LEGS]
 LDOT = [f"ldot[{k}]" for k in LEGS]
 F = [f"F[{k}]" for k in LEGS]
+U = [f"U[{k}]" for k in LEGS]
 LP = [f"lp[{k}]" for k in LEGS]
 
 
 def closed_loop(t_end, h, scheme="gauss-seidel", platform_reals=None, controller_reals=None, controller_integers=None,
                 record=("r[3]",), force_hook=None, events=None):
     """Runs the coupled system; returns (times, recorded platform outputs, max |l - l^p| per
-    step, status) with status "ok" or the FMU's message if a step failed. `force_hook(t, F)`
-    may change the forces on their way to the platform (an actuator failure); `events`
+    step, status) with status "ok" or the FMU's message if a step failed. With `drive = 1` in
+    both components' parameters the voltages U are exchanged instead of the forces F.
+    `force_hook(t, F)` may change the forces (or voltages) on their way to the platform (an
+    actuator failure); `events`
     receives the platform's logEvents messages. Raises ValueError, before anything runs, for
     an end time or step that is not positive and finite, an unknown scheme, or a variable name
     the FMUs do not have."""
     check_times(t_end, h, "t_end", "h")
     if scheme not in SCHEMES:
         raise ValueError(f"scheme = {scheme!r}: 'gauss-seidel' or 'jacobi'")
+    drives = [int(dict(p or {}).get("drive", 0)) for p in (platform_reals, {**(controller_reals or {}),
+                                                                           **(controller_integers or {})})]
+    if drives[0] != drives[1]:
+        raise ValueError(f"drive = {drives[0]} in platform_reals but {drives[1]} in the controller's parameters: the "
+                         "controller's voltage commands U drive the platform only when both have drive = 1")
+    commands = U if drives[0] == 1 else F
     record = list(record)
     platform = Component(PLATFORM_FMU, "platform", reals=platform_reals, events=events,
                          what=("platform_reals", "platform_integers"))
@@ -96,13 +106,13 @@ def closed_loop(t_end, h, scheme="gauss-seidel", platform_reals=None, controller
         platform.free()
         raise
     try:
-        return _run(platform, controller, t_end, h, scheme, record, force_hook)
+        return _run(platform, controller, t_end, h, scheme, record, force_hook, commands)
     finally:
         platform.free()
         controller.free()
 
 
-def _run(platform, controller, t_end, h, scheme, record, force_hook):
+def _run(platform, controller, t_end, h, scheme, record, force_hook, commands=F):
     times, rows, errors, status = [], [], [], "ok"
     n = int(round(t_end / h))
     time = 0.0
@@ -113,21 +123,22 @@ def _run(platform, controller, t_end, h, scheme, record, force_hook):
         for _ in range(n):
             if scheme == "gauss-seidel":
                 controller.set(L + LDOT, np.concatenate([platform.get(L), platform.get(LDOT)]))
-                forces = controller.get(F)
+                forces = controller.get(commands)
                 if force_hook:
-                    forces = vector_of(force_hook(time, forces), 6, "force_hook's forces", lambda i: f"F[{i + 1}]")
-                platform.set(F, forces)
+                    what = "force_hook's forces" if commands is F else "force_hook's voltages"
+                    forces = vector_of(force_hook(time, forces), 6, what, lambda i: commands[i])
+                platform.set(commands, forces)
                 platform.fmu.doStep(currentCommunicationPoint=time, communicationStepSize=h)
                 controller.fmu.doStep(currentCommunicationPoint=time, communicationStepSize=h)
                 time += h
             else:
                 # fmpy.ssp.simulation: platform first (the SSD's element order), then controller.
-                platform.set(F, connection_f)
+                platform.set(commands, connection_f)
                 platform.fmu.doStep(currentCommunicationPoint=time, communicationStepSize=h)
                 out_l, out_ldot = platform.get(L), platform.get(LDOT)
                 controller.set(L + LDOT, np.concatenate([connection_l, connection_ldot]))
                 controller.fmu.doStep(currentCommunicationPoint=time, communicationStepSize=h)
-                out_f = controller.get(F)
+                out_f = controller.get(commands)
                 connection_f, connection_l, connection_ldot = out_f, out_l, out_ldot
                 time += h
             times.append(time)

@@ -214,7 +214,7 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
     y: &mut [f64; N],
     t1: f64,
 ) -> Result<f64, IntegrationError<S::Fault>> {
-    let MethodCall { settings: s, memory, stats, events } = call;
+    let MethodCall { settings: s, memory, stats, events, .. } = call;
     let span = t1 - t0;
     let h_max = if s.max_step > 0.0 { s.max_step.min(span) } else { span };
     let fsal = !system.modifies_state_after_step();

@@ -37,9 +37,9 @@ struct Exponential {
     weights: [f64; 3],
 }
 
-/// `phi1(z) = (e^z - 1)/z`, `phi2 = (phi1 - 1)/z`, `phi3 = (phi2 - 1/2)/z`: by their Taylor
-/// series near 0, where the recurrences cancel, by the recurrences elsewhere.
-fn phi123(z: f64) -> [f64; 3] {
+/// `phi1(z) = (e^z - 1)/z`, `phi2 = (phi1 - 1)/z`, `phi3 = (phi2 - 1/2)/z` from `e^z - 1`: by
+/// their Taylor series near 0, where the recurrences cancel, by the recurrences elsewhere.
+fn phi123(z: f64, exp_m1: f64) -> [f64; 3] {
     if z.abs() < 0.5 {
         // Terms z^k / (k + j)!; 16 terms leave less than 0.5^16/16! of the first.
         let mut out = [0.0; 3];
@@ -52,7 +52,7 @@ fn phi123(z: f64) -> [f64; 3] {
         }
         out
     } else {
-        let phi1 = z.exp_m1() / z;
+        let phi1 = exp_m1 / z;
         let phi2 = (phi1 - 1.0) / z;
         [phi1, phi2, (phi2 - 0.5) / z]
     }
@@ -61,12 +61,15 @@ fn phi123(z: f64) -> [f64; 3] {
 impl Exponential {
     fn new(block: LinearDecay, h: f64) -> Self {
         let z = -block.rate * h;
-        let [p1, p2, p3] = phi123(z);
-        let [q1, q2, _] = phi123(0.5 * z);
+        // One exponential: e^z - 1 = (e^(z/2) - 1)(e^(z/2) + 1), without cancellation.
+        let half_m1 = (0.5 * z).exp_m1();
+        let full_m1 = half_m1 * (half_m1 + 2.0);
+        let [p1, p2, p3] = phi123(z, full_m1);
+        let [q1, q2, _] = phi123(0.5 * z, half_m1);
         Exponential {
             block,
-            half: (0.5 * z).exp(),
-            full: z.exp(),
+            half: half_m1 + 1.0,
+            full: full_m1 + 1.0,
             a1: 0.5 * h * q1,
             b1: 0.5 * h * (q1 - 2.0 * q2),
             b2: h * q2,
@@ -194,6 +197,7 @@ fn classical_step<S: OdeSystem<N>, const N: usize>(
 /// One ETDRK4 step: the classical stages, with the decaying block's components replaced by
 /// Krogstad's (`a = e^(z/2) y + a1 n(y)`, `b = e^(z/2) y + b1 n(y) + b2 n(a)`, `c = e^z y + c1
 /// n(y) + c3 n(b)`, output `e^z y + weights . n`), which with `z = 0` are the classical ones.
+#[inline(always)]
 fn exponential_step<S: OdeSystem<N>, const N: usize>(
     system: &S,
     e: &Exponential,
@@ -221,15 +225,21 @@ fn exponential_step<S: OdeSystem<N>, const N: usize>(
     }
     let k4 = system.derivative_of(t_end, &c);
     let [w1, w23, w4] = e.weights;
-    for j in 0..N {
-        y[j] = if block.contains(&j) {
+    let exponential: [f64; N] = std::array::from_fn(|j| {
+        if block.contains(&j) {
             e.full * y[j]
                 + w1 * e.nonstiff(j, &k1, y)
                 + w23 * (e.nonstiff(j, &k2, &a) + e.nonstiff(j, &k3, &b))
                 + w4 * e.nonstiff(j, &k4, &c)
         } else {
-            y[j] + h / 6.0 * (k1[j] + 2.0 * (k2[j] + k3[j]) + k4[j])
-        };
+            0.0
+        }
+    });
+    for j in 0..N {
+        y[j] += h / 6.0 * (k1[j] + 2.0 * (k2[j] + k3[j]) + k4[j]);
+    }
+    for j in block {
+        y[j] = exponential[j];
     }
 }
 

@@ -8,7 +8,7 @@
 //! | [`stand`] | mass, inertia, gravity, joint positions; the default truck-cabin stand; validation |
 //! | [`body`] | the rigid body: its 24 redundant coordinates, the special form's accelerations, projection, angles, invariants |
 //! | [`legs`] | the legs: geometry, end stops, the six legs side by side |
-//! | [`actuators`] | what drives the legs: leg force laws |
+//! | [`actuators`] | what drives the legs: leg force laws, the electric drives |
 //! | [`special_form`] | the platform's equations of motion: body, legs and stops together |
 //! | [`direct_problem`] | leg forces for a prescribed motion (paper 2.2-2.7) |
 //! | [`programme`] | programme motions (soft-start sinusoids) with exact derivatives |

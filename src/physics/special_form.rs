@@ -18,7 +18,7 @@
 //! ([`AxisRows`]), pinned to the definition bit for bit by a test; other machines take the
 //! definition itself.
 
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 
 use super::actuators::LegForceLaw;
 use super::actuators::drives::{DriveRate, ElectricDrives};
@@ -65,12 +65,15 @@ pub struct SpecialForm {
     joint_cosines: [f64; 3],
     /// Whether the fast path applies: massless legs without friction, forces given.
     fast: bool,
+    /// Whether the drives' fast path applies: drives on legs otherwise massless, without
+    /// friction (the rotors' inertia along the legs is the only inertia they add).
+    fast_driven: bool,
 }
 
 /// The sum over the six legs in the fixed order `((x1 + x3) + x5) + ((x2 + x4) + x6)`, that of
 /// [`PerLeg::sum`].
 #[inline(always)]
-fn sum_over_legs<T: Real>(x: &[T; LEG_COUNT]) -> T {
+pub(crate) fn sum_over_legs<T: Real>(x: &[T; LEG_COUNT]) -> T {
     ((x[0] + x[2]) + x[4]) + ((x[1] + x[3]) + x[5])
 }
 
@@ -98,6 +101,7 @@ impl SpecialForm {
             reference_axes: [Vector3::x(), Vector3::y(), Vector3::z()],
             joint_cosines: [-1.0, -1.0, 0.0],
             fast: true,
+            fast_driven: false,
             stand,
         }
     }
@@ -116,6 +120,7 @@ impl SpecialForm {
         }
         self.joint_limits = joint_limits;
         self.fast = self.takes_fast_path();
+        self.fast_driven = self.takes_driven_fast_path();
         self
     }
 
@@ -125,6 +130,7 @@ impl SpecialForm {
         self.legs.axial_mass = drives.map_or(0.0, |d| d.reflected_mass());
         self.drives = drives;
         self.fast = self.takes_fast_path();
+        self.fast_driven = self.takes_driven_fast_path();
         self
     }
 
@@ -136,6 +142,17 @@ impl SpecialForm {
     /// Whether the step's fast path applies: massless legs without friction, forces given.
     fn takes_fast_path(&self) -> bool {
         !self.legs.has_mass() && self.friction.is_zero() && self.drives.is_none()
+    }
+
+    /// Whether the drives' fast path applies ([`SpecialForm::derivative_driven_in`]).
+    fn takes_driven_fast_path(&self) -> bool {
+        let bodies = LegBodies { axial_mass: 0.0, ..self.legs };
+        self.drives.is_some() && !bodies.has_mass() && self.friction.is_zero()
+    }
+
+    /// Whether [`SpecialForm::derivative_driven_in`] applies to this form.
+    pub fn has_driven_fast_path(&self) -> bool {
+        self.fast_driven
     }
 
     /// The drives' axial forces and rates at a body state: each leg's rate `l'_k` from the
@@ -228,8 +245,32 @@ impl SpecialForm {
     /// The right-hand side `dy/dt` of the body state `y` for the leg forces `u`, and the leg
     /// powers (the integrands of `work.F` and `work.dissipated`): the definition.
     pub fn rate<T: Real>(&self, y: &[T; STATE_DIM], u: &[T; LEG_COUNT]) -> ([T; STATE_DIM], LegPower<T>) {
+        let (rate, power, _) = self.rate_of(y, Actuation::Forces(u));
+        (rate, power)
+    }
+
+    /// [`SpecialForm::rate`] with the legs driven by the electric drives (which must be on):
+    /// the armature currents `I_k` (A) and voltages `U_k` (V) instead of the forces; also each
+    /// drive's force, current rate and powers.
+    pub fn rate_driven<T: Real>(
+        &self,
+        y: &[T; STATE_DIM],
+        currents: &[T; LEG_COUNT],
+        voltages: &[T; LEG_COUNT],
+    ) -> ([T; STATE_DIM], LegPower<T>, [DriveRate<T>; LEG_COUNT]) {
+        self.rate_of(y, Actuation::Drives { currents, voltages })
+    }
+
+    /// The definition, for either actuation.
+    fn rate_of<T: Real>(
+        &self,
+        y: &[T; STATE_DIM],
+        actuation: Actuation<'_, T>,
+    ) -> ([T; STATE_DIM], LegPower<T>, [DriveRate<T>; LEG_COUNT]) {
         let state = BodyState::from_vector(y);
-        let w = self.loads(&state, u).wrench();
+        let loads = self.loads(&state, actuation);
+        let drives = loads.drives;
+        let w = loads.wrench();
         let c = std::array::from_fn::<_, 3, _>(|a| state.e[a].cross(&state.e_dot[a]).dot(&w.moment));
         // `F.v + L.omega` of the actuator forces alone, with the inertial angular velocity
         // `omega = 1/2 sum_a e_a x e_a'`: `sum_k u_k ldot_k`.
@@ -241,28 +282,42 @@ impl SpecialForm {
         for (i, v) in rates.iter().enumerate() {
             dy[3 * i..3 * i + 3].copy_from_slice(v.as_slice());
         }
-        (dy, power)
+        (dy, power, drives)
     }
 
     /// The force of each leg on the platform at its joint `A_k` (inertial components, N): what
-    /// the joint must be sized for.
+    /// the joint must be sized for. `u`: the actuators' axial forces.
     pub fn joint_forces<T: Real>(&self, y: &[T; STATE_DIM], u: &[T; LEG_COUNT]) -> [Vector3<T>; LEG_COUNT] {
-        let loads = self.loads(&BodyState::from_vector(y), u);
+        let loads = self.loads(&BodyState::from_vector(y), Actuation::Forces(u));
         std::array::from_fn(|k| loads.actuator[k] + loads.stop[k] + loads.machine[k])
     }
 
     /// Each leg's load on the platform, by cause, leg by leg. A collapsed (or non-finite) leg
     /// carries nothing.
-    fn loads<T: Real>(&self, state: &BodyState<T>, u: &[T; LEG_COUNT]) -> Loads<T> {
+    fn loads<T: Real>(&self, state: &BodyState<T>, actuation: Actuation<'_, T>) -> Loads<T> {
         let legs = LegGeometry::new(&self.stand, state);
         let mut loads = Loads::new(legs.arm);
         let mut inertia = [None; LEG_COUNT];
+        let drives = match actuation {
+            Actuation::Drives { currents, voltages } => self.drives.map(|d| (d, currents, voltages)),
+            Actuation::Forces(_) => None,
+        };
         for k in 0..LEG_COUNT {
             let (leg, l) = (legs.leg[k], legs.length[k]);
             if !(l > T::zero()) {
                 continue;
             }
-            loads.actuator[k] = leg * (u[k] / l);
+            let a_dot = || state.v + state.body_vector_rate(&self.stand.platform_joints[k]);
+            let motion = (!self.fast || self.joint_limits.is_some()).then(|| LegMotion::new(&leg, l, &a_dot()));
+            let u = match (actuation, &drives, &motion) {
+                (Actuation::Forces(u), _, _) => u[k],
+                (_, Some((d, currents, voltages)), Some(motion)) => {
+                    loads.drives[k] = d.rate(voltages[k], currents[k], motion.l_dot);
+                    loads.drives[k].force
+                }
+                _ => T::zero(),
+            };
+            loads.actuator[k] = leg * (u / l);
             if let Some(stops) = &self.stops
                 && stops.is_outside(k, l.value())
             {
@@ -272,11 +327,9 @@ impl SpecialForm {
                 loads.stop[k] = n * contact.force;
                 loads.stop_dissipation[k] = contact.dissipation;
             }
-            if !self.fast || self.joint_limits.is_some() {
-                let a_dot = state.v + state.body_vector_rate(&self.stand.platform_joints[k]);
-                let motion = LegMotion::new(&leg, l, &a_dot);
-                let leg_inertia = self.legs.has_mass().then(|| self.legs.inertia(&motion, self.stand.gravity));
-                let machine = self.machine_load(k, state, &motion, leg_inertia.as_ref());
+            if let Some(motion) = &motion {
+                let leg_inertia = self.legs.has_mass().then(|| self.legs.inertia(motion, self.stand.gravity));
+                let machine = self.machine_load(k, state, motion, leg_inertia.as_ref());
                 loads.add_machine(k, &machine);
                 inertia[k] = leg_inertia.map(|m| (m, motion.n));
             }
@@ -343,15 +396,17 @@ impl SpecialForm {
         let j_w =
             |x: &Vector3<T>| e[0] * (e[0].dot(x) * j[0]) + e[1] * (e[1].dot(x) * j[1]) + e[2] * (e[2].dot(x) * j[2]);
         // The system [[M I + sum M_k, -sum M_k [rho]x], [., J_w - sum [rho]x M_k [rho]x]], with
-        // M_k = a I + c n n^T (a = I_t / l^2, c = m_r - a):
-        // -M_k [rho]x = -a [rho]x + c n (rho x n)^T and
-        // -[rho]x M_k [rho]x = a (|rho|^2 I - rho rho^T) + c (rho x n)(rho x n)^T.
+        // M_k = a I + c n n^T (a = I_t / l^2, c = m_r + m_a - a): each leg adds
+        // c S S^T with S = (n, rho x n), and where a != 0 the point mass's
+        // a [[I, -[rho]x], [[rho]x, |rho|^2 I - rho rho^T]]. Lower triangle only.
         let zero = T::zero();
-        let identity = Matrix3::from_diagonal_element(T::one());
-        let mut a11 = identity * T::constant(self.stand.mass);
-        let mut a12 = Matrix3::from_element(zero);
-        let mut a22 =
-            Matrix3::from_fn(|r, c| e[0][r] * e[0][c] * j[0] + e[1][r] * e[1][c] * j[1] + e[2][r] * e[2][c] * j[2]);
+        let mut a = [[zero; 6]; 6];
+        for r in 0..3 {
+            a[r][r] = T::constant(self.stand.mass);
+            for c in 0..=r {
+                a[3 + r][3 + c] = e[0][r] * e[0][c] * j[0] + e[1][r] * e[1][c] * j[1] + e[2][r] * e[2][c] * j[2];
+            }
+        }
         let mut force = Vector3::new(zero, zero, -T::constant(self.stand.mass * self.stand.gravity));
         let mut moment = -omega.cross(&j_w(&omega));
         for k in 0..LEG_COUNT {
@@ -367,19 +422,27 @@ impl SpecialForm {
             moment += rho.cross(&f) + loads.machine_moment[k];
             let (across, along) = (m.across, m.along - m.across);
             let rn = rho.cross(n);
-            let n_along = n * along;
-            a11 += identity * across + n_along * n.transpose();
-            let skew = Matrix3::new(zero, -rho.z, rho.y, rho.z, zero, -rho.x, -rho.y, rho.x, zero);
-            a12 += n_along * rn.transpose() - skew * across;
-            a22 += (identity * rho.dot(&rho) - rho * rho.transpose()) * across + (rn * along) * rn.transpose();
-        }
-        let mut a = [[zero; 6]; 6];
-        for r in 0..3 {
-            for c in 0..3 {
-                a[r][c] = a11[(r, c)];
-                a[r][3 + c] = a12[(r, c)];
-                a[3 + c][r] = a12[(r, c)];
-                a[3 + r][3 + c] = a22[(r, c)];
+            let s = [n.x, n.y, n.z, rn.x, rn.y, rn.z];
+            for r in 0..6 {
+                let sr = s[r] * along;
+                for c in 0..=r {
+                    a[r][c] += sr * s[c];
+                }
+            }
+            if across.value() != 0.0 {
+                // The point mass: a11 += a I, a21 += a [rho]x, a22 += a (|rho|^2 I - rho rho^T).
+                let skew = [[zero, -rho.z, rho.y], [rho.z, zero, -rho.x], [-rho.y, rho.x, zero]];
+                let rr = rho.dot(&rho);
+                for r in 0..3 {
+                    a[r][r] += across;
+                    for c in 0..3 {
+                        a[3 + r][c] += skew[r][c] * across;
+                    }
+                    for c in 0..=r {
+                        let diagonal = if r == c { rr } else { zero };
+                        a[3 + r][3 + c] += (diagonal - rho[r] * rho[c]) * across;
+                    }
+                }
             }
         }
         let q = solve_spd6(a, [force.x, force.y, force.z, moment.x, moment.y, moment.z]);
@@ -492,6 +555,171 @@ impl SpecialForm {
         }
     }
 
+    /// [`SpecialForm::rate_driven`]'s numbers for drives on otherwise massless, frictionless
+    /// legs (see [`SpecialForm::has_driven_fast_path`]), the six legs side by side: the leg's
+    /// axial force `f_k = s_k - m_a l_k''` with `s_k` the drive's and the end stop's force and
+    /// `l_k'' = S_k . (r'', omega') + c_k` (`S_k = (n_k, rho_k x n_k)`, `c_k = l_k |n_k'|^2 +
+    /// n_k . (omega x (omega x rho_k))`), so that the platform's accelerations solve
+    /// `[diag(M, J_w) + m_a sum S_k S_k^T] (r'', omega') = sum (s_k - m_a c_k) S_k + gravity,
+    /// gyroscopic and joint-limit terms`; the definition's arithmetic in another order (equal to
+    /// round-off, tested). Returns the currents' rates and the powers.
+    #[inline(always)]
+    pub(crate) fn derivative_driven_in<V: Lanes>(
+        &self,
+        y: &StateVector,
+        currents: &[f64; LEG_COUNT],
+        voltages: &[f64; LEG_COUNT],
+        dy: &mut StateVector,
+    ) -> DrivenRates {
+        let Some(drives) = &self.drives else {
+            let (rate, power, d) = self.rate_driven(y, currents, voltages);
+            *dy = rate;
+            return DrivenRates {
+                current_rate: d.map(|k| k.current_rate),
+                electric_power: sum_over_legs(&d.map(|k| k.electric_power)),
+                dissipation: power.dissipation + sum_over_legs(&d.map(|k| k.dissipation)),
+            };
+        };
+        let state = BodyState::from_vector(y);
+        let LegLanes { arm, leg, length } = self.joints.legs::<V>(&state);
+        let inverse_length = PerLeg::splat(1.0) / length;
+        let (n, l_dot) = self.joints.directions_and_rates(&state, &leg, length, inverse_length);
+        // The joints' velocities and the centripetal part of their accelerations.
+        let [d1, d2, d3] = &state.e_dot;
+        let a = components!(|c| PerLeg::<V>::new(&self.joints.platform[c]));
+        let velocity = components!(|c| {
+            PerLeg::splat(state.v[c])
+                + (PerLeg::splat(d1[c]) * a[0] + PerLeg::splat(d2[c]) * a[1] + PerLeg::splat(d3[c]) * a[2])
+        });
+        let omega = state.angular_velocity_inertial();
+        let w = components!(|c| PerLeg::<V>::splat(omega[c]));
+        let whirl = PerLeg::cross(&w, &PerLeg::cross(&w, &arm));
+        let speed2 = velocity[0] * velocity[0] + velocity[1] * velocity[1] + velocity[2] * velocity[2];
+        let c = length.where_positive((speed2 - l_dot * l_dot) * inverse_length)
+            + (n[0] * whirl[0] + n[1] * whirl[1] + n[2] * whirl[2]);
+        // The drives.
+        let ratio = drives.transmission();
+        let (current, voltage) = (PerLeg::<V>::new(currents), PerLeg::<V>::new(voltages));
+        let shaft = l_dot * PerLeg::splat(ratio);
+        let drive_force =
+            (current * PerLeg::splat(drives.kt) - shaft * PerLeg::splat(drives.damping)) * PerLeg::splat(ratio);
+        let current_rate = (voltage - current * PerLeg::splat(drives.resistance) - shaft * PerLeg::splat(drives.ke))
+            / PerLeg::splat(drives.inductance);
+        let electric = voltage * current;
+        let lost = current * current * PerLeg::splat(drives.resistance)
+            + shaft * shaft * PerLeg::splat(drives.damping)
+            + shaft * current * PerLeg::splat(drives.ke - drives.kt);
+        // The end stops (rare: cold) and the joint limits (only where one may touch).
+        let (stop, stop_dissipation) = match &self.stops {
+            Some(stops) if length.any_outside(PerLeg::new(&self.stroke[0]), PerLeg::new(&self.stroke[1])) => {
+                std::hint::cold_path();
+                self.stop_forces_in(stops, &length, &l_dot)
+            }
+            _ => (PerLeg::splat(0.0), 0.0),
+        };
+        let machine = match &self.joint_limits {
+            Some(_) if self.joints_may_touch(&state, &leg, length) => {
+                std::hint::cold_path();
+                self.machine_wrench(&state)
+            }
+            _ => None,
+        };
+        let m_a = self.legs.axial_mass;
+        let b = length.where_positive(drive_force + stop - c * PerLeg::splat(m_a));
+        let rn = PerLeg::cross(&arm, &n);
+        let s = [n[0], n[1], n[2], rn[0], rn[1], rn[2]];
+        // The system's lower triangle and right-hand side.
+        let (mass, j, e) = (self.stand.mass, &self.stand.inertia, &state.e);
+        let mut matrix = [[0.0; 6]; 6];
+        for r in 0..6 {
+            for col in 0..=r {
+                matrix[r][col] = (s[r] * s[col]).sum() * m_a;
+            }
+        }
+        for r in 0..3 {
+            matrix[r][r] += mass;
+            for col in 0..=r {
+                matrix[3 + r][3 + col] +=
+                    e[0][r] * e[0][col] * j[0] + e[1][r] * e[1][col] * j[1] + e[2][r] * e[2][col] * j[2];
+            }
+        }
+        let j_w =
+            |x: &Vector3<f64>| e[0] * (e[0].dot(x) * j[0]) + e[1] * (e[1].dot(x) * j[1]) + e[2] * (e[2].dot(x) * j[2]);
+        let mut force = Vector3::new((b * n[0]).sum(), (b * n[1]).sum(), (b * n[2]).sum() - mass * self.stand.gravity);
+        let mut moment =
+            Vector3::new((b * rn[0]).sum(), (b * rn[1]).sum(), (b * rn[2]).sum()) - omega.cross(&j_w(&omega));
+        if let Some(m) = &machine {
+            force += m.force;
+            moment += m.moment;
+        }
+        let q = solve_spd6(matrix, [force.x, force.y, force.z, moment.x, moment.y, moment.z]);
+        let along = s[0] * PerLeg::splat(q[0])
+            + s[1] * PerLeg::splat(q[1])
+            + s[2] * PerLeg::splat(q[2])
+            + s[3] * PerLeg::splat(q[3])
+            + s[4] * PerLeg::splat(q[4])
+            + s[5] * PerLeg::splat(q[5]);
+        let f = b - along * PerLeg::splat(m_a);
+        let w = LegWrench {
+            force: Vector3::new((f * n[0]).sum(), (f * n[1]).sum(), (f * n[2]).sum()),
+            moment: Vector3::new((f * rn[0]).sum(), (f * rn[1]).sum(), (f * rn[2]).sum()),
+            stop: StopWrench { dissipation: stop_dissipation, ..StopWrench::default() },
+            machine,
+        };
+        let (e_rows, e_dot) = (AxisRows::<V::Axes>::of(&state.e), AxisRows::of(&state.e_dot));
+        let (acceleration, e_dd) =
+            self.body.accelerations_in(&state, &e_rows, &e_dot, &w.total_force(), &w.total_moment());
+        let [e1, e2, e3] = e_dd;
+        let [r1, r2, r3, r4, r5, r6, r7, r8, r9] = *axes_rates(y);
+        *dy = [
+            state.v.x,
+            state.v.y,
+            state.v.z,
+            acceleration.x,
+            acceleration.y,
+            acceleration.z,
+            r1,
+            r2,
+            r3,
+            r4,
+            r5,
+            r6,
+            r7,
+            r8,
+            r9,
+            e1.x,
+            e1.y,
+            e1.z,
+            e2.x,
+            e2.y,
+            e2.z,
+            e3.x,
+            e3.y,
+            e3.z,
+        ];
+        DrivenRates {
+            current_rate: current_rate.to_array(),
+            electric_power: electric.sum(),
+            dissipation: w.dissipation() + lost.sum(),
+        }
+    }
+
+    /// The end stops' forces along the legs ([`EndStops::contact`], leg by leg: 0 inside the
+    /// stroke) and their damping's power, for legs given side by side.
+    #[inline(never)]
+    fn stop_forces_in<V: Lanes>(&self, stops: &EndStops, length: &PerLeg<V>, l_dot: &PerLeg<V>) -> (PerLeg<V>, f64) {
+        let (l, l_dot) = (length.to_array(), l_dot.to_array());
+        let (mut force, mut dissipation) = ([0.0; LEG_COUNT], [0.0; LEG_COUNT]);
+        for k in 0..LEG_COUNT {
+            if l[k] > 0.0 && stops.is_outside(k, l[k]) {
+                let contact = stops.contact(k, l[k], l_dot[k]);
+                force[k] = contact.force;
+                dissipation[k] = contact.dissipation;
+            }
+        }
+        (PerLeg::new(&force), sum_over_legs(&dissipation))
+    }
+
     /// The end stops' forces ([`EndStops::contact`], leg by leg) on the legs given side by side.
     #[inline(always)]
     fn stop_wrench_in<V: Lanes>(
@@ -561,39 +789,75 @@ impl SpecialForm {
     }
 }
 
+/// What [`SpecialForm::derivative_driven_in`] gives besides the body's rates.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct DrivenRates {
+    /// `I_k'`, A/s.
+    pub current_rate: [f64; LEG_COUNT],
+    /// `sum U_k I_k`, W.
+    pub electric_power: f64,
+    /// The stops', joint limits' and drives' losses, W.
+    pub dissipation: f64,
+}
+
+/// What moves the legs: given forces, or the electric drives' currents and voltages.
+#[derive(Clone, Copy)]
+enum Actuation<'a, T> {
+    Forces(&'a [T; LEG_COUNT]),
+    Drives { currents: &'a [T; LEG_COUNT], voltages: &'a [T; LEG_COUNT] },
+}
+
 /// The fast path's joint check counts a joint within this of its limit's cosine as touching.
 const JOINT_CHECK_MARGIN: f64 = 1e-9;
 
-/// Solves `A x = b` for a symmetric positive definite 6x6 `A` (Cholesky); not numbers if `A`
-/// is not positive definite.
+/// Solves `A x = b` for a symmetric positive definite 6x6 `A` given by its lower triangle
+/// (Cholesky `A = L L^T`, the diagonal's reciprocals `d_i` kept); not numbers if `A` is not
+/// positive definite. Written out: with loops the trip counts and index checks cost more
+/// than the arithmetic.
+#[inline(always)]
+#[rustfmt::skip]
 fn solve_spd6<T: Real>(a: [[T; 6]; 6], b: [T; 6]) -> [T; 6] {
-    let mut l = [[T::zero(); 6]; 6];
-    for i in 0..6 {
-        for j in 0..=i {
-            let mut sum = a[i][j];
-            for k in 0..j {
-                sum -= l[i][k] * l[j][k];
-            }
-            l[i][j] = if i == j { sum.sqrt() } else { sum / l[j][j] };
-        }
-    }
-    let mut y = [T::zero(); 6];
-    for i in 0..6 {
-        let mut sum = b[i];
-        for k in 0..i {
-            sum -= l[i][k] * y[k];
-        }
-        y[i] = sum / l[i][i];
-    }
-    let mut x = [T::zero(); 6];
-    for i in (0..6).rev() {
-        let mut sum = y[i];
-        for k in i + 1..6 {
-            sum -= l[k][i] * x[k];
-        }
-        x[i] = sum / l[i][i];
-    }
-    x
+    let [a0, a1, a2, a3, a4, a5] = a;
+    let l00 = a0[0].sqrt();
+    let d0 = T::one() / l00;
+    let l10 = a1[0] * d0;
+    let l11 = (a1[1] - l10 * l10).sqrt();
+    let d1 = T::one() / l11;
+    let l20 = a2[0] * d0;
+    let l21 = (a2[1] - l20 * l10) * d1;
+    let l22 = (a2[2] - l20 * l20 - l21 * l21).sqrt();
+    let d2 = T::one() / l22;
+    let l30 = a3[0] * d0;
+    let l31 = (a3[1] - l30 * l10) * d1;
+    let l32 = (a3[2] - l30 * l20 - l31 * l21) * d2;
+    let l33 = (a3[3] - l30 * l30 - l31 * l31 - l32 * l32).sqrt();
+    let d3 = T::one() / l33;
+    let l40 = a4[0] * d0;
+    let l41 = (a4[1] - l40 * l10) * d1;
+    let l42 = (a4[2] - l40 * l20 - l41 * l21) * d2;
+    let l43 = (a4[3] - l40 * l30 - l41 * l31 - l42 * l32) * d3;
+    let l44 = (a4[4] - l40 * l40 - l41 * l41 - l42 * l42 - l43 * l43).sqrt();
+    let d4 = T::one() / l44;
+    let l50 = a5[0] * d0;
+    let l51 = (a5[1] - l50 * l10) * d1;
+    let l52 = (a5[2] - l50 * l20 - l51 * l21) * d2;
+    let l53 = (a5[3] - l50 * l30 - l51 * l31 - l52 * l32) * d3;
+    let l54 = (a5[4] - l50 * l40 - l51 * l41 - l52 * l42 - l53 * l43) * d4;
+    let l55 = (a5[5] - l50 * l50 - l51 * l51 - l52 * l52 - l53 * l53 - l54 * l54).sqrt();
+    let d5 = T::one() / l55;
+    let y0 = b[0] * d0;
+    let y1 = (b[1] - l10 * y0) * d1;
+    let y2 = (b[2] - l20 * y0 - l21 * y1) * d2;
+    let y3 = (b[3] - l30 * y0 - l31 * y1 - l32 * y2) * d3;
+    let y4 = (b[4] - l40 * y0 - l41 * y1 - l42 * y2 - l43 * y3) * d4;
+    let y5 = (b[5] - l50 * y0 - l51 * y1 - l52 * y2 - l53 * y3 - l54 * y4) * d5;
+    let x5 = y5 * d5;
+    let x4 = (y4 - l54 * x5) * d4;
+    let x3 = (y3 - l43 * x4 - l53 * x5) * d3;
+    let x2 = (y2 - l32 * x3 - l42 * x4 - l52 * x5) * d2;
+    let x1 = (y1 - l21 * x2 - l31 * x3 - l41 * x4 - l51 * x5) * d1;
+    let x0 = (y0 - l10 * x1 - l20 * x2 - l30 * x3 - l40 * x4 - l50 * x5) * d0;
+    [x0, x1, x2, x3, x4, x5]
 }
 
 /// Each leg's load on the platform at its joint, by cause.
@@ -610,6 +874,8 @@ struct Loads<T: nalgebra::Scalar> {
     machine: [Vector3<T>; LEG_COUNT],
     /// The platform joints' limit moments.
     machine_moment: [Vector3<T>; LEG_COUNT],
+    /// The drives' forces, current rates and powers (zero without drives).
+    drives: [DriveRate<T>; LEG_COUNT],
     machine_dissipation: T,
     /// Whether any of the machine's loads acts.
     machine_acts: bool,
@@ -633,6 +899,7 @@ impl<T: Real> Loads<T> {
             stop_dissipation: [T::zero(); LEG_COUNT],
             machine: zero,
             machine_moment: zero,
+            drives: [DriveRate::zero(); LEG_COUNT],
             machine_dissipation: T::zero(),
             machine_acts: false,
         }
@@ -786,7 +1053,9 @@ mod tests {
                 y[10] += 1e-4; // off the constraint manifold: the Baumgarte terms act
                 let legs = LegGeometry::new(&stand, &BodyState::from_vector(&y));
                 contacts += (0..LEG_COUNT).filter(|&k| stops.is_outside(k, legs.length[k])).count();
-                joint_contacts += usize::from(form.loads(&BodyState::from_vector(&y), &[0.0; LEG_COUNT]).machine_acts);
+                joint_contacts += usize::from(
+                    form.loads(&BodyState::from_vector(&y), Actuation::Forces(&[0.0; LEG_COUNT])).machine_acts,
+                );
                 let (reference, p) = form.rate(&y, &law.leg_forces_at(0.3));
                 let bits = |x: &[f64; 24]| x.map(f64::to_bits);
                 for held in [true, false] {
@@ -814,6 +1083,83 @@ mod tests {
         }
         assert!(contacts >= 12, "the end-stop branch was exercised ({contacts} legs in contact)");
         assert!(joint_contacts >= 2, "the joint-limit branch was exercised ({joint_contacts} states)");
+    }
+
+    /// The drives' fast path is the definition (`rate_driven`) to round-off: massless legs with
+    /// the rotors' axial mass, on and off the end stops and the joint limits, with Baumgarte
+    /// terms, in SSE2 and AVX2.
+    #[test]
+    fn the_drives_fast_path_is_the_definition_to_round_off() {
+        use crate::physics::actuators::drives::ElectricDrives;
+        let stand = Stand::truck_cabin();
+        let stops = EndStops::default();
+        let r0 = Stand::truck_cabin_neutral_position();
+        let n0 = std::array::from_fn(|k| (r0 + stand.platform_joints[k] - stand.base_joints[k]).normalize());
+        let limits = JointLimits::new(0.1, 0.15, 1e6, 5e4, n0, &nalgebra::Matrix3::identity());
+        let currents = [18.0, -4.0, 25.0, 30.0, 11.0, 19.5];
+        let voltages = [7.5, 120.0, -80.0, 0.0, 250.0, 40.0];
+        let (mut worst, mut contacts, mut joint_contacts): (f64, usize, usize) = (0.0, 0, 0);
+        for (rate, joints) in [(0.0, None), (10.0, Some(limits))] {
+            let form = SpecialForm::new(stand.clone())
+                .with_end_stops(Some(stops))
+                .with_baumgarte_rate(rate)
+                .with_machine(LegBodies::default(), Friction::default(), joints)
+                .with_drives(Some(ElectricDrives::default()));
+            assert!(form.has_driven_fast_path());
+            for (dz, roll, w) in [(0.0, 0.0, 0.0), (0.02, 0.05, 0.3), (-0.45, 0.1, -1.0), (0.45, -0.2, 2.0)] {
+                let state = BodyState::from_pose(
+                    Stand::truck_cabin_neutral_position() + Vector3::new(0.01, -0.02, dz),
+                    Vector3::new(0.1, -0.3, 0.7),
+                    &rotation_from_angles(&Vector3::new(roll, -0.04, 0.02)),
+                    &Vector3::new(w, 0.2, -0.1),
+                );
+                let mut y = state.to_vector();
+                y[10] += 1e-4;
+                let legs = LegGeometry::new(&stand, &BodyState::from_vector(&y));
+                contacts += (0..LEG_COUNT).filter(|&k| stops.is_outside(k, legs.length[k])).count();
+                joint_contacts += usize::from(
+                    form.loads(&BodyState::from_vector(&y), Actuation::Forces(&[0.0; LEG_COUNT])).machine_acts,
+                );
+                let (reference, power, drives) = form.rate_driven(&y, &currents, &voltages);
+                let mut fast = [0.0; 24];
+                let rates = form.derivative_driven_in::<Narrow>(&y, &currents, &voltages, &mut fast);
+                let scale = reference.iter().fold(1.0f64, |m, x| m.max(x.abs()));
+                let mut error = (0..24).map(|i| (fast[i] - reference[i]).abs()).fold(0.0, f64::max) / scale;
+                let lost = power.dissipation + sum_over_legs(&drives.map(|d| d.dissipation));
+                let electric = sum_over_legs(&drives.map(|d| d.electric_power));
+                error = error.max((rates.dissipation - lost).abs() / lost.abs().max(1.0));
+                error = error.max((rates.electric_power - electric).abs() / electric.abs().max(1.0));
+                for k in 0..LEG_COUNT {
+                    let r = drives[k].current_rate;
+                    error = error.max((rates.current_rate[k] - r).abs() / r.abs().max(1.0));
+                }
+                #[cfg(target_arch = "x86_64")]
+                if std::arch::is_x86_feature_detected!("avx2") {
+                    let mut wide = [0.0; 24];
+                    // SAFETY: AVX2 detected just now.
+                    unsafe { wide_driven(&form, &y, &currents, &voltages, &mut wide) };
+                    error = error.max((0..24).map(|i| (wide[i] - reference[i]).abs()).fold(0.0, f64::max) / scale);
+                }
+                worst = worst.max(error);
+            }
+        }
+        println!("drives' fast path against the definition: largest relative difference {worst:.1e}");
+        assert!(worst < 1e-12, "{worst:e}");
+        assert!(contacts >= 6 && joint_contacts >= 1, "contacts exercised: stops {contacts}, joints {joint_contacts}");
+    }
+
+    /// # Safety
+    /// AVX2 must be available.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx,avx2,fma")]
+    unsafe fn wide_driven(
+        form: &SpecialForm,
+        y: &StateVector,
+        currents: &[f64; LEG_COUNT],
+        voltages: &[f64; LEG_COUNT],
+        dy: &mut StateVector,
+    ) {
+        form.derivative_driven_in::<Wide>(y, currents, voltages, dy);
     }
 
     /// # Safety

@@ -13,8 +13,9 @@
 //!    (and refuses another), and that it exports every FMI 2.0 and FMI 3.0 function;
 //! 5. zip `modelDescription.xml`, the binary (`binaries/linux64/<id>.so`, FMI 3
 //!    `binaries/x86_64-linux/<id>.so`) and `documentation/index.html`;
-//! 6. check `modelDescription/StewartSystem.ssd` (the closed loop) against the models and zip
-//!    it with both FMI 2 FMUs into `target/fmu/StewartSystem.ssp`.
+//! 6. check `modelDescription/StewartSystem.ssd` (the closed loop) and
+//!    `StewartSystemDrives.ssd` (with electric drives) against the models and zip each with
+//!    both FMI 2 FMUs into `target/fmu/StewartSystem.ssp`, `StewartSystemDrives.ssp`.
 
 mod binary_check;
 mod package;
@@ -76,14 +77,17 @@ fn run() -> Result<(), String> {
 
     interface_tables(&root.join("docs").join("model.md"), update)?;
 
-    let ssd_path = root.join("modelDescription").join("StewartSystem.ssd");
-    let ssd = std::fs::read_to_string(&ssd_path).map_err(|e| format!("cannot read {}: {e}", ssd_path.display()))?;
-    let sources = ssd_check::check(&ssd).map_err(|e| format!("{}: {e}", ssd_path.display()))?;
-    let fmus: Vec<PathBuf> = sources.iter().map(|s| out_dir.join(s)).collect();
-    let fmu_refs: Vec<&Path> = fmus.iter().map(|p| p.as_path()).collect();
-    let ssp = out_dir.join("StewartSystem.ssp");
-    package::write_ssp(&ssp, &ssd, &fmu_refs)?;
-    println!("build-fmu: StewartSystem ({} components) -> {}", fmus.len(), ssp.display());
+    // The closed loop with force commands, and with electric drives (voltage commands).
+    for system in ["StewartSystem", "StewartSystemDrives"] {
+        let ssd_path = root.join("modelDescription").join(format!("{system}.ssd"));
+        let ssd = std::fs::read_to_string(&ssd_path).map_err(|e| format!("cannot read {}: {e}", ssd_path.display()))?;
+        let sources = ssd_check::check(&ssd).map_err(|e| format!("{}: {e}", ssd_path.display()))?;
+        let fmus: Vec<PathBuf> = sources.iter().map(|s| out_dir.join(s)).collect();
+        let fmu_refs: Vec<&Path> = fmus.iter().map(|p| p.as_path()).collect();
+        let ssp = out_dir.join(format!("{system}.ssp"));
+        package::write_ssp(&ssp, &ssd, &fmu_refs)?;
+        println!("build-fmu: {system} ({} components) -> {}", fmus.len(), ssp.display());
+    }
     Ok(())
 }
 

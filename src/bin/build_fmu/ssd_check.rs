@@ -1,13 +1,14 @@
-//! Checks of `modelDescription/StewartSystem.ssd` with quick-xml: well-formed, every
-//! component's source is one of our FMUs, every connector names a variable of that model
-//! with the matching causality, every connection joins an output to an input.
+//! Checks of the system descriptions (`modelDescription/StewartSystem*.ssd`) with quick-xml:
+//! well-formed, every component's source is one of our FMUs, every connector names a variable
+//! of that model with the matching causality, every connection joins an output to an input,
+//! every bound parameter value names a parameter of its component, of the type it declares.
 
 use std::collections::HashMap;
 
 use quick_xml::Reader;
 use quick_xml::events::Event;
 use stewart_fmu::models::ModelKind;
-use stewart_fmu::models::variables::{Causality, VariableTable};
+use stewart_fmu::models::variables::{Causality, VariableTable, VariableType};
 
 /// Returns the FMU file names the system uses.
 pub fn check(ssd: &str) -> Result<Vec<String>, String> {
@@ -18,6 +19,8 @@ pub fn check(ssd: &str) -> Result<Vec<String>, String> {
     let mut current: Option<String> = None;
     let mut connections = vec![];
     let mut sources = vec![];
+    // The parameter whose value element comes next: component, name, FMI type.
+    let mut parameter: Option<(String, String, &str)> = None;
     loop {
         let event = reader.read_event().map_err(|e| format!("not well-formed XML: {e}"))?;
         let e = match &event {
@@ -64,6 +67,34 @@ pub fn check(ssd: &str) -> Result<Vec<String>, String> {
                     return Err(format!("{component}.{name} is declared {kind} but is an {expected}"));
                 }
                 connectors.insert(name, kind);
+            }
+            "ssv:Parameter" => {
+                let component = current.as_ref().ok_or("Parameter outside a Component")?;
+                let name = attrs.get("name").cloned().ok_or("Parameter without name")?;
+                let (model, _) = components.get(component).ok_or("unknown component")?;
+                let table = VariableTable::new(model.info().groups);
+                let (group, _) = table
+                    .elements()
+                    .map(|(_, g, i)| (g, g.element_name(i)))
+                    .find(|(_, n)| *n == name)
+                    .ok_or(format!("{component}: {name} is not a variable of {}", model.info().model_identifier))?;
+                if group.causality != Causality::Parameter {
+                    return Err(format!("{component}.{name} is bound a value but is not a parameter"));
+                }
+                let kind = match group.var_type {
+                    VariableType::Real => "Real",
+                    VariableType::Boolean => "Boolean",
+                    _ => "Integer",
+                };
+                parameter = Some((component.clone(), name, kind));
+            }
+            "ssv:Real" | "ssv:Integer" | "ssv:Boolean" => {
+                let (component, name, kind) = parameter.take().ok_or("a value outside a Parameter")?;
+                let element = e.name().as_ref().to_string();
+                if element.strip_prefix("ssv:") != Some(kind) {
+                    return Err(format!("{component}.{name} is a {kind} parameter, bound an {element}"));
+                }
+                attrs.get("value").ok_or(format!("{component}.{name}: value without value"))?;
             }
             "ssd:Connection" => {
                 let get = |k: &str| attrs.get(k).cloned().ok_or(format!("Connection without {k}"));

@@ -94,6 +94,12 @@ pub struct DriveRate<T> {
     pub dissipation: T,
 }
 
+impl<T: Real> DriveRate<T> {
+    pub fn zero() -> Self {
+        DriveRate { force: T::zero(), current_rate: T::zero(), electric_power: T::zero(), dissipation: T::zero() }
+    }
+}
+
 impl ElectricDrives {
     /// `N = 2 pi i / p`, rad/m: the motor's rate per unit leg rate.
     pub fn transmission(&self) -> f64 {
