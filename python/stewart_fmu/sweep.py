@@ -1,4 +1,4 @@
-"""`stewart-sweep STUDY.toml --out DIR [--scheduler ADDRESS] [--workers N] [--limit N] [--serial]`:
+"""`stewart-sweep STUDY.toml --out DIR [--fmu PATH] [--scheduler ADDRESS] [--workers N] [--limit N] [--serial]`:
 runs a design study (see `stewart_fmu.study`) on Dask.
 
 - The study file is checked first (`stewart_fmu.study_schema`; docs/studies.md): a file with
@@ -37,6 +37,7 @@ from pathlib import Path
 import pandas as pd
 
 from . import study as st
+from . import study_schema
 
 
 def results_dir(out):
@@ -239,6 +240,12 @@ def parser():
                    help=f"refuse a study of more runs (default {st.DEFAULT_MAX_RUNS}: on a 2-core, 24 GiB machine the "
                         "shipped studies run at 5-40 runs/s, so that is 1-6 hours, and the run list (about 0.4 kB a "
                         "run) and the rows stay far below the memory; raise it for a bigger cluster)")
+    p.add_argument("--fmu", metavar="PATH",
+                   help="the StewartPlatform.fmu to run (default: the package's: the repository's target/fmu/ or "
+                        "the copy an installed wheel carries; or the environment variable STEWART_PLATFORM_FMU)")
+    p.add_argument("--controller-fmu", metavar="PATH",
+                   help="the StewartController.fmu (default: the one beside --fmu, or the package's; or "
+                        "STEWART_CONTROLLER_FMU)")
     p.add_argument("--scheduler", help="address of a running Dask scheduler (tcp://host:port)")
     p.add_argument("--connect-timeout", type=_positive_float, default=CONNECT_TIMEOUT,
                    help=f"seconds to wait for --scheduler to answer (default {CONNECT_TIMEOUT:g})")
@@ -260,7 +267,7 @@ def main(argv=None):
         parser().error("--out is required (except with --check)")
     try:
         return sweep(args)
-    except (st.StudyError, SweepError) as e:
+    except (st.StudyError, SweepError, FileNotFoundError) as e:
         print(f"stewart-sweep: {e}", file=sys.stderr, flush=True)
         return 2
     except KeyboardInterrupt:
@@ -269,7 +276,8 @@ def main(argv=None):
 
 
 def sweep(args):
-    plan = st.plan(args.study, args.max_runs)
+    paths = study_schema.fmu_paths(args.fmu, args.controller_fmu)
+    plan = st.plan(args.study, args.max_runs, fmus=paths)
     spec = plan.spec
     if args.check:
         print(plan.text())
@@ -285,10 +293,10 @@ def sweep(args):
             print(f"stewart-sweep: the lock of a sweep that ended without releasing it (pid "
                   f"{lock.taken_over.get('pid')}, started {lock.taken_over.get('started')}) was taken over",
                   file=sys.stderr)
-        return _sweep_locked(spec, plan, args, out)
+        return _sweep_locked(spec, plan, args, out, paths)
 
 
-def _sweep_locked(spec, plan, args, out):
+def _sweep_locked(spec, plan, args, out, paths):
     try:
         if not (out / "study.toml").exists() or not os.path.samefile(args.study, out / "study.toml"):
             shutil.copyfile(args.study, out / "study.toml")
@@ -307,7 +315,7 @@ def _sweep_locked(spec, plan, args, out):
     started = time.monotonic()
     try:
         if todo:
-            fmus = st.fmus_for(spec)
+            fmus = st.fmus_for(spec, paths)
             if args.serial:
                 for run in todo:
                     writer.add(run_and_time(spec, run, fmus))
