@@ -16,17 +16,17 @@ python_env
 build_fmus
 # The 3-D viewer (three.js, built with vite from the committed lock file).
 build_viewer
-step "the paper's experiments (non-dimensional units; about half a minute)"
+step "the paper's experiments (non-dimensional units)"
 .venv/bin/python examples/paper_experiments.py "$OUT"
-step "the workspace scenarios: end stops, singular arrangements (about a minute)"
+step "the workspace scenarios: end stops, singular arrangements"
 .venv/bin/python examples/workspace_scenarios.py "$OUT"
-step "the machine scenarios: heavy legs, joint limits, friction (about a minute)"
+step "the machine scenarios: heavy legs, joint limits, friction"
 .venv/bin/python examples/machine_scenarios.py "$OUT"
 step "the linearisation about the neutral pose"
 .venv/bin/python examples/linearise.py --output "$OUT"
 # Design studies on a local Dask cluster (one worker per core): results.parquet, summary, plots.
 for study in stability payload power_loss workspace; do
-    step "design study $study on a local Dask cluster"
+    step "design study $study on a local Dask cluster (seconds to half a minute; a progress bar)"
     .venv/bin/stewart-sweep "studies/$study.toml" --out "$OUT/$study"
 done
 # The viewer with four results (heave, power loss, actuator failure, start-up).

@@ -74,10 +74,10 @@ python_env() {
     fi
     local stamp=.venv/.requirements.sha256
     if ! sha256sum --status -c "$stamp" 2>/dev/null; then
-        step "installing the Python packages of tests/requirements.txt into .venv (FMPy, NumPy, SciPy, Matplotlib, Dask, pandas, pyarrow, libcosimpy, pytest; about 400 MB, a minute or two the first time)"
-        # One line a package (pip's "Collecting ..."), errors in full.
+        step "installing the Python packages of tests/requirements.txt into .venv (FMPy, NumPy, SciPy, Matplotlib, Dask, pandas, pyarrow, libcosimpy, pytest; about 800 MB, a minute or two the first time)"
+        # One line a package (pip's "Collecting NAME", without its "(from ...)"), errors in full.
         if ! .venv/bin/python -m pip install --disable-pip-version-check --progress-bar off -r tests/requirements.txt \
-                > >(grep --line-buffered -E '^(Collecting|Successfully installed)'); then
+                > >(grep --line-buffered -E '^(Collecting|Successfully installed)' | sed -u -E 's/ \(from .*//'); then
             die "pip install -r tests/requirements.txt failed (see above)"
         fi
         sha256sum tests/requirements.txt > "$stamp"
@@ -88,7 +88,7 @@ python_env() {
 
 # The FMUs: the Rust library in release mode, packaged (the first build takes a few minutes).
 build_fmus() {
-    step "building the FMUs: cargo build --release of the Rust library, then packaging into target/fmu/ (a few minutes the first time, seconds after)"
+    step "building the FMUs: cargo build --release of the Rust library, then packaging into target/fmu/ (a minute or more the first time, seconds after)"
     cargo run --release --bin build-fmu
 }
 

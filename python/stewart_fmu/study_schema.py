@@ -22,7 +22,7 @@ from .core import CONTROLLER_FMU, PLATFORM_FMU, fmu_file, nearest
 MAX_STEPS_PER_RUN = 10_000_000
 
 # The default of `stewart-sweep --max-runs`, sized for a 2-core, 24 GiB machine: the shipped
-# studies run at 5 .. 40 runs/s there (the README's table), so 10^5 runs take 1 .. 6 hours, and
+# studies run at 5 .. 40 runs/s there (their summaries; docs/studies.md), so 10^5 runs take 1 .. 6 hours, and
 # their run list (about 0.4 kB a run: 380 MB measured for 10^6) and rows stay far below the
 # memory. 10^7 runs would take weeks (the red-team run's 10^7 grid took 5.6 GB before a run).
 DEFAULT_MAX_RUNS = 100_000

@@ -2,11 +2,11 @@
 the viewer page inside, nothing written into python/), which is installed into a fresh virtual
 environment in a temporary folder (its dependencies from PyPI, at the versions of
 tests/requirements.txt). From a working directory outside the repository, that environment
-runs a design study with `stewart-sweep` on a local Dask cluster of two worker processes
-(127.0.0.1), whose rows equal the same study run here from the repository bit for bit; a
-simulation and a closed loop whose numbers equal the repository's (the equilibrium holds, the
-legs track the programme); and `view()`, whose page, served and opened in headless Chromium,
-shows the legs Python computes from its CSV. A missing FMU is an error that names both ways
+runs the README's tour (its Python blocks, and its design study with `stewart-sweep` on a
+local Dask cluster of two worker processes on 127.0.0.1), with the repository's numbers bit
+for bit; a simulation and a closed loop whose numbers equal the repository's (the equilibrium
+holds, the legs track the programme); and `view()`, whose page, served and opened in headless
+Chromium, shows the legs Python computes from its CSV. A missing FMU is an error that names both ways
 to point at one (the environment variable and `--fmu`)."""
 
 import hashlib
@@ -21,15 +21,16 @@ import zipfile
 import functools
 import http.server
 import threading
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
+from test_readme import check_study, check_tour, run_study, run_tour
 from test_viewer import QuietHandler, browse, expected
 
 from stewart_fmu import NEUTRAL_Z, ROOT
 from stewart_fmu.cosim import closed_loop
-from stewart_fmu.sweep import load_results
 from fmpy import simulate_fmu
 
 STUDY = """
@@ -138,31 +139,29 @@ def test_the_installed_package_uses_its_own_fmus_and_matches_the_repository(inst
     assert max(got["errors"]) < 2e-5  # the legs track the heave programme to 0.02 mm
 
 
-def test_a_study_on_a_local_dask_cluster_gives_the_repositorys_rows(installed, tmp_path):
+def test_the_readme_tour_runs_from_the_installed_package_as_in_the_repository(installed, tmp_path):
+    """The tour's Python blocks and its study (stewart-sweep on a local Dask cluster of two
+    workers) in the fresh environment, from a folder outside the repository: what they show
+    (test_readme.check_tour, check_study), and the same numbers as the repository's run."""
     venv, work, _ = installed
-    (work / "mass.toml").write_text(STUDY)
-    run = subprocess.run([str(venv / "bin" / "stewart-sweep"), "mass.toml", "--out", "results", "--workers", "2"],
-                         cwd=work, capture_output=True, text=True, env=clean_env(venv), timeout=600)
-    assert run.returncode == 0, run.stderr[-3000:]
-    assert "6 runs, 0 done already, running 6" in run.stdout
-    installed_rows = load_results(work / "results")
-    assert installed_rows["worker"].str.startswith("tcp://127.0.0.1:").all()
-    assert installed_rows["worker"].nunique() <= 2
-    (tmp_path / "mass.toml").write_text(STUDY)
-    here = subprocess.run([str(ROOT / ".venv" / "bin" / "stewart-sweep"), "mass.toml", "--out", "results", "--serial"],
-                          cwd=tmp_path, capture_output=True, text=True, timeout=600)
-    assert here.returncode == 0, here.stderr[-3000:]
-    repo_rows = load_results(tmp_path / "results")
+    kept = run_tour(venv / "bin" / "python", work, clean_env(venv))
+    check_tour(kept)
+    rows, out = run_study(venv / "bin", work, clean_env(venv))
+    by_mass = check_study(rows, out)
+    here_env = {k: v for k, v in os.environ.items() if not k.startswith("STEWART_")}
+    here = run_tour(sys.executable, tmp_path, here_env)
+    repo_rows, _ = run_study(Path(sys.executable).parent, tmp_path, here_env)
 
     def comparable(frame):
         return frame.drop(columns=["wall_time", "worker"]).sort_values("run_id").reset_index(drop=True)
 
-    print(f"installed stewart-sweep, 2 local Dask workers: {len(installed_rows)} rows, largest leg error "
-          f"{installed_rows['max_leg_error'].min() * 1e3:.3f} .. {installed_rows['max_leg_error'].max() * 1e3:.3f} mm, "
-          f"{int(installed_rows['stable'].sum())} stable; equal to the repository's serial rows")
-    assert len(installed_rows) == 6 and (installed_rows["status"] == "ok").all()
-    pd.testing.assert_frame_equal(comparable(installed_rows), comparable(repo_rows))
-    assert (work / "results" / "summary.txt").exists()
+    print(f"installed package, the README's tour outside the repository: equilibrium z = "
+          f"{kept[0]['result']['r[3]'][-1]!r} m; closed loop {max(kept[1]['errors']) * 1e3:.4f} mm; pose command roll "
+          f"{kept[2]['roll']:.6f} rad; study on 2 local Dask workers: largest leg error by mass (kg -> mm) "
+          f"{ {m: round(e * 1e3, 3) for m, e in by_mass.items()} }; equal to the repository's run: "
+          f"{kept == here}")
+    assert kept == here, "the installed package computes the repository's numbers"
+    pd.testing.assert_frame_equal(comparable(rows), comparable(repo_rows))
 
 
 def test_view_writes_the_packaged_page_and_the_browser_shows_the_result(installed):
@@ -196,9 +195,9 @@ def test_view_writes_the_packaged_page_and_the_browser_shows_the_result(installe
 
 def test_a_missing_fmu_names_both_ways_to_point_at_one(installed):
     venv, work, _ = installed
-    (work / "mass.toml").write_text(STUDY)
+    (work / "small.toml").write_text(STUDY)
     env = dict(clean_env(venv), STEWART_PLATFORM_FMU=str(work / "nowhere" / "StewartPlatform.fmu"))
-    run = subprocess.run([str(venv / "bin" / "stewart-sweep"), "mass.toml", "--out", "missing"], cwd=work,
+    run = subprocess.run([str(venv / "bin" / "stewart-sweep"), "small.toml", "--out", "missing"], cwd=work,
                          capture_output=True, text=True, env=env, timeout=300)
     print(run.stderr.strip())
     assert run.returncode == 2
@@ -209,7 +208,7 @@ def test_a_missing_fmu_names_both_ways_to_point_at_one(installed):
     assert simulation.returncode == 1 and "FileNotFoundError" in simulation.stderr
     assert "STEWART_PLATFORM_FMU" in simulation.stderr and "--fmu" in simulation.stderr
     # --fmu points the study at an FMU elsewhere (here the repository's build).
-    check = subprocess.run([str(venv / "bin" / "stewart-sweep"), "mass.toml", "--check", "--fmu",
+    check = subprocess.run([str(venv / "bin" / "stewart-sweep"), "small.toml", "--check", "--fmu",
                             str(ROOT / "target" / "fmu" / "StewartPlatform.fmu")], cwd=work, capture_output=True,
                            text=True, env=env, timeout=300)
     assert check.returncode == 0, check.stderr
