@@ -20,7 +20,7 @@ python_env
 export FMI_SIM="$PWD/target/tools/bin/fmi-sim"
 if [ ! -x "$FMI_SIM" ]; then
     # cargo prints a line per crate compiled: the progress of this long step.
-    step "installing fmi-sim 0.7.0 (rust-fmi's FMI importer) into target/tools: compiling about 250 crates, 5-10 minutes on 2 cores"
+    step "installing fmi-sim 0.7.0 (rust-fmi's FMI importer) into target/tools: compiling about 200 crates, 5-10 minutes on 2 cores, once"
     cargo install --locked fmi-sim@0.7.0 --root target/tools
 fi
 
@@ -28,15 +28,15 @@ build_fmus
 # The 3-D viewer: Node packages from the committed lock file, then the static build.
 build_viewer
 if cargo clippy --version >/dev/null 2>&1; then
-    step "clippy (the Rust lints; a few minutes the first time)"
+    step "clippy (the Rust lints; about a minute the first time)"
     cargo clippy --release --all-targets -- -D warnings
     # The build without the AVX2 path (`--no-default-features`) compiles and lints clean too.
     cargo clippy --release --lib --no-default-features -- -D warnings
 else
     echo "run_all: clippy is not installed with this toolchain; lint step not run"
 fi
-step "the Rust tests (cargo test --release: builds the tests first, a few minutes)"
+step "the Rust tests (cargo test --release: builds the tests first, about 3 minutes)"
 cargo test --release
 # Each test once (-v); the numbers the tests print (-rP: passes' output), failures and errors (-rfE).
-step "the Python tests over the packaged FMUs (about 15 minutes on 2 cores)"
+step "the Python tests over the packaged FMUs (4-15 minutes on 2 cores, with the machine's load)"
 .venv/bin/python -m pytest tests/python -v -rfEP

@@ -147,3 +147,32 @@ def test_the_python_examples_of_the_docs_pages_run(tmp_path):
     recipe = next(ns for name, ns in ran if name == "fmi-behaviour.md")
     assert recipe["t"] == 1.5  # the recipe finished the step the FMU refused at first
     assert (tmp_path / "my_viewer" / "data" / "tilted.csv").exists()
+
+
+def heading_anchor(heading):
+    """GitHub's anchor of a Markdown heading."""
+    text = re.sub(r"[^\w\- ]", "", heading.strip().lower())
+    return text.replace(" ", "-")
+
+
+def test_the_links_between_the_pages_resolve():
+    """Every relative link in README.md, ARCHITECTURE.md and docs/*.md names a file of the
+    repository, and every #anchor a heading of that file."""
+    pages = [ROOT / "README.md", ROOT / "ARCHITECTURE.md", *sorted((ROOT / "docs").glob("*.md"))]
+    checked, broken = 0, []
+    for page in pages:
+        text = re.sub(r"```.*?```", "", page.read_text(), flags=re.S)
+        for target in re.findall(r"\]\(([^)\s]+)\)", text):
+            if re.match(r"[a-z]+:", target):
+                continue  # an address on the web
+            path, _, anchor = target.partition("#")
+            file = (page.parent / path).resolve() if path else page
+            checked += 1
+            if not file.exists():
+                broken.append(f"{page.name}: {target}: no such file")
+            elif anchor:
+                anchors = {heading_anchor(h) for h in re.findall(r"^#+ (.*)$", file.read_text(), re.M)}
+                if anchor not in anchors:
+                    broken.append(f"{page.name}: {target}: no heading with that anchor")
+    print(f"links between the pages: {checked} checked")
+    assert checked > 30 and not broken, broken
