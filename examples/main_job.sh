@@ -8,23 +8,32 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 OUT="${1:-output}"
 
-if [ ! -x .venv/bin/python ]; then
-    python3 -m venv .venv
-fi
-.venv/bin/python -m pip install --quiet --disable-pip-version-check -r tests/requirements.txt
-.venv/bin/python -m pip install --quiet --disable-pip-version-check --no-deps -e python
+# Prerequisites (checked; on Debian the missing ones installed), .venv, progress lines.
+source tests/setup.sh
+require main
+python_env
 
-cargo run --release --bin build-fmu
+build_fmus
 # The 3-D viewer (three.js, built with vite from the committed lock file).
-(cd viewer && npm ci --no-audit --no-fund --loglevel=error && npm run build --silent)
+build_viewer
+step "the paper's experiments (non-dimensional units)"
 .venv/bin/python examples/paper_experiments.py "$OUT"
+step "the workspace scenarios: end stops, singular arrangements"
 .venv/bin/python examples/workspace_scenarios.py "$OUT"
+step "the machine scenarios: heavy legs, joint limits, friction"
 .venv/bin/python examples/machine_scenarios.py "$OUT"
+step "the drive scenarios: holding, dynamic braking, voltage commands, a failed drive"
 .venv/bin/python examples/drive_scenarios.py "$OUT"
+step "the linearisation about the neutral pose"
 .venv/bin/python examples/linearise.py --output "$OUT"
 # Design studies on a local Dask cluster (one worker per core): results.parquet, summary, plots.
 for study in stability payload power_loss workspace; do
+    step "design study $study on a local Dask cluster (seconds to half a minute; a progress bar)"
     .venv/bin/stewart-sweep "studies/$study.toml" --out "$OUT/$study"
 done
-# The viewer with four results (heave, power loss, actuator failure, start-up).
+# The viewer with six results (heave, power loss, actuator failure, start-up, heavy legs, the ripple on its joint limits).
+step "the viewer's results"
 .venv/bin/python examples/viewer_data.py "$OUT/viewer"
+# What each file in the output folder is.
+.venv/bin/python examples/output_index.py "$OUT"
+step "done: results in $OUT/ (what each file is: $OUT/README.md)"

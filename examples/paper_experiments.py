@@ -7,6 +7,7 @@ non-dimensional units. Writes one CSV per experiment and PNG plots to the output
 
 import csv
 import math
+import re
 import sys
 from pathlib import Path
 
@@ -20,7 +21,7 @@ from fmpy.fmi1 import FMICallException
 
 from stewart_fmu.cosim import closed_loop
 from stewart_fmu import (EQUILIBRIUM_FORCE, PLATFORM_FMU, Platform, heave_forces, heave_programme,
-                     stand_parameters)
+                         recording_callbacks, stand_parameters)
 
 OUT = Path(sys.argv[1] if len(sys.argv) > 1 else "output")
 P = stand_parameters(nondimensional=True)
@@ -35,9 +36,12 @@ def write_csv(name, header, rows):
 
 
 def run_forces(force_of_t, t_end, h, derivative_of_t=None):
-    """Open loop: forces as a function of time; returns rows (t, heave, roll, pitch)."""
-    pl = Platform(parameters=P)
+    """Open loop: forces as a function of time; returns rows (t, heave, roll, pitch) and, if
+    the platform left the workspace and the FMU discarded a step, why (else None)."""
+    messages = []
+    pl = Platform(parameters=P, logger=recording_callbacks(messages))
     rows = [(0.0, 0.0, 0.0, 0.0)]
+    stopped = None
     try:
         while pl.time < t_end - 1e-9:
             t = pl.time
@@ -46,9 +50,13 @@ def run_forces(force_of_t, t_end, h, derivative_of_t=None):
             a = pl.vector("angles", 3)
             rows.append((pl.time, pl.get("r[3]")[0] - Z0, a[0], a[1]))
     except FMICallException:
-        pass  # the platform tumbled: the FMU discarded the step
+        # The platform tumbled: the FMU discarded the step. Its message quotes the leg forces
+        # with the FMU's unit N; in this run they are in units of M g.
+        found = re.search(r"at t = ([-+0-9.eE]+): (.*?base plane)", messages[-1][2] if messages else "")
+        stopped = (f"discarded at t = {float(found.group(1)):.2f}: {found.group(2)}" if found
+                   else "discarded: " + (messages[-1][2][:100] if messages else "no message"))
     pl.free()
-    return np.array(rows)
+    return np.array(rows), stopped
 
 
 def controller_parameters(gain, damping, disturbance=1e-4):
@@ -79,13 +87,13 @@ def main():
                    f"max constraint error {np.max(result['constraintError']):.1e}")
 
     # 1. Equilibrium.
-    eq = run_forces(lambda t: [EQUILIBRIUM_FORCE] * 6, 25.0, 0.01)
+    eq, _ = run_forces(lambda t: [EQUILIBRIUM_FORCE] * 6, 25.0, 0.01)
     write_csv("experiment1_equilibrium.csv", ["t", "heave", "roll", "pitch"], eq.tolist())
     dev = np.abs(eq[:, 1]) + np.abs(eq[:, 2]) + np.abs(eq[:, 3])
     summary.append(f"1 equilibrium: pose held to 1e-9 until t = {eq[np.argmax(dev > 1e-9), 0]:.2f}")
 
     # 2. Parasitic oscillations (paper Fig. 2).
-    par = run_forces(lambda t: [EQUILIBRIUM_FORCE + 1e-4 * math.sin(t)] * 6, 8 * math.pi, 0.01,
+    par, _ = run_forces(lambda t: [EQUILIBRIUM_FORCE + 1e-4 * math.sin(t)] * 6, 8 * math.pi, 0.01,
                      lambda t: [1e-4 * math.cos(t)] * 6)
     write_csv("experiment2_parasitic.csv", ["t", "heave", "roll", "pitch"], par.tolist())
     summary.append(f"2 parasitic oscillations: heave passes 0.01 at t = {par[np.argmax(par[:, 1] > 0.01), 0]:.2f}, "
@@ -94,13 +102,14 @@ def main():
     # 3. Heave programme: forces from the direct problem, reproduced by the FMU.
     t_prog = np.arange(0.0, 40.0 + 1e-9, 0.01)
     forces = np.array([heave_forces(t)[0] for t in t_prog])
-    heave = run_forces(lambda t: [heave_forces(t)[0]] * 6, 30.0, 0.001, lambda t: [heave_forces(t)[1]] * 6)
+    heave, heave_stopped = run_forces(lambda t: [heave_forces(t)[0]] * 6, 30.0, 0.001, lambda t: [heave_forces(t)[1]] * 6)
     eta = np.array([heave_programme(t, Z0)[0] - Z0 for t in heave[:, 0]])
     write_csv("experiment3_heave.csv", ["t", "heave_fmu", "heave_programme"], np.column_stack([heave[:, 0], heave[:, 1], eta]).tolist())
     write_csv("experiment3_forces.csv", ["t", "u"], np.column_stack([t_prog, forces]).tolist())
     err8 = np.max(np.abs(heave[heave[:, 0] <= 8, 1] - eta[heave[:, 0] <= 8]))
     summary.append(f"3 heave programme: forces in [{forces.min():.4f}, {forces.max():.4f}], "
-                   f"max |eta_FMU - eta| for t <= 8: {err8:.1e}")
+                   f"max |eta_FMU - eta| for t <= 8: {err8:.1e}; open loop, the platform then leaves the programme"
+                   + (f" ({heave_stopped})" if heave_stopped else f" (ran to t = {heave[-1, 0]:.2f})"))
 
     # 4. Perturbed programme (paper Fig. 5).
     def perturbed(t):
@@ -110,7 +119,7 @@ def main():
         e = math.exp(-t / 2)
         return [heave_forces(t)[1] + 1e-4 * (2 * math.cos(2 * t) * (1 - e) + 0.5 * math.sin(2 * t) * e)] * 6
 
-    pert = run_forces(perturbed, 20.0, 0.005, perturbed_rate)
+    pert, _ = run_forces(perturbed, 20.0, 0.005, perturbed_rate)
     eta_p = np.array([heave_programme(t, Z0)[0] - Z0 for t in pert[:, 0]])
     write_csv("experiment4_perturbed.csv", ["t", "heave_fmu", "heave_programme"], np.column_stack([pert[:, 0], pert[:, 1], eta_p]).tolist())
     d4 = pert[:, 1] - eta_p
@@ -130,31 +139,42 @@ def main():
         write_csv(f"experiment5_{slug}.csv", ["t", "heave", "max_leg_error"], rows.tolist())
         summary.append(f"5 feedback, {name}: ran to t = {rows[-1, 0]:.1f}, max leg-length error {rows[:, 2].max():.2e}")
 
-    # Plots.
+    # Plots, in the paper's non-dimensional units. Curves that should lie on the programme
+    # are drawn over it (the programme wide and pale beneath), each in its own dash.
+    T_LABEL = "t (non-dimensional, units of sqrt(R_b/g))"
+    Z_LABEL = "heave (z - z0) / R_b"
+    programme_style = dict(color="0.6", lw=5, alpha=0.45, zorder=1, label="programme")
+    styles = ["-", "--", "-.", ":"]
     fig, ax = plt.subplots(2, 2, figsize=(12, 8))
     ax[0, 0].plot(par[:, 0], par[:, 1])
-    ax[0, 0].set(title="Parasitic oscillations, u = 0.2005 + 0.0001 sin t (Fig. 2)", xlabel="t", ylabel="heave eta")
+    ax[0, 0].set(title="Parasitic oscillations, u = 0.2005 + 0.0001 sin t (Fig. 2)", xlabel=T_LABEL, ylabel=Z_LABEL)
     ax[0, 0].set_ylim(-0.05, 1.0)
     ax[0, 1].plot(t_prog, forces)
-    ax[0, 1].set(title="Programme leg force, direct problem (paper Fig. 4)", xlabel="t", ylabel="u / (M g)")
-    ax[1, 0].plot(heave[:, 0], eta, "k--", label="programme")
-    ax[1, 0].plot(heave[:, 0], heave[:, 1], label="FMU, programme forces")
-    ax[1, 0].plot(pert[:, 0], pert[:, 1], label="FMU, perturbed forces (Fig. 5)")
-    ax[1, 0].set(title="Vertical oscillation: direct problem forces applied", xlabel="t", ylabel="heave", ylim=(-0.4, 1.0))
-    ax[1, 0].legend()
-    for name, rows in runs.items():
-        ax[1, 1].plot(rows[:, 0], rows[:, 1], label=name)
-    ax[1, 1].plot(t_prog, [heave_programme(t, Z0)[0] - Z0 for t in t_prog], "k--", label="programme")
-    ax[1, 1].set(title="Controller FMU driving the platform FMU (perturbed)", xlabel="t", ylabel="heave",
+    ax[0, 1].set(title="Programme leg force, direct problem (paper Fig. 4)", xlabel=T_LABEL,
+                 ylabel="leg force u / (M g) (non-dimensional)")
+    ax[1, 0].plot(heave[:, 0], eta, **programme_style)
+    ax[1, 0].plot(heave[:, 0], heave[:, 1], "C0", ls="--", zorder=3, label="FMU, programme forces")
+    ax[1, 0].plot(pert[:, 0], pert[:, 1], "C1", zorder=2, label="FMU, perturbed forces (Fig. 5)")
+    if heave_stopped:
+        ax[1, 0].plot(heave[-1, 0], max(heave[-1, 1], -0.39), "C0x", ms=9, mew=2, zorder=4,
+                      label=f"FMU, programme forces: {heave_stopped.split(':')[0]}")
+    ax[1, 0].set(title="Vertical oscillation: direct problem forces applied", xlabel=T_LABEL, ylabel=Z_LABEL,
+                 ylim=(-0.4, 1.0))
+    ax[1, 0].legend(fontsize=8)
+    ax[1, 1].plot(t_prog, [heave_programme(t, Z0)[0] - Z0 for t in t_prog], **programme_style)
+    for j, (name, rows) in enumerate(runs.items()):
+        ax[1, 1].plot(rows[:, 0], rows[:, 1], f"C{j}", ls=styles[j % len(styles)], lw=1.4, zorder=2 + j, label=name)
+    ax[1, 1].set(title="Controller FMU driving the platform FMU (perturbed)", xlabel=T_LABEL, ylabel=Z_LABEL,
                  ylim=(-0.4, 1.0))
     ax[1, 1].legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(OUT / "paper_experiments.png", dpi=120)
 
     fig, ax = plt.subplots(figsize=(7, 4))
-    for name, rows in runs.items():
-        ax.semilogy(rows[:, 0], np.maximum(rows[:, 2], 1e-12), label=name)
-    ax.set(title="Leg-length tracking error, controller FMU + platform FMU", xlabel="t", ylabel="max_k |l_k - l_k^p|")
+    for j, (name, rows) in enumerate(runs.items()):
+        ax.semilogy(rows[:, 0], np.maximum(rows[:, 2], 1e-12), f"C{j}", ls=styles[j % len(styles)], label=name)
+    ax.set(title="Leg-length tracking error, controller FMU + platform FMU", xlabel=T_LABEL,
+           ylabel="max_k |l_k - l_k^p| / R_b")
     ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(OUT / "feedback_tracking_error.png", dpi=120)

@@ -4,48 +4,39 @@
 # functions, fuzzing), then the Python tests that drive the packaged FMUs with FMPy,
 # libcosim and fmi-sim, and the valgrind leak check.
 #
-# Installs what it needs on a fresh Debian machine: valgrind, libclang (for building fmi-sim)
-# and Chromium (for the viewer's browser test) from Debian's packages, the viewer's Node
-# packages with npm ci, fmi-sim from crates.io (into target/tools), the Python
-# packages from tests/requirements.txt (into .venv).
+# Installs what it needs on a fresh Debian machine (tests/setup.sh checks the prerequisites):
+# valgrind, libclang (for building fmi-sim) and Chromium (for the viewer's browser test) from
+# Debian's packages without their recommends, the viewer's Node packages with npm ci, fmi-sim
+# from crates.io (into target/tools), the Python packages from tests/requirements.txt (into
+# .venv). Each step that takes more than a few seconds starts with a progress line.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-SUDO=""
-if [ "$(id -u)" -ne 0 ] && command -v sudo >/dev/null; then SUDO="sudo"; fi
-need_apt=()
-command -v valgrind >/dev/null || need_apt+=(valgrind)
-command -v gcc >/dev/null || need_apt+=(gcc)
-ls /usr/lib/llvm-*/lib/libclang.so* >/dev/null 2>&1 || need_apt+=(libclang-dev)
-command -v chromium >/dev/null || need_apt+=(chromium)
-command -v npm >/dev/null || need_apt+=(nodejs npm)
-if [ ${#need_apt[@]} -gt 0 ]; then
-    echo "run_all: installing ${need_apt[*]} from Debian's packages"
-    $SUDO apt-get update -qq
-    $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${need_apt[@]}"
-fi
-
-if [ ! -x .venv/bin/python ]; then
-    python3 -m venv .venv
-fi
-.venv/bin/python -m pip install --quiet --disable-pip-version-check -r tests/requirements.txt
-.venv/bin/python -m pip install --quiet --disable-pip-version-check --no-deps -e python
+# Prerequisites (checked; on Debian the missing ones installed), .venv, progress lines.
+source tests/setup.sh
+require tests
+python_env
 
 export FMI_SIM="$PWD/target/tools/bin/fmi-sim"
 if [ ! -x "$FMI_SIM" ]; then
-    echo "run_all: installing fmi-sim 0.7.0 (rust-fmi's FMI importer) into target/tools"
-    cargo install --quiet --locked fmi-sim@0.7.0 --root target/tools
+    # cargo prints a line per crate compiled: the progress of this long step.
+    step "installing fmi-sim 0.7.0 (rust-fmi's FMI importer) into target/tools: compiling about 200 crates, 5-10 minutes on 2 cores, once"
+    cargo install --locked fmi-sim@0.7.0 --root target/tools
 fi
 
-cargo run --release --bin build-fmu
+build_fmus
 # The 3-D viewer: Node packages from the committed lock file, then the static build.
-(cd viewer && npm ci --no-audit --no-fund --loglevel=error && npm run build --silent)
+build_viewer
 if cargo clippy --version >/dev/null 2>&1; then
+    step "clippy (the Rust lints; about a minute the first time)"
     cargo clippy --release --all-targets -- -D warnings
     # The build without the AVX2 path (`--no-default-features`) compiles and lints clean too.
     cargo clippy --release --lib --no-default-features -- -D warnings
 else
     echo "run_all: clippy is not installed with this toolchain; lint step not run"
 fi
+step "the Rust tests (cargo test --release: builds the tests first, about 3 minutes)"
 cargo test --release
-.venv/bin/python -m pytest tests/python -v -rA
+# Each test once (-v); the numbers the tests print (-rP: passes' output), failures and errors (-rfE).
+step "the Python tests over the packaged FMUs (4-15 minutes on 2 cores, with the machine's load)"
+.venv/bin/python -m pytest tests/python -v -rfEP

@@ -12,11 +12,39 @@ import numpy as np
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
 
-# The repository this package lives in (python/stewart_fmu/): the FMUs are built into its
-# target/fmu/; STEWART_PLATFORM_FMU points elsewhere.
-ROOT = Path(__file__).resolve().parents[2]
-PLATFORM_FMU = Path(os.environ.get("STEWART_PLATFORM_FMU", ROOT / "target" / "fmu" / "StewartPlatform.fmu"))
-CONTROLLER_FMU = PLATFORM_FMU.parent / "StewartController.fmu"
+# Where the FMUs are. Used from its repository (python/stewart_fmu/, an editable install) the
+# package takes them from the repository's build, target/fmu/; installed from a wheel it takes
+# the copies the wheel carries (stewart_fmu/data/fmu/, python/build_wheel.sh). The environment
+# variables STEWART_PLATFORM_FMU and STEWART_CONTROLLER_FMU (and stewart-sweep's --fmu,
+# --controller-fmu) point elsewhere.
+PACKAGE = Path(__file__).resolve().parent
+ROOT = PACKAGE.parents[1]  # the repository's root (meaningful only when the package is used from it)
+IN_REPOSITORY = (ROOT / "Cargo.toml").is_file() and (ROOT / "python" / "stewart_fmu").is_dir()
+DATA = PACKAGE / "data"  # in a wheel: fmu/ (as target/fmu/) and viewer/ (the built viewer page)
+FMU_DIR = ROOT / "target" / "fmu" if IN_REPOSITORY else DATA / "fmu"
+PLATFORM_FMU = Path(os.environ.get("STEWART_PLATFORM_FMU") or FMU_DIR / "StewartPlatform.fmu")
+CONTROLLER_FMU = Path(os.environ.get("STEWART_CONTROLLER_FMU") or PLATFORM_FMU.parent / "StewartController.fmu")
+
+
+def fmu_file(path, option="--fmu"):
+    """`path` as a string if the FMU is there; otherwise FileNotFoundError saying how to get
+    it or point at it (`option`: stewart-sweep's option for this FMU)."""
+    path = Path(path)
+    if path.is_file():
+        return str(path)
+    if IN_REPOSITORY:
+        where = "build the FMUs with `cargo run --release --bin build-fmu` (both set-up commands do), or point at them"
+    elif path.parent == DATA / "fmu":
+        where = ("this installation of stewart_fmu carries no FMUs (install the wheel python/build_wheel.sh "
+                 "builds, which does), or point at them")
+    else:
+        where = "point at the FMUs"
+    for variable in ("STEWART_PLATFORM_FMU", "STEWART_CONTROLLER_FMU"):
+        if os.environ.get(variable) and Path(os.environ[variable]) == path:
+            where = f"the environment variable {variable} names it; correct it or " + where
+    raise FileNotFoundError(f"{path.name} not found at {path}: {where}: set the environment variables "
+                            f"STEWART_PLATFORM_FMU=/path/to/StewartPlatform.fmu (and STEWART_CONTROLLER_FMU; by "
+                            f"default StewartController.fmu beside it), or give stewart-sweep {option} PATH")
 
 # docs/model.md §3: the truck-cabin stand.
 R_B, R_P, H_C = 1.5, 1.0, 0.5
@@ -190,7 +218,7 @@ class Platform:
                  tolerance=None, name="platform", logger=None, events=None):
         """`events`: a list that receives the FMU's logEvents messages (contacts, singular
         arrangements passed) as (status, category, message)."""
-        fmu = str(fmu)
+        fmu = fmu_file(fmu)
         self.md = read_model_description(fmu)
         if fmu not in Platform._extracted:
             Platform._extracted[fmu] = extract(fmu)

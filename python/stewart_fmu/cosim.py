@@ -22,9 +22,12 @@ from fmpy.fmi2 import FMU2Slave
 
 from fmpy.fmi1 import FMICallException
 
-from .core import CONTROLLER_FMU, PLATFORM_FMU, check_names, check_times, recording_callbacks, set_values, vector_of
+from .core import (CONTROLLER_FMU, PLATFORM_FMU, check_names, check_times, fmu_file, recording_callbacks, set_values,
+                   vector_of)
 
 SYSTEM_SSP = Path(PLATFORM_FMU).parent / "StewartSystem.ssp"
+# The closed loop with electric drives (docs/model.md §9): parameter bindings set drive = 1.
+SYSTEM_DRIVES_SSP = Path(PLATFORM_FMU).parent / "StewartSystemDrives.ssp"
 LEGS = range(1, 7)
 _extracted = {}
 
@@ -35,7 +38,7 @@ SCHEMES = ("gauss-seidel", "jacobi")
 class Component:
     def __init__(self, fmu, name, reals=None, integers=None, start_time=0.0, events=None, what=None):
         """`what`: the names of the arguments `reals` and `integers` came in, for messages."""
-        fmu = str(fmu)
+        fmu = fmu_file(fmu)
         self.md = read_model_description(fmu)
         if fmu not in _extracted:
             _extracted[fmu] = extract(fmu)

@@ -28,7 +28,7 @@ import numpy as np
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Model
 
-from .core import EQUILIBRIUM_FORCE, GRAVITY, MASS, PLATFORM_FMU, set_values, stand_parameters
+from .core import EQUILIBRIUM_FORCE, GRAVITY, MASS, PLATFORM_FMU, fmu_file, set_values, stand_parameters
 
 DOF = ["surge x", "sway y", "heave z", "roll", "pitch", "yaw"]
 
@@ -37,7 +37,8 @@ class PlatformModel:
     """A Model Exchange instance of StewartPlatform at a fixed operating point."""
 
     def __init__(self, parameters, forces, fmu=PLATFORM_FMU):
-        self.md = read_model_description(str(fmu))
+        fmu = fmu_file(fmu)
+        self.md = read_model_description(fmu)
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.fmu = FMU2Model(guid=self.md.guid, unzipDirectory=extract(str(fmu)),
                              modelIdentifier=self.md.modelExchange.modelIdentifier, instanceName="linearise")

@@ -36,7 +36,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave, fmi2Terminated
 
 from . import study_schema
-from .core import CONTROLLER_FMU, PLATFORM_FMU, recording_callbacks, set_values, stand_parameters
+from .core import fmu_file, recording_callbacks, set_values, stand_parameters
 from .study_schema import DEFAULT_MAX_RUNS, StudyError
 
 
@@ -44,15 +44,16 @@ METRICS = ["max_leg_error", "max_pose_error", "stable", "discard_time", "min_kap
            "energy_residual", "peak_deceleration", "final_z"]
 
 
-def plan(path, max_runs=DEFAULT_MAX_RUNS):
+def plan(path, max_runs=DEFAULT_MAX_RUNS, fmus=None):
     """The study file's Plan, checked against the schema (`stewart_fmu.study_schema`) and the
-    FMUs before anything runs; raises StudyError naming every problem."""
+    FMUs (`fmus`: `study_schema.fmu_paths()`, the package's by default) before anything runs;
+    raises StudyError naming every problem."""
     path = Path(path)
     try:
         spec = tomllib.loads(path.read_text())
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as e:
         raise StudyError(path, [f"cannot read the study file: {e}"]) from e
-    return study_schema.check(spec, path, max_runs)
+    return study_schema.check(spec, path, max_runs, fmus=fmus)
 
 
 def load(path, max_runs=DEFAULT_MAX_RUNS):
@@ -153,12 +154,13 @@ def _drop_components():
         _safe(_PROCESS.pop(key).fmu.freeInstance, None)
 
 
-def fmus_for(spec):
-    """The FMUs a study needs, as bytes (they travel to the workers; no shared file system)."""
-    fmus = {"platform": Path(PLATFORM_FMU).read_bytes()}
-    if spec["study"]["system"] == "closed-loop":
-        fmus["controller"] = Path(CONTROLLER_FMU).read_bytes()
-    return fmus
+def fmus_for(spec, paths=None):
+    """The FMUs a study needs, as bytes (they travel to the workers; no shared file system).
+    `paths`: `study_schema.fmu_paths()`, the package's FMUs by default."""
+    paths = paths or study_schema.fmu_paths()
+    roles = ("platform", "controller") if spec["study"]["system"] == "closed-loop" else ("platform",)
+    return {role: Path(fmu_file(paths[role], "--fmu" if role == "platform" else "--controller-fmu")).read_bytes()
+            for role in roles}
 
 
 LEGS = range(1, 7)
@@ -170,8 +172,9 @@ FSTOP = [f"Fstop[{k}]" for k in LEGS]
 ENERGY = ["E", "work.F", "work.dissipated", "kappa", "r[1]", "r[2]", "r[3]", "v[3]"]
 
 
-def _parameters(spec, run):
-    """The values for each FMU from the study's units and the run."""
+def _parameters(spec, run, platform_md):
+    """The values for each FMU from the study's units and the run (`platform_md`: the platform's
+    model description, for the start values the centre-of-mass offset moves)."""
     study = spec["study"]
     platform, controller = {}, {}
     if study["units"] == "nondimensional":
@@ -188,7 +191,7 @@ def _parameters(spec, run):
         elif role == "controller":
             controller[variable] = value
     if any(offset):
-        md_start = _start_values(PLATFORM_FMU)
+        md_start = _start_values(platform_md)
         for k in LEGS:
             for i in range(3):
                 name = f"A[{k},{i + 1}]"
@@ -199,15 +202,10 @@ def _parameters(spec, run):
     return platform, controller
 
 
-_STARTS = {}
-
-
-def _start_values(fmu):
-    if fmu not in _STARTS:
-        md = read_model_description(str(fmu))
-        _STARTS[fmu] = {v.name: float(v.start) for v in md.modelVariables
-                        if v.start is not None and v.type == "Real"}
-    return _STARTS[fmu]
+def _start_values(md):
+    """The Real start values of a model description (the worker's own copy of the FMU's: on a
+    remote worker the client's files are not there)."""
+    return {v.name: float(v.start) for v in md.modelVariables if v.start is not None and v.type == "Real"}
 
 
 def failed_metrics(message):
@@ -247,7 +245,7 @@ def _execute(spec, run, fmus, row):
     h = float(run.get("step", study["step"]))
     stop = float(run.get("stop_time", study["stop_time"]))
     try:
-        platform_values, controller_values = _parameters(spec, run)
+        platform_values, controller_values = _parameters(spec, run, platform.md)
         platform.start(platform_values)
         if closed:
             controller.start(controller_values)

@@ -13,16 +13,16 @@ so a run that reaches a worker without `check` (the API) is an error row, never 
 
 import math
 from dataclasses import dataclass, field
-from pathlib import PurePosixPath
+from pathlib import Path, PurePosixPath
 
-from .core import CONTROLLER_FMU, PLATFORM_FMU, nearest
+from .core import CONTROLLER_FMU, PLATFORM_FMU, fmu_file, nearest
 
 # Each run is a Python loop of about 50 us a communication step (two FMUs); 10^7 steps is
 # about 10 min of one worker: beyond that a run is almost surely a unit mistake (ms for s).
 MAX_STEPS_PER_RUN = 10_000_000
 
 # The default of `stewart-sweep --max-runs`, sized for a 2-core, 24 GiB machine: the shipped
-# studies run at 5 .. 40 runs/s there (the README's table), so 10^5 runs take 1 .. 6 hours, and
+# studies run at 5 .. 40 runs/s there (their summaries; docs/studies.md), so 10^5 runs take 1 .. 6 hours, and
 # their run list (about 0.4 kB a run: 380 MB measured for 10^6) and rows stay far below the
 # memory. 10^7 runs would take weeks (the red-team run's 10^7 grid took 5.6 GB before a run).
 DEFAULT_MAX_RUNS = 100_000
@@ -91,6 +91,7 @@ class Variable:
     min: float = None
     max: float = None
     unit: str = None
+    description: str = ""
 
 
 def variables_of(md):
@@ -100,24 +101,41 @@ def variables_of(md):
         kind = "Integer" if v.type == "Enumeration" else v.type
         lo = float(v.min) if v.min not in (None, "") else None
         hi = float(v.max) if v.max not in (None, "") else None
-        table[v.name] = Variable(kind, v.causality, lo, hi, v.unit if v.unit else None)
+        table[v.name] = Variable(kind, v.causality, lo, hi, v.unit if v.unit else None, v.description or "")
     return table
 
 
 _FMU_VARIABLES = {}
 
 
-def fmu_variables():
-    """{'platform': ..., 'controller': ...} from the packaged FMUs' model descriptions
-    (cached while the files are unchanged)."""
+def fmu_paths(platform=None, controller=None):
+    """{'platform': path, 'controller': path}: the given FMUs, or the package's defaults
+    (`stewart_fmu.core`: the repository's build, the wheel's copies, or the environment's
+    STEWART_PLATFORM_FMU and STEWART_CONTROLLER_FMU). A platform given without a controller
+    takes the StewartController.fmu beside it."""
+    platform = Path(platform) if platform else PLATFORM_FMU
+    if controller:
+        controller = Path(controller)
+    else:
+        controller = platform.parent / "StewartController.fmu" if platform != PLATFORM_FMU else CONTROLLER_FMU
+    return {"platform": platform, "controller": controller}
+
+
+def fmu_variables(paths=None):
+    """{'platform': ..., 'controller': ...} from the FMUs' model descriptions (`fmu_paths()`
+    by default; cached while the files are unchanged)."""
     from fmpy import read_model_description
     tables = {}
-    for role, path in (("platform", PLATFORM_FMU), ("controller", CONTROLLER_FMU)):
+    for role, path in (paths or fmu_paths()).items():
         try:
             key = (str(path), path.stat().st_mtime_ns)
         except OSError:
-            raise StudyError("", [f"{path} is missing: build the FMUs with `cargo run --release --bin build-fmu` "
-                                  "(or point STEWART_PLATFORM_FMU at them)"]) from None
+            option = "--fmu" if role == "platform" else "--controller-fmu"
+            try:
+                fmu_file(path, option)
+            except FileNotFoundError as e:
+                raise StudyError("", [str(e)]) from None
+            raise
         if key not in _FMU_VARIABLES:
             _FMU_VARIABLES[key] = variables_of(read_model_description(str(path)))
         tables[role] = _FMU_VARIABLES[key]
@@ -302,8 +320,9 @@ class Plan:
         return "\n".join(lines)
 
 
-def check(spec, path="", max_runs=DEFAULT_MAX_RUNS, variables=None):
-    """The Plan of a study file's dict (defaults filled in); raises StudyError with every problem."""
+def check(spec, path="", max_runs=DEFAULT_MAX_RUNS, variables=None, fmus=None):
+    """The Plan of a study file's dict (defaults filled in); raises StudyError with every problem.
+    `variables`: the FMUs' variable tables (`fmu_variables`), or read from `fmus` (`fmu_paths`)."""
     problems, structure = [], []
     if not isinstance(spec, dict):
         raise StudyError(path, ["the study file must be a TOML table"])
@@ -331,7 +350,7 @@ def check(spec, path="", max_runs=DEFAULT_MAX_RUNS, variables=None):
     system, units = study["system"], study["units"]
     problems += _check_study(study)
     if variables is None:
-        variables = fmu_variables()
+        variables = fmu_variables(fmus)
 
     fixed, grid, random = spec.get("fixed", {}), spec.get("grid", {}), dict(spec.get("random", {}))
     samples, seed = random.pop("samples", None), random.pop("seed", 0)

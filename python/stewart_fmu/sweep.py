@@ -1,4 +1,4 @@
-"""`stewart-sweep STUDY.toml --out DIR [--scheduler ADDRESS] [--workers N] [--limit N] [--serial]`:
+"""`stewart-sweep STUDY.toml --out DIR [--fmu PATH] [--scheduler ADDRESS] [--workers N] [--limit N] [--serial]`:
 runs a design study (see `stewart_fmu.study`) on Dask.
 
 - The study file is checked first (`stewart_fmu.study_schema`; docs/studies.md): a file with
@@ -37,6 +37,7 @@ from pathlib import Path
 import pandas as pd
 
 from . import study as st
+from . import study_schema
 
 
 def results_dir(out):
@@ -239,6 +240,12 @@ def parser():
                    help=f"refuse a study of more runs (default {st.DEFAULT_MAX_RUNS}: on a 2-core, 24 GiB machine the "
                         "shipped studies run at 5-40 runs/s, so that is 1-6 hours, and the run list (about 0.4 kB a "
                         "run) and the rows stay far below the memory; raise it for a bigger cluster)")
+    p.add_argument("--fmu", metavar="PATH",
+                   help="the StewartPlatform.fmu to run (default: the package's: the repository's target/fmu/ or "
+                        "the copy an installed wheel carries; or the environment variable STEWART_PLATFORM_FMU)")
+    p.add_argument("--controller-fmu", metavar="PATH",
+                   help="the StewartController.fmu (default: the one beside --fmu, or the package's; or "
+                        "STEWART_CONTROLLER_FMU)")
     p.add_argument("--scheduler", help="address of a running Dask scheduler (tcp://host:port)")
     p.add_argument("--connect-timeout", type=_positive_float, default=CONNECT_TIMEOUT,
                    help=f"seconds to wait for --scheduler to answer (default {CONNECT_TIMEOUT:g})")
@@ -260,7 +267,7 @@ def main(argv=None):
         parser().error("--out is required (except with --check)")
     try:
         return sweep(args)
-    except (st.StudyError, SweepError) as e:
+    except (st.StudyError, SweepError, FileNotFoundError) as e:
         print(f"stewart-sweep: {e}", file=sys.stderr, flush=True)
         return 2
     except KeyboardInterrupt:
@@ -269,7 +276,8 @@ def main(argv=None):
 
 
 def sweep(args):
-    plan = st.plan(args.study, args.max_runs)
+    paths = study_schema.fmu_paths(args.fmu, args.controller_fmu)
+    plan = st.plan(args.study, args.max_runs, fmus=paths)
     spec = plan.spec
     if args.check:
         print(plan.text())
@@ -285,10 +293,10 @@ def sweep(args):
             print(f"stewart-sweep: the lock of a sweep that ended without releasing it (pid "
                   f"{lock.taken_over.get('pid')}, started {lock.taken_over.get('started')}) was taken over",
                   file=sys.stderr)
-        return _sweep_locked(spec, plan, args, out)
+        return _sweep_locked(spec, plan, args, out, paths)
 
 
-def _sweep_locked(spec, plan, args, out):
+def _sweep_locked(spec, plan, args, out, paths):
     try:
         if not (out / "study.toml").exists() or not os.path.samefile(args.study, out / "study.toml"):
             shutil.copyfile(args.study, out / "study.toml")
@@ -307,7 +315,7 @@ def _sweep_locked(spec, plan, args, out):
     started = time.monotonic()
     try:
         if todo:
-            fmus = st.fmus_for(spec)
+            fmus = st.fmus_for(spec, paths)
             if args.serial:
                 for run in todo:
                     writer.add(run_and_time(spec, run, fmus))
@@ -325,7 +333,7 @@ def _sweep_locked(spec, plan, args, out):
     (out / "summary.txt").write_text(summary + "\n")
     print(summary)
     status = 0
-    for path, problem in plot(spec, results, out):
+    for path, problem in plot(spec, results, out, study_schema.fmu_variables(paths)):
         if problem:
             print(f"stewart-sweep: {path.name} not written: {problem}", file=sys.stderr)
             status = 1
@@ -418,11 +426,12 @@ def summarise(spec, results, executed, elapsed, order=None):
     return "\n".join(lines)
 
 
-def plot(spec, results, out):
+def plot(spec, results, out, variables=None):
     """The study's `[[plot]]` figures: `map` (a metric over two parameters, one panel per value
-    of a third), `histogram` of a metric, `scatter` of a metric against a parameter. Yields
-    (path, None) for each figure written, (path, reason) for one that could not be: rows are
-    never lost to a plot."""
+    of a third), `histogram` of a metric, `scatter` of a metric against a parameter. Axes are
+    labelled with each quantity's name and unit (`stewart_fmu.labels`; `variables`: the FMUs'
+    variable tables). Yields (path, None) for each figure written, (path, reason) for one that
+    could not be: rows are never lost to a plot."""
     if not len(results) or not spec.get("plot"):
         return
     import matplotlib
@@ -436,7 +445,7 @@ def plot(spec, results, out):
             continue
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
-            fig = _figure(plt, spec, results, p)
+            fig = _figure(plt, spec, results, p, variables)
             fig.savefig(path, dpi=110)
             plt.close(fig)
         except Exception as e:  # noqa: BLE001 - a figure that fails is reported; the rows are kept
@@ -446,19 +455,45 @@ def plot(spec, results, out):
         yield path, None
 
 
-def _figure(plt, spec, results, p):
+def colour_limits(values):
+    """Colour-scale limits that show the bulk of the values: the data's range, cut at 3
+    interquartile ranges beyond the quartiles, so that one outlier (a run at rest, 1e-15 m)
+    does not take the whole scale. Returns (lo, hi)."""
     import numpy as np
+    finite = np.asarray(values, dtype=float)
+    finite = finite[np.isfinite(finite)]
+    if not len(finite):
+        return 0.0, 1.0
+    q1, q3 = np.percentile(finite, [25, 75])
+    spread = q3 - q1
+    lo = max(finite.min(), q1 - 3 * spread) if spread > 0 else finite.min()
+    hi = min(finite.max(), q3 + 3 * spread) if spread > 0 else finite.max()
+    return (lo, hi) if hi > lo else (lo - 0.5, hi + 0.5)
+
+
+def _figure(plt, spec, results, p, variables=None):
+    import textwrap
+
+    import numpy as np
+
+    from . import labels
     kind = p.get("kind", "histogram")
+    nondimensional = spec["study"].get("units") == "nondimensional"
 
     def column(name):
         return results[f"param:{name}"] if f"param:{name}" in results else results[name]
 
+    def label(name, width=48):
+        return textwrap.fill(labels.label(name, variables, nondimensional), width)
+
     value = p.get("value", "max_leg_error")
-    title = p.get("title", f"{spec['study']['name']}: {value}")
+    title = p.get("title", f"{spec['study']['name']}: {labels.label(value, variables, nondimensional)}")
     if kind == "map":
         facets = sorted(column(p["facet"]).unique()) if p.get("facet") else [None]
-        fig, axes = plt.subplots(1, len(facets), figsize=(max(6.5, 4.2 * len(facets)), 4.2), squeeze=False)
-        for ax, facet in zip(axes[0], facets):
+        fig, axes = plt.subplots(1, len(facets), figsize=(max(7.5, 4.2 * len(facets) + 1.5), 5.0), squeeze=False,
+                                 sharey=True, layout="constrained")
+        grids = []
+        for facet in facets:
             part = results if facet is None else results[column(p["facet"]) == facet]
             xs, ys = sorted(column(p["x"])[part.index].unique()), sorted(column(p["y"])[part.index].unique())
             grid = np.full((len(ys), len(xs)), np.nan)
@@ -466,32 +501,47 @@ def _figure(plt, spec, results, p):
                 x, y = r.get(f"param:{p['x']}", r.get(p["x"])), r.get(f"param:{p['y']}", r.get(p["y"]))
                 v = r[value] if r["stable"] or not p.get("unstable_blank", True) else np.nan
                 grid[ys.index(y), xs.index(x)] = v
-            shown = np.log10(grid) if p.get("log") else grid
-            im = ax.imshow(shown, origin="lower", aspect="auto", cmap="viridis")
+            with np.errstate(divide="ignore", invalid="ignore"):
+                shown = np.log10(grid) if p.get("log") else grid
+            grids.append((xs, ys, grid, shown))
+        # One colour scale for all panels, robust to outliers; cells beyond it are marked.
+        every = np.concatenate([g[3].ravel() for g in grids])
+        lo, hi = colour_limits(every)
+        below, above = bool(np.any(every < lo)), bool(np.any(every > hi))
+        for ax, facet, (xs, ys, grid, shown) in zip(axes[0], facets, grids):
+            im = ax.imshow(shown, origin="lower", aspect="auto", cmap="viridis", vmin=lo, vmax=hi)
             ax.set_xticks(range(len(xs)), [f"{x:g}" for x in xs], rotation=45)
             ax.set_yticks(range(len(ys)), [f"{y:g}" for y in ys])
-            ax.set_xlabel(p["x"])
-            ax.set_ylabel(p["y"])
             if facet is not None:
-                ax.set_title(f"{p['facet']} = {facet:g}")
-            for (yi, xi), v in np.ndenumerate(grid):
-                if np.isnan(v):
+                ax.set_title(labels.facet_title(p["facet"], facet, variables, nondimensional))
+            for (yi, xi), v in np.ndenumerate(shown):
+                if np.isnan(grid[yi, xi]):
                     ax.text(xi, yi, "x", ha="center", va="center", color="red")
-            fig.colorbar(im, ax=ax, label=("log10 " if p.get("log") else "") + value)
-        fig.suptitle(title + " (x: unstable or failed)")
-    elif kind == "scatter":
-        fig, ax = plt.subplots(figsize=(6, 4))
+                elif v < lo or v > hi:
+                    ax.text(xi, yi, "<" if v < lo else ">", ha="center", va="center", color="white",
+                            fontweight="bold")
+        extend = {(True, True): "both", (True, False): "min", (False, True): "max"}.get((below, above), "neither")
+        fig.supxlabel(label(p["x"], 90), fontsize=9)
+        axes[0][0].set_ylabel(label(p["y"], 40), fontsize=9)
+        fig.colorbar(im, ax=list(axes[0]), extend=extend,
+                     label=textwrap.fill(("log10 of " if p.get("log") else "") + labels.label(value, variables,
+                                                                                             nondimensional), 40))
+        note = "x: unstable or failed" + ("; < >: beyond the colour scale" if below or above else "")
+        fig.suptitle(textwrap.fill(f"{title} ({note})", int(10 * fig.get_figwidth())), fontsize=10)
+        return fig
+    if kind == "scatter":
+        fig, ax = plt.subplots(figsize=(6.5, 4.2))
         ax.scatter(column(p["x"]), results[value], s=12)
-        ax.set_xlabel(p["x"])
-        ax.set_ylabel(value)
-        ax.set_title(title)
+        ax.set_xlabel(label(p["x"]))
+        ax.set_ylabel(label(value))
+        ax.set_title(textwrap.fill(title, 64), fontsize=10)
         ax.grid(True, alpha=0.3)
     else:
-        fig, ax = plt.subplots(figsize=(6, 4))
+        fig, ax = plt.subplots(figsize=(6.5, 4.2))
         ax.hist(results[value].dropna(), bins=p.get("bins", 30))
-        ax.set_xlabel(value)
+        ax.set_xlabel(label(value))
         ax.set_ylabel("runs")
-        ax.set_title(title)
+        ax.set_title(textwrap.fill(title, 64), fontsize=10)
     fig.tight_layout()
     return fig
 

@@ -11,14 +11,16 @@ present (`VIEW_OUTPUTS` lists them all for `simulate_fmu(..., output=VIEW_OUTPUT
 import json
 import shutil
 import subprocess
+import sys
 from pathlib import Path
+from urllib.parse import quote
 
 import numpy as np
 from fmpy import read_model_description
 
-from .core import PLATFORM_FMU, ROOT
+from .core import DATA, IN_REPOSITORY, PLATFORM_FMU, ROOT, fmu_file
 
-VIEWER = ROOT / "viewer"
+VIEWER = ROOT / "viewer"  # the viewer's sources, in the repository
 LEGS = range(1, 7)
 VIEW_OUTPUTS = ([f"r[{i}]" for i in (1, 2, 3)] + [f"R[{a},{b}]" for a in (1, 2, 3) for b in (1, 2, 3)]
                 + [f"angles[{i}]" for i in (1, 2, 3)] + [f"l[{k}]" for k in LEGS] + [f"F[{k}]" for k in LEGS]
@@ -30,14 +32,26 @@ STAND_SCALARS = ("leg.cylinderMass", "leg.rodMass", "leg.cylinderCoM", "leg.rodC
 
 
 def built_viewer():
-    """The built page (`viewer/dist/`), building it with npm if it is missing."""
+    """The built page: installed from a wheel, the copy it carries (stewart_fmu/data/viewer/);
+    in the repository, viewer/dist/, built with npm from the committed lock file if missing."""
+    if not IN_REPOSITORY:
+        packaged = DATA / "viewer"
+        if (packaged / "index.html").is_file():
+            return packaged
+        raise RuntimeError(f"the viewer page is not in this installation of stewart_fmu ({packaged} is missing): "
+                           "install the wheel python/build_wheel.sh builds, which carries it")
     dist = VIEWER / "dist"
     if not (dist / "index.html").exists():
         npm = shutil.which("npm")
         if npm is None:
-            raise RuntimeError("viewer/dist is missing and npm is not installed: run `npm ci && npm run build` in viewer/")
-        subprocess.run([npm, "ci", "--no-audit", "--no-fund"], cwd=VIEWER, check=True, capture_output=True)
-        subprocess.run([npm, "run", "build"], cwd=VIEWER, check=True, capture_output=True)
+            raise RuntimeError("viewer/dist is missing and npm is not installed: install Node.js and npm, then run "
+                               "`npm ci && npm run build` in viewer/")
+        print("stewart_fmu.viewer: building the viewer page in viewer/ (npm ci and vite; about a minute)",
+              file=sys.stderr, flush=True)
+        for command in ([npm, "ci", "--no-audit", "--no-fund"], [npm, "run", "build"]):
+            run = subprocess.run(command, cwd=VIEWER, capture_output=True, text=True)
+            if run.returncode != 0:
+                raise RuntimeError(f"`{' '.join(command[1:])}` in {VIEWER} failed:\n{run.stderr[-2000:]}")
     return dist
 
 
@@ -45,7 +59,7 @@ def stand(parameters=None, fmu=PLATFORM_FMU):
     """The stand of a run for the viewer: the FMU's start values of `B`, `A`, `lmin`, `lmax`,
     the legs' bodies and the joint limits, overridden by `parameters` (FMI names, as given to
     `simulate_fmu`'s `start_values`)."""
-    variables = read_model_description(str(fmu)).modelVariables
+    variables = read_model_description(fmu_file(fmu)).modelVariables
     start = {v.name: float(v.start) for v in variables if v.start is not None and v.type == "Real"}
     joints = {v.name: v.start == "true" for v in variables if v.type == "Boolean"}.get("joints", False)
     for k, v in (parameters or {}).items():
@@ -86,8 +100,11 @@ def write_csv(path, result):
 
 
 def view(result, stand_values=None, out="output/viewer", name="result", title=None):
-    """Writes the viewer page with `result` into `out` (data in `out/data/`, listed in
-    `out/data/index.json` beside earlier ones); returns the page's address relative to `out`."""
+    """Writes the viewer page with `result` into `out` (data in `out/data/NAME.csv` and
+    `NAME.stand.json`, listed in `out/data/index.json` beside earlier ones); returns the page's
+    address relative to `out`, its query encoded. `name` is a file name: no folders."""
+    if not isinstance(name, str) or not name or name in (".", "..") or "/" in name or "\\" in name or "\0" in name:
+        raise ValueError(f"name = {name!r}: a file name for the result is expected (no '/', not empty)")
     out = Path(out)
     dist = built_viewer()
     out.mkdir(parents=True, exist_ok=True)
@@ -101,4 +118,4 @@ def view(result, stand_values=None, out="output/viewer", name="result", title=No
     entry = {"title": title or name, "data": f"data/{name}.csv", "stand": f"data/{name}.stand.json"}
     index = [d for d in index if d["data"] != entry["data"]] + [entry]
     index_path.write_text(json.dumps(index, indent=1))
-    return f"index.html?data={entry['data']}&stand={entry['stand']}"
+    return f"index.html?data={quote(entry['data'])}&stand={quote(entry['stand'])}"

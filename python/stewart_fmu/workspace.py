@@ -22,7 +22,7 @@ from fmpy import read_model_description, simulate_fmu
 
 from .cosim import closed_loop
 from .core import (BASE_AZIMUTHS, GRAVITY, H_C, MASS, PLATFORM_AZIMUTHS, PLATFORM_FMU, R_B, R_P, Platform, check_names,
-                   check_times)
+                   check_times, fmu_file)
 
 LEGS = range(1, 7)
 EQUILIBRIUM_FORCE_SI = 0.2005 * MASS * GRAVITY
@@ -30,7 +30,7 @@ EQUILIBRIUM_FORCE_SI = 0.2005 * MASS * GRAVITY
 
 def start_values(names, fmu=PLATFORM_FMU):
     """Start values of the FMU's own model description (the defaults the FMU runs with)."""
-    md = read_model_description(str(fmu))
+    md = read_model_description(fmu_file(fmu))
     values = {v.name: v.start for v in md.modelVariables}
     check_names(names, values, md.modelName, "start_values")
     return {n: float(values[n]) for n in names}

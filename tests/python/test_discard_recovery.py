@@ -1,4 +1,4 @@
-"""What a host sees after a discard, and the README's recovery recipe: a step that only the
+"""What a host sees after a discard, and the recovery recipe of docs/fmi-behaviour.md: a step that only the
 limit of internal steps per call stops is refused with the numbers, `fmi2Terminated` false,
 and the recipe (restore the state saved before the step, go on in halves) finishes it, with
 the same motion as a master that took the shorter steps from the start. A discard the motion
@@ -17,12 +17,12 @@ from stewart_fmu import PLATFORM_FMU, ROOT, recording_callbacks
 
 
 def readme_recipe():
-    """The `step_with_retry` function exactly as the README gives it."""
-    text = (ROOT / "README.md").read_text()
+    """The `step_with_retry` function exactly as docs/fmi-behaviour.md gives it."""
+    text = (ROOT / "docs" / "fmi-behaviour.md").read_text()
     block = next(b for b in re.findall(r"```python\n(.*?)```", text, re.S) if "def step_with_retry" in b)
     code = block[: block.index("md = read_model_description")]
     namespace = {}
-    exec(compile(code, "README.md", "exec"), namespace)
+    exec(compile(code, "docs/fmi-behaviour.md", "exec"), namespace)
     return namespace["step_with_retry"]
 
 

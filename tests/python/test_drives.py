@@ -12,7 +12,7 @@ from fmpy import read_model_description, simulate_fmu
 
 from stewart_fmu import PLATFORM_FMU, Platform
 from stewart_fmu import drives as dr
-from stewart_fmu.cosim import CONTROLLER_FMU
+from stewart_fmu.cosim import CONTROLLER_FMU, SYSTEM_DRIVES_SSP
 from stewart_fmu.workspace import static_rest_height, stop_defaults
 from test_fmi3 import PLATFORM3, Fmu3
 
@@ -98,8 +98,7 @@ def test_libcosim_runs_the_drive_system_from_its_ssp():
     log_output_level(CosimLogLevel.WARNING)
     vrp = {v.name: v.valueReference for v in read_model_description(str(PLATFORM_FMU)).modelVariables}
     vrc = {v.name: v.valueReference for v in read_model_description(str(CONTROLLER_FMU)).modelVariables}
-    execution = CosimExecution.from_ssp_file(ssp_path=str(PLATFORM_FMU.parent / "StewartSystemDrives.ssp"),
-                                             step_size=1_000_000)
+    execution = CosimExecution.from_ssp_file(ssp_path=str(SYSTEM_DRIVES_SSP), step_size=1_000_000)
     index = {(s.name.decode() if isinstance(s.name, bytes) else s.name): s.index for s in execution.slave_infos()}
     observer = CosimObserver.create_last_value()
     execution.add_observer(observer=observer)

@@ -158,7 +158,7 @@ def test_fmi3_model_exchange_matches_fmi2_model_exchange():
     against the FMI 2 one. Explicit Euler with time-varying inputs: identical. CVODE with
     constant forces: equal to what its error control allows (the permuted state vector changes
     the order of its sums). (With time-varying inputs FMPy's CVODE root function applies the
-    inputs at CVODE's internal times, which differ between the two runs; see README.)"""
+    inputs at CVODE's internal times, which differ between the two runs; see docs/fmi-behaviour.md.)"""
     t = np.linspace(0.0, 2.0, 2001)
     inputs = np.zeros(len(t), dtype=[("time", float)] + [(f"F[{k}]", float) for k in range(1, 7)])
     inputs["time"] = t

@@ -2,7 +2,7 @@
 processes started here, no mocks): a 40-run study through `stewart-sweep --scheduler` with one
 worker killed mid-study gives every row once, equal to the serial run's rows; an interrupted
 study resumes without running anything twice; the shipped stability study reproduces the
-README's communication-step limit."""
+communication-step limit of docs/control.md."""
 
 import os
 import signal

@@ -11,6 +11,7 @@ import csv
 import functools
 import http.server
 import json
+import re
 import shutil
 import subprocess
 import threading
@@ -43,13 +44,21 @@ def served(tmp_path_factory):
     t, rows, _, status = closed_loop(10.0, 1e-3, platform_reals=start, record=tuple(VIEW_OUTPUTS))
     assert status == "ok"
     result = dict(time=t, **{n: rows[:, j] for j, n in enumerate(VIEW_OUTPUTS)})
-    address = view(result, stand(start), folder, "tilted", "tilted start")
+    view(result, stand(start), folder, "tilted", "tilted start")
     address = view(ripple_run(10.0, 0.01)[0], stand(), folder, "ripple", "ripple on the joint limits")
+    # The symmetric heave (roll, pitch and yaw only round-off) with one impact-like spike in
+    # F[1], under a file name that must be encoded in a URL.
+    t, rows, _, status = closed_loop(2.0, 1e-3, record=tuple(VIEW_OUTPUTS))
+    assert status == "ok"
+    spiked = dict(time=t, **{n: rows[:, j].copy() for j, n in enumerate(VIEW_OUTPUTS)})
+    spiked["F[1]"][500] = 1e6
+    rest_address = view(spiked, stand(), folder, "heave at rest #1", "heave, round-off angles, a spike in F[1]")
     handler = functools.partial(QuietHandler, directory=str(folder))
     server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
     threading.Thread(target=server.serve_forever, daemon=True).start()
     root = f"http://127.0.0.1:{server.server_address[1]}/"
-    yield folder, root + "index.html?data=data/tilted.csv&stand=data/tilted.stand.json", result, root + address
+    yield (folder, root + "index.html?data=data/tilted.csv&stand=data/tilted.stand.json", result, root + address,
+           root + rest_address)
     server.shutdown()
 
 
@@ -83,7 +92,7 @@ def expected(folder, t, name="tilted"):
 
 
 def test_the_browser_shows_the_same_legs_as_python(served, tmp_path):
-    folder, url, result, _ = served
+    folder, url, result, _, _ = served
     shot = tmp_path / "viewer.png"
     report = browse(url, shot, TIMES)
     assert report["rows"] == len(result["time"]) == 10000
@@ -105,7 +114,54 @@ def test_the_browser_shows_the_same_legs_as_python(served, tmp_path):
     message = report["badFile"]["error"]
     assert message.startswith("not a platform result: missing columns") and "r[2]" in message and "R[1,1]" in message
     assert report["badFile"]["shown"] == message
+    # The dataset menu lists every result written into the folder, also when the address
+    # names one (?data=), and selects that one.
+    menu = report["shown"]["datasets"]
+    assert [d["data"] for d in menu] == ["data/tilted.csv", "data/ripple.csv", "data/heave at rest #1.csv"]
+    assert [d["selected"] for d in menu] == [True, False, False]
+    # The plots have a time axis over the run (1 ms .. 10 s) and a key.
+    plots = report["shown"]["plots"]
+    assert (plots["plot-heave"]["t0"], plots["plot-heave"]["t1"]) == (result["time"][0], result["time"][-1])
+    assert plots["plot-angles"]["key"] == ["roll", "pitch", "yaw"]
+    assert plots["plot-legs"]["key"] == ["1", "2", "3", "4", "5", "6"]
+    assert plots["plot-heave"]["ticks"] == [2, 4, 6, 8, 10]
+    # Pose that is not a number: rows from the first NaN are left out, with a message naming
+    # the row and column; NaN from the first row is an error.
+    nan = report["nan"]
+    print(f"viewer: NaN pose from row 4: {nan['later']['message']!r}; from row 1: {nan['first']['error']!r}")
+    assert nan["later"]["error"] is None and nan["later"]["rows"] == 3
+    assert "not a number (NaN)" in nan["later"]["message"] and "column r[2], row 4 of 5 (t = 0.3)" in nan["later"]["message"]
+    assert "not a number (NaN) from the first row" in nan["first"]["error"] and "column r[3]" in nan["first"]["error"]
+    assert nan["first"]["message"] == nan["first"]["error"]
     shutil.copyfile(shot, ROOT / "target" / "viewer_screenshot.png")
+
+
+def test_the_plots_keep_round_off_flat_and_the_force_scale_shows_the_working_range(served, tmp_path):
+    """The symmetric heave's roll, pitch and yaw are round-off: the angles plot spans at least
+    1e-3 rad about them instead of blowing 1e-16 up to its height. One spike of 1e6 N in F[1]
+    does not set the force colours: the scale ends at the 98th percentile of |F| (as numpy
+    computes it from the CSV), and the legend says that it is clipped and names the peak. The
+    result's file name has a space and a '#', which the address and the fetches encode."""
+    folder, _, _, _, url = served
+    assert "%20" in url and "%23" in url
+    report = browse(url, tmp_path / "rest.png", [0.5, 1.999])
+    col, _ = row(folder, "heave at rest #1", 0.0)
+    assert report["rows"] == len(col["time"]) == 2000
+    angles = np.array([col[f"angles[{a}]"] for a in (1, 2, 3)])
+    lo, hi = report["shown"]["plots"]["plot-angles"]["lo"], report["shown"]["plots"]["plot-angles"]["hi"]
+    forces = np.abs(np.array([col[f"F[{k}]"] for k in range(1, 7)]))
+    scale = report["shown"]["forceScale"]
+    legend = report["shown"]["legend"]
+    print(f"viewer: angles round-off {np.max(np.abs(angles)):.1e} rad plotted over [{lo:.3g}, {hi:.3g}]; force scale "
+          f"{scale['limit']:.6g} N (98th percentile of |F|, numpy {np.percentile(forces, 98):.6g}), peak "
+          f"{scale['peak']:.3g} N; legend {legend}")
+    assert 0 < np.max(np.abs(angles)) < 1e-12
+    assert hi - lo >= 1e-3 - 1e-15 and lo <= angles.min() and hi >= angles.max()
+    assert scale["limit"] == pytest.approx(np.percentile(forces, 98), rel=1e-12)
+    assert scale["limit"] < 1e4 < scale["peak"] == 1e6 and scale["clipped"]
+    assert "clipped" in legend["clipped"] and "1.00e+6" in legend["clipped"]
+    ends = [float(x) for x in re.findall(r"[\u2264\u2265] (\S+)", legend["scale"])]
+    assert ends == pytest.approx([-scale["limit"], scale["limit"]], rel=5e-3), legend["scale"]
 
 
 def red_pixels(shot):
@@ -120,7 +176,7 @@ def test_the_browser_draws_the_legs_as_two_bodies_and_the_joints_at_their_limits
     exactly those red; before the tilt none is. Each leg is a cylinder from B_k and a rod to
     a_k along the leg, of twice the centre-of-mass distances lengthened to overlap 5 % at the
     longest leg."""
-    folder, _, _, url = served
+    folder, _, _, url, _ = served
     s = json.loads((folder / "data" / "ripple.stand.json").read_text())
     times = [0.5, 0.95, 1.4, 5.0, 9.99]
     calm, limits = tmp_path / "calm.png", tmp_path / "limits.png"

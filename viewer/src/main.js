@@ -6,10 +6,10 @@
 
 import * as THREE from "three";
 import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
-import { Result, checkStand, defaultStand, parseCsv } from "./result.js";
+import { Result, checkStand, defaultStand, niceTicks, parseCsv, plotRange } from "./result.js";
 
 const $ = (id) => document.getElementById(id);
-const state = { result: null, index: 0, playing: false, speed: 1, time: 0, error: null, ready: false };
+const state = { result: null, index: 0, playing: false, speed: 1, time: 0, error: null, notice: null, ready: false };
 
 // ----- scene -------------------------------------------------------------------------------
 
@@ -47,10 +47,11 @@ function resize() {
 }
 window.addEventListener("resize", resize);
 
-// Force colours: blue (pull) .. grey (0) .. red (push), scaled to the result's force range.
-function forceColour(f, [lo, hi]) {
+// Force colours: blue (pull) .. grey (0) .. red (push), scaled to the result's working range
+// (`forceScale`: the 98th percentile of |F|); beyond it, the end colours.
+function forceColour(f, limit) {
   if (!Number.isFinite(f)) return new THREE.Color(0x888888);
-  const m = Math.max(Math.abs(lo), Math.abs(hi)) || 1;
+  const m = limit || 1;
   const x = Math.max(-1, Math.min(1, f / m));
   return x >= 0 ? new THREE.Color(0.55 + 0.45 * x, 0.55 - 0.4 * x, 0.55 - 0.4 * x) : new THREE.Color(0.55 + 0.4 * x, 0.55 + 0.1 * x, 0.55 - 0.45 * x);
 }
@@ -107,23 +108,31 @@ function build(result) {
 }
 
 function legend(result) {
-  const [lo, hi] = result.forceRange;
   const el = $("legend");
   if (!result.forces) {
-    el.innerHTML = "leg forces: not in the file (legs grey)";
+    el.textContent = "leg forces: not in the file (legs grey)";
     return;
   }
+  const { limit, peak, clipped } = result.forceScale;
   const c = document.createElement("canvas");
   c.width = 160;
   c.height = 12;
   const g = c.getContext("2d");
-  const m = Math.max(Math.abs(lo), Math.abs(hi));
   for (let x = 0; x < c.width; x++) {
-    g.fillStyle = `#${forceColour(-m + (2 * m * x) / (c.width - 1), [lo, hi]).getHexString()}`;
+    g.fillStyle = `#${forceColour(-limit + (2 * limit * x) / (c.width - 1), limit).getHexString()}`;
     g.fillRect(x, 0, 1, c.height);
   }
-  el.innerHTML = "";
-  el.append("cylinder colour: leg force F (N), pull", c, `${(-m).toPrecision(3)} .. 0 .. ${m.toPrecision(3)} push; a glowing cylinder is at an end stop, a red joint at its angle limit`);
+  const scale = document.createElement("div");
+  scale.id = "force-scale";
+  scale.textContent = clipped
+    ? `pull \u2264 ${(-limit).toPrecision(3)} .. 0 .. \u2265 ${limit.toPrecision(3)} push`
+    : `pull ${(-limit).toPrecision(3)} .. 0 .. ${limit.toPrecision(3)} push`;
+  const note = document.createElement("div");
+  note.id = "force-clipped";
+  note.textContent = clipped
+    ? `clipped at the 98th percentile of |F|: peaks up to ${peak.toPrecision(3)} N take the end colours (legs beyond it named below the plots)`
+    : "the scale spans every force in the file";
+  el.replaceChildren("cylinder colour: leg force F (N)", c, scale, note, "a glowing cylinder is at an end stop, a red joint at its angle limit");
 }
 
 const yUp = new THREE.Vector3(0, 1, 0);
@@ -156,7 +165,7 @@ function place(i) {
     stretch(cylinder, ...bodies[k].cylinder);
     stretch(parts.rods[k], ...bodies[k].rod);
     const atStop = result.stopForce(k, i) !== 0;
-    cylinder.material.color = forceColour(result.force(k, i), result.forceRange);
+    cylinder.material.color = forceColour(result.force(k, i), result.forceScale && result.forceScale.limit);
     cylinder.material.emissive = new THREE.Color(atStop ? 0x8a6d00 : 0x000000);
     parts.joints[k].position.set(...a);
     highlight(parts.baseJoints[k], limits.base[k]);
@@ -179,14 +188,26 @@ function place(i) {
   const joints = [...atLimit(limits.base, "base"), ...atLimit(limits.platform, "platform")];
   const s = result.stand;
   const legs = s.cylinderMass || s.rodMass ? `legs of ${s.cylinderMass || 0} kg + ${s.rodMass || 0} kg` : "massless legs";
-  $("info").textContent = `row ${i + 1} of ${result.rows}; legs at an end stop: ${stops}; joints at their angle limit: ${joints.length ? joints.join(", ") : "none"}; ${legs}; stand: ${s.source || "from file"}`;
+  const limit = result.forceScale ? result.forceScale.limit : Infinity;
+  const beyond = ends.map((_, k) => (Math.abs(result.force(k, i)) > limit ? `${k + 1}` : null)).filter(Boolean);
+  const clippedText = beyond.length ? `; legs beyond the force colour scale: ${beyond.join(", ")}` : "";
+  $("info").textContent = `row ${i + 1} of ${result.rows}; legs at an end stop: ${stops}; joints at their angle limit: ${joints.length ? joints.join(", ") : "none"}${clippedText}; ${legs}; stand: ${s.source || "from file"}`;
   drawPlots(i);
 }
 
 // ----- plots -------------------------------------------------------------------------------
 
 const PLOT_COLOURS = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b"];
+// Each plot: its series' names (the key under it) and the smallest vertical span it shows, in
+// the file's units (m or rad; deg for the joints), so that round-off stays a flat line.
+const PLOTS = {
+  "plot-heave": { key: ["r[3]"], minSpan: 1e-3 },
+  "plot-angles": { key: ["roll", "pitch", "yaw"], minSpan: 1e-3 },
+  "plot-legs": { key: ["1", "2", "3", "4", "5", "6"], minSpan: 1e-3 },
+  "plot-joints": { key: ["thetaB (largest)", "thetaA (largest)", "base limit", "platform limit"], minSpan: 0.1 },
+};
 let plotSeries = null;
+const plotLayout = {};
 
 function preparePlots(result) {
   const n = result.rows;
@@ -194,6 +215,9 @@ function preparePlots(result) {
   const idx = [];
   for (let i = 0; i < n; i += stride) idx.push(i);
   const times = idx.map((i) => result.time[i]);
+  // The time axis spans the whole run (the plotted rows are every stride-th).
+  const t0 = result.time[0];
+  const t1 = result.time[n - 1] > t0 ? result.time[n - 1] : t0 + 1;
   const heave = [idx.map((i) => result.pose(i).r[2])];
   const angles = [0, 1, 2].map((a) => idx.map((i) => result.angles(i)[a]));
   const legs = [0, 1, 2, 3, 4, 5].map((k) => idx.map((i) => result.legLengths(i)[k]));
@@ -202,51 +226,81 @@ function preparePlots(result) {
   const s = result.stand;
   const limit = (value) => (s.joints !== false && Number.isFinite(value) ? [idx.map(() => deg * value)] : []);
   const joints = result.jointAngles(0) ? [largest("base"), largest("platform"), ...limit(s.baseMaxAngle), ...limit(s.platformMaxAngle)] : null;
-  plotSeries = { times, heave, angles, legs, joints };
+  plotSeries = { times, "plot-heave": heave, "plot-angles": angles, "plot-legs": legs, "plot-joints": joints };
+  for (const [id, plot] of Object.entries(PLOTS)) {
+    const series = plotSeries[id];
+    const key = $(`key-${id}`);
+    key.replaceChildren();
+    (series ? plot.key.slice(0, series.length) : []).forEach((name, j) => {
+      const item = document.createElement("span");
+      item.className = "key-item";
+      item.style.color = PLOT_COLOURS[j % PLOT_COLOURS.length];
+      item.textContent = `\u2014 ${name}`;
+      key.append(item);
+    });
+    const [lo, hi] = series ? plotRange(series, plot.minSpan) : [0, 1];
+    plotLayout[id] = { lo, hi, t0, t1, ticks: niceTicks(t0, t1), key: [...key.children].map((e) => e.textContent.slice(2)) };
+  }
 }
 
-function drawPlot(id, series, t) {
+const MARGIN = { left: 52, right: 6, top: 6, bottom: 18 };
+
+function drawPlot(id, t) {
   const c = $(id);
   const g = c.getContext("2d");
+  const series = plotSeries[id];
   const { times } = plotSeries;
   g.clearRect(0, 0, c.width, c.height);
+  g.font = "10px system-ui, sans-serif";
   if (!series) {
     g.fillStyle = "#555";
     g.fillText("not in the file", 4, 14);
     return;
   }
-  const all = series.flat().filter(Number.isFinite);
-  let lo = Math.min(...all);
-  let hi = Math.max(...all);
-  if (!(hi > lo)) {
-    lo -= 1e-9 + Math.abs(lo) * 1e-3;
-    hi += 1e-9 + Math.abs(hi) * 1e-3;
+  const { lo, hi, t0, t1, ticks } = plotLayout[id];
+  const w = c.width - MARGIN.left - MARGIN.right;
+  const h = c.height - MARGIN.top - MARGIN.bottom;
+  const x = (tt) => MARGIN.left + (w * (tt - t0)) / (t1 - t0);
+  const y = (v) => MARGIN.top + h - (h * (v - lo)) / (hi - lo);
+  // Axes: the value range on the left, the time axis with its ticks below.
+  g.strokeStyle = "#999";
+  g.strokeRect(MARGIN.left, MARGIN.top, w, h);
+  g.fillStyle = "#444";
+  g.textAlign = "right";
+  g.fillText(hi.toPrecision(4), MARGIN.left - 3, MARGIN.top + 8);
+  g.fillText(lo.toPrecision(4), MARGIN.left - 3, MARGIN.top + h);
+  g.textAlign = "center";
+  for (const tick of ticks) {
+    g.beginPath();
+    g.moveTo(x(tick), MARGIN.top + h);
+    g.lineTo(x(tick), MARGIN.top + h + 3);
+    g.stroke();
+    g.fillText(`${+tick.toPrecision(6)}`, x(tick), c.height - 4);
   }
-  const t0 = times[0];
-  const t1 = times[times.length - 1] || t0 + 1;
-  const x = (tt) => 4 + ((c.width - 8) * (tt - t0)) / (t1 - t0 || 1);
-  const y = (v) => c.height - 14 - ((c.height - 20) * (v - lo)) / (hi - lo);
+  g.textAlign = "right";
+  g.fillText("t, s", MARGIN.left - 3, c.height - 4);
+  g.textAlign = "left";
+  g.save();
+  g.beginPath();
+  g.rect(MARGIN.left, MARGIN.top, w, h);
+  g.clip();
   series.forEach((s, j) => {
     g.strokeStyle = PLOT_COLOURS[j % PLOT_COLOURS.length];
     g.beginPath();
     s.forEach((v, i) => (i ? g.lineTo(x(times[i]), y(v)) : g.moveTo(x(times[i]), y(v))));
     g.stroke();
   });
-  g.fillStyle = "#555";
-  g.fillText(`${lo.toPrecision(4)} .. ${hi.toPrecision(4)}`, 4, c.height - 2);
   g.strokeStyle = "#000";
   g.beginPath();
-  g.moveTo(x(t), 0);
-  g.lineTo(x(t), c.height - 12);
+  g.moveTo(x(t), MARGIN.top);
+  g.lineTo(x(t), MARGIN.top + h);
   g.stroke();
+  g.restore();
 }
 
 function drawPlots(i) {
   const t = state.result.time[i];
-  drawPlot("plot-heave", plotSeries.heave, t);
-  drawPlot("plot-angles", plotSeries.angles, t);
-  drawPlot("plot-legs", plotSeries.legs, t);
-  drawPlot("plot-joints", plotSeries.joints, t);
+  for (const id of Object.keys(PLOTS)) drawPlot(id, t);
 }
 
 // ----- loading -----------------------------------------------------------------------------
@@ -261,7 +315,8 @@ function load(csvText, stand) {
     const result = new Result(parseCsv(csvText), stand ? checkStand(stand) : defaultStand());
     state.result = result;
     state.error = null;
-    $("message").textContent = "";
+    state.notice = result.notice;
+    $("message").textContent = result.notice || "";
     $("slider").max = String(result.rows - 1);
     build(result);
     preparePlots(result);
@@ -292,9 +347,16 @@ function seekIndex(i) {
   place(state.index);
 }
 
-async function fetchText(url) {
-  const response = await fetch(url);
-  if (!response.ok) throw new Error(`${url}: HTTP ${response.status}`);
+// A file's path (as written in data/index.json or ?data=) as a URL: each segment encoded, so
+// that names with spaces, '#', '?' or '%' load; full URLs are taken as they are.
+function fileUrl(path) {
+  if (/^[a-z][a-z0-9+.-]*:/i.test(path)) return path;
+  return path.split("/").map(encodeURIComponent).join("/");
+}
+
+async function fetchText(path) {
+  const response = await fetch(fileUrl(path));
+  if (!response.ok) throw new Error(`${path}: HTTP ${response.status}`);
   return response.text();
 }
 
@@ -385,29 +447,40 @@ window.stewartViewer = {
     platform: parts.joints.map((j) => j.material.color.getHex() === LIMIT_COLOUR),
   } : null),
   pose: () => (state.result ? state.result.pose(state.index) : null),
+  // The message line (an error, or a notice such as rows cut at a NaN pose).
+  message: () => $("message").textContent,
+  forceScale: () => (state.result ? state.result.forceScale : null),
+  legend: () => ({ scale: $("force-scale")?.textContent ?? null, clipped: $("force-clipped")?.textContent ?? null }),
+  info: () => $("info").textContent,
+  // Each plot's vertical range, time ticks and key, as drawn.
+  plots: () => plotLayout,
+  datasets: () => [...$("datasets").options].map((o) => ({ ...JSON.parse(o.value), selected: o.selected })),
 };
 
 resize();
 requestAnimationFrame(frame);
 const query = new URLSearchParams(window.location.search);
-if (query.get("data")) {
-  loadUrls(query.get("data"), query.get("stand"));
-} else {
-  fetch("data/index.json")
-    .then((r) => (r.ok ? r.json() : []))
-    .catch(() => [])
-    .then((datasets) => {
-      const select = $("datasets");
-      for (const d of datasets) {
-        const option = document.createElement("option");
-        option.value = JSON.stringify(d);
-        option.textContent = d.title || d.data;
-        select.append(option);
-      }
-      if (datasets.length) loadUrls(datasets[0].data, datasets[0].stand);
-      else {
-        showError("no result loaded: open or drop a result CSV (and its stand JSON), or pass ?data=...&stand=...");
-        state.ready = true;
-      }
-    });
-}
+// The dataset menu lists data/index.json whatever the address names; a result named by
+// `?data=` is selected (and added when the list does not have it).
+fetch("data/index.json")
+  .then((r) => (r.ok ? r.json() : []))
+  .catch(() => [])
+  .then((datasets) => {
+    const select = $("datasets");
+    const wanted = query.get("data");
+    const list = Array.isArray(datasets) ? datasets.filter((d) => d && typeof d.data === "string") : [];
+    if (wanted && !list.some((d) => d.data === wanted)) list.unshift({ title: `${wanted} (from the address)`, data: wanted, stand: query.get("stand") });
+    for (const d of list) {
+      const option = document.createElement("option");
+      option.value = JSON.stringify(d);
+      option.textContent = d.title || d.data;
+      option.selected = d.data === wanted;
+      select.append(option);
+    }
+    if (wanted) loadUrls(wanted, query.get("stand"));
+    else if (list.length) loadUrls(list[0].data, list[0].stand);
+    else {
+      showError("no result loaded: open or drop a result CSV (and its stand JSON), or pass ?data=...&stand=...");
+      state.ready = true;
+    }
+  });

@@ -99,6 +99,49 @@ export function rotationFromAngles(roll, pitch, yaw) {
   ];
 }
 
+/**
+ * The vertical range of a small plot: the data's range, widened about its middle to at least
+ * `minSpan`, so that round-off (1e-16 rad) stays a flat line instead of filling the plot.
+ * Returns [lo, hi].
+ */
+export function plotRange(series, minSpan) {
+  let lo = Infinity;
+  let hi = -Infinity;
+  for (const s of series) {
+    for (const v of s) {
+      if (Number.isFinite(v)) {
+        lo = Math.min(lo, v);
+        hi = Math.max(hi, v);
+      }
+    }
+  }
+  if (!(lo <= hi)) return [0, 1];
+  const span = Math.max(hi - lo, minSpan, 1e-12 * Math.max(Math.abs(lo), Math.abs(hi)));
+  const middle = 0.5 * (lo + hi);
+  return [middle - 0.5 * span, middle + 0.5 * span];
+}
+
+/** About `n` round tick values covering [t0, t1]. */
+export function niceTicks(t0, t1, n = 5) {
+  const span = t1 - t0;
+  if (!(span > 0)) return [t0];
+  const raw = span / n;
+  const magnitude = 10 ** Math.floor(Math.log10(raw));
+  const step = [1, 2, 5, 10].map((m) => m * magnitude).find((s) => s >= raw);
+  const ticks = [];
+  for (let t = Math.ceil(t0 / step) * step; t <= t1 + 1e-9 * span; t += step) ticks.push(Math.abs(t) < 1e-12 * span ? 0 : t);
+  return ticks;
+}
+
+/** The q-quantile (0..1) of finite values, by linear interpolation between order statistics. */
+export function quantile(values, q) {
+  const v = values.filter(Number.isFinite).sort((a, b) => a - b);
+  if (!v.length) return NaN;
+  const x = q * (v.length - 1);
+  const i = Math.floor(x);
+  return i + 1 < v.length ? v[i] + (x - i) * (v[i + 1] - v[i]) : v[i];
+}
+
 /** A result ready to play: times, poses, forces, and the stand. */
 export class Result {
   constructor(csv, stand) {
@@ -113,17 +156,20 @@ export class Result {
     this.thetaB = LEGS.every((k) => `thetaB[${k}]` in csv.columns) ? LEGS.map((k) => col(`thetaB[${k}]`)) : null;
     this.thetaA = LEGS.every((k) => `thetaA[${k}]` in csv.columns) ? LEGS.map((k) => col(`thetaA[${k}]`)) : null;
     this.bodyLengths = legBodyLengths(this.stand);
-    let lo = Infinity;
-    let hi = -Infinity;
-    for (const series of [...(this.forces || []), ...(this.stopForces || [])]) {
-      for (const x of series) {
-        if (Number.isFinite(x)) {
-          lo = Math.min(lo, x);
-          hi = Math.max(hi, x);
-        }
+    // Rows from the first whose pose is not a number (a failed run) are left out, with a message.
+    this.notice = null;
+    const poseColumns = ["r[1]", "r[2]", "r[3]", ...(this.hasRotation ? ROTATION : ANGLES)];
+    for (let i = 0; i < csv.rows; i++) {
+      const bad = poseColumns.find((n) => !Number.isFinite(csv.columns[n][i]));
+      if (bad) {
+        const where = `column ${bad}, row ${i + 1} of ${csv.rows} (t = ${this.time[i]})`;
+        if (i === 0) throw new Error(`the pose is not a number (NaN) from the first row: ${where}`);
+        this.rows = i;
+        this.notice = `the pose is not a number (NaN) from ${where}: showing the ${i} rows before it`;
+        break;
       }
     }
-    this.forceRange = lo <= hi ? [lo, hi] : [0, 1];
+    this.forceScale = this.forces ? forceScale(this.forces, this.rows) : null;
   }
 
   /** Index of the last row at or before time t (rows are not interpolated). */
@@ -213,4 +259,19 @@ export class Result {
     if (LEGS.every((k) => `l[${k}]` in c)) return LEGS.map((k) => c[`l[${k}]`][i]);
     return this.legEndpoints(i).map(([b, a]) => Math.hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]));
   }
+}
+
+/**
+ * The colour scale of the leg forces: symmetric about 0, up to the 98th percentile of |F| over
+ * all legs and rows (the working range), so that an impact peak does not turn every working
+ * force grey; forces beyond it are drawn at the scale's end colour and counted as clipped.
+ * Returns {limit, peak, clipped}.
+ */
+export function forceScale(forces, rows) {
+  const magnitudes = [];
+  for (const series of forces) for (let i = 0; i < rows; i++) magnitudes.push(Math.abs(series[i]));
+  const peak = Math.max(0, ...magnitudes.filter(Number.isFinite));
+  let limit = quantile(magnitudes, 0.98);
+  if (!(limit > 0)) limit = peak > 0 ? peak : 1;
+  return { limit, peak, clipped: peak > limit };
 }

@@ -1,0 +1,99 @@
+# Set-up shared by the two README commands (examples/main_job.sh and tests/run_all.sh), sourced
+# by both: the prerequisites checked and, on Debian, installed without their recommends; the
+# Python environment in .venv; a progress line before every step that takes more than a few
+# seconds, with the time since the command started.
+
+SETUP_START=$SECONDS
+
+# A progress line: "[m:ss] what is done now".
+step() {
+    local s=$((SECONDS - SETUP_START))
+    printf '[%d:%02d] %s\n' $((s / 60)) $((s % 60)) "$*"
+}
+
+die() {
+    echo "set-up: $*" >&2
+    exit 1
+}
+
+# Debian packages for what is missing; elsewhere, a message naming what to install.
+apt_install() {
+    local sudo=""
+    if ! command -v apt-get >/dev/null; then
+        die "missing: $* (Debian package names); this is not a Debian system: install them with your package manager"
+    fi
+    if [ "$(id -u)" -ne 0 ]; then
+        command -v sudo >/dev/null || die "missing: $*: install them as root: apt-get install --no-install-recommends $*"
+        sudo="sudo"
+    fi
+    step "installing $* from Debian's packages (without their recommends; a minute or two)"
+    $sudo apt-get update -qq
+    $sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "$@" >/dev/null
+}
+
+# `require main` (the main job) or `require tests` (the tests: also gcc, valgrind, libclang,
+# Chromium). Rust is not a Debian package here: rustup installs it.
+require() {
+    local need=()
+    command -v cargo >/dev/null || die "cargo is not installed: install Rust 1.85 or newer (the crate uses edition 2024) with rustup (https://rustup.rs), then open a new shell"
+    local rust
+    rust=$(rustc --version | awk '{print $2}')
+    if ! printf '1.85.0\n%s\n' "$rust" | sort -V -C; then
+        die "rustc $rust is too old: 1.85 or newer is needed (edition 2024): rustup update"
+    fi
+    command -v python3 >/dev/null || need+=(python3)
+    if command -v python3 >/dev/null; then
+        python3 -c 'import sys; sys.exit(sys.version_info < (3, 11))' ||
+            die "python3 is $(python3 --version 2>&1 | cut -d' ' -f2): 3.11 or newer is needed"
+        python3 -c 'import ensurepip, venv' 2>/dev/null || need+=(python3-venv)
+    fi
+    command -v cc >/dev/null || need+=(gcc)  # cargo's linker
+    command -v npm >/dev/null || need+=(nodejs npm)
+    if [ "$1" = tests ]; then
+        command -v valgrind >/dev/null || need+=(valgrind)
+        ls /usr/lib/llvm-*/lib/libclang.so* >/dev/null 2>&1 || need+=(libclang-dev)  # fmi-sim's build
+        command -v chromium >/dev/null || need+=(chromium fonts-liberation)           # the viewer's browser test
+    fi
+    if [ ${#need[@]} -gt 0 ]; then
+        apt_install "${need[@]}"
+    fi
+    # The viewer's build tool (vite) needs Node.js 20.19 or newer; Debian 12's own is 18.
+    local node
+    node=$(node --version 2>/dev/null | tr -d v)
+    if ! printf '20.19.0\n%s\n' "$node" | sort -V -C; then
+        die "Node.js ${node:-(none)} is too old for the viewer's build (vite needs 20.19 or newer; Debian 12 ships 18): install Node.js 20 or 22 (NodeSource's Debian packages, or nvm)"
+    fi
+}
+
+# The Python environment: .venv with tests/requirements.txt and the repository's package
+# (python/, editable). pip runs again only when the requirements changed.
+python_env() {
+    if [ ! -x .venv/bin/python ]; then
+        step "creating the Python environment .venv"
+        python3 -m venv .venv
+    fi
+    local stamp=.venv/.requirements.sha256
+    if ! sha256sum --status -c "$stamp" 2>/dev/null; then
+        step "installing the Python packages of tests/requirements.txt into .venv (FMPy, NumPy, SciPy, Matplotlib, Dask, pandas, pyarrow, libcosimpy, pytest; about 800 MB, a minute or two the first time)"
+        # One line a package (pip's "Collecting NAME", without its "(from ...)"), errors in full.
+        if ! .venv/bin/python -m pip install --disable-pip-version-check --progress-bar off -r tests/requirements.txt \
+                > >(grep --line-buffered -E '^(Collecting|Successfully installed)' | sed -u -E 's/ \(from .*//'); then
+            die "pip install -r tests/requirements.txt failed (see above)"
+        fi
+        sha256sum tests/requirements.txt > "$stamp"
+    fi
+    step "installing the repository's Python package (python/: stewart_fmu, stewart-sweep) into .venv, editable"
+    .venv/bin/python -m pip install --quiet --disable-pip-version-check --no-deps -e python
+}
+
+# The FMUs: the Rust library in release mode, packaged (the first build takes a few minutes).
+build_fmus() {
+    step "building the FMUs: cargo build --release of the Rust library, then packaging into target/fmu/ (a minute or more the first time, seconds after)"
+    cargo run --release --bin build-fmu
+}
+
+# The 3-D viewer: Node packages from the committed lock file, then the static build.
+build_viewer() {
+    step "building the 3-D viewer: npm ci (three.js, vite, playwright-core; about 70 MB) and vite build into viewer/dist/"
+    (cd viewer && npm ci --no-audit --no-fund --loglevel=error && npm run build --silent)
+}
