@@ -65,7 +65,8 @@ impl Disturbance {
         if self.amplitude == 0.0 {
             return 0.0;
         }
-        let soft = if self.time_constant > 0.0 { 1.0 - (-t / self.time_constant).exp() } else { 1.0 };
+        // Soft-started at t = 0; nothing before (the formula would overflow for t far below 0).
+        let soft = if self.time_constant > 0.0 { (1.0 - (-t / self.time_constant).exp()).max(0.0) } else { 1.0 };
         self.amplitude * (self.frequency * t).sin() * soft
     }
 }

@@ -254,20 +254,20 @@ impl<F> IntegrationError<F> {
 impl<F: std::fmt::Display> std::fmt::Display for IntegrationError<F> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            IntegrationError::Fault { t, fault } => write!(f, "at t = {t}: {fault}"),
+            IntegrationError::Fault { t, fault } => write!(f, "at t = {t:?}: {fault}"),
             IntegrationError::StepSizeUnderflow { t, h } => write!(
                 f,
-                "at t = {t}: the adaptive step size fell to {h:e} without meeting the tolerance (the solution is \
+                "at t = {t:?}: the adaptive step size fell to {h:e} without meeting the tolerance (the solution is \
                  not smooth or diverges)"
             ),
             IntegrationError::TooManySteps { t, t_end, steps } => write!(
                 f,
-                "the adaptive integrator took {steps} internal steps, the limit per call, and reached t = {t}, short \
-                 of t = {t_end} (the motion needs very small steps there)"
+                "the adaptive integrator took {steps} internal steps, the limit per call, and reached t = {t:?}, short \
+                 of t = {t_end:?} (the motion needs very small steps there)"
             ),
             IntegrationError::FixedStepsExceedLimit { t, t_end, fixed_step, steps, limit } => write!(
                 f,
-                "from t = {t} to {t_end} RK4 with solver.fixedStep = {fixed_step:e} s needs {steps:.3e} steps, more \
+                "from t = {t:?} to {t_end:?} RK4 with solver.fixedStep = {fixed_step:e} s needs {steps:.3e} steps, more \
                  than the limit of {limit} internal steps per call; nothing was computed"
             ),
         }

@@ -206,6 +206,11 @@ pub trait FmuModel {
     fn set_input_derivative(&mut self, var: VariableRef, value: f64);
     /// First time derivative of a Real output (`fmi2GetRealOutputDerivatives`).
     fn output_derivative(&mut self, var: VariableRef) -> f64;
+    /// Why the outputs are not numbers now (they are NaN where the model cannot compute them),
+    /// naming the parameter or input at fault; `None` if the model cannot say.
+    fn undefined_reason(&self) -> Option<String> {
+        None
+    }
     /// Model Exchange: sets the time of the continuous states.
     fn set_time(&mut self, _t: f64) {}
     /// Model Exchange: the continuous states, in the order of `ModelInfo::states`.
@@ -246,6 +251,24 @@ pub trait FmuModel {
 }
 
 /// [`FmuModel::set_real_run`] element by element, stopping at the first value refused.
+/// Largest start time, s, at which a double still resolves a microsecond (2^33 s, 272 years):
+/// Unix times fit; beyond it the communication points and a controller's programme lose their
+/// resolution.
+pub const MAX_START_TIME: f64 = 8_589_934_592.0;
+
+/// A start time the models can run from, or why not.
+pub fn check_start_time(start_time: f64) -> Result<(), String> {
+    if start_time.abs() > MAX_START_TIME {
+        let resolution = start_time.abs() * f64::EPSILON;
+        return Err(format!(
+            "startTime {start_time:e} s: a double resolves only {resolution:e} s there, so the communication points \
+             (and a controller's programme) lose their resolution; start within +-{MAX_START_TIME:e} s (272 years, \
+             which includes Unix times), for example at 0"
+        ));
+    }
+    Ok(())
+}
+
 pub fn set_one_by_one<M: FmuModel + ?Sized>(model: &mut M, first: VariableRef, values: &[f64]) -> Result<(), String> {
     for (i, &x) in values.iter().enumerate() {
         model.set_real(VariableRef { group: first.group, index: first.index + i }, x)?;
@@ -428,6 +451,9 @@ impl AnyModel {
     }
     pub fn output_derivative(&mut self, var: VariableRef) -> f64 {
         dispatch!(self, m => m.output_derivative(var))
+    }
+    pub fn undefined_reason(&self) -> Option<String> {
+        dispatch!(self, m => m.undefined_reason())
     }
     pub fn save(&self, w: &mut ByteWriter) {
         dispatch!(self, m => m.save(w))

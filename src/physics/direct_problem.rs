@@ -28,6 +28,15 @@ use super::stand::{LEG_COUNT, Stand};
 /// half of the double-precision digits.
 pub const SINGULAR_CONDITION_NUMBER: f64 = 1e8;
 
+/// The largest condition number reported, `1/eps` = 4.5e15: past it double precision cannot
+/// tell the matrix from a singular one, and at a singular arrangement the condition number is
+/// this bound (a finite number: an FMU output is never infinite).
+pub const CONDITION_NUMBER_BOUND: f64 = 1.0 / f64::EPSILON;
+
+/// Most sweeps the condition number's SVD may take: a 6x6 matrix of numbers converges in a few
+/// dozen; past this it is reported singular rather than iterated without end.
+const SVD_ITERATIONS: usize = 1000;
+
 /// Why the direct problem has no trustworthy answer.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum DirectProblemError {
@@ -85,12 +94,20 @@ impl ForceMomentMatrix {
         determinant6(a)
     }
 
-    /// 2-norm condition number `sigma_max / sigma_min` (infinite when singular).
+    /// 2-norm condition number `sigma_max / sigma_min`, at most [`CONDITION_NUMBER_BOUND`]: the
+    /// bound where the matrix is singular (or numerically so, or not made of numbers).
     pub fn condition_number(&self) -> f64 {
-        let sv = self.matrix.singular_values();
-        let max = sv.max();
-        let min = sv.min();
-        if min > 0.0 { max / min } else { f64::INFINITY }
+        // A matrix that is not all numbers (a pose of overflowed coordinates) is no leg
+        // arrangement: singular. The SVD's iterations are bounded, so nothing here can hang.
+        if !self.matrix.iter().all(|x| x.is_finite()) {
+            return CONDITION_NUMBER_BOUND;
+        }
+        let Some(svd) = self.matrix.try_svd_unordered(false, false, f64::EPSILON, SVD_ITERATIONS) else {
+            return CONDITION_NUMBER_BOUND;
+        };
+        let sv = svd.singular_values;
+        let (max, min) = (sv.max(), sv.min());
+        if min > 0.0 { (max / min).min(CONDITION_NUMBER_BOUND) } else { CONDITION_NUMBER_BOUND }
     }
 
     /// Leg forces producing the resultant `force` and moment `moment` (about the centre of mass).

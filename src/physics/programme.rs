@@ -8,7 +8,9 @@
 //!
 //! The factor `(1 - exp(-t/T))²` makes velocity vanish at `t = 0` and, for `phi = 0`, the
 //! acceleration too, so the programme forces start without a jump. (With a phase the initial
-//! acceleration is `2 a sin(phi) / T²`.) The paper's heave law (5.1) is
+//! acceleration is `2 a sin(phi) / T²`.) Before `t = 0` a soft-started programme rests at
+//! `q0`: the factor is 0 there (its formula would grow like `exp(-t/T)` and overflow for a run
+//! that starts long before 0). The paper's heave law (5.1) is
 //! `z(t) = z0 + 0.2 sin t (1 - exp(-t/2))²` in non-dimensional units.
 
 use nalgebra::Vector3;
@@ -37,7 +39,9 @@ impl SoftStartSinusoid {
 
     /// Value, first and second derivative at time `t`.
     pub fn evaluate(&self, t: f64) -> (f64, f64, f64) {
-        let (g, g1, g2) = if self.time_constant > 0.0 {
+        let (g, g1, g2) = if self.time_constant > 0.0 && t < 0.0 {
+            (0.0, 0.0, 0.0)
+        } else if self.time_constant > 0.0 {
             let tc = self.time_constant;
             let e = (-t / tc).exp();
             ((1.0 - e) * (1.0 - e), 2.0 * (e - e * e) / tc, 2.0 * (2.0 * e * e - e) / (tc * tc))
@@ -143,14 +147,21 @@ mod tests {
     #[test]
     fn derivatives_match_finite_differences() {
         let s = SoftStartSinusoid { offset: 0.3, amplitude: 0.2, frequency: 1.3, phase: 0.4, time_constant: 2.0 };
-        for t in [0.0, 0.5, 3.0, 10.0] {
-            let h = 1e-5;
+        let h = 1e-5;
+        for t in [0.5, 3.0, 10.0] {
             let (_, d, dd) = s.evaluate(t);
             let fd1 = (s.evaluate(t + h).0 - s.evaluate(t - h).0) / (2.0 * h);
             let fd2 = (s.evaluate(t + h).1 - s.evaluate(t - h).1) / (2.0 * h);
             assert!((d - fd1).abs() < 1e-9, "t={t}: {d} vs {fd1}");
             assert!((dd - fd2).abs() < 1e-9, "t={t}: {dd} vs {fd2}");
         }
+        // At t = 0 from the right (the programme rests before 0): second-order one-sided.
+        let one_sided = |f: &dyn Fn(f64) -> f64| (-3.0 * f(0.0) + 4.0 * f(h) - f(2.0 * h)) / (2.0 * h);
+        let (_, d, dd) = s.evaluate(0.0);
+        assert!((d - one_sided(&|t| s.evaluate(t).0)).abs() < 1e-9);
+        assert!((dd - one_sided(&|t| s.evaluate(t).1)).abs() < 1e-8);
+        // Before 0 it rests at the offset, however early the run starts.
+        assert_eq!(s.evaluate(-1e9), (0.3, 0.0, 0.0));
         // Soft start: at rest at t = 0 (acceleration too when the phase is 0, as in the paper).
         let s = SoftStartSinusoid { phase: 0.0, ..s };
         let (q, d, dd) = s.evaluate(0.0);

@@ -100,13 +100,13 @@ impl Stand {
     pub fn validate(&self) -> Result<(), ParameterError> {
         check_finite("M", self.mass)?;
         if self.mass <= 0.0 {
-            return Err(ParameterError::new("M", format!("mass must be positive, got {} kg", self.mass)));
+            return Err(ParameterError::new("M", format!("mass must be positive, got {:?} kg", self.mass)));
         }
         for (a, &j) in self.inertia.iter().enumerate() {
             let name = format!("J[{}]", a + 1);
             check_finite(&name, j)?;
             if j <= 0.0 {
-                return Err(ParameterError::new(name, format!("moment of inertia must be positive, got {j} kg.m2")));
+                return Err(ParameterError::new(name, format!("moment of inertia must be positive, got {j:?} kg.m2")));
             }
         }
         let [j1, j2, j3] = self.inertia;
@@ -127,8 +127,8 @@ impl Stand {
                 return Err(ParameterError::new(
                     format!("J[{}]", a + 1),
                     format!(
-                        "moments of inertia violate the strict triangle inequality: J[{}] = {ja} must be less than \
-                         J[{b}] + J[{c}] = {}: {why}",
+                        "moments of inertia violate the strict triangle inequality: J[{}] = {ja:?} must be less than \
+                         J[{b}] + J[{c}] = {:?}: {why}",
                         a + 1,
                         jb + jc,
                     ),
@@ -139,13 +139,25 @@ impl Stand {
         if self.gravity < 0.0 {
             return Err(ParameterError::new(
                 "g",
-                format!("gravity must be >= 0 (it acts along -z), got {}", self.gravity),
+                format!("gravity must be >= 0 (it acts along -z), got {:?}", self.gravity),
             ));
         }
         for (k, (b, a)) in self.base_joints.iter().zip(self.platform_joints.iter()).enumerate() {
             for i in 0..3 {
-                check_finite(&format!("B[{},{}]", k + 1, i + 1), b[i])?;
-                check_finite(&format!("A[{},{}]", k + 1, i + 1), a[i])?;
+                for (symbol, x) in [("B", b[i]), ("A", a[i])] {
+                    let name = format!("{symbol}[{},{}]", k + 1, i + 1);
+                    check_finite(&name, x)?;
+                    if x.abs() > MAX_COORDINATE {
+                        return Err(ParameterError::new(
+                            name,
+                            format!(
+                                "{x:e} is beyond any stand: joint coordinates are limited to +-{MAX_COORDINATE:e} (m, \
+                                 or the non-dimensional unit of length), where the stand's geometry stays in double \
+                                 precision"
+                            ),
+                        ));
+                    }
+                }
             }
         }
         let tolerance = COINCIDENCE_TOLERANCE * self.characteristic_length().max(f64::MIN_POSITIVE);
@@ -170,8 +182,12 @@ impl Stand {
     }
 }
 
+/// Largest joint coordinate, m (or the non-dimensional unit of length): a stand of a thousand
+/// kilometres; beyond it lengths squared leave double precision.
+pub const MAX_COORDINATE: f64 = 1e6;
+
 pub(crate) fn check_finite(name: &str, value: f64) -> Result<(), ParameterError> {
-    if value.is_finite() { Ok(()) } else { Err(ParameterError::new(name, format!("must be finite, got {value}"))) }
+    if value.is_finite() { Ok(()) } else { Err(ParameterError::new(name, format!("must be finite, got {value:?}"))) }
 }
 
 #[cfg(test)]

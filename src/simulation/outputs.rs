@@ -182,14 +182,16 @@ impl<T: Real> PlatformOutputs<T> {
 }
 
 /// `kappa`: the 2-norm condition number of the legs' force/moment matrix (moment rows
-/// divided by the stand's characteristic length), infinite at a singular arrangement.
+/// divided by the stand's characteristic length), at most
+/// [`crate::physics::direct_problem::CONDITION_NUMBER_BOUND`] (its value at a singular arrangement).
 pub fn condition_number(stand: &Stand, y: &SimulationState) -> f64 {
     let state = BodyState::from_vector(body(y));
     ForceMomentMatrix::new(stand, &LegGeometry::new(stand, &state)).condition_number()
 }
 
 /// Change of `kappa` for a change `dy` of the state: `kappa = s_max / s_min` with
-/// `ds_i = u_i^T dM v_i` for the singular triplets. 0 where `kappa` is infinite.
+/// `ds_i = u_i^T dM v_i` for the singular triplets. 0 where `kappa` is at its bound (a singular
+/// arrangement).
 pub fn condition_number_tangent(stand: &Stand, y: &SimulationState, dy: &SimulationState) -> f64 {
     let s = BodyState::from_vector(body(y));
     let ds = BodyState::from_vector(body(dy));
@@ -210,11 +212,14 @@ pub fn condition_number_tangent(stand: &Stand, y: &SimulationState, dy: &Simulat
         dm.fixed_view_mut::<3, 1>(0, k).copy_from(&dn);
         dm.fixed_view_mut::<3, 1>(3, k).copy_from(&dmoment);
     }
-    let svd = m.matrix.svd(true, true);
+    if !m.matrix.iter().all(|x| x.is_finite()) {
+        return 0.0;
+    }
+    let Some(svd) = m.matrix.try_svd(true, true, f64::EPSILON, 1000) else { return 0.0 };
     let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else { return 0.0 };
     let (imax, imin) = (svd.singular_values.imax(), svd.singular_values.imin());
     let (smax, smin) = (svd.singular_values[imax], svd.singular_values[imin]);
-    if !(smin > 0.0) {
+    if !(smin > 0.0) || smax / smin >= crate::physics::direct_problem::CONDITION_NUMBER_BOUND {
         return 0.0;
     }
     let dsigma = |i: usize| (u.column(i).transpose() * dm * v_t.row(i).transpose())[0];

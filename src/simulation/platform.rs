@@ -435,7 +435,7 @@ impl StepFailure {
 impl std::fmt::Display for StepFailure {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            StepFailure::Physics { t, fault } => write!(f, "at t = {t}: {fault}"),
+            StepFailure::Physics { t, fault } => write!(f, "at t = {t:?}: {fault}"),
             StepFailure::Solver(e) => write!(f, "{e}"),
         }
     }

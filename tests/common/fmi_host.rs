@@ -77,20 +77,17 @@ unsafe impl Send for Host {}
 
 impl Host {
     pub fn new(name: &str, kind: ModelKind) -> Host {
+        Host::with_interface(name, kind, fmi2CoSimulation)
+    }
+
+    /// An instance of the interface `fmu_type` (`fmi2CoSimulation` or `fmi2ModelExchange`).
+    pub fn with_interface(name: &str, kind: ModelKind, fmu_type: fmi2Type) -> Host {
         let log: Box<LogSink> = Box::new(Mutex::new(vec![]));
         let cb = Box::new(callbacks(&log));
         let name = CString::new(name).unwrap();
         let guid = CString::new(instantiation_token(kind, FmiVersion::Fmi2)).unwrap();
         let c = unsafe {
-            fmi2Instantiate(
-                name.as_ptr(),
-                fmi2CoSimulation,
-                guid.as_ptr(),
-                c"file:///tmp".as_ptr(),
-                &*cb,
-                fmi2False,
-                fmi2False,
-            )
+            fmi2Instantiate(name.as_ptr(), fmu_type, guid.as_ptr(), c"file:///tmp".as_ptr(), &*cb, fmi2False, fmi2False)
         };
         assert!(!c.is_null(), "fmi2Instantiate failed");
         Host { c, log, table: VariableTable::new(kind.info().groups), time: 0.0, _callbacks: cb }

@@ -132,7 +132,7 @@ impl Instance {
 
     pub fn set_time(&mut self, t: f64) -> Status {
         if !t.is_finite() {
-            return self.error(&format!("time must be finite, got {t}"));
+            return self.error(&format!("time must be finite, got {t:?}"));
         }
         self.time = t;
         self.model_mut().set_time(t);
@@ -144,7 +144,7 @@ impl Instance {
             return s;
         }
         if let Some(i) = x.iter().position(|v| !v.is_finite()) {
-            return self.error(&format!("state {i} = {} refused: states must be finite", x[i]));
+            return self.error(&format!("state {i} = {:?} refused: states must be finite", x[i]));
         }
         let mut internal = vec![0.0; x.len()];
         for (&xi, &i) in x.iter().zip(&self.state_order) {
@@ -181,8 +181,11 @@ impl Instance {
         self.model.derivatives(&mut internal);
         self.in_importer_order(&internal, dx);
         if let Some(i) = dx.iter().position(|v| !v.is_finite()) {
-            return self
-                .error(&format!("derivative {i} is not finite at t = {}: the state is not admissible", self.time));
+            let hint = self.model.undefined_reason().map(|r| format!("; {r}")).unwrap_or_default();
+            return self.error(&format!(
+                "derivative {i} is not finite at t = {:?}: the state is not admissible{hint}",
+                self.time
+            ));
         }
         Status::Ok
     }

@@ -290,7 +290,7 @@ impl Instance {
             Status::Ok,
             LogCategory::Calls,
             &format!(
-                "{}({args}) -> {} (state {}, t = {})",
+                "{}({args}) -> {} (state {}, t = {:?})",
                 self.current,
                 status.name(self.version),
                 self.state_name(),
@@ -300,7 +300,7 @@ impl Instance {
     }
 
     pub fn poison(&mut self, message: &str) {
-        let reason = format!("panic in {} at t = {}: {message}", self.current, self.time);
+        let reason = format!("panic in {} at t = {:?}: {message}", self.current, self.time);
         self.logger.log(Status::Fatal, LogCategory::Fatal, &format!("{reason}; the instance is poisoned"));
         self.poisoned = Some(reason);
     }
@@ -413,17 +413,17 @@ impl Instance {
     /// The experiment: `fmi2SetupExperiment`, and the arguments of `fmi3EnterInitializationMode`.
     pub fn setup_experiment(&mut self, tolerance: Option<f64>, start_time: f64, stop_time: Option<f64>) -> Status {
         if !start_time.is_finite() {
-            return self.error(&format!("startTime must be finite, got {start_time}"));
+            return self.error(&format!("startTime must be finite, got {start_time:?}"));
         }
         if let Some(tol) = tolerance
             && !(tol > 0.0 && tol < 1.0)
         {
-            return self.error(&format!("tolerance must be in (0, 1), got {tol}"));
+            return self.error(&format!("tolerance must be in (0, 1), got {tol:?}"));
         }
         if let Some(stop) = stop_time
             && (!stop.is_finite() || stop < start_time)
         {
-            return self.error(&format!("stopTime {stop} must be finite and not before startTime {start_time}"));
+            return self.error(&format!("stopTime {stop:?} must be finite and not before startTime {start_time:?}"));
         }
         self.tolerance = tolerance;
         self.start_time = start_time;

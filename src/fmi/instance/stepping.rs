@@ -13,15 +13,15 @@ impl Instance {
     pub fn do_step(&mut self, tc: f64, h: f64) -> (Status, DoStepOutcome) {
         let mut outcome = DoStepOutcome { last_successful_time: self.time, ..Default::default() };
         if !(h.is_finite() && h > 0.0) {
-            return (self.error(&format!("communicationStepSize must be finite and > 0, got {h}")), outcome);
+            return (self.error(&format!("communicationStepSize must be finite and > 0, got {h:?}")), outcome);
         }
         if !tc.is_finite() {
-            return (self.error(&format!("currentCommunicationPoint must be finite, got {tc}")), outcome);
+            return (self.error(&format!("currentCommunicationPoint must be finite, got {tc:?}")), outcome);
         }
         let tol = communication_point_tolerance(self.time, tc, h);
         if (tc - self.time).abs() > tol {
             let message = format!(
-                "currentCommunicationPoint {tc} does not match the FMU's time {} (difference {:e}, more than the \
+                "currentCommunicationPoint {tc:?} does not match the FMU's time {:?} (difference {:e}, more than the \
                  round-off tolerance {tol:e} s)",
                 self.time,
                 tc - self.time
@@ -32,7 +32,7 @@ impl Instance {
         if let Some(stop) = self.stop_time
             && t_end > stop + communication_point_tolerance(stop, t_end, h)
         {
-            let message = format!("step to t = {t_end} goes past the stopTime {stop}");
+            let message = format!("step to t = {t_end:?} goes past the stopTime {stop:?}");
             return (self.error(&message), outcome);
         }
         let events = self.version == FmiVersion::Fmi3 && self.kind.info().capabilities.event_indicators > 0;
@@ -125,8 +125,10 @@ impl Instance {
                     .error(&format!("derivative order {order} of {} not supported (only 1)", g.element_name(r.index)));
             }
             if !x.is_finite() {
-                return self
-                    .error(&format!("derivative of {} = {x} refused: values must be finite", g.element_name(r.index)));
+                return self.error(&format!(
+                    "derivative of {} = {x:?} refused: values must be finite",
+                    g.element_name(r.index)
+                ));
             }
             refs.push(r);
         }

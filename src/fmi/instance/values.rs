@@ -205,7 +205,8 @@ impl Instance {
     pub(super) fn nan_error(&self, vrs: &[u32], values: &[f64]) -> Status {
         let i = values.iter().position(|x| x.is_nan()).unwrap_or(0);
         let r = elements(&self.access, vrs).nth(i).unwrap_or(VariableRef { group: usize::MAX, index: 0 });
-        self.error(&format!("{} is not a number with the current parameters", self.element_name(r)))
+        let reason = self.model.undefined_reason().unwrap_or_else(|| "with the current parameters".into());
+        self.error(&format!("{} is not a number: {reason}", self.element_name(r)))
     }
 
     pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Status {

@@ -61,7 +61,7 @@ pub unsafe extern "C" fn fmi2DoStep(
         c,
         F::DoStep,
         args(
-            "currentCommunicationPoint = {current_communication_point}, communicationStepSize = {communication_step_size}"
+            "currentCommunicationPoint = {current_communication_point:?}, communicationStepSize = {communication_step_size:?}"
         ),
         |inst| inst.do_step(current_communication_point, communication_step_size).0
     )

@@ -145,7 +145,7 @@ pub unsafe extern "C" fn fmi2SetupExperiment(
         c,
         F::SetupExperiment,
         args(
-            "toleranceDefined = {tolerance_defined}, tolerance = {tolerance}, startTime = {start_time}, stopTimeDefined = {stop_time_defined}, stopTime = {stop_time}"
+            "toleranceDefined = {tolerance_defined}, tolerance = {tolerance:?}, startTime = {start_time:?}, stopTimeDefined = {stop_time_defined}, stopTime = {stop_time:?}"
         ),
         |inst| {
             inst.setup_experiment(

@@ -57,7 +57,7 @@ pub unsafe extern "C" fn fmi2CompletedIntegratorStep(
 /// See the documentation of the `exports` module.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SetTime(c: fmi2Component, time: fmi2Real) -> fmi2Status {
-    boundary!(c, F::SetTime, args("time = {time}"), |inst| inst.set_time(time))
+    boundary!(c, F::SetTime, args("time = {time:?}"), |inst| inst.set_time(time))
 }
 
 /// # Safety

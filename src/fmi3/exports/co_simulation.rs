@@ -55,7 +55,7 @@ pub unsafe extern "C" fn fmi3DoStep(
         instance,
         F::DoStep,
         args(
-            "currentCommunicationPoint = {current_communication_point}, communicationStepSize = {communication_step_size}"
+            "currentCommunicationPoint = {current_communication_point:?}, communicationStepSize = {communication_step_size:?}"
         ),
         |inst| {
             let event = try_out!(inst, event_handling_needed, "eventHandlingNeeded");

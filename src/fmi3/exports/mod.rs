@@ -252,7 +252,7 @@ pub unsafe extern "C" fn fmi3EnterInitializationMode(
         instance,
         F::EnterInitializationMode,
         args(
-            "toleranceDefined = {tolerance_defined}, tolerance = {tolerance}, startTime = {start_time}, stopTimeDefined = {stop_time_defined}, stopTime = {stop_time}"
+            "toleranceDefined = {tolerance_defined}, tolerance = {tolerance:?}, startTime = {start_time:?}, stopTimeDefined = {stop_time_defined}, stopTime = {stop_time:?}"
         ),
         |inst| {
             let status = inst.setup_experiment(

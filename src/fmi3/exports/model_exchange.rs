@@ -31,7 +31,7 @@ pub unsafe extern "C" fn fmi3CompletedIntegratorStep(
 /// See the documentation of the `exports` module.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3SetTime(instance: fmi3Instance, time: fmi3Float64) -> fmi3Status {
-    boundary!(instance, F::SetTime, args("time = {time}"), |inst| inst.set_time(time))
+    boundary!(instance, F::SetTime, args("time = {time:?}"), |inst| inst.set_time(time))
 }
 
 /// # Safety

@@ -23,7 +23,7 @@ use crate::physics::direct_problem::solve_direct_problem;
 use crate::physics::legs::bodies::LegBodies;
 use crate::physics::legs::end_stops::EndStops;
 use crate::physics::programme::{PoseProgramme, SoftStartSinusoid, StartUp};
-use crate::physics::stand::{LEG_COUNT, Stand};
+use crate::physics::stand::{LEG_COUNT, MAX_COORDINATE, Stand};
 use variables::BINDINGS;
 
 pub static INFO: ModelInfo = ModelInfo {
@@ -295,11 +295,56 @@ impl ControllerModel {
         }
     }
 
+    /// Why a programme pose cannot be a stand's pose (not numbers, or beyond any stand), naming
+    /// where it comes from; `None` if it can.
+    fn implausible(&self, point: &PoseTrajectoryPoint) -> Option<String> {
+        let numbers = [point.r, point.v, point.a, point.w, point.w_dot].iter().all(|v| v.iter().all(|x| x.is_finite()))
+            && point.rotation.iter().all(|x| x.is_finite());
+        if numbers && point.r.amax() <= MAX_COORDINATE {
+            return None;
+        }
+        let p = &self.parameters;
+        let source = match p.programme {
+            ProgrammeKind::Heave | ProgrammeKind::StartUp => format!(
+                "the parameters heave.* (heave.centre {:?} m, heave.amplitude {:?} m, heave.frequency {:?} rad/s, \
+                 heave.timeConstant {:?} s){}",
+                p.heave_centre.as_slice(),
+                p.heave.amplitude,
+                p.heave.frequency,
+                p.heave.time_constant,
+                if p.programme == ProgrammeKind::StartUp {
+                    format!(" and startup.* (startup.position {:?} m)", p.startup_position.as_slice())
+                } else {
+                    String::new()
+                }
+            ),
+            ProgrammeKind::Sinusoid => format!(
+                "the parameters sine.* (amplitudes {:?} m, {:?} rad, frequencies {:?} rad/s)",
+                p.sine.amplitude, p.sine.angle_amplitude, p.sine.frequency
+            ),
+            ProgrammeKind::External => format!(
+                "the inputs pose.* (pose.r {:?} m, pose.v {:?} m/s, pose.a {:?} m/s2, pose.angles {:?} rad)",
+                self.pose.r, self.pose.v, self.pose.a, self.pose.angles
+            ),
+        };
+        Some(format!(
+            "the programme pose at t = {:?} is {} (its centre of mass at {:?} m, acceleration {:?} m/s2): it comes \
+             from {source}",
+            self.time,
+            if numbers { "beyond any stand" } else { "not a number" },
+            point.r.as_slice(),
+            point.a.as_slice()
+        ))
+    }
+
     /// Direct problem and feedback at the current time and inputs.
     pub fn compute(&self) -> Result<ControllerOutputs, String> {
         let point = self.programme_point(self.time);
+        if let Some(why) = self.implausible(&point) {
+            return Err(why);
+        }
         let solution = solve_direct_problem(&self.parameters.stand, &self.parameters.leg_bodies(), &point)
-            .map_err(|e| format!("the programme pose at t = {} cannot be produced by the legs: {e}", self.time))?;
+            .map_err(|e| format!("the programme pose at t = {:?} cannot be produced by the legs: {e}", self.time))?;
         let mut f = self.parameters.feedback.leg_forces(&solution, &self.l, &self.ldot);
         let d = self.parameters.disturbance.at(self.time);
         let (f_min, f_max) = (self.parameters.f_min, self.parameters.f_max);
@@ -351,15 +396,15 @@ impl ControllerModel {
             ("disturbance.timeConstant", p.disturbance.time_constant),
         ] {
             if value < 0.0 {
-                return Err(format!("parameter {name}: must be >= 0 s (0 = no soft start), got {value}"));
+                return Err(format!("parameter {name}: must be >= 0 s (0 = no soft start), got {value:?}"));
             }
         }
         if p.programme == ProgrammeKind::StartUp && !(p.startup_duration > 0.0) {
-            return Err(format!("parameter startup.duration: must be > 0 s, got {}", p.startup_duration));
+            return Err(format!("parameter startup.duration: must be > 0 s, got {:?}", p.startup_duration));
         }
         let (f_min, f_max) = (p.f_min, p.f_max);
         if !(f_min < f_max) {
-            return Err(format!("parameter Fmin: must be less than Fmax = {f_max} N, got {f_min} N"));
+            return Err(format!("parameter Fmin: must be less than Fmax = {f_max:?} N, got {f_min:?} N"));
         }
         self.compute().map(|_| ()).map_err(|e| format!("programme: {e}"))
     }
@@ -402,6 +447,7 @@ impl FmuModel for ControllerModel {
         _tolerance: Option<f64>,
         _model_exchange: bool,
     ) -> Result<Initialised, String> {
+        super::check_start_time(start_time)?;
         let before = self.time;
         self.time = start_time;
         self.outputs = None;
@@ -411,13 +457,17 @@ impl FmuModel for ControllerModel {
         }
         let p = &self.parameters;
         Ok(format!(
-            "initialised at t = {start_time}: programme {:?}, G = {} N/m, D = {} N.s/m, feedforward {}{}",
+            "initialised at t = {start_time:?}: programme {:?}, G = {:?} N/m, D = {:?} N.s/m, feedforward {}{}",
             p.programme,
             p.feedback.gain,
             p.feedback.damping,
             p.feedback.feedforward,
             if p.drives_enabled {
-                format!(", voltage outputs U (drives: N = {:.4} rad/m, Umax = {} V)", p.drives.transmission(), p.u_max)
+                format!(
+                    ", voltage outputs U (drives: N = {:.4} rad/m, Umax = {:?} V)",
+                    p.drives.transmission(),
+                    p.u_max
+                )
             } else {
                 String::new()
             }
@@ -437,7 +487,7 @@ impl FmuModel for ControllerModel {
             Err(message) => {
                 (self.time, self.outputs) = before;
                 Err(StepError {
-                    message: format!("step from t = {t} to {} rolled back: {message}", t + h),
+                    message: format!("step from t = {t:?} to {:?} rolled back: {message}", t + h),
                     retry_shorter: false,
                 })
             }
@@ -451,6 +501,10 @@ impl FmuModel for ControllerModel {
 
     fn output_derivative(&mut self, _var: VariableRef) -> f64 {
         0.0
+    }
+
+    fn undefined_reason(&self) -> Option<String> {
+        self.compute().err()
     }
 
     /// The stored variables (declaration order) and the time.

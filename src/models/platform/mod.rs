@@ -80,6 +80,10 @@ pub struct PlatformModel {
     /// Whether passages through singular arrangements are reported (see
     /// [`FmuModel::set_event_reporting`]).
     events_reported: bool,
+    /// Model Exchange: the time of the host's last completed integrator step, and the length of
+    /// that step (a fault's message gives the host's step).
+    last_completed_step: f64,
+    host_step: f64,
 }
 
 impl Default for PlatformModel {
@@ -96,6 +100,8 @@ impl Default for PlatformModel {
             kappa: None,
             joint_forces: None,
             events_reported: true,
+            last_completed_step: 0.0,
+            host_step: 0.0,
         }
     }
 }
@@ -197,6 +203,49 @@ impl PlatformModel {
         }
     }
 
+    /// Why a failed RK4 step is most likely the integrator's instability rather than the motion:
+    /// its internal step (for a communication step `h`) against the stiffest law's stable step.
+    fn rk4_instability(&self, h: f64) -> Option<String> {
+        let (sim, _) = self.simulation.as_ref()?;
+        let settings = &sim.integrator.settings;
+        if settings.method != crate::integration::Method::RungeKutta4 {
+            return None;
+        }
+        let step = if settings.fixed_step > 0.0 { settings.fixed_step.min(h) } else { h };
+        let law = self.parameters.stiffest_law()?;
+        (step > law.rk4_stable_step).then(|| {
+            format!(
+                "; the likely cause is RK4's instability, not the motion: its internal step of {step:.3e} s is longer \
+                 than the {:.3e} s it integrates stably, because {} is about {:.3e} s: set solver.fixedStep below {:.1e} s \
+                 or use the adaptive method (solver.method = 1)",
+                law.rk4_stable_step,
+                law.what,
+                law.time,
+                law.rk4_stable_step / 5.0
+            )
+        })
+    }
+
+    /// Model Exchange: the host's integrator owns the step: its step (the last completed one,
+    /// or the time since if longer) against the stiffest law, when it is too long for an
+    /// explicit method.
+    fn host_step_hint(&self) -> Option<String> {
+        let (sim, experiment) = self.simulation.as_ref()?;
+        if !experiment.model_exchange {
+            return None;
+        }
+        let since = self.host_step.max(sim.time - self.last_completed_step);
+        let law = self.parameters.stiffest_law()?;
+        (since > 0.1 * law.time).then(|| {
+            format!(
+                "the host's integrator steps {since:.3e} s, while {} is about {:.3e} s: an \
+                 explicit integrator needs steps well below it (a tenth or less), an implicit or adaptive one (CVODE) \
+                 finds them itself",
+                law.what, law.time
+            )
+        })
+    }
+
     /// What a crossing of switching function `c.index` means, in words.
     fn describe_crossing(sim: &PlatformSimulation, c: &Crossing<SIMULATION_DIM>) -> String {
         let state = BodyState::from_vector(body(&c.y));
@@ -209,7 +258,7 @@ impl PlatformModel {
             switching::DETERMINANT => {
                 let involved = singular_legs(sim.stand(), &legs);
                 return format!(
-                    "t = {}: the legs passed through a singular arrangement (determinant of the force/moment matrix \
+                    "t = {:?}: the legs passed through a singular arrangement (determinant of the force/moment matrix \
                      changed sign; legs {} form a force combination without resultant there)",
                     c.t,
                     leg_list(&involved)
@@ -229,7 +278,7 @@ impl PlatformModel {
                     None => return String::new(),
                 };
                 return format!(
-                    "t = {}: the {joint} joint of leg {} {what} its angle limit ({:.4} deg, limit {:.4} deg)",
+                    "t = {:?}: the {joint} joint of leg {} {what} its angle limit ({:.4} deg, limit {:.4} deg)",
                     c.t,
                     k + 1,
                     theta.to_degrees(),
@@ -238,7 +287,7 @@ impl PlatformModel {
             }
         };
         let (Some(l), Some(ldot)) = (legs.length.get(k), rates.get(k)) else { return String::new() };
-        format!("t = {}: leg {} {what} its {stop} end stop (l = {l} m, ldot = {ldot} m/s)", c.t, k + 1)
+        format!("t = {:?}: leg {} {what} its {stop} end stop (l = {l:?} m, ldot = {ldot:?} m/s)", c.t, k + 1)
     }
 
     /// A simulation for the parameters and `experiment`, told what the instance reports, with
@@ -344,6 +393,7 @@ impl FmuModel for PlatformModel {
         tolerance: Option<f64>,
         model_exchange: bool,
     ) -> Result<Initialised, String> {
+        super::check_start_time(start_time)?;
         let experiment = Experiment { start_time, tolerance, model_exchange };
         let sim = self.start(&experiment)?;
         let legs = LegOutputs::compute(&sim.form, &sim.state).l;
@@ -352,13 +402,14 @@ impl FmuModel for PlatformModel {
         // a mistyped height, and the pushing legs and gravity take the platform away.
         let warning = (sim.guard.side < 0.0).then(|| {
             format!(
-                "all platform joints start below the base plane (z = {} m; r0[3] = {} m): the platform hangs under \
+                "all platform joints start below the base plane (z = {:?} m; r0[3] = {:?} m): the platform hangs under \
                  its base like a suspended hexapod, and legs that push (F > 0) drive it further down; raise r0[3] if \
                  it should stand on its legs",
                 sim.guard.base_plane, self.parameters.r0[2]
             )
         });
         self.simulation = Some((sim, experiment));
+        self.last_completed_step = start_time;
         self.invalidate_outputs();
         Ok(Initialised { summary, warning })
     }
@@ -391,11 +442,12 @@ impl FmuModel for PlatformModel {
             Err(failure) => Err(StepError {
                 message: if failure.is_step_limit() {
                     format!(
-                        "step from t = {t} to {t_end} rolled back: {failure}; retry from t = {t} with shorter \
+                        "step from t = {t:?} to {t_end:?} rolled back: {failure}; retry from t = {t:?} with shorter \
                          communication steps"
                     )
                 } else {
-                    format!("step from t = {t} to {t_end} rolled back: {failure}; {inputs} {values:?} {unit}")
+                    let hint = self.rk4_instability(h).unwrap_or_default();
+                    format!("step from t = {t:?} to {t_end:?} rolled back: {failure}; {inputs} {values:?} {unit}{hint}")
                 },
                 retry_shorter: failure.is_step_limit(),
             }),
@@ -471,10 +523,20 @@ impl FmuModel for PlatformModel {
 
     fn completed_integrator_step(&mut self) -> Result<(), StepError> {
         let Some(sim) = self.sim() else { return Ok(()) };
-        sim.guard.check(&sim.form.joints, &sim.body_state()).map_err(|f| StepError {
-            message: format!("at t = {}: {f}; the simulation cannot go on", sim.time),
+        let time = sim.time;
+        let checked = sim.guard.check(&sim.form.joints, &sim.body_state());
+        self.host_step = time - self.last_completed_step;
+        self.last_completed_step = time;
+        let hint = self.host_step_hint().map(|h| format!("; {h}")).unwrap_or_default();
+        checked.map_err(|f| StepError {
+            message: format!("at t = {time:?}: {f}; the simulation cannot go on{hint}"),
             retry_shorter: false,
         })
+    }
+
+    /// Model Exchange: a state the host's integrator reached that is not a motion.
+    fn undefined_reason(&self) -> Option<String> {
+        self.host_step_hint()
     }
 
     fn directional_derivative(
@@ -544,6 +606,7 @@ impl FmuModel for PlatformModel {
             // Off until the instance says whether passages are reported: switching it on
             // then takes the determinant's side afresh.
             sim.set_track_singularities(false);
+            model.last_completed_step = sim.time;
             model.simulation = Some((sim, experiment));
         }
         Ok(model)

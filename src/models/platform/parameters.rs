@@ -268,7 +268,7 @@ impl PlatformParameters {
             ));
         }
         if !(s.max_step >= 0.0) {
-            return Err(format!("parameter solver.maxStep: must be >= 0 s (0 = no limit), got {}", s.max_step));
+            return Err(format!("parameter solver.maxStep: must be >= 0 s (0 = no limit), got {:?}", s.max_step));
         }
         if !(s.fixed_step == 0.0 || (s.fixed_step >= MIN_FIXED_STEP && s.fixed_step.is_finite())) {
             return Err(format!(
@@ -278,7 +278,7 @@ impl PlatformParameters {
             ));
         }
         if !(self.baumgarte_rate >= 0.0) {
-            return Err(format!("parameter solver.baumgarteRate: must be >= 0 1/s, got {}", self.baumgarte_rate));
+            return Err(format!("parameter solver.baumgarteRate: must be >= 0 1/s, got {:?}", self.baumgarte_rate));
         }
         Ok(())
     }
@@ -287,7 +287,7 @@ impl PlatformParameters {
     pub fn summary(&self, sim: &PlatformSimulation, experiment: &Experiment, legs: &[f64; LEG_COUNT]) -> String {
         let stops = match self.end_stops() {
             Some(s) => format!(
-                "end stops on (stiffness {} N/m, damping {} N.s/m, strokes {:?} .. {:?} m)",
+                "end stops on (stiffness {:?} N/m, damping {:?} N.s/m, strokes {:?} .. {:?} m)",
                 s.stiffness, s.damping, s.lower, s.upper
             ),
             None => "end stops off".to_string(),
@@ -305,7 +305,7 @@ impl PlatformParameters {
         };
         let p = self;
         format!(
-            "initialised at t = {}: M = {} kg, J = {:?} kg.m2, g = {} m/s2, leg lengths {:?} m, kappa {:.4}, \
+            "initialised at t = {:?}: M = {:?} kg, J = {:?} kg.m2, g = {:?} m/s2, leg lengths {:?} m, kappa {:.4}, \
              {stops}{drives}, stopAtSingularity {}, method {:?}, relTol {:e}{}, stabilisation {}",
             experiment.start_time,
             p.stand.mass,
@@ -318,11 +318,72 @@ impl PlatformParameters {
             sim.integrator.settings.rel_tol,
             if experiment.tolerance.is_some() { " (the importer's tolerance)" } else { "" },
             if sim.form.body.baumgarte_rate > 0.0 {
-                format!("Baumgarte {} 1/s", sim.form.body.baumgarte_rate)
+                format!("Baumgarte {:?} 1/s", sim.form.body.baumgarte_rate)
             } else {
                 format!("{:?}", p.stabilisation)
             }
         )
+    }
+}
+
+/// The stiffest of the contact and friction laws, as an explicit integrator sees it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StiffLaw {
+    /// What it is, naming its parameters.
+    pub what: String,
+    /// Its time scale, s: a contact's period, or friction's time constant.
+    pub time: f64,
+    /// The largest step RK4 integrates it stably with, s.
+    pub rk4_stable_step: f64,
+}
+
+impl PlatformParameters {
+    /// The law that bounds an explicit integrator's step the most: the end stops' and joint
+    /// limits' contact periods (`2 pi sqrt(mass / stiffness)`: the platform's mass on six
+    /// stops, its smallest moment of inertia on a joint limit) and friction's time constant
+    /// near rest (`(M/6) / (F_s / v_t)`). RK4 is stable below 0.45 of an undamped period
+    /// (`omega h < 2.83`) and 2.78 time constants of a decay. `None` without any.
+    pub fn stiffest_law(&self) -> Option<StiffLaw> {
+        let tau = 2.0 * std::f64::consts::PI;
+        let mut laws = vec![];
+        if self.stops_enabled && self.stops.stiffness > 0.0 {
+            let period = tau * (self.stand.mass / (6.0 * self.stops.stiffness)).sqrt();
+            laws.push(StiffLaw {
+                what: format!(
+                    "the end stops' contact period (stops.stiffness = {:e} N/m under the platform's mass on six stops)",
+                    self.stops.stiffness
+                ),
+                time: period,
+                rk4_stable_step: 0.45 * period,
+            });
+        }
+        if self.joints_enabled && self.joints.stiffness > 0.0 {
+            let inertia = self.stand.inertia.iter().copied().fold(f64::INFINITY, f64::min);
+            let period = tau * (inertia / self.joints.stiffness).sqrt();
+            laws.push(StiffLaw {
+                what: format!(
+                    "the joint limits' contact period (joints.stiffness = {:e} N.m/rad under the platform's smallest \
+                     moment of inertia)",
+                    self.joints.stiffness
+                ),
+                time: period,
+                rk4_stable_step: 0.45 * period,
+            });
+        }
+        let grip = self.friction.static_.max(self.friction.coulomb);
+        if grip > 0.0 && self.friction.smoothing > 0.0 {
+            let time = self.stand.mass / 6.0 / (grip / self.friction.smoothing);
+            laws.push(StiffLaw {
+                what: format!(
+                    "the cylinder friction's time constant near rest (friction.static = {:e} N over \
+                     friction.smoothing = {:e} m/s, a sixth of the platform's mass)",
+                    grip, self.friction.smoothing
+                ),
+                time,
+                rk4_stable_step: 2.78 * time,
+            });
+        }
+        laws.into_iter().min_by(|a, b| a.rk4_stable_step.total_cmp(&b.rk4_stable_step))
     }
 }
 

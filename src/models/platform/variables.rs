@@ -453,7 +453,8 @@ declare_variables! {
             206,
             Some("1"),
             "Condition number of the 6x6 leg force/moment matrix (moment rows divided by the stand's characteristic \
-             length): large near a singular leg arrangement, infinite at one",
+             length): large near a singular leg arrangement; at one (or where double precision cannot tell) it is \
+             1/eps = 4.5e15, its largest value",
             &[All("A"), All("B"), All("r0"), All("angles0")],
         )
         .depends_on(POSE_STATES); computed,

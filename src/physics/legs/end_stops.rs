@@ -196,13 +196,13 @@ impl EndStops {
             if lo <= 0.0 {
                 return Err(ParameterError::new(
                     lo_name,
-                    format!("the shortest leg length must be positive, got {lo} m"),
+                    format!("the shortest leg length must be positive, got {lo:?} m"),
                 ));
             }
             if lo >= hi {
                 return Err(ParameterError::new(
                     lo_name,
-                    format!("the stroke is empty: lmin[{0}] = {lo} m must be less than lmax[{0}] = {hi} m", k + 1),
+                    format!("the stroke is empty: lmin[{0}] = {lo:?} m must be less than lmax[{0}] = {hi:?} m", k + 1),
                 ));
             }
         }
@@ -210,14 +210,14 @@ impl EndStops {
         if self.stiffness <= 0.0 {
             return Err(ParameterError::new(
                 "stops.stiffness",
-                format!("the stop stiffness must be positive, got {} N/m", self.stiffness),
+                format!("the stop stiffness must be positive, got {:?} N/m", self.stiffness),
             ));
         }
         crate::physics::stand::check_finite("stops.damping", self.damping)?;
         if self.damping < 0.0 {
             return Err(ParameterError::new(
                 "stops.damping",
-                format!("the contact damping must be >= 0 N.s/m (0 = elastic stops), got {}", self.damping),
+                format!("the contact damping must be >= 0 N.s/m (0 = elastic stops), got {:?}", self.damping),
             ));
         }
         Ok(())
