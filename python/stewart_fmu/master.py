@@ -86,9 +86,11 @@ def run(system, stop_time, step, scheme="gauss-seidel", values=None, record=(), 
     failed actuator). Returns (times, rows, status, message): `rows` one row of the recorded
     values per recorded point, status "ok" or the failed call as FMPy words it."""
     check_times(stop_time, step, "stop_time", "step")
-    every = 1 if interval is None else int(round(interval / step))
-    if every < 1 or abs(every * step - interval) > 1e-9 * interval:
-        raise ValueError(f"interval = {interval}: a whole multiple of step = {step} is expected")
+    every = 1
+    if interval is not None:
+        every = int(round(interval / step))
+        if every < 1 or abs(every * step - interval) > 1e-9 * interval:
+            raise ValueError(f"interval = {interval}: a whole multiple of step = {step} is expected")
     out = system.run(int(round(stop_time / step)), float(step), scheme=scheme, values=list((values or {}).items()),
                      overrides=[(n, float(v), float(t)) for n, v, t in overrides], record=list(record), every=every)
     times = np.frombuffer(out["times"], dtype="<f8")
