@@ -56,6 +56,10 @@ struct PySystem {
     names: Vec<String>,
 }
 
+/// A study point from Python: (steps, step, values by qualified name, overrides as (qualified
+/// name, value, from time)).
+type Point<'py> = (usize, f64, Vec<(String, Bound<'py, PyAny>)>, Vec<(String, f64, f64)>);
+
 fn scheme_and_rule(scheme: &str, time_rule: &str) -> PyResult<(Scheme, TimeRule)> {
     let scheme = Scheme::parse(scheme).map_err(PyValueError::new_err)?;
     let rule = match time_rule {
@@ -178,11 +182,14 @@ impl PySystem {
         record: Vec<String>,
         every: usize,
     ) -> PyResult<Bound<'py, PyDict>> {
-        if !(step.is_finite() && step > 0.0) || !start_time.is_finite() {
+        // Written so that NaN fails too.
+        let good = step.is_finite() && step > 0.0 && start_time.is_finite();
+        if !good {
             return Err(PyValueError::new_err(format!("step = {step}, start_time = {start_time}: finite, step > 0")));
         }
         let (scheme, time_rule) = scheme_and_rule(scheme, time_rule)?;
-        let mut guard = self.inner.lock().map_err(|_| PyRuntimeError::new_err("the system is unusable after a panic"))?;
+        let mut guard =
+            self.inner.lock().map_err(|_| PyRuntimeError::new_err("the system is unusable after a panic"))?;
         let system = guard.as_mut().ok_or_else(|| PyRuntimeError::new_err("the system is closed"))?;
         let (values, overrides) = PySystem::spec(system, values, overrides)?;
         let mut recorder = Recorder::new(system, &record, every).map_err(PyValueError::new_err)?;
@@ -229,11 +236,13 @@ impl PySystem {
         &self,
         py: Python<'py>,
         closed_loop: bool,
-        points: Vec<(usize, f64, Vec<(String, Bound<'py, PyAny>)>, Vec<(String, f64, f64)>)>,
+        points: Vec<Point<'py>>,
     ) -> PyResult<Vec<Bound<'py, PyDict>>> {
-        let mut guard = self.inner.lock().map_err(|_| PyRuntimeError::new_err("the system is unusable after a panic"))?;
+        let mut guard =
+            self.inner.lock().map_err(|_| PyRuntimeError::new_err("the system is unusable after a panic"))?;
         let system = guard.as_mut().ok_or_else(|| PyRuntimeError::new_err("the system is closed"))?;
-        let controller = if closed_loop { Some(system.component_index("controller").map_err(PyValueError::new_err)?) } else { None };
+        let controller =
+            if closed_loop { Some(system.component_index("controller").map_err(PyValueError::new_err)?) } else { None };
         // Resolve every point first (with the GIL), then run them all without it.
         let mut specs = vec![];
         for (steps, step, values, overrides) in points {
@@ -255,7 +264,9 @@ impl PySystem {
                     let started = std::time::Instant::now();
                     let row = match spec {
                         Err(message) => Err(message.clone()),
-                        Ok(spec) => match catch_unwind(AssertUnwindSafe(|| stewart_master::study::run(system, controller, spec))) {
+                        Ok(spec) => match catch_unwind(AssertUnwindSafe(|| {
+                            stewart_master::study::run(system, controller, spec)
+                        })) {
                             Ok(row) => row,
                             Err(payload) => {
                                 system.free_instances();

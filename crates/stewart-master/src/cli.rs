@@ -116,8 +116,15 @@ fn command(args: &[String]) -> Result<i32, String> {
             "--fail" => {
                 let text = value.ok_or("--fail needs COMPONENT.VARIABLE=VALUE@TIME")?;
                 let parsed = text.split_once('=').and_then(|(n, rest)| rest.split_once('@').map(|(v, t)| (n, v, t)));
-                let (name, v, t) = parsed.ok_or_else(|| format!("--fail {text}: write COMPONENT.VARIABLE=VALUE@TIME"))?;
+                let (name, v, t) =
+                    parsed.ok_or_else(|| format!("--fail {text}: write COMPONENT.VARIABLE=VALUE@TIME"))?;
                 let (component, value_reference, _) = system.resolve(name)?;
+                // Only an input can be held (an output belongs to its FMU).
+                let variable = name.split_once('.').map(|(_, v)| v).unwrap_or(name);
+                let causality = &system.fmu(component).description.find(variable)?.causality;
+                if causality != "input" {
+                    return Err(format!("--fail {text}: {name} is {causality}, not an input"));
+                }
                 let (value, from) = (v.parse::<f64>(), t.parse::<f64>());
                 let (Ok(value), Ok(from)) = (value, from) else {
                     return Err(format!("--fail {text}: VALUE and TIME must be numbers"));
@@ -145,15 +152,8 @@ fn command(args: &[String]) -> Result<i32, String> {
         }
     };
     let mut recorder = Recorder::new(&system, &record, every)?;
-    let spec = RunSpec {
-        start_time: 0.0,
-        step,
-        steps: steps as usize,
-        scheme,
-        time_rule: TimeRule::Sum,
-        values,
-        overrides,
-    };
+    let spec =
+        RunSpec { start_time: 0.0, step, steps: steps as usize, scheme, time_rule: TimeRule::Sum, values, overrides };
     let started = Instant::now();
     let outcome = system.run(&spec, &mut recorder);
     let seconds = started.elapsed().as_secs_f64();
@@ -168,7 +168,8 @@ fn command(args: &[String]) -> Result<i32, String> {
         writeln!(writer, "time,{}", record.join(",")).map_err(io)?;
         let width = recorder.width();
         for (r, t) in recorder.times.iter().enumerate() {
-            let row: Vec<String> = recorder.values[r * width..(r + 1) * width].iter().map(|x| format!("{x:?}")).collect();
+            let row: Vec<String> =
+                recorder.values[r * width..(r + 1) * width].iter().map(|x| format!("{x:?}")).collect();
             writeln!(writer, "{t:?},{}", row.join(",")).map_err(io)?;
         }
         writer.flush().map_err(io)?;

@@ -39,7 +39,10 @@ impl ModelDescription {
     pub fn parse(text: &str) -> Result<ModelDescription, String> {
         let root = xml::parse(text).map_err(|e| format!("modelDescription.xml: {e}"))?;
         if root.name != "fmiModelDescription" {
-            return Err(format!("modelDescription.xml: the root element is <{}>, not <fmiModelDescription>", root.name));
+            return Err(format!(
+                "modelDescription.xml: the root element is <{}>, not <fmiModelDescription>",
+                root.name
+            ));
         }
         let version = root.attribute("fmiVersion").unwrap_or("");
         if version != "2.0" {
@@ -75,7 +78,12 @@ impl ModelDescription {
         // ModelStructure/Outputs: `dependencies` lists 1-based indices of the variables an
         // output depends on; without the attribute it may depend on all of them (FMI 2, 3.2.2.1).
         let any_input = variables.iter().any(|v| v.causality == "input");
-        for u in root.child("ModelStructure").and_then(|s| s.child("Outputs")).map(|o| o.children_named("Unknown")).into_iter().flatten()
+        for u in root
+            .child("ModelStructure")
+            .and_then(|s| s.child("Outputs"))
+            .map(|o| o.children_named("Unknown"))
+            .into_iter()
+            .flatten()
         {
             let Some(index) = u.attribute("index").and_then(|s| s.parse::<usize>().ok()).filter(|&i| i >= 1) else {
                 continue;
@@ -103,8 +111,13 @@ impl ModelDescription {
     pub fn find(&self, name: &str) -> Result<&Variable, String> {
         self.variable(name).ok_or_else(|| {
             let stem = name.split('[').next().unwrap_or(name);
-            let close: Vec<&str> =
-                self.variables.iter().map(|v| v.name.as_str()).filter(|n| n.split('[').next() == Some(stem)).take(3).collect();
+            let close: Vec<&str> = self
+                .variables
+                .iter()
+                .map(|v| v.name.as_str())
+                .filter(|n| n.split('[').next() == Some(stem))
+                .take(3)
+                .collect();
             let hint = if close.is_empty() { String::new() } else { format!(" (similar: {})", close.join(", ")) };
             format!("{} has no variable {name:?}{hint}", self.model_name)
         })

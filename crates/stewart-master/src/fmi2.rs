@@ -37,8 +37,15 @@ struct CallbackFunctions {
     component_environment: *mut c_void,
 }
 
-type Instantiate =
-    unsafe extern "C" fn(*const c_char, c_int, *const c_char, *const c_char, *const CallbackFunctions, c_int, c_int) -> Component;
+type Instantiate = unsafe extern "C" fn(
+    *const c_char,
+    c_int,
+    *const c_char,
+    *const c_char,
+    *const CallbackFunctions,
+    c_int,
+    c_int,
+) -> Component;
 type Free = unsafe extern "C" fn(Component);
 type SetupExperiment = unsafe extern "C" fn(Component, c_int, f64, f64, c_int, f64) -> Status;
 type Plain = unsafe extern "C" fn(Component) -> Status;
@@ -244,7 +251,14 @@ impl Instance {
 
     /// The last discard, error or fatal message since `clear_messages`, or "".
     pub fn last_problem(&self) -> String {
-        self.sink.messages.borrow().iter().rev().find(|m| m.status >= DISCARD).map(|m| m.text.clone()).unwrap_or_default()
+        self.sink
+            .messages
+            .borrow()
+            .iter()
+            .rev()
+            .find(|m| m.status >= DISCARD)
+            .map(|m| m.text.clone())
+            .unwrap_or_default()
     }
 
     pub fn reset(&mut self) -> Result<(), CallError> {
@@ -255,7 +269,9 @@ impl Instance {
 
     pub fn setup_experiment(&mut self, start_time: f64) -> Result<(), CallError> {
         // SAFETY: as above; no tolerance and no stop time defined (FMPy's defaults).
-        check("fmi2SetupExperiment", unsafe { (self.library.setup_experiment)(self.component, 0, 0.0, start_time, 0, 0.0) })
+        check("fmi2SetupExperiment", unsafe {
+            (self.library.setup_experiment)(self.component, 0, 0.0, start_time, 0, 0.0)
+        })
     }
 
     pub fn enter_initialization_mode(&mut self) -> Result<(), CallError> {
@@ -273,7 +289,9 @@ impl Instance {
     pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Result<(), CallError> {
         assert_eq!(vrs.len(), values.len());
         // SAFETY: two arrays of the length passed.
-        check("fmi2SetReal", unsafe { (self.library.set_real)(self.component, vrs.as_ptr(), vrs.len(), values.as_ptr()) })
+        check("fmi2SetReal", unsafe {
+            (self.library.set_real)(self.component, vrs.as_ptr(), vrs.len(), values.as_ptr())
+        })
     }
 
     pub fn get_real(&mut self, vrs: &[u32], values: &mut [f64]) -> Result<(), CallError> {
@@ -304,7 +322,9 @@ impl Instance {
         assert_eq!(vrs.len(), values.len());
         let ints: Vec<c_int> = values.iter().map(|&b| b as c_int).collect();
         // SAFETY: two arrays of the length passed.
-        check("fmi2SetBoolean", unsafe { (self.library.set_boolean)(self.component, vrs.as_ptr(), vrs.len(), ints.as_ptr()) })
+        check("fmi2SetBoolean", unsafe {
+            (self.library.set_boolean)(self.component, vrs.as_ptr(), vrs.len(), ints.as_ptr())
+        })
     }
 
     /// Sets values of any type, grouped as FMPy's `set_values` does: the Reals in one call,

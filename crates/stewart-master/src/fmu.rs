@@ -19,7 +19,8 @@ impl TempDir {
     fn new(label: &str) -> Result<TempDir, String> {
         let base = std::env::temp_dir();
         let label: String = label.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '-' }).take(40).collect();
-        let nanos = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.subsec_nanos()).unwrap_or(0);
+        let nanos =
+            std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.subsec_nanos()).unwrap_or(0);
         for attempt in 0..100 {
             let n = FOLDERS.fetch_add(1, Ordering::Relaxed);
             let path = base.join(format!("stewart-master-{label}-{}-{n}-{nanos}-{attempt}", std::process::id()));
@@ -60,7 +61,8 @@ impl Fmu {
 
     /// Unpacks an FMU given as the bytes of its zip archive (`label` names it in messages).
     pub fn from_bytes(data: &[u8], label: &str) -> Result<Fmu, String> {
-        let mut archive = zip::ZipArchive::new(Cursor::new(data)).map_err(|e| format!("{label} is not an FMU (a zip archive): {e}"))?;
+        let mut archive = zip::ZipArchive::new(Cursor::new(data))
+            .map_err(|e| format!("{label} is not an FMU (a zip archive): {e}"))?;
         let stem = Path::new(label).file_stem().and_then(|s| s.to_str()).unwrap_or("fmu").to_string();
         let folder = TempDir::new(&stem)?;
         // `extract` refuses entries whose names leave the folder.
@@ -107,7 +109,8 @@ fn percent_encode(path: &str) -> String {
 
 /// One file of a zip archive (an SSP's SystemStructure.ssd or one of its FMUs).
 pub fn read_from_zip(data: &[u8], name: &str, label: &str) -> Result<Vec<u8>, String> {
-    let mut archive = zip::ZipArchive::new(Cursor::new(data)).map_err(|e| format!("{label} is not a zip archive: {e}"))?;
+    let mut archive =
+        zip::ZipArchive::new(Cursor::new(data)).map_err(|e| format!("{label} is not a zip archive: {e}"))?;
     let mut file = archive.by_name(name).map_err(|e| format!("{label} has no {name}: {e}"))?;
     let mut out = Vec::with_capacity(file.size() as usize);
     file.read_to_end(&mut out).map_err(|e| format!("cannot read {name} in {label}: {e}"))?;

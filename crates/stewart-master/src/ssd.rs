@@ -93,7 +93,9 @@ impl SystemDescription {
             }
             let kind = e.attribute("type").unwrap_or("application/x-fmu-sharedlibrary");
             if kind != "application/x-fmu-sharedlibrary" {
-                return Err(format!("component {cname}: type {kind:?}: only FMUs (application/x-fmu-sharedlibrary) are supported"));
+                return Err(format!(
+                    "component {cname}: type {kind:?}: only FMUs (application/x-fmu-sharedlibrary) are supported"
+                ));
             }
             let source = required(e, "source", &format!("component {cname}"))?.to_string();
             let connectors = e
@@ -101,17 +103,21 @@ impl SystemDescription {
                 .map(|c| c.children_named("Connector").collect::<Vec<_>>())
                 .unwrap_or_default()
                 .into_iter()
-                .map(|c| Ok((required(c, "name", "a Connector")?.to_string(), c.attribute("kind").unwrap_or("").to_string())))
+                .map(|c| {
+                    Ok((required(c, "name", "a Connector")?.to_string(), c.attribute("kind").unwrap_or("").to_string()))
+                })
                 .collect::<Result<Vec<_>, String>>()?;
             let parameters = parameters(e, &cname)?;
             components.push(ComponentDescription { name: cname, source, connectors, parameters });
         }
         let mut connections = vec![];
-        for c in system.child("Connections").map(|c| c.children_named("Connection").collect::<Vec<_>>()).unwrap_or_default()
+        for c in
+            system.child("Connections").map(|c| c.children_named("Connection").collect::<Vec<_>>()).unwrap_or_default()
         {
             let start_connector = required(c, "startConnector", "a Connection")?.to_string();
             let end_connector = required(c, "endConnector", "a Connection")?.to_string();
-            let (Some(start_element), Some(end_element)) = (c.attribute("startElement"), c.attribute("endElement")) else {
+            let (Some(start_element), Some(end_element)) = (c.attribute("startElement"), c.attribute("endElement"))
+            else {
                 return Err(format!(
                     "the connection {start_connector} -> {end_connector} joins a connector of the system itself: only \
                      connections between components are supported"

@@ -30,7 +30,8 @@ pub const PLATFORM_WATCHED: [&str; 20] = [
     "l[6]",
 ];
 /// The controller's (closed loop), in this order.
-pub const CONTROLLER_WATCHED: [&str; 9] = ["lp[1]", "lp[2]", "lp[3]", "lp[4]", "lp[5]", "lp[6]", "rp[1]", "rp[2]", "rp[3]"];
+pub const CONTROLLER_WATCHED: [&str; 9] =
+    ["lp[1]", "lp[2]", "lp[3]", "lp[4]", "lp[5]", "lp[6]", "rp[1]", "rp[2]", "rp[3]"];
 
 /// A study run's row: status ("ok", "discard", "error"), message and metrics (NaN where the
 /// run gives none).
@@ -90,7 +91,7 @@ struct Metrics {
 
 impl Observer for Metrics {
     fn watched(&self) -> Vec<Vec<u32>> {
-        let mut w = vec![vec![]; self.controller_index.max(0) + 1];
+        let mut w = vec![vec![]; self.controller_index + 1];
         w[0] = self.platform.clone();
         if self.closed {
             w[self.controller_index] = self.controller.clone();

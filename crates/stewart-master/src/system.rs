@@ -232,7 +232,8 @@ impl System {
             });
         }
         for connection in description.map(|d| d.connections.as_slice()).unwrap_or_default() {
-            let index = |element: &str| components.iter().position(|c| c.name == element).expect("checked by the SSD parser");
+            let index =
+                |element: &str| components.iter().position(|c| c.name == element).expect("checked by the SSD parser");
             let (from, to) = (index(&connection.start_element), index(&connection.end_element));
             let variable = |c: usize, name: &str, causality: &str| -> Result<(u32, bool), String> {
                 let v = components[c]
@@ -241,10 +242,16 @@ impl System {
                     .find(name)
                     .map_err(|e| format!("connection {}.{name}: {e}", components[c].name))?;
                 if v.kind != Type::Real {
-                    return Err(format!("connection {}.{name}: only Real connections are supported", components[c].name));
+                    return Err(format!(
+                        "connection {}.{name}: only Real connections are supported",
+                        components[c].name
+                    ));
                 }
                 if v.causality != causality {
-                    return Err(format!("connection {}.{name}: is {}, not {causality}", components[c].name, v.causality));
+                    return Err(format!(
+                        "connection {}.{name}: is {}, not {causality}",
+                        components[c].name, v.causality
+                    ));
                 }
                 Ok((v.value_reference, v.feedthrough))
             };
@@ -259,7 +266,10 @@ impl System {
             };
             components[from].feedthrough |= feedthrough;
             if components[to].inputs.iter().any(|&(vr, _, _)| vr == in_vr) {
-                return Err(format!("{}.{} has more than one connection into it", components[to].name, connection.end_connector));
+                return Err(format!(
+                    "{}.{} has more than one connection into it",
+                    components[to].name, connection.end_connector
+                ));
             }
             components[to].inputs.push((in_vr, from, slot));
         }
@@ -605,7 +615,11 @@ fn gauss_seidel_order(components: &[Component]) -> Result<Vec<usize>, String> {
     let mut done = vec![false; components.len()];
     while order.len() < components.len() {
         let ready = (0..components.len()).find(|&k| {
-            !done[k] && components[k].inputs.iter().all(|&(_, from, _)| !components[from].feedthrough || done[from] || from == k)
+            !done[k]
+                && components[k]
+                    .inputs
+                    .iter()
+                    .all(|&(_, from, _)| !components[from].feedthrough || done[from] || from == k)
         });
         match ready {
             Some(k) if components[k].feedthrough && components[k].inputs.iter().any(|&(_, from, _)| from == k) => {
@@ -616,7 +630,8 @@ fn gauss_seidel_order(components: &[Component]) -> Result<Vec<usize>, String> {
                 order.push(k);
             }
             None => {
-                let rest: Vec<&str> = (0..components.len()).filter(|&k| !done[k]).map(|k| components[k].name.as_str()).collect();
+                let rest: Vec<&str> =
+                    (0..components.len()).filter(|&k| !done[k]).map(|k| components[k].name.as_str()).collect();
                 return Err(format!(
                     "the components {} form an algebraic loop (outputs that depend directly on inputs, in a cycle): \
                      a fixed-step master cannot order them",

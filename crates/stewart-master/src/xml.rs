@@ -42,8 +42,9 @@ pub fn parse(text: &str) -> Result<Element, String> {
     reader.config_mut().trim_text(true);
     let mut stack: Vec<Element> = vec![Element::default()];
     loop {
-        let event =
-            reader.read_event().map_err(|e| format!("not well-formed XML at byte {}: {e}", reader.buffer_position()))?;
+        let event = reader
+            .read_event()
+            .map_err(|e| format!("not well-formed XML at byte {}: {e}", reader.buffer_position()))?;
         match &event {
             Event::Start(start) => stack.push(element(start, &reader)?),
             Event::Empty(start) => {
