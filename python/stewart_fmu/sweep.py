@@ -117,7 +117,10 @@ def run_and_time(spec, run, fmus, master="fmpy"):
 def run_batch(spec, runs, fmus, master="fmpy"):
     """What a worker executes: a batch of runs, their rows (each with its wall time and the
     worker). The compiled master runs the batch in one call."""
-    faulthandler.enable()  # an FMU that crashes the process names itself in the worker's log
+    try:
+        faulthandler.enable()  # an FMU that crashes the process names itself in the worker's log
+    except (AttributeError, OSError, ValueError):
+        pass  # a standard error without a file descriptor (captured): nowhere to write it
     worker = st.worker_name()
     if master == "compiled":
         return [make_row(run, row, seconds, worker) for run, (row, seconds) in zip(runs, st.execute_many(spec, runs, fmus))]

@@ -232,8 +232,9 @@ def test_two_sweeps_on_one_out_run_one_at_a_time(study_file, tmp_path):
 
 def test_the_lock_of_a_killed_sweep_does_not_block_the_next(study_file, tmp_path):
     out = tmp_path / "killed"
-    first = subprocess.Popen([SWEEP, str(study_file), "--out", str(out), "--serial"], stdout=subprocess.DEVNULL,
-                             stderr=subprocess.DEVNULL)
+    # The FMPy master: slow enough to be killed mid-study.
+    first = subprocess.Popen([SWEEP, str(study_file), "--out", str(out), "--serial", "--master", "fmpy"],
+                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     deadline = time.monotonic() + 120
     while rows_written(out) < 3 and first.poll() is None and time.monotonic() < deadline:
         time.sleep(0.05)
