@@ -1,24 +1,45 @@
-"""Study throughput: runs per second of a 60-run closed-loop study (non-dimensional heave
-programme, 2000 communication steps per run), in this process without Dask and on a local
-Dask cluster with 1 and 2 worker processes (one thread each), after each worker has loaded the
-FMUs once. Prints a table with the parallel efficiency and the scheduler's cost per run.
+"""Study throughput of the two masters: runs per second of the shipped stability study's
+closed-loop runs (non-dimensional heave programme, G x D, 2000 communication steps of 0.01
+each), with the compiled master (`stewart_fmu.master`, the default) and the FMPy master
+(`--master fmpy`), in this process without Dask and on a local Dask cluster of 1 and 2 worker
+processes (one thread each) after each worker has loaded the FMUs, handed out as `stewart-sweep`
+hands them (the compiled master's runs in batches, `sweep.batches`). Then the compiled master's
+cost per communication step: wall time, and instructions (callgrind, the difference between 1
+and 3 runs, so that loading and Python's start-up drop out) split into the two FMUs (inside
+their exported fmi2* functions), the master's loop (`System::run` without the FMUs) and the
+Python around each run (the study's checks and the row); and a worker's memory over repeated
+rounds. Prints one table and writes it to benches/results/sweep.txt.
 
-    .venv/bin/python benches/sweep_bench.py
+    .venv/bin/python benches/sweep_bench.py             # after cargo run --release --bin build-fmu
+                                                        # and cargo build --release -p stewart-master-py
 """
 
 import os
+import platform
+import re
+import subprocess
+import sys
+import tempfile
 import time
+from pathlib import Path
 
+from stewart_fmu import ROOT
 from stewart_fmu import study as st
-from stewart_fmu.sweep import run_and_time
+from stewart_fmu.sweep import batches, run_batch
 
 SPEC = {
     "study": {"name": "bench", "system": "closed-loop", "units": "nondimensional", "stop_time": 20.0, "step": 0.01,
               "stable_error": 0.01},
-    "fixed": {"controller.heave.centre[3]": 1.3059496109441155, "controller.heave.amplitude": 0.2},
+    "fixed": {"controller.heave.centre[3]": 1.3059496109441155, "controller.heave.amplitude": 0.2,
+              "controller.heave.frequency": 1.0, "controller.heave.timeConstant": 2.0},
     "grid": {"controller.G": [2.0, 5.0, 10.0, 20.0, 50.0, 100.0], "controller.D": [0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 3.5,
                                                                                      4.0, 4.5, 5.0]},
 }
+STEPS = 2000
+# Runs per measurement: the compiled master repeats the 60-run grid, so that each measurement
+# lasts seconds.
+ROUNDS = {"compiled": 20, "fmpy": 1}
+OUT = ROOT / "benches" / "results" / "sweep.txt"
 
 
 def _rss_mb():
@@ -26,45 +47,120 @@ def _rss_mb():
         return next(int(line.split()[1]) for line in f if line.startswith("VmRSS:")) / 1024
 
 
-def main():
-    runs = st.runs(SPEC)
-    fmus = st.fmus_for(SPEC)
-    run_and_time(SPEC, runs[0], fmus)  # load the FMUs in this process
+def in_process(master, runs, fmus):
+    run_batch(SPEC, runs[:2], fmus, master)  # load the FMUs in this process
     start = time.perf_counter()
-    rows = [run_and_time(SPEC, r, fmus) for r in runs]
-    serial = len(runs) / (time.perf_counter() - start)
-    per_run = sum(r["wall_time"] for r in rows) / len(rows)
-    lines = [f"study throughput, {len(runs)} runs of {SPEC['study']['stop_time'] / SPEC['study']['step']:.0f} steps, "
-             f"{os.cpu_count()} cores", f"{'where':28} {'runs/s':>8} {'efficiency':>10}",
-             f"{'this process, no Dask':28} {serial:8.2f} {'':>10}"]
+    for batch in batches(SPEC, runs, master, 1):
+        rows = run_batch(SPEC, batch, fmus, master)
+        assert all(r["status"] == "ok" for r in rows), rows[0]
+    return len(runs) / (time.perf_counter() - start)
+
+
+def on_dask(master, runs, fmus, workers):
     from distributed import Client, LocalCluster
-    rates = {}
-    for workers in (1, 2):
-        with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
-                Client(cluster) as client:
-            shared = client.scatter(fmus, broadcast=True)
-            warm = [client.submit(run_and_time, SPEC, runs[i], shared, pure=False) for i in range(workers * 2)]
-            client.gather(warm)
-            start = time.perf_counter()
-            futures = [client.submit(run_and_time, SPEC, r, shared, pure=False) for r in runs]
-            client.gather(futures)
-            rates[workers] = len(runs) / (time.perf_counter() - start)
-        lines.append(f"{f'Dask, {workers} local worker(s)':28} {rates[workers]:8.2f} "
-                     f"{rates[workers] / (workers * serial):10.0%}")
-    # A worker's memory over a longer study: 5 rounds of the 60 runs on one worker.
-    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
             Client(cluster) as client:
         shared = client.scatter(fmus, broadcast=True)
+        client.gather([client.submit(run_batch, SPEC, runs[:2], shared, master, pure=False) for _ in range(2 * workers)])
+        start = time.perf_counter()
+        futures = [client.submit(run_batch, SPEC, b, shared, master, pure=False)
+                   for b in batches(SPEC, runs, master, workers)]
+        client.gather(futures)
+        rate = len(runs) / (time.perf_counter() - start)
         rss = []
-        for _ in range(5):
-            client.gather([client.submit(run_and_time, SPEC, r, shared, pure=False) for r in runs])
-            rss.append(next(iter(client.run(_rss_mb).values())))
-    lines.append(f"worker RSS after each 60 runs (MB): {', '.join(f'{x:.1f}' for x in rss)}")
-    overhead = 1.0 / rates[1] - 1.0 / serial
-    lines.append(f"mean run {per_run * 1e3:.1f} ms in-process; Dask's cost per run with one worker "
-                 f"{overhead * 1e3:.1f} ms; N workers give about N x {1 / (per_run + max(overhead, 0)):.1f} runs/s "
-                 f"while the scheduler keeps up (a few thousand tasks/s)")
-    print("\n".join(lines))
+        for _ in range(3):
+            client.gather([client.submit(run_batch, SPEC, b, shared, master, pure=False)
+                           for b in batches(SPEC, runs, master, workers)])
+            rss.append(max(client.run(_rss_mb).values()))
+    return rate, rss
+
+
+CALLGRIND_SCRIPT = """
+import sys
+sys.path.insert(0, {bench!r})
+from sweep_bench import SPEC
+from stewart_fmu import study as st
+from stewart_fmu.sweep import run_batch
+runs = st.runs(SPEC)
+fmus = st.fmus_for(SPEC)
+run_batch(SPEC, runs[:1], fmus, "compiled")
+run_batch(SPEC, runs[1:1 + int(sys.argv[1])], fmus, "compiled")
+"""
+
+
+def callgrind(n, folder):
+    """{function (with object): inclusive instructions} and the total, for a process that
+    runs 1 + n study runs with the compiled master."""
+    script = Path(folder) / "runs.py"
+    script.write_text(CALLGRIND_SCRIPT.format(bench=str(Path(__file__).parent)))
+    out = Path(folder) / f"callgrind.{n}"
+    subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", sys.executable, str(script), str(n)],
+                   check=True, capture_output=True)
+    report = subprocess.run(["callgrind_annotate", "--inclusive=yes", "--threshold=100", str(out)], check=True,
+                            capture_output=True, text=True).stdout
+    counts = {}
+    for line in report.splitlines():
+        m = re.match(r"\s*([\d,]+) \([^)]*\)\s+(\S.*)$", line)
+        if m:
+            counts[m.group(2)] = counts.get(m.group(2), 0) + int(m.group(1).replace(",", ""))
+    total = next(v for k, v in counts.items() if k.startswith("PROGRAM TOTALS"))
+    return counts, total
+
+
+def instructions_per_step():
+    """Instructions per closed-loop step: total, in the FMUs, in the master's loop, in the
+    Python around the runs (callgrind: 3 runs minus 1 run, over 2 x 2000 steps)."""
+    with tempfile.TemporaryDirectory() as folder:
+        (one, total_one), (three, total_three) = callgrind(1, folder), callgrind(3, folder)
+    steps = 2 * STEPS
+
+    def summed(counts, pattern):
+        return sum(v for k, v in counts.items() if re.search(pattern, k))
+
+    fmu = r"\?\?\?:fmi2(DoStep|GetReal|SetReal|SetInteger|SetBoolean|Reset|SetupExperiment|EnterInitializationMode|" \
+          r"ExitInitializationMode) \["
+    loop = r"stewart_master::system::System::run \["
+    per = {
+        "total": (total_three - total_one) / steps,
+        "fmus": (summed(three, fmu) - summed(one, fmu)) / steps,
+        "loop": (summed(three, loop) - summed(one, loop)) / steps,
+    }
+    per["master"] = per["loop"] - per["fmus"]
+    per["python"] = per["total"] - per["loop"]
+    return per
+
+
+def main():
+    grid = st.runs(SPEC)
+    fmus = st.fmus_for(SPEC)
+    lines = [f"study throughput: the stability study's closed-loop runs ({len(grid)}-run G x D grid, "
+             f"{STEPS} steps of 0.01 each, non-dimensional heave), {os.cpu_count()} cores "
+             f"({platform.processor() or platform.machine()}), {time.strftime('%Y-%m-%d')}",
+             f"{'master':9} {'where':24} {'runs':>6} {'runs/s':>9} {'us/step':>8} {'vs 1 worker':>11}"]
+    rates = {}
+    for master in ("compiled", "fmpy"):
+        runs = grid * ROUNDS[master]
+        serial = in_process(master, runs, fmus)
+        lines.append(f"{master:9} {'this process, no Dask':24} {len(runs):6} {serial:9.1f} {1e6 / (serial * STEPS):8.2f}")
+        rates[master] = {"serial": serial}
+        for workers in (1, 2):
+            rate, rss = on_dask(master, runs, fmus, workers)
+            rates[master][workers] = (rate, rss)
+            scale = f"{rate / rates[master][1][0]:10.2f}x" if workers > 1 else ""
+            lines.append(f"{master:9} {f'Dask, {workers} local worker(s)':24} {len(runs):6} {rate:9.1f} "
+                         f"{1e6 / (rate * STEPS):8.2f} {scale:>11}")
+    speedup = rates["compiled"][2][0] / rates["fmpy"][2][0]
+    lines.append(f"compiled / fmpy on 2 workers: {speedup:.1f}x; worker RSS after three more rounds (MB), compiled: "
+                 f"{', '.join(f'{x:.0f}' for x in rates['compiled'][2][1])}; fmpy: "
+                 f"{', '.join(f'{x:.0f}' for x in rates['fmpy'][2][1])}")
+    per = instructions_per_step()
+    lines.append(f"compiled master, instructions per closed-loop step (callgrind, 3 runs minus 1): {per['total']:,.0f} "
+                 f"in all: the two FMUs {per['fmus']:,.0f} ({per['fmus'] / per['total']:.1%}), the master's loop "
+                 f"{per['master']:,.0f} ({per['master'] / per['total']:.1%}), Python around the runs "
+                 f"{per['python']:,.0f} ({per['python'] / per['total']:.1%})")
+    text = "\n".join(lines)
+    print(text)
+    OUT.write_text(text + "\n")
 
 
 if __name__ == "__main__":

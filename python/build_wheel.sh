@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Builds the wheel of the Python package stewart_fmu that carries the FMUs (FMI 2 and 3), the
-# SSP system and the built viewer page, so that it works wherever it is installed:
+# SSP systems, the built viewer page and the compiled co-simulation master (the extension module
+# stewart_fmu._master, built for Python 3.11+'s stable ABI), so that it works wherever it is installed:
 #   target/wheels/stewart_fmu-<version>-py3-none-linux_x86_64.whl
 # (linux_x86_64: the FMUs inside carry only a Linux x86-64 binary). Needs the FMUs and the
 # viewer built first (`bash examples/main_job.sh` does both; or `cargo run --release --bin
@@ -17,10 +18,12 @@ DATA="$STAGE/stewart_fmu/data"
 FMUS=(target/fmu/StewartPlatform.fmu target/fmu/StewartController.fmu target/fmu/StewartSystem.ssp
       target/fmu/StewartSystemDrives.ssp
       target/fmu/fmi3/StewartPlatform.fmu target/fmu/fmi3/StewartController.fmu)
-for f in "${FMUS[@]}" viewer/dist/index.html; do
+MASTER=target/release/libstewart_master_py.so
+for f in "${FMUS[@]}" viewer/dist/index.html "$MASTER"; do
     if [ ! -f "$f" ]; then
         echo "build_wheel: $f is missing: build the FMUs (cargo run --release --bin build-fmu) and the viewer" \
-             "(npm ci && npm run build in viewer/) first; bash examples/main_job.sh does both" >&2
+             "(npm ci && npm run build in viewer/) and the master (cargo build --release -p stewart-master-py) first;" \
+             "bash examples/main_job.sh does all three" >&2
         exit 2
     fi
 done
@@ -32,6 +35,7 @@ cp -r python/stewart_fmu "$STAGE/"
 find "$STAGE" -name __pycache__ -prune -exec rm -rf {} +
 for f in "${FMUS[@]}"; do cp "$f" "$DATA/fmu/${f#target/fmu/}"; done
 cp -r viewer/dist "$DATA/viewer"
+cp "$MASTER" "$STAGE/stewart_fmu/_master.abi3.so"
 # The platform tag says where the FMUs run; setuptools builds in the copy.
 printf '[bdist_wheel]\nplat_name = linux_x86_64\n' > "$STAGE/setup.cfg"
 

@@ -86,10 +86,14 @@ python_env() {
     .venv/bin/python -m pip install --quiet --disable-pip-version-check --no-deps -e python
 }
 
-# The FMUs: the Rust library in release mode, packaged (the first build takes a few minutes).
+# The FMUs: the Rust library in release mode, packaged (the first build takes a few minutes);
+# then the compiled co-simulation master, the Python extension stewart_fmu.master loads
+# (target/release/libstewart_master_py.so) and its command target/release/stewart-master.
 build_fmus() {
     step "building the FMUs: cargo build --release of the Rust library, then packaging into target/fmu/ (a minute or more the first time, seconds after)"
     cargo run --release --bin build-fmu
+    step "building the compiled co-simulation master (crates/stewart-master, its Python extension; a minute the first time)"
+    cargo build --release -p stewart-master -p stewart-master-py
 }
 
 # The 3-D viewer: Node packages from the committed lock file, then the static build.

@@ -18,13 +18,22 @@ programme (closed loop) and, with `stop_contact_unstable = true`, no leg touches
 A run's id is a hash of its parameter values, so a study can be resumed and a run is never
 executed twice. Results do not depend on where a run executes: a worker process unpacks each
 FMU once and reuses its instances with `fmi2Reset`, which restores them exactly.
+
+Two masters run a study's points, with the same rows to the bit: the compiled one
+(`stewart_fmu.master`, Rust; the default: the loop in compiled code at the FMUs' own speed,
+many runs per call) and the FMPy one (`_execute` below, the reference: `--master fmpy`). In a
+closed-loop study the coupling is `StewartSystem.ssp`'s (with `drive = 1` in both FMUs,
+`StewartSystemDrives.ssp`'s voltages), Gauss-Seidel.
 """
 
 import hashlib
+import io
 import itertools
 import json
 import math
 import os
+import re
+import time
 import tempfile
 import tomllib
 import zipfile
@@ -40,6 +49,7 @@ from .core import fmu_file, recording_callbacks, set_values, stand_parameters
 from .study_schema import DEFAULT_MAX_RUNS, StudyError
 
 
+MASTERS = ("compiled", "fmpy")
 METRICS = ["max_leg_error", "max_pose_error", "stable", "discard_time", "min_kappa", "max_stop_force",
            "energy_residual", "peak_deceleration", "final_z"]
 
@@ -159,14 +169,37 @@ def fmus_for(spec, paths=None):
     `paths`: `study_schema.fmu_paths()`, the package's FMUs by default."""
     paths = paths or study_schema.fmu_paths()
     roles = ("platform", "controller") if spec["study"]["system"] == "closed-loop" else ("platform",)
-    return {role: Path(fmu_file(paths[role], "--fmu" if role == "platform" else "--controller-fmu")).read_bytes()
+    fmus = {role: Path(fmu_file(paths[role], "--fmu" if role == "platform" else "--controller-fmu")).read_bytes()
             for role in roles}
+    if "controller" in fmus:
+        try:
+            fmus["couplings"] = couplings()  # the compiled master's: they travel with the FMUs
+        except FileNotFoundError:
+            pass  # no SSP files here: the FMPy master runs the study (sweep.choose_master says so)
+    return fmus
+
+
+def system_description(ssp, bindings=True):
+    """The text of an SSP file's SystemStructure.ssd (`bindings=False`: without its parameter
+    bindings, for a master that sets every value itself, as the studies and
+    `stewart_fmu.cosim.closed_loop` do)."""
+    with zipfile.ZipFile(ssp) as z:
+        text = z.read("SystemStructure.ssd").decode()
+    return text if bindings else re.sub(r"<ssd:ParameterBindings>.*?</ssd:ParameterBindings>", "", text, flags=re.S)
+
+
+def couplings():
+    """The closed loop's couplings the compiled master runs, by `drive`: the package's
+    StewartSystem.ssd (forces) and StewartSystemDrives.ssd (voltages), without bindings."""
+    from .cosim import SYSTEM_DRIVES_SSP, SYSTEM_SSP
+    return {0: system_description(fmu_file(SYSTEM_SSP)), 1: system_description(fmu_file(SYSTEM_DRIVES_SSP), False)}
 
 
 LEGS = range(1, 7)
 L = [f"l[{k}]" for k in LEGS]
 LDOT = [f"ldot[{k}]" for k in LEGS]
 F = [f"F[{k}]" for k in LEGS]
+U = [f"U[{k}]" for k in LEGS]
 LP = [f"lp[{k}]" for k in LEGS]
 FSTOP = [f"Fstop[{k}]" for k in LEGS]
 ENERGY = ["E", "work.F", "work.dissipated", "kappa", "r[1]", "r[2]", "r[3]", "v[3]"]
@@ -215,11 +248,14 @@ def failed_metrics(message):
     return row
 
 
-def execute(spec, run, fmus):
-    """Runs one point of the study; returns its row (parameters are added by the caller):
-    status "ok", "discard" or "error", the message, and the metrics. Never raises: a run that
-    fails for any reason (a value the FMU refuses, a bad value that reached here without the
-    study's check, a bug) is an error row with its message."""
+def execute(spec, run, fmus, master="fmpy"):
+    """Runs one point of the study with `master` ("compiled" or "fmpy"); returns its row
+    (parameters are added by the caller): status "ok", "discard" or "error", the message, and
+    the metrics. Never raises: a run that fails for any reason (a value the FMU refuses, a bad
+    value that reached here without the study's check, a bug) is an error row with its
+    message."""
+    if master == "compiled":
+        return execute_many(spec, [run], fmus)[0][0]
     row = {m: math.nan for m in METRICS}
     row.update(status="ok", message="")
     try:
@@ -228,6 +264,127 @@ def execute(spec, run, fmus):
         _drop_components()
         row.update(status="error", message=f"{type(e).__name__}: {e}", stable=False)
     return row
+
+
+def _commands(run, closed):
+    """The platform's command inputs (F, or U with electric drives) and, if the run's `drive`
+    values do not fit together, why it cannot run."""
+    drives = [int(run.get(f"{role}.drive", 0)) for role in ("platform", "controller")]
+    if closed and drives[0] != drives[1]:
+        return F, (f"platform.drive = {drives[0]} but controller.drive = {drives[1]}: the controller's voltage "
+                   f"commands U drive the platform only when both have drive = 1")
+    return (U if drives[0] == 1 else F), None
+
+
+def _scenario(run, closed, commands):
+    """The run's scenario as inputs held at 0 from a time on: (platform input, 0.0, time)."""
+    if closed and run.get("scenario.failed_leg") is not None:
+        leg = int(run["scenario.failed_leg"])
+        return [(commands[leg - 1], 0.0, float(run.get("scenario.failure_time", 0.0)))]
+    if not closed and run.get("scenario.power_loss_at") is not None:
+        return [(c, 0.0, float(run["scenario.power_loss_at"])) for c in commands]
+    return []
+
+
+def _finish(study, row, closed):
+    """The row's `stable` from its status and metrics (both masters)."""
+    threshold = float(study.get("stable_error", math.inf))
+    touched = bool(study.get("stop_contact_unstable", False)) and row["max_stop_force"] > 0.0
+    row["stable"] = bool(row["status"] == "ok" and (not closed or row["max_leg_error"] < threshold) and not touched)
+
+
+# ----- the compiled master ----------------------------------------------------------------------
+
+_COMPILED = {}  # per worker process: the compiled master's systems by study system and FMU hashes
+_DESCRIPTIONS = {}  # per worker process: each FMU's model description and variables, by content hash
+
+
+def _description(data):
+    """(model description, variables) of an FMU given as bytes, read once per process."""
+    key = hashlib.sha256(data).hexdigest()
+    if key not in _DESCRIPTIONS:
+        with zipfile.ZipFile(io.BytesIO(data)) as z:
+            xml = z.read("modelDescription.xml")
+        folder = tempfile.mkdtemp(prefix="stewart-md-")
+        path = Path(folder) / "modelDescription.xml"
+        path.write_bytes(xml)
+        md = read_model_description(str(path))
+        path.unlink()
+        os.rmdir(folder)
+        _DESCRIPTIONS[key] = (md, study_schema.variables_of(md))
+    return _DESCRIPTIONS[key]
+
+
+def _compiled_system(fmus, closed, drive):
+    from . import master
+    platform, controller = fmus["platform"], fmus.get("controller")
+    key = (closed, drive, hashlib.sha256(platform).hexdigest(), hashlib.sha256(controller or b"").hexdigest())
+    if key not in _COMPILED:
+        if closed:
+            ssd = fmus.get("couplings", {}).get(drive) or couplings()[drive]
+            _COMPILED[key] = master.System({"platform": platform, "controller": controller}, ssd)
+        else:
+            _COMPILED[key] = master.System({"platform": platform})
+    return _COMPILED[key]
+
+
+def _drop_compiled():
+    for key in list(_COMPILED):
+        _safe(_COMPILED.pop(key).close, None)
+
+
+def execute_many(spec, runs, fmus):
+    """Runs study points with the compiled master, in this process, in one call per coupling;
+    returns [(row, seconds)] in the order of `runs`. Never raises: as `execute`."""
+    study = spec["study"]
+    closed = study["system"] == "closed-loop"
+    out = [None] * len(runs)
+    points = {}  # drive -> [(index, point)]
+    prepared = [0.0] * len(runs)  # each run's share of the Python around the loop, s
+    try:
+        platform_md, platform_variables = _description(fmus["platform"])
+        variables = {"platform": platform_variables,
+                     "controller": _description(fmus["controller"])[1] if closed else {}}
+    except Exception as e:  # noqa: BLE001 - an FMU that cannot be read: every run is an error row
+        return [(failed_metrics(f"{type(e).__name__}: {e}"), 0.0) for _ in runs]
+    for i, run in enumerate(runs):
+        started = time.perf_counter()
+        row = {m: math.nan for m in METRICS}
+        row.update(status="ok", message="")
+        try:
+            problems = study_schema.check_run(spec, run, variables)
+            commands, mismatch = _commands(run, closed)
+            if problems or mismatch:
+                row.update(status="error", message="; ".join(problems or [mismatch]), stable=False)
+                out[i] = (row, time.perf_counter() - started)
+                continue
+            h = float(run.get("step", study["step"]))
+            n = int(round(float(run.get("stop_time", study["stop_time"])) / h))
+            platform_values, controller_values = _parameters(spec, run, platform_md)
+            values = ([(f"platform.{k}", v) for k, v in platform_values.items()]
+                      + [(f"controller.{k}", v) for k, v in controller_values.items()])
+            overrides = [(f"platform.{name}", value, at) for name, value, at in _scenario(run, closed, commands)]
+            drive = 1 if commands is U else 0
+            points.setdefault(drive, []).append((i, (n, h, values, overrides)))
+            out[i] = row
+            prepared[i] = time.perf_counter() - started
+        except Exception as e:  # noqa: BLE001 - a failed run is data
+            out[i] = (failed_metrics(f"{type(e).__name__}: {e}"), time.perf_counter() - started)
+    for drive, batch in points.items():
+        try:
+            results = _compiled_system(fmus, closed, drive).study(closed, [p for _, p in batch])
+        except Exception as e:  # noqa: BLE001 - the system cannot be made or run: its runs are error rows
+            _drop_compiled()
+            results = [{"status": "error", "message": f"{type(e).__name__}: {e}", "seconds": 0.0}] * len(batch)
+        for (i, _), result in zip(batch, results):
+            row = out[i]
+            seconds = result.pop("seconds")
+            row.update(result)
+            if row["status"] == "error" and row["message"].startswith("panic in the compiled master"):
+                _drop_compiled()
+            _finish(study, row, closed)
+            out[i] = (row, seconds + prepared[i])
+    return out
 
 
 def _execute(spec, run, fmus, row):
@@ -242,8 +399,15 @@ def _execute(spec, run, fmus, row):
     if problems:
         row.update(status="error", message="; ".join(problems), stable=False)
         return
+    commands, mismatch = _commands(run, closed)
+    if mismatch:
+        row.update(status="error", message=mismatch, stable=False)
+        return
     h = float(run.get("step", study["step"]))
     stop = float(run.get("stop_time", study["stop_time"]))
+    for c in (platform, controller):
+        if c is not None:
+            c.messages.clear()  # a problem of an earlier run is not this run's
     try:
         platform_values, controller_values = _parameters(spec, run, platform.md)
         platform.start(platform_values)
@@ -253,9 +417,8 @@ def _execute(spec, run, fmus, row):
         problems = [c.last_problem() for c in (platform, controller) if c is not None and c.last_problem()]
         row.update(status="error", message=problems[-1] if problems else str(e), stable=False)
         return
-    power_loss = run.get("scenario.power_loss_at")
-    failed_leg = run.get("scenario.failed_leg")
-    failure_time = float(run.get("scenario.failure_time", 0.0))
+    # The scenario: inputs held at 0 from a time on (a failed leg, a power loss).
+    held = [(commands.index(name), value, at) for name, value, at in _scenario(run, closed, commands)]
     n = int(round(stop / h))
     t = 0.0
     e0 = platform.get(["E"])[0]
@@ -268,12 +431,15 @@ def _execute(spec, run, fmus, row):
             if closed:
                 legs = platform.get(L + LDOT)
                 controller.set(L + LDOT, legs)
-                forces = controller.get(F)
-                if failed_leg is not None and t >= failure_time:
-                    forces[int(failed_leg) - 1] = 0.0
-                platform.set(F, forces)
-            elif power_loss is not None and t >= float(power_loss):
-                platform.set(F, np.zeros(6))
+                forces = controller.get(commands)
+                for k, value, at in held:
+                    if t >= at:
+                        forces[k] = value
+                platform.set(commands, forces)
+            else:
+                active = [(commands[k], value) for k, value, at in held if t >= at]
+                if active:
+                    platform.set([name for name, _ in active], [value for _, value in active])
             platform.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
             if closed:
                 controller.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
@@ -289,7 +455,9 @@ def _execute(spec, run, fmus, row):
             if closed:
                 leg_error = max(leg_error, float(np.max(np.abs(platform.get(L) - controller.get(LP)))))
                 rp = controller.get(["rp[1]", "rp[2]", "rp[3]"])
-                pose_error = max(pose_error, float(np.linalg.norm(values[4:7] - rp)))
+                # |r - r^p| written out, so that both masters sum the squares in one order.
+                dx, dy, dz = (float(values[4 + i] - rp[i]) for i in range(3))
+                pose_error = max(pose_error, math.sqrt(dx * dx + dy * dy + dz * dz))
     except FMICallException as e:
         terminated = _safe(lambda: platform.fmu.getBooleanStatus(fmi2Terminated), True)
         problem = platform.last_problem() or (controller.last_problem() if controller else "") or str(e)
@@ -299,9 +467,7 @@ def _execute(spec, run, fmus, row):
                peak_deceleration=deceleration, final_z=float(values[6]) if values is not None else math.nan)
     if closed:
         row.update(max_leg_error=leg_error, max_pose_error=pose_error)
-    threshold = float(study.get("stable_error", math.inf))
-    touched = bool(study.get("stop_contact_unstable", False)) and stop_force > 0.0
-    row["stable"] = bool(row["status"] == "ok" and (not closed or leg_error < threshold) and not touched)
+    _finish(study, row, closed)
 
 
 def _safe(f, default):

@@ -22,6 +22,7 @@ runs a design study (see `stewart_fmu.study`) on Dask.
 """
 
 import argparse
+import faulthandler
 import fcntl
 import itertools
 import json
@@ -79,10 +80,15 @@ class Writer:
 class Progress:
     def __init__(self, total, done):
         self.total, self.done, self.start, self.first = total, done, time.monotonic(), done
+        self.shown = 0.0
 
-    def tick(self):
-        self.done += 1
-        elapsed = time.monotonic() - self.start
+    def tick(self, count=1):
+        self.done += count
+        now = time.monotonic()
+        if now - self.shown < 0.1 and self.done < self.total:
+            return  # at most ten lines a second: thousands of runs a second would flood the terminal
+        self.shown = now
+        elapsed = now - self.start
         rate = (self.done - self.first) / elapsed if elapsed > 0 else 0.0
         eta = (self.total - self.done) / rate if rate > 0 else math.inf
         width = 30
@@ -103,11 +109,75 @@ def make_row(run, metrics, seconds, worker):
     return row
 
 
-def run_and_time(spec, run, fmus):
-    """What a worker executes for one run: the row with the run's wall time and worker."""
-    start = time.perf_counter()
-    metrics = st.execute(spec, run, fmus)
-    return make_row(run, metrics, time.perf_counter() - start, st.worker_name())
+def run_and_time(spec, run, fmus, master="fmpy"):
+    """One run: the row with the run's wall time and worker."""
+    return run_batch(spec, [run], fmus, master)[0]
+
+
+def run_batch(spec, runs, fmus, master="fmpy"):
+    """What a worker executes: a batch of runs, their rows (each with its wall time and the
+    worker). The compiled master runs the batch in one call."""
+    try:
+        faulthandler.enable()  # an FMU that crashes the process names itself in the worker's log
+    except (AttributeError, OSError, ValueError):
+        pass  # a standard error without a file descriptor (captured): nowhere to write it
+    worker = st.worker_name()
+    if master == "compiled":
+        return [make_row(run, row, seconds, worker) for run, (row, seconds) in zip(runs, st.execute_many(spec, runs, fmus))]
+    rows = []
+    for run in runs:
+        start = time.perf_counter()
+        metrics = st.execute(spec, run, fmus)
+        rows.append(make_row(run, metrics, time.perf_counter() - start, worker))
+    return rows
+
+
+# The compiled master's runs go to the workers in batches of about this many communication
+# steps in all: at 2-10 us a step a batch takes a fraction of a second, long enough that
+# Dask's own cost per task (about 10 ms) is small, short enough that the progress line moves
+# and a worker that dies loses little. The FMPy master's runs (about 50 us a step) go one by one.
+BATCH_STEPS = 100_000
+
+
+def run_steps(spec, run):
+    study = spec["study"]
+    return max(1, int(round(float(run.get("stop_time", study["stop_time"])) / float(run.get("step", study["step"])))))
+
+
+def batches(spec, runs, master, workers):
+    """The runs in batches for `master`: one run each for the FMPy master; for the compiled
+    one, up to BATCH_STEPS steps each and at least four batches per worker while there are
+    runs enough, so that every worker stays busy to the end."""
+    if master != "compiled":
+        return [[run] for run in runs]
+    cap = max(1, math.ceil(len(runs) / (4 * max(workers, 1))))
+    out, current, steps = [], [], 0
+    for run in runs:
+        current.append(run)
+        steps += run_steps(spec, run)
+        if steps >= BATCH_STEPS or len(current) >= cap:
+            out.append(current)
+            current, steps = [], 0
+    if current:
+        out.append(current)
+    return out
+
+
+def choose_master(requested, spec, fmus):
+    """(master, note): the compiled master unless `requested` is "fmpy" or it cannot run here
+    (then the FMPy master, and the note says why). SweepError if "compiled" was asked for and
+    cannot run."""
+    if requested == "fmpy":
+        return "fmpy", None
+    from . import master
+    ok, reason = master.available()
+    if ok and spec["study"]["system"] == "closed-loop" and "couplings" not in fmus:
+        ok, reason = False, "the closed loop's StewartSystem.ssp is not beside the package's FMUs"
+    if ok:
+        return "compiled", None
+    if requested == "compiled":
+        raise SweepError(f"--master compiled: {reason}")
+    return "fmpy", f"{reason}: running with the FMPy master (--master fmpy; slower, the same rows)"
 
 
 class SweepError(Exception):
@@ -253,6 +323,9 @@ def parser():
                    help="local worker processes (default: cores)")
     p.add_argument("--limit", type=int, help="run at most this many of the missing runs")
     p.add_argument("--serial", action="store_true", help="run in this process, without Dask")
+    p.add_argument("--master", choices=st.MASTERS,
+                   help="the co-simulation master: 'compiled' (the default: stewart_fmu.master, Rust, at the FMUs' "
+                        "own speed) or 'fmpy' (the Python reference over FMPy; the same rows to the bit)")
     return p
 
 
@@ -308,20 +381,24 @@ def _sweep_locked(spec, plan, args, out, paths):
     todo = [r for r in all_runs if st.run_id(r) not in done]
     if args.limit is not None:
         todo = todo[: max(args.limit, 0)]
+    fmus = st.fmus_for(spec, paths) if todo else {}
+    master, note = choose_master(args.master, spec, fmus) if todo else (args.master or "compiled", None)
+    if note:
+        print(f"stewart-sweep: {note}", file=sys.stderr, flush=True)
     print(f"stewart-sweep: study {spec['study']['name']}: {len(all_runs)} runs, {len(done)} done already, "
-          f"running {len(todo)}", flush=True)
+          f"running {len(todo)} with the {master} master", flush=True)
     writer = Writer(out)
     progress = Progress(len(all_runs), len(done))
     started = time.monotonic()
     try:
         if todo:
-            fmus = st.fmus_for(spec, paths)
             if args.serial:
-                for run in todo:
-                    writer.add(run_and_time(spec, run, fmus))
-                    progress.tick()
+                for batch in batches(spec, todo, master, 1):
+                    for row in run_batch(spec, batch, fmus, master):
+                        writer.add(row)
+                    progress.tick(len(batch))
             else:
-                run_on_dask(spec, todo, fmus, args, writer, progress)
+                run_on_dask(spec, todo, fmus, args, writer, progress, master)
     finally:
         writer.flush()  # what finished is kept, whatever stopped the study
         progress.close()
@@ -329,7 +406,7 @@ def _sweep_locked(spec, plan, args, out, paths):
     results = load_results(out)
     if len(results):
         results = results[results["run_id"].isin(order)].reset_index(drop=True)
-    summary = summarise(spec, results, len(todo), elapsed, order)
+    summary = summarise(spec, results, len(todo), elapsed, order, master)
     (out / "summary.txt").write_text(summary + "\n")
     print(summary)
     status = 0
@@ -354,12 +431,13 @@ def first_error(failed, order):
     return f"{row['message']} (run {row['run_id']}{': ' + params if params else ''})"
 
 
-# At most this many runs wait at the scheduler at a time: enough to keep a large cluster busy,
-# and the client's and scheduler's memory stay bounded whatever the number of runs.
+# At most this many batches (single runs with the FMPy master) wait at the scheduler at a time:
+# enough to keep a large cluster busy, and the client's and scheduler's memory stay bounded
+# whatever the number of runs.
 WINDOW = 1000
 
 
-def run_on_dask(spec, todo, fmus, args, writer, progress):
+def run_on_dask(spec, todo, fmus, args, writer, progress, master="fmpy"):
     from distributed import Client, LocalCluster, as_completed
     if args.scheduler:
         try:
@@ -379,26 +457,34 @@ def run_on_dask(spec, todo, fmus, args, writer, progress):
         client = Client(cluster)
     try:
         shared = client.scatter(fmus, broadcast=True)
-        pending = iter(todo)
-        runs = {}
+        workers = len(client.scheduler_info().get("workers", {})) or args.workers
+        pending = iter(batches(spec, todo, master, workers))
+        submitted = {}
 
-        def submit(run):
-            future = client.submit(run_and_time, spec, run, shared, key=f"run-{st.run_id(run)}-{uuid.uuid4().hex[:6]}",
-                                   pure=False)
-            runs[future] = run
+        def submit(batch):
+            key = f"runs-{st.run_id(batch[0])}-{len(batch)}-{uuid.uuid4().hex[:6]}"
+            future = client.submit(run_batch, spec, batch, shared, master, key=key, pure=False)
+            submitted[future] = batch
             return future
 
-        window = max(WINDOW, 4 * len(client.scheduler_info().get("workers", {})))
-        futures = as_completed([submit(run) for run in itertools.islice(pending, window)])
+        window = max(WINDOW, 4 * workers)
+        futures = as_completed([submit(batch) for batch in itertools.islice(pending, window)])
         for future in futures:
-            run = runs.pop(future)
+            batch = submitted.pop(future)
             try:
-                row = future.result()
-            except Exception as e:  # noqa: BLE001 - e.g. KilledWorker: the run is a row, not the study's crash
-                metrics = st.failed_metrics(f"{type(e).__name__}: {e}")
-                row = make_row(run, metrics, math.nan, "none")
-            writer.add(row)
-            progress.tick()
+                rows = future.result()
+            except Exception as e:  # noqa: BLE001 - e.g. KilledWorker: the runs are rows, not the study's crash
+                future.release()
+                if len(batch) > 1:
+                    # Which run took the workers down is not known: each again on its own, so that
+                    # only that one ends as an error row.
+                    for run in batch:
+                        futures.add(submit([run]))
+                    continue
+                rows = [make_row(batch[0], st.failed_metrics(f"{type(e).__name__}: {e}"), math.nan, "none")]
+            for row in rows:
+                writer.add(row)
+            progress.tick(len(rows))
             future.release()
             following = next(pending, None)
             if following is not None:
@@ -409,9 +495,10 @@ def run_on_dask(spec, todo, fmus, args, writer, progress):
             cluster.close()
 
 
-def summarise(spec, results, executed, elapsed, order=None):
+def summarise(spec, results, executed, elapsed, order=None, master=None):
     lines = [f"study {spec['study']['name']}: {len(results)} rows in results.parquet; this call ran {executed} in "
-             f"{elapsed:.1f} s ({executed / elapsed if elapsed > 0 else 0:.2f} runs/s)"]
+             f"{elapsed:.1f} s ({executed / elapsed if elapsed > 0 else 0:.2f} runs/s)"
+             + (f" with the {master} master" if master and executed else "")]
     if len(results):
         counts = results["status"].value_counts().to_dict()
         lines.append("status: " + ", ".join(f"{k} {v}" for k, v in sorted(counts.items())))

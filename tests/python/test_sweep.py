@@ -2,7 +2,8 @@
 processes started here, no mocks): a 40-run study through `stewart-sweep --scheduler` with one
 worker killed mid-study gives every row once, equal to the serial run's rows; an interrupted
 study resumes without running anything twice; the shipped stability study reproduces the
-communication-step limit of docs/control.md."""
+communication-step limit of docs/control.md. The serial runs use the default (compiled) master,
+the interrupted and the killed-worker runs the FMPy master: their rows are equal."""
 
 import os
 import signal
@@ -102,7 +103,9 @@ def cluster(tmp_path):
 def test_a_killed_worker_loses_nothing_and_rows_equal_the_serial_run(study_file, tmp_path, cluster, serial_rows):
     address, workers = cluster
     out = tmp_path / "cluster"
-    sweep = subprocess.Popen([SWEEP, str(study_file), "--out", str(out), "--scheduler", address],
+    # The FMPy master, one run a task (the compiled master's batches: test_master.py); the
+    # serial rows are the compiled master's, so the rows of the two masters are compared too.
+    sweep = subprocess.Popen([SWEEP, str(study_file), "--out", str(out), "--scheduler", address, "--master", "fmpy"],
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 120
     while rows_written(out) < 6 and sweep.poll() is None and time.monotonic() < deadline:
@@ -121,7 +124,9 @@ def test_a_killed_worker_loses_nothing_and_rows_equal_the_serial_run(study_file,
 
 def test_an_interrupted_study_resumes_without_running_anything_twice(study_file, tmp_path, serial_rows):
     out = tmp_path / "resume"
-    first = subprocess.Popen([SWEEP, str(study_file), "--out", str(out), "--serial"], stdout=subprocess.PIPE,
+    # Interrupted under the FMPy master, resumed under the compiled one: one results file.
+    first = subprocess.Popen([SWEEP, str(study_file), "--out", str(out), "--serial", "--master", "fmpy"],
+                             stdout=subprocess.PIPE,
                              stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 120
     while rows_written(out) < 5 and first.poll() is None and time.monotonic() < deadline:
@@ -204,7 +209,9 @@ def test_two_sweeps_on_one_out_run_one_at_a_time(study_file, tmp_path):
     """The second sweep on the same --out is refused while the first runs, naming it; the
     first writes every row once."""
     out = tmp_path / "shared"
-    first = subprocess.Popen([SWEEP, str(study_file), "--out", str(out), "--serial"], stdout=subprocess.PIPE,
+    # Interrupted under the FMPy master, resumed under the compiled one: one results file.
+    first = subprocess.Popen([SWEEP, str(study_file), "--out", str(out), "--serial", "--master", "fmpy"],
+                             stdout=subprocess.PIPE,
                              stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 120
     while rows_written(out) < 1 and first.poll() is None and time.monotonic() < deadline:
@@ -225,8 +232,9 @@ def test_two_sweeps_on_one_out_run_one_at_a_time(study_file, tmp_path):
 
 def test_the_lock_of_a_killed_sweep_does_not_block_the_next(study_file, tmp_path):
     out = tmp_path / "killed"
-    first = subprocess.Popen([SWEEP, str(study_file), "--out", str(out), "--serial"], stdout=subprocess.DEVNULL,
-                             stderr=subprocess.DEVNULL)
+    # The FMPy master: slow enough to be killed mid-study.
+    first = subprocess.Popen([SWEEP, str(study_file), "--out", str(out), "--serial", "--master", "fmpy"],
+                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     deadline = time.monotonic() + 120
     while rows_written(out) < 3 and first.poll() is None and time.monotonic() < deadline:
         time.sleep(0.05)

@@ -82,6 +82,7 @@ def installed(tmp_path_factory):
             data = z.read(f"stewart_fmu/data/fmu/{name}")
             assert hashlib.sha256(data).hexdigest() == sha(ROOT / "target" / "fmu" / name), name
         assert "stewart_fmu/data/viewer/index.html" in names
+        assert "stewart_fmu/_master.abi3.so" in names  # the compiled co-simulation master
         assert any(n.startswith("stewart_fmu/data/viewer/assets/") and n.endswith(".js") for n in names)
     print(f"wheel: {wheel.name}, {wheel.stat().st_size / 1e6:.2f} MB, {len(names)} files")
 
@@ -137,6 +138,29 @@ def test_the_installed_package_uses_its_own_fmus_and_matches_the_repository(inst
     assert got["status"] == status == "ok"
     assert got["errors"] == errors.tolist() and got["loop_z"] == rows[:, 0].tolist()
     assert max(got["errors"]) < 2e-5  # the legs track the heave programme to 0.02 mm
+
+
+def test_the_installed_package_has_the_compiled_master_with_the_repositorys_numbers(installed):
+    """The wheel's extension module runs the closed loop outside the repository, to the bit as
+    the repository's compiled master and FMPy master do; its `stewart-master` command runs."""
+    venv, work, _ = installed
+    got = run_python(venv, work, """
+        import json
+        from stewart_fmu import master
+        t, rows, errors, status = master.closed_loop(2.0, 1e-3, record=("r[3]",))
+        print(json.dumps({"module": master._master.__file__, "available": master.available()[0], "status": status,
+                          "errors": errors.tolist(), "z": rows[:, 0].tolist()}))
+    """)
+    t, rows, errors, status = closed_loop(2.0, 1e-3, record=("r[3]",))
+    print(f"installed compiled master: {got['module']}; closed loop 2 s: status {got['status']}, same as FMPy's "
+          f"master in the repository to the bit: {got['errors'] == errors.tolist() and got['z'] == rows[:, 0].tolist()}")
+    assert got["available"] and got["module"].startswith(str(venv / "lib"))
+    assert got["status"] == status == "ok"
+    assert got["errors"] == errors.tolist() and got["z"] == rows[:, 0].tolist()
+    command = subprocess.run([str(venv / "bin" / "stewart-master"), "describe", "missing.ssp"], capture_output=True,
+                             text=True, cwd=work, env=clean_env(venv))
+    assert command.returncode == 2  # no such SSP file: a message, not a crash
+    assert "stewart-master:" in command.stderr and "Traceback" not in command.stderr
 
 
 def test_the_readme_tour_runs_from_the_installed_package_as_in_the_repository(installed, tmp_path):

@@ -1,0 +1,200 @@
+//! `stewart-master`: runs an SSP system from the command line (the same code the Python
+//! extension runs).
+
+use std::io::Write;
+use std::path::Path;
+use std::time::Instant;
+
+use crate::record::Recorder;
+use crate::system::{Given, Override, RunSpec, Scheme, TimeRule, convert};
+
+pub const USAGE: &str = "\
+usage: stewart-master run SYSTEM.ssp --stop-time T --step H [--scheme gauss-seidel|jacobi]
+                          [--set COMPONENT.VARIABLE=VALUE ...] [--record COMPONENT.VARIABLE ...]
+                          [--interval DT] [--fail COMPONENT.VARIABLE=VALUE@TIME ...] [--out FILE.csv]
+       stewart-master describe SYSTEM.ssp
+
+run:      steps the system of the SSP file (FMI 2 Co-Simulation FMUs, connected as its
+          SystemStructure.ssd says, its parameter bindings applied) from 0 to T at the
+          communication step H; Gauss-Seidel by default (the Python master stewart_fmu.cosim's
+          schemes). --set sets a parameter or input in initialisation mode (after the SSP's
+          bindings); --record writes those outputs as CSV (to --out, or standard output) every
+          DT (a multiple of H; default every step); --fail holds an input at VALUE from TIME on
+          (a failed actuator). A summary line (steps, time per step, status) goes to standard
+          error. Exit status: 0 the run completed, 1 an FMU ended it early (discard or error;
+          the FMU's message is printed), 2 the command was wrong.
+describe: the components, their FMUs, parameter bindings and the connections.";
+
+/// Runs the command with `args` (without the program name); returns the exit status.
+pub fn main(args: &[String]) -> i32 {
+    match command(args) {
+        Ok(status) => status,
+        Err(message) => {
+            eprintln!("stewart-master: {message}");
+            2
+        }
+    }
+}
+
+fn parse_given(text: &str) -> Given {
+    match text {
+        "true" | "True" => Given::Bool(true),
+        "false" | "False" => Given::Bool(false),
+        _ => match text.parse::<i64>() {
+            Ok(n) => Given::Int(n),
+            Err(_) => text.parse::<f64>().map(Given::Float).unwrap_or(Given::Float(f64::NAN)),
+        },
+    }
+}
+
+fn positive(text: Option<&String>, option: &str) -> Result<f64, String> {
+    let text = text.ok_or_else(|| format!("{option} needs a value"))?;
+    match text.parse::<f64>() {
+        Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
+        _ => Err(format!("{option} {text}: a positive number of seconds is expected")),
+    }
+}
+
+fn command(args: &[String]) -> Result<i32, String> {
+    let Some(verb) = args.first() else {
+        println!("{USAGE}");
+        return Ok(2);
+    };
+    if verb == "--help" || verb == "-h" || verb == "help" {
+        println!("{USAGE}");
+        return Ok(0);
+    }
+    let path = args.get(1).ok_or_else(|| format!("{verb}: the SSP file is missing\n{USAGE}"))?;
+    if !matches!(verb.as_str(), "run" | "describe") {
+        return Err(format!("unknown command {verb:?}\n{USAGE}"));
+    }
+    let (mut system, description) = crate::ssp::open(Path::new(path))?;
+    if verb == "describe" {
+        println!("system {} ({})", description.name, path);
+        for (k, c) in description.components.iter().enumerate() {
+            let fmu = system.fmu(k);
+            println!(
+                "  component {}: {} ({}, {} variables), {} connectors",
+                c.name,
+                c.source,
+                fmu.description.model_name,
+                fmu.description.variables.len(),
+                c.connectors.len()
+            );
+            for (name, value) in &c.parameters {
+                println!("    bound {name} = {value:?}");
+            }
+        }
+        for c in &description.connections {
+            println!("  {}.{} -> {}.{}", c.start_element, c.start_connector, c.end_element, c.end_connector);
+        }
+        return Ok(0);
+    }
+    let (mut stop, mut step, mut scheme, mut interval, mut out) = (None, None, Scheme::GaussSeidel, None, None);
+    let mut values = vec![vec![]; system.component_count()];
+    let (mut record, mut overrides) = (vec![], vec![]);
+    let mut i = 2;
+    while i < args.len() {
+        let option = args[i].as_str();
+        let value = args.get(i + 1);
+        match option {
+            "--stop-time" => stop = Some(positive(value, option)?),
+            "--step" => step = Some(positive(value, option)?),
+            "--interval" => interval = Some(positive(value, option)?),
+            "--scheme" => scheme = Scheme::parse(value.ok_or("--scheme needs a value")?)?,
+            "--out" => out = Some(value.ok_or("--out needs a file name")?.clone()),
+            "--record" => record.push(value.ok_or("--record needs a variable")?.clone()),
+            "--set" => {
+                let text = value.ok_or("--set needs COMPONENT.VARIABLE=VALUE")?;
+                let (name, given) =
+                    text.split_once('=').ok_or_else(|| format!("--set {text}: write COMPONENT.VARIABLE=VALUE"))?;
+                let (c, vr, kind) = system.resolve(name)?;
+                let value = convert(kind, parse_given(given))
+                    .map_err(|expected| format!("--set {text}: {expected} is expected for {name}"))?;
+                values[c].push((vr, value));
+            }
+            "--fail" => {
+                let text = value.ok_or("--fail needs COMPONENT.VARIABLE=VALUE@TIME")?;
+                let parsed = text.split_once('=').and_then(|(n, rest)| rest.split_once('@').map(|(v, t)| (n, v, t)));
+                let (name, v, t) =
+                    parsed.ok_or_else(|| format!("--fail {text}: write COMPONENT.VARIABLE=VALUE@TIME"))?;
+                let (component, value_reference, _) = system.resolve(name)?;
+                // Only an input can be held (an output belongs to its FMU).
+                let variable = name.split_once('.').map(|(_, v)| v).unwrap_or(name);
+                let causality = &system.fmu(component).description.find(variable)?.causality;
+                if causality != "input" {
+                    return Err(format!("--fail {text}: {name} is {causality}, not an input"));
+                }
+                let (value, from) = (v.parse::<f64>(), t.parse::<f64>());
+                let (Ok(value), Ok(from)) = (value, from) else {
+                    return Err(format!("--fail {text}: VALUE and TIME must be numbers"));
+                };
+                overrides.push(Override { component, value_reference, value, from });
+            }
+            _ => return Err(format!("unknown option {option:?}\n{USAGE}")),
+        }
+        i += 2;
+    }
+    let stop = stop.ok_or("--stop-time is required")?;
+    let step = step.ok_or("--step is required")?;
+    let steps = (stop / step).round();
+    if steps < 1.0 {
+        return Err(format!("--step {step} is longer than --stop-time {stop}: no step would run"));
+    }
+    let every = match interval {
+        None => 1,
+        Some(dt) => {
+            let k = (dt / step).round();
+            if k < 1.0 || ((k * step - dt).abs() > 1e-9 * dt) {
+                return Err(format!("--interval {dt}: a whole multiple of --step {step} is expected"));
+            }
+            k as usize
+        }
+    };
+    let mut recorder = Recorder::new(&system, &record, every)?;
+    let spec =
+        RunSpec { start_time: 0.0, step, steps: steps as usize, scheme, time_rule: TimeRule::Sum, values, overrides };
+    let started = Instant::now();
+    let outcome = system.run(&spec, &mut recorder);
+    let seconds = started.elapsed().as_secs_f64();
+    if !record.is_empty() {
+        let mut writer: Box<dyn Write> = match &out {
+            Some(file) => Box::new(std::io::BufWriter::new(
+                std::fs::File::create(file).map_err(|e| format!("--out {file}: {e}"))?,
+            )),
+            None => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
+        };
+        let io = |e: std::io::Error| format!("writing the results: {e}");
+        writeln!(writer, "time,{}", record.join(",")).map_err(io)?;
+        let width = recorder.width();
+        for (r, t) in recorder.times.iter().enumerate() {
+            let row: Vec<String> =
+                recorder.values[r * width..(r + 1) * width].iter().map(|x| format!("{x:?}")).collect();
+            writeln!(writer, "{t:?},{}", row.join(",")).map_err(io)?;
+        }
+        writer.flush().map_err(io)?;
+    }
+    let per_step = seconds / outcome.steps.max(1) as f64;
+    match &outcome.failure {
+        None => {
+            eprintln!(
+                "stewart-master: {} steps of {step} s in {seconds:.3} s ({:.3} us a step); ok",
+                outcome.steps,
+                per_step * 1e6
+            );
+            Ok(0)
+        }
+        Some(f) => {
+            let name = system.component_names()[f.component].clone();
+            let problem = f.problems.get(f.component).filter(|p| !p.is_empty()).cloned().unwrap_or_default();
+            eprintln!(
+                "stewart-master: {} steps of {step} s in {seconds:.3} s; ended at t = {} by {name}: {}{}",
+                outcome.steps,
+                outcome.time,
+                f.error,
+                if problem.is_empty() { String::new() } else { format!(" {problem}") }
+            );
+            Ok(1)
+        }
+    }
+}

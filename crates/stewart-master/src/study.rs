@@ -1,0 +1,198 @@
+//! One run of a design study (`stewart_fmu.study`): the metrics accumulated in the loop, step
+//! by step, exactly as the FMPy master (`stewart_fmu.study._execute`) computes them, so that
+//! both give the same rows to the bit. Every comparison is written as Python's `max(a, b)`
+//! (`b` only if `b > a`) and `min`, and a maximum over legs as NumPy's, which is NaN if any
+//! element is.
+
+use crate::system::{Failure, Observer, Readings, RunSpec, System};
+
+/// The platform's variables a study reads after every step, in this order.
+pub const PLATFORM_WATCHED: [&str; 20] = [
+    "E",
+    "work.F",
+    "work.dissipated",
+    "kappa",
+    "r[1]",
+    "r[2]",
+    "r[3]",
+    "v[3]",
+    "Fstop[1]",
+    "Fstop[2]",
+    "Fstop[3]",
+    "Fstop[4]",
+    "Fstop[5]",
+    "Fstop[6]",
+    "l[1]",
+    "l[2]",
+    "l[3]",
+    "l[4]",
+    "l[5]",
+    "l[6]",
+];
+/// The controller's (closed loop), in this order.
+pub const CONTROLLER_WATCHED: [&str; 9] =
+    ["lp[1]", "lp[2]", "lp[3]", "lp[4]", "lp[5]", "lp[6]", "rp[1]", "rp[2]", "rp[3]"];
+
+/// A study run's row: status ("ok", "discard", "error"), message and metrics (NaN where the
+/// run gives none).
+#[derive(Clone, Debug, PartialEq)]
+pub struct StudyRow {
+    pub status: &'static str,
+    pub message: String,
+    pub discard_time: f64,
+    pub max_leg_error: f64,
+    pub max_pose_error: f64,
+    pub min_kappa: f64,
+    pub max_stop_force: f64,
+    pub energy_residual: f64,
+    pub peak_deceleration: f64,
+    pub final_z: f64,
+    /// Steps completed.
+    pub steps: usize,
+}
+
+/// NumPy's `np.max` of six values: NaN if any is NaN.
+fn max_propagating(values: impl Iterator<Item = f64>) -> f64 {
+    let mut m = f64::NEG_INFINITY;
+    for x in values {
+        if x.is_nan() {
+            return f64::NAN;
+        }
+        if x > m {
+            m = x;
+        }
+    }
+    m
+}
+
+/// Python's `max(current, x)` for floats.
+fn python_max(current: &mut f64, x: f64) {
+    if x > *current {
+        *current = x;
+    }
+}
+
+struct Metrics {
+    closed: bool,
+    platform: Vec<u32>,
+    controller: Vec<u32>,
+    controller_index: usize,
+    step: f64,
+    e0: f64,
+    leg_error: f64,
+    pose_error: f64,
+    stop_force: f64,
+    residual: f64,
+    deceleration: f64,
+    kappa_min: f64,
+    v_prev: Option<f64>,
+    final_z: Option<f64>,
+}
+
+impl Observer for Metrics {
+    fn watched(&self) -> Vec<Vec<u32>> {
+        let mut w = vec![vec![]; self.controller_index + 1];
+        w[0] = self.platform.clone();
+        if self.closed {
+            w[self.controller_index] = self.controller.clone();
+        }
+        w
+    }
+
+    fn initial(&mut self, values: &Readings) {
+        self.e0 = values.of(0)[0];
+    }
+
+    fn step(&mut self, _step: usize, _time: f64, values: &Readings) {
+        let p = values.of(0);
+        let (energy, work, dissipated, kappa, z, vz) = (p[0], p[1], p[2], p[3], p[6], p[7]);
+        python_max(&mut self.residual, ((energy - self.e0) - (work - dissipated)).abs());
+        if kappa < self.kappa_min {
+            self.kappa_min = kappa;
+        }
+        python_max(&mut self.stop_force, max_propagating(p[8..14].iter().map(|f| f.abs())));
+        if let Some(v_prev) = self.v_prev {
+            python_max(&mut self.deceleration, (vz - v_prev) / self.step);
+        }
+        self.v_prev = Some(vz);
+        self.final_z = Some(z);
+        if self.closed {
+            let c = values.of(self.controller_index);
+            python_max(&mut self.leg_error, max_propagating((0..6).map(|k| (p[14 + k] - c[k]).abs())));
+            let (dx, dy, dz) = (p[4] - c[6], p[5] - c[7], p[6] - c[8]);
+            python_max(&mut self.pose_error, (dx * dx + dy * dy + dz * dz).sqrt());
+        }
+    }
+}
+
+/// The value references of `names` in component `c`.
+fn references(system: &System, c: usize, names: &[&str]) -> Result<Vec<u32>, String> {
+    names.iter().map(|n| system.variable(c, n).map(|(vr, _)| vr)).collect()
+}
+
+/// Runs one study point on `system` (its component 0 the platform; with `controller`, that
+/// component closes the loop) and returns its row.
+pub fn run(system: &mut System, controller: Option<usize>, spec: &RunSpec) -> Result<StudyRow, String> {
+    let platform = references(system, 0, &PLATFORM_WATCHED)?;
+    let controller_refs = match controller {
+        Some(c) => references(system, c, &CONTROLLER_WATCHED)?,
+        None => vec![],
+    };
+    let mut metrics = Metrics {
+        closed: controller.is_some(),
+        platform,
+        controller: controller_refs,
+        controller_index: controller.unwrap_or(0),
+        step: spec.step,
+        e0: 0.0,
+        leg_error: 0.0,
+        pose_error: 0.0,
+        stop_force: 0.0,
+        residual: 0.0,
+        deceleration: 0.0,
+        kappa_min: f64::INFINITY,
+        v_prev: None,
+        final_z: None,
+    };
+    let outcome = system.run(spec, &mut metrics);
+    let nan = f64::NAN;
+    let mut row = StudyRow {
+        status: "ok",
+        message: String::new(),
+        discard_time: nan,
+        max_leg_error: nan,
+        max_pose_error: nan,
+        min_kappa: nan,
+        max_stop_force: nan,
+        energy_residual: nan,
+        peak_deceleration: nan,
+        final_z: nan,
+        steps: outcome.steps,
+    };
+    match outcome.failure {
+        Some(Failure { error, problems, initialising: true, .. }) => {
+            // As the FMPy master: the last component's problem that has one, else the call.
+            row.status = "error";
+            row.message = problems.iter().rev().find(|p| !p.is_empty()).cloned().unwrap_or_else(|| error.to_string());
+            return Ok(row);
+        }
+        Some(Failure { error, problems, terminated, .. }) => {
+            let problem = problems.iter().find(|p| !p.is_empty()).cloned().unwrap_or_else(|| error.to_string());
+            let terminated = terminated[0].unwrap_or(true);
+            row.status = if error.status == crate::fmi2::DISCARD { "discard" } else { "error" };
+            row.discard_time = outcome.time;
+            row.message = problem + if terminated { "" } else { " (recoverable with shorter steps)" };
+        }
+        None => {}
+    }
+    row.max_stop_force = metrics.stop_force;
+    row.energy_residual = metrics.residual;
+    row.min_kappa = if metrics.kappa_min < f64::INFINITY { metrics.kappa_min } else { nan };
+    row.peak_deceleration = metrics.deceleration;
+    row.final_z = metrics.final_z.unwrap_or(nan);
+    if metrics.closed {
+        row.max_leg_error = metrics.leg_error;
+        row.max_pose_error = metrics.pose_error;
+    }
+    Ok(row)
+}

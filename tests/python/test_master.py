@@ -1,0 +1,217 @@
+"""The compiled co-simulation master (crates/stewart-master, `stewart_fmu.master`) against the
+FMPy master (`stewart_fmu.study._execute`, `stewart_fmu.cosim`): the shipped stability study
+(with its discards), payload, power-loss (the platform alone, its forces cut) and workspace
+studies, and a study with electric drives and a failed leg, give the same rows in every
+column to the bit; the closed loop gives the same numbers with both schemes; its command line
+writes what Python gets and says when an FMU ends a run; on a real Dask cluster on loopback a
+worker killed mid-study loses no run and the rows equal the serial run's."""
+
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from stewart_fmu import ROOT, master
+from stewart_fmu import study as st
+from stewart_fmu.cosim import SYSTEM_SSP, closed_loop
+from stewart_fmu.sweep import load_results, run_batch
+from test_sweep import cluster, comparable, rows_written  # noqa: F401 - cluster is a fixture
+
+SWEEP = str(Path(sys.executable).parent / "stewart-sweep")
+MASTER = str(Path(sys.executable).parent / "stewart-master")
+
+
+def test_the_compiled_master_is_built_and_loads():
+    ok, reason = master.available()
+    assert ok, reason
+
+
+def same(a, b):
+    return a == b or (isinstance(a, float) and isinstance(b, float) and math.isnan(a) and math.isnan(b))
+
+
+def compare(spec, runs):
+    """Both masters' rows for `runs` in this process: (compiled, fmpy, columns that differ)."""
+    fmus = st.fmus_for(spec)
+    compiled = run_batch(spec, runs, fmus, "compiled")
+    fmpy = run_batch(spec, runs, fmus, "fmpy")
+    differ = [(r["run_id"], c, r[c], s[c]) for r, s in zip(compiled, fmpy) for c in r
+              if c not in ("wall_time", "worker") and not same(r[c], s[c])]
+    return compiled, fmpy, differ
+
+
+# (study file, runs compared: all, or the first N to keep the FMPy side short)
+STUDIES = [("stability.toml", None), ("payload.toml", 24), ("power_loss.toml", None), ("workspace.toml", 12)]
+
+
+@pytest.mark.parametrize("name,count", STUDIES)
+def test_the_shipped_studies_give_the_same_rows_with_both_masters(name, count):
+    spec = st.load(ROOT / "studies" / name)
+    runs = st.runs(spec)[:count]
+    compiled, fmpy, differ = compare(spec, runs)
+    statuses = pd.Series([r["status"] for r in compiled]).value_counts().to_dict()
+    print(f"{name}: {len(runs)} runs ({statuses}); columns that differ between the masters: {len(differ)}; "
+          f"mean run {np.mean([r['wall_time'] for r in compiled]) * 1e3:.1f} ms compiled, "
+          f"{np.mean([r['wall_time'] for r in fmpy]) * 1e3:.1f} ms FMPy")
+    assert len(compiled) == len(fmpy) == len(runs)
+    assert not differ, differ[:5]
+    if name == "stability.toml":
+        # A study with discards: the step limit ends runs, with the FMU's message and time.
+        discards = [r for r in compiled if r["status"] == "discard"]
+        assert len(discards) > 10 and all("base plane" in r["message"] for r in discards)
+        assert all(r["discard_time"] > 0 for r in discards) and any(r["status"] == "ok" for r in compiled)
+    if name == "power_loss.toml":
+        assert all(r["status"] == "ok" and r["peak_deceleration"] > 0 for r in compiled)
+
+
+DRIVES = """
+[study]
+name = "drives"
+system = "closed-loop"
+units = "si"
+stop_time = 1.5
+step = 0.002
+stable_error = 0.01
+
+[fixed]
+"platform.drive" = 1
+"controller.drive" = 1
+"scenario.failure_time" = 0.5
+
+[grid]
+"scenario.failed_leg" = [1, 4]
+"platform.M" = [2500.0, 3500.0]
+"""
+
+
+def test_a_drives_study_with_a_failed_leg_gives_the_same_rows_with_both_masters(tmp_path):
+    """The voltages' coupling (StewartSystemDrives.ssp) with a leg's voltage cut at 0.5 s."""
+    path = tmp_path / "drives.toml"
+    path.write_text(DRIVES)
+    spec = st.load(path)
+    runs = st.runs(spec)
+    compiled, _, differ = compare(spec, runs)
+    print(f"drives study: {len(runs)} runs, statuses {[r['status'] for r in compiled]}, max leg errors "
+          f"{[round(r['max_leg_error'], 6) for r in compiled]} m; columns that differ: {len(differ)}")
+    assert not differ, differ[:5]
+    assert all(r["status"] == "ok" for r in compiled)
+    # The failed leg is felt: it no longer follows its programme.
+    assert all(r["max_leg_error"] > 1e-3 for r in compiled)
+
+
+@pytest.mark.parametrize("scheme", ["gauss-seidel", "jacobi"])
+def test_the_closed_loop_is_the_fmpy_masters_to_the_bit(scheme):
+    record = ("r[3]", "E", "F[1]")
+    t1, rows1, errors1, status1 = master.closed_loop(3.0, 1e-3, scheme, record=record)
+    t2, rows2, errors2, status2 = closed_loop(3.0, 1e-3, scheme, record=record)
+    print(f"closed loop, 3 s at 1 ms, {scheme}: {len(t1)} points, largest leg error {errors1.max() * 1e3:.4f} mm, "
+          f"same numbers as stewart_fmu.cosim: {np.array_equal(rows1, rows2) and np.array_equal(errors1, errors2)}")
+    assert status1 == status2 == "ok"
+    assert np.array_equal(t1, t2) and np.array_equal(rows1, rows2) and np.array_equal(errors1, errors2)
+
+
+def test_the_command_line_writes_what_python_gets_and_reports_a_discard(tmp_path):
+    out = tmp_path / "heave.csv"
+    run = subprocess.run([MASTER, "run", str(SYSTEM_SSP), "--stop-time", "2", "--step", "0.001", "--record",
+                          "platform.r[3]", "--record", "controller.F[1]", "--interval", "0.01", "--out", str(out)],
+                         capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    table = pd.read_csv(out)
+    system = master.from_ssp(SYSTEM_SSP)
+    times, rows, status, _ = master.run(system, 2.0, 0.001, record=["platform.r[3]", "controller.F[1]"],
+                                        interval=0.01)
+    print(f"stewart-master run: {run.stderr.strip()}; {len(table)} rows, equal to Python's: "
+          f"{np.array_equal(table.to_numpy()[:, 1:], rows)}")
+    assert status == "ok" and len(table) == 200
+    assert np.array_equal(table["time"].to_numpy(), times) and np.array_equal(table.to_numpy()[:, 1:], rows)
+    # A point of the stability study that the platform discards (a step beyond the loop's
+    # limit): the command ends it with exit status 1 and the FMU's message, as the study's row
+    # (not the same bits: the command applies the SSP's bindings first and sums the time).
+    spec = st.load(ROOT / "studies" / "stability.toml")
+    fmus = st.fmus_for(spec)
+    point = next(r for r in st.runs(spec) if float(r["step"]) >= 0.3)
+    row = run_batch(spec, [point], fmus, "fmpy")[0]
+    platform_md, _ = st._description(fmus["platform"])
+    platform, controller = st._parameters(spec, point, platform_md)
+    sets = [a for role, values in (("platform", platform), ("controller", controller)) for k, v in values.items()
+            for a in ("--set", f"{role}.{k}={v!r}")]
+    bad = subprocess.run([MASTER, "run", str(SYSTEM_SSP), "--stop-time", str(spec["study"]["stop_time"]), "--step",
+                          str(point["step"]), *sets], capture_output=True, text=True)
+    print(f"stability point {point}: FMPy master's row {row['status']} at t = {row['discard_time']}: "
+          f"{row['message']}; stewart-master: exit {bad.returncode}: {bad.stderr.strip()}")
+    assert row["status"] == "discard"
+    assert bad.returncode == 1 and "fmi2DoStep failed with status 2 (discard)" in bad.stderr
+    assert "passed through the base plane" in row["message"] and "passed through the base plane" in bad.stderr
+    wrong = subprocess.run([MASTER, "run", str(SYSTEM_SSP), "--stop-time", "1", "--step", "0.001", "--set",
+                            "platform.nonsense=1"], capture_output=True, text=True)
+    assert wrong.returncode == 2 and "nonsense" in wrong.stderr
+
+
+def test_a_bad_value_is_the_runs_error_row_not_the_batchs(tmp_path):
+    """One point the FMU refuses (a negative mass) among good ones: its row says why, the others run."""
+    spec = st.load(ROOT / "studies" / "power_loss.toml")
+    runs = st.runs(spec)[:3]
+    runs[1] = {**runs[1], "platform.M": -1.0}
+    compiled, fmpy, differ = compare(spec, runs)
+    print(f"a negative mass: {compiled[1]['status']}: {compiled[1]['message']}")
+    assert [r["status"] for r in compiled] == ["ok", "error", "ok"]
+    assert compiled[1]["message"] and not differ
+
+
+STUDY = """
+[study]
+name = "long"
+system = "closed-loop"
+units = "nondimensional"
+stop_time = 300.0
+step = 0.01
+stable_error = 0.01
+
+[fixed]
+"controller.heave.centre[3]" = 1.3059496109441155
+"controller.heave.amplitude" = 0.2
+
+[grid]
+"controller.G" = [5.0, 10.0, 20.0, 50.0]
+
+[random]
+samples = 10
+seed = 11
+"controller.D" = { uniform = [1.0, 3.0] }
+"""
+
+
+def test_a_killed_worker_loses_no_run_of_the_compiled_master(tmp_path, cluster):  # noqa: F811
+    """stewart-sweep (the compiled master, runs in batches) on two workers, one killed mid-study:
+    every run once, the rows equal the serial run's."""
+    study = tmp_path / "long.toml"
+    study.write_text(STUDY)
+    serial = subprocess.run([SWEEP, str(study), "--out", str(tmp_path / "serial"), "--serial"], capture_output=True,
+                            text=True)
+    assert serial.returncode == 0, serial.stderr[-3000:]
+    assert "with the compiled master" in serial.stdout
+    address, workers = cluster
+    out = tmp_path / "cluster"
+    sweep = subprocess.Popen([SWEEP, str(study), "--out", str(out), "--scheduler", address],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while rows_written(out) < 4 and sweep.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.02)
+    written_at_kill = rows_written(out)
+    os.killpg(workers[0].pid, signal.SIGKILL)
+    stdout, stderr = sweep.communicate(timeout=300)
+    assert sweep.returncode == 0, stderr[-3000:]
+    rows = load_results(out)
+    print(f"{len(rows)}-run study (30,000 steps a run) on 2 workers, one killed after {written_at_kill} rows: "
+          f"{len(rows)} rows, run ids unique {rows['run_id'].is_unique}; {stdout.splitlines()[-0]}")
+    assert written_at_kill < 40, "the kill came after the study had finished: make the runs longer"
+    assert len(rows) == 40 and rows["run_id"].is_unique
+    assert (rows["status"] == "ok").all()
+    pd.testing.assert_frame_equal(comparable(rows), comparable(load_results(tmp_path / "serial")))
