@@ -77,7 +77,7 @@ mod tests {
 
     #[test]
     fn feedback_law_and_missing_measurements() {
-        let p = DirectProblemSolution { forces: [1.0; 6], lengths: [2.0; 6], rates: [0.5; 6], condition_number: 3.0 };
+        let p = DirectProblemSolution { forces: [1.0; 6], lengths: [2.0; 6], rates: [0.5; 6] };
         let fb = LegFeedback { gain: 10.0, damping: 2.0, feedforward: true };
         let l = [1.9, 2.0, 2.1, 0.0, f64::NAN, 2.0];
         let ld = [0.5, 0.0, 0.5, 0.5, 0.5, 0.5];

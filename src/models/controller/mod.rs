@@ -19,7 +19,7 @@ use super::{DefaultExperiment, FmuModel, ModelInfo, StepError, StepReport};
 use crate::control::{Disturbance, LegFeedback};
 use crate::physics::actuators::drives::ElectricDrives;
 use crate::physics::body::kinematics::{PoseTrajectoryPoint, angles_from_rotation};
-use crate::physics::direct_problem::solve_direct_problem;
+use crate::physics::direct_problem::{DirectProblemSolution, solve_direct_problem};
 use crate::physics::legs::bodies::LegBodies;
 use crate::physics::legs::end_stops::EndStops;
 use crate::physics::programme::{PoseProgramme, SoftStartSinusoid, StartUp};
@@ -230,6 +230,10 @@ pub struct ControllerModel {
     pub pose: ExternalPose,
     pub time: f64,
     outputs: Option<ControllerOutputs>,
+    /// The programme's direct problem at `time`, kept while only the measured legs `l`,
+    /// `ldot` change: it depends on the time, the parameters and the `pose.*` inputs alone, and
+    /// its SVD is most of a step's cost (a closed loop sets `l`, `ldot` after every step).
+    programme: Option<Result<(PoseTrajectoryPoint, DirectProblemSolution), String>>,
 }
 
 impl Default for ControllerModel {
@@ -250,6 +254,7 @@ impl Default for ControllerModel {
             pose: ExternalPose { r: [centre.x, centre.y, centre.z], ..Default::default() },
             time: 0.0,
             outputs: None,
+            programme: None,
         }
     }
 }
@@ -339,13 +344,38 @@ impl ControllerModel {
 
     /// Direct problem and feedback at the current time and inputs.
     pub fn compute(&self) -> Result<ControllerOutputs, String> {
+        let (point, solution) = self.direct_problem()?;
+        Ok(self.feedback(&point, &solution))
+    }
+
+    /// [`ControllerModel::compute`] with the direct problem kept in `programme` (the same
+    /// numbers).
+    fn compute_kept(&mut self) -> Result<ControllerOutputs, String> {
+        if self.programme.is_none() {
+            self.programme = Some(self.direct_problem());
+        }
+        match &self.programme {
+            Some(Ok((point, solution))) => Ok(self.feedback(point, solution)),
+            Some(Err(why)) => Err(why.clone()),
+            None => unreachable!("filled above"),
+        }
+    }
+
+    /// The programme point and its direct problem at the current time.
+    fn direct_problem(&self) -> Result<(PoseTrajectoryPoint, DirectProblemSolution), String> {
         let point = self.programme_point(self.time);
         if let Some(why) = self.implausible(&point) {
             return Err(why);
         }
         let solution = solve_direct_problem(&self.parameters.stand, &self.parameters.leg_bodies(), &point)
             .map_err(|e| format!("the programme pose at t = {:?} cannot be produced by the legs: {e}", self.time))?;
-        let mut f = self.parameters.feedback.leg_forces(&solution, &self.l, &self.ldot);
+        Ok((point, solution))
+    }
+
+    /// The feedback about the programme: leg forces (and voltages, with drives) for the
+    /// measured legs.
+    fn feedback(&self, point: &PoseTrajectoryPoint, solution: &DirectProblemSolution) -> ControllerOutputs {
+        let mut f = self.parameters.feedback.leg_forces(solution, &self.l, &self.ldot);
         let d = self.parameters.disturbance.at(self.time);
         let (f_min, f_max) = (self.parameters.f_min, self.parameters.f_max);
         for fk in f.iter_mut() {
@@ -360,7 +390,7 @@ impl ControllerModel {
         } else {
             [0.0; LEG_COUNT]
         };
-        Ok(ControllerOutputs {
+        ControllerOutputs {
             f,
             u,
             fp: solution.forces,
@@ -368,14 +398,14 @@ impl ControllerModel {
             ldotp: solution.rates,
             rp: point.r,
             anglesp: angles_from_rotation(&point.rotation),
-        })
+        }
     }
 
     /// The outputs at the current time and inputs, computed on the first read after a
     /// change ([`ControllerOutputs::UNDEFINED`] where the programme cannot be produced).
     fn outputs(&mut self) -> &ControllerOutputs {
         if self.outputs.is_none() {
-            self.outputs = Some(self.compute().unwrap_or(ControllerOutputs::UNDEFINED));
+            self.outputs = Some(self.compute_kept().unwrap_or(ControllerOutputs::UNDEFINED));
         }
         self.outputs.as_ref().unwrap_or(&ControllerOutputs::UNDEFINED)
     }
@@ -428,6 +458,9 @@ impl FmuModel for ControllerModel {
     fn set_real(&mut self, var: VariableRef, value: f64) -> Result<(), String> {
         *self.real_slot(var).ok_or("not a settable Real variable")? = value;
         self.outputs = None;
+        if var.group != variables::group::L && var.group != variables::group::LDOT {
+            self.programme = None;
+        }
         Ok(())
     }
 
@@ -438,6 +471,7 @@ impl FmuModel for ControllerModel {
     fn set_integer(&mut self, var: VariableRef, value: i32) -> Result<(), String> {
         self.set_integer_code(var, value).unwrap_or_else(|| Err("not a settable Integer variable".into()))?;
         self.outputs = None;
+        self.programme = None;
         Ok(())
     }
 
@@ -451,6 +485,7 @@ impl FmuModel for ControllerModel {
         let before = self.time;
         self.time = start_time;
         self.outputs = None;
+        self.programme = None;
         if let Err(e) = self.validate() {
             self.time = before;
             return Err(e);
@@ -476,16 +511,16 @@ impl FmuModel for ControllerModel {
     }
 
     fn do_step(&mut self, t: f64, h: f64, _stop_at_event: bool) -> Result<StepReport, StepError> {
-        let before = (self.time, self.outputs);
+        let before = (self.time, self.outputs, self.programme.take());
         self.time = t + h;
         self.outputs = None;
-        match self.compute() {
+        match self.compute_kept() {
             Ok(o) => {
                 self.outputs = Some(o);
                 Ok(StepReport { reached: t + h, event: false })
             }
             Err(message) => {
-                (self.time, self.outputs) = before;
+                (self.time, self.outputs, self.programme) = before;
                 Err(StepError {
                     message: format!("step from t = {t:?} to {:?} rolled back: {message}", t + h),
                     retry_shorter: false,
@@ -518,6 +553,7 @@ impl FmuModel for ControllerModel {
         model.restore_variables(r)?;
         model.time = r.finite("time")?;
         model.outputs = None;
+        model.programme = None;
         Ok(model)
     }
 }
