@@ -32,7 +32,7 @@ for study in stability payload power_loss workspace; do
     step "design study $study on a local Dask cluster (seconds to half a minute; a progress bar)"
     .venv/bin/stewart-sweep "studies/$study.toml" --out "$OUT/$study"
 done
-step "the payload Monte Carlo: 10,000 runs of 1,500 closed-loop steps on a local Dask cluster (about two minutes on 2 cores; a progress bar)"
+step "the payload Monte Carlo: 10,000 runs of 1,500 closed-loop steps on a local Dask cluster (under a minute on 2 cores; a progress bar)"
 .venv/bin/stewart-sweep studies/payload_monte_carlo.toml --out "$OUT/payload_monte_carlo"
 # The viewer with six results (heave, power loss, actuator failure, start-up, heavy legs, the ripple on its joint limits).
 step "the viewer's results"
