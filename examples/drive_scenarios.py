@@ -8,7 +8,6 @@ drive_heave.png, drive_failure.png and drive_summary.txt.
     python examples/drive_scenarios.py [output-folder]   (default: output/)
 """
 
-import csv
 import math
 import sys
 from pathlib import Path
@@ -22,6 +21,8 @@ import numpy as np
 from stewart_fmu import drives as dr
 from stewart_fmu import workspace as ws
 
+from csv_columns import write_columns
+
 OUT = Path(sys.argv[1] if len(sys.argv) > 1 else "output")
 LEGS = list(dr.LEGS)
 P = dr.drive_parameters()
@@ -30,11 +31,7 @@ PERIOD = 2 * math.pi / 2.5573423705088842  # the default heave programme's
 
 
 def write_csv(name, columns):
-    names = list(columns)
-    with open(OUT / name, "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(names)
-        w.writerows(zip(*[np.asarray(columns[n]) for n in names]))
+    write_columns(OUT / name, columns)
 
 
 def balance(c):

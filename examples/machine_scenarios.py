@@ -7,7 +7,6 @@ machine_ripple.png, machine_friction.png and machine_summary.txt.
     python examples/machine_scenarios.py [output-folder]   (default: output/)
 """
 
-import csv
 import re
 import sys
 from pathlib import Path
@@ -21,16 +20,14 @@ import numpy as np
 from stewart_fmu import machine as mc
 from stewart_fmu.workspace import start_values
 
+from csv_columns import write_columns
+
 OUT = Path(sys.argv[1] if len(sys.argv) > 1 else "output")
 LEGS = list(mc.LEGS)
 
 
 def write_csv(name, columns):
-    names = list(columns)
-    with open(OUT / name, "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(names)
-        w.writerows(zip(*[np.asarray(columns[n]) for n in names]))
+    write_columns(OUT / name, columns)
 
 
 def cause(message):

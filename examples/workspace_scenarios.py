@@ -6,7 +6,6 @@ scenarios 1-4), workspace_energy_and_singularities.png and workspace_summary.txt
     python examples/workspace_scenarios.py [output-folder]   (default: output/)
 """
 
-import csv
 import sys
 from pathlib import Path
 
@@ -18,16 +17,14 @@ import numpy as np
 
 from stewart_fmu import workspace as ws
 
+from csv_columns import write_columns
+
 OUT = Path(sys.argv[1] if len(sys.argv) > 1 else "output")
 LEGS = list(ws.LEGS)
 
 
 def write_csv(name, columns):
-    names = list(columns)
-    with open(OUT / name, "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(names)
-        w.writerows(zip(*[np.asarray(columns[n]) for n in names]))
+    write_columns(OUT / name, columns)
 
 
 def stop_columns(d):

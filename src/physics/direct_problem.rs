@@ -14,7 +14,7 @@
 //! platform at the joints for the prescribed motion (all known then) are taken from `F` and
 //! `L` before the system is solved.
 
-use nalgebra::{Matrix6, Vector3, Vector6};
+use nalgebra::{Matrix6, SVD, U6, Vector3, Vector6};
 
 use super::body::kinematics::PoseTrajectoryPoint;
 use super::body::state::BodyState;
@@ -94,17 +94,20 @@ impl ForceMomentMatrix {
         determinant6(a)
     }
 
+    /// The matrix's SVD, `None` where the matrix is not all numbers (a pose of overflowed
+    /// coordinates: no leg arrangement) or the SVD does not converge in [`SVD_ITERATIONS`]
+    /// sweeps. Every SVD of this matrix goes through here, so none can hang.
+    pub fn svd(&self, compute_u: bool, compute_v: bool) -> Option<SVD<f64, U6, U6>> {
+        if !self.matrix.iter().all(|x| x.is_finite()) {
+            return None;
+        }
+        self.matrix.try_svd_unordered(compute_u, compute_v, f64::EPSILON, SVD_ITERATIONS)
+    }
+
     /// 2-norm condition number `sigma_max / sigma_min`, at most [`CONDITION_NUMBER_BOUND`]: the
     /// bound where the matrix is singular (or numerically so, or not made of numbers).
     pub fn condition_number(&self) -> f64 {
-        // A matrix that is not all numbers (a pose of overflowed coordinates) is no leg
-        // arrangement: singular. The SVD's iterations are bounded, so nothing here can hang.
-        if !self.matrix.iter().all(|x| x.is_finite()) {
-            return CONDITION_NUMBER_BOUND;
-        }
-        let Some(svd) = self.matrix.try_svd_unordered(false, false, f64::EPSILON, SVD_ITERATIONS) else {
-            return CONDITION_NUMBER_BOUND;
-        };
+        let Some(svd) = self.svd(false, false) else { return CONDITION_NUMBER_BOUND };
         let sv = svd.singular_values;
         let (max, min) = (sv.max(), sv.min());
         if min > 0.0 { (max / min).min(CONDITION_NUMBER_BOUND) } else { CONDITION_NUMBER_BOUND }
@@ -144,8 +147,8 @@ impl ForceMomentMatrix {
 /// tenth of the largest. Far from a singular arrangement this names the legs of the weakest
 /// combination.
 pub fn singular_legs(stand: &Stand, legs: &LegGeometry) -> [bool; LEG_COUNT] {
-    let svd = ForceMomentMatrix::new(stand, legs).matrix.svd(false, true);
     let mut out = [false; LEG_COUNT];
+    let Some(svd) = ForceMomentMatrix::new(stand, legs).svd(false, true) else { return out };
     let Some(v_t) = svd.v_t else { return out };
     let weakest = svd.singular_values.imin();
     let x = v_t.row(weakest);

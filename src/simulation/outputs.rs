@@ -212,10 +212,7 @@ pub fn condition_number_tangent(stand: &Stand, y: &SimulationState, dy: &Simulat
         dm.fixed_view_mut::<3, 1>(0, k).copy_from(&dn);
         dm.fixed_view_mut::<3, 1>(3, k).copy_from(&dmoment);
     }
-    if !m.matrix.iter().all(|x| x.is_finite()) {
-        return 0.0;
-    }
-    let Some(svd) = m.matrix.try_svd(true, true, f64::EPSILON, 1000) else { return 0.0 };
+    let Some(svd) = m.svd(true, true) else { return 0.0 };
     let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else { return 0.0 };
     let (imax, imin) = (svd.singular_values.imax(), svd.singular_values.imin());
     let (smax, smin) = (svd.singular_values[imax], svd.singular_values[imin]);

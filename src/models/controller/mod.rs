@@ -351,14 +351,13 @@ impl ControllerModel {
     /// [`ControllerModel::compute`] with the direct problem kept in `programme` (the same
     /// numbers).
     fn compute_kept(&mut self) -> Result<ControllerOutputs, String> {
-        if self.programme.is_none() {
-            self.programme = Some(self.direct_problem());
-        }
-        match &self.programme {
-            Some(Ok((point, solution))) => Ok(self.feedback(point, solution)),
-            Some(Err(why)) => Err(why.clone()),
-            None => unreachable!("filled above"),
-        }
+        let kept = self.programme.take().unwrap_or_else(|| self.direct_problem());
+        let outputs = match &kept {
+            Ok((point, solution)) => Ok(self.feedback(point, solution)),
+            Err(why) => Err(why.clone()),
+        };
+        self.programme = Some(kept);
+        outputs
     }
 
     /// The programme point and its direct problem at the current time.

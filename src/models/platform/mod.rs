@@ -527,10 +527,13 @@ impl FmuModel for PlatformModel {
         let checked = sim.guard.check(&sim.form.joints, &sim.body_state());
         self.host_step = time - self.last_completed_step;
         self.last_completed_step = time;
-        let hint = self.host_step_hint().map(|h| format!("; {h}")).unwrap_or_default();
-        checked.map_err(|f| StepError {
-            message: format!("at t = {time:?}: {f}; the simulation cannot go on{hint}"),
-            retry_shorter: false,
+        // The hint is worded only for a failure: this runs after every step of the host.
+        checked.map_err(|f| {
+            let hint = self.host_step_hint().map(|h| format!("; {h}")).unwrap_or_default();
+            StepError {
+                message: format!("at t = {time:?}: {f}; the simulation cannot go on{hint}"),
+                retry_shorter: false,
+            }
         })
     }
 
