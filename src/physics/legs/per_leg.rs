@@ -22,9 +22,9 @@ mod lanes {
         __m128d, __m256d, _CMP_GT_OQ, _CMP_LT_OQ, _mm_add_pd, _mm_and_pd, _mm_andnot_pd, _mm_cmpgt_pd, _mm_cmplt_pd,
         _mm_cvtsd_f64, _mm_div_pd, _mm_max_pd, _mm_min_pd, _mm_movemask_pd, _mm_mul_pd, _mm_or_pd, _mm_set_pd,
         _mm_set1_pd, _mm_setzero_pd, _mm_sqrt_pd, _mm_sub_pd, _mm_unpackhi_pd, _mm256_add_pd, _mm256_and_pd,
-        _mm256_andnot_pd, _mm256_castpd256_pd128, _mm256_cmp_pd, _mm256_div_pd, _mm256_extractf128_pd, _mm256_max_pd,
-        _mm256_min_pd, _mm256_movemask_pd, _mm256_mul_pd, _mm256_or_pd, _mm256_set_pd, _mm256_set1_pd,
-        _mm256_setzero_pd, _mm256_sqrt_pd, _mm256_storeu_pd, _mm256_sub_pd,
+        _mm256_andnot_pd, _mm256_castpd256_pd128, _mm256_cmp_pd, _mm256_div_pd, _mm256_extractf128_pd, _mm256_hadd_pd,
+        _mm256_max_pd, _mm256_min_pd, _mm256_movemask_pd, _mm256_mul_pd, _mm256_or_pd, _mm256_permute2f128_pd,
+        _mm256_set_pd, _mm256_set1_pd, _mm256_setzero_pd, _mm256_sqrt_pd, _mm256_storeu_pd, _mm256_sub_pd,
     };
 
     /// Legs 1-2, 3-4 and 5-6 in three SSE2 registers.
@@ -241,6 +241,30 @@ mod lanes {
             }
         }
 
+        /// Two values' pair sums `((x1 + x3) + x5, (x2 + x4) + x6)` side by side in one
+        /// register, then one horizontal add for each pair of pairs: four sums in about the
+        /// instructions of two.
+        #[inline(always)]
+        fn sum4(values: [Self; 4]) -> [f64; 4] {
+            #[inline(always)]
+            unsafe fn pairs(a: Wide, b: Wide) -> __m256d {
+                unsafe {
+                    let low = _mm256_permute2f128_pd::<0x20>(a.0, b.0);
+                    let high = _mm256_permute2f128_pd::<0x31>(a.0, b.0);
+                    let tail = _mm256_permute2f128_pd::<0x20>(a.1, b.1);
+                    _mm256_add_pd(_mm256_add_pd(low, high), tail)
+                }
+            }
+            unsafe {
+                let [a, b, c, d] = values;
+                // [a1 + a2, c1 + c2, b1 + b2, d1 + d2] of the pair sums.
+                let s = _mm256_hadd_pd(pairs(a, b), pairs(c, d));
+                let mut out = [0.0; 4];
+                _mm256_storeu_pd(out.as_mut_ptr(), s);
+                [out[0], out[2], out[1], out[3]]
+            }
+        }
+
         #[inline(always)]
         fn to_array(self) -> [f64; 6] {
             let mut x = [0.0; 8];
@@ -361,6 +385,11 @@ pub trait Lanes: Copy {
     fn clamp(self, lower: Self, upper: Self) -> Self;
     fn any_outside(self, lower: Self, upper: Self) -> bool;
     fn sum(self) -> f64;
+    /// Four sums at once, each in [`Lanes::sum`]'s order (so the same bits).
+    #[inline(always)]
+    fn sum4(values: [Self; 4]) -> [f64; 4] {
+        values.map(Self::sum)
+    }
     fn to_array(self) -> [f64; LEG_COUNT];
 }
 
@@ -449,6 +478,12 @@ impl<L: Lanes> PerLeg<L> {
         self.0.sum()
     }
 
+    /// Four sums over the legs at once, each as [`PerLeg::sum`] adds (the same bits).
+    #[inline(always)]
+    pub fn sum4(values: [Self; 4]) -> [f64; 4] {
+        L::sum4(values.map(|v| v.0))
+    }
+
     #[inline(always)]
     pub fn to_array(self) -> [f64; LEG_COUNT] {
         self.0.to_array()
@@ -513,6 +548,14 @@ mod tests {
         let finite = PerLeg::<L>::new(&[1.5, -2.25, 3.0e-7, -0.0, 0.99, -1.0]);
         assert_eq!(bits(finite.clamp(lo, hi).to_array()), bits(finite.to_array().map(|x| x.clamp(-1.0, 1.0))));
         assert_eq!(pb.sum().to_bits(), (((b[0] + b[2]) + b[4]) + ((b[1] + b[3]) + b[5])).to_bits());
+        let c = [1.0e16, -3.5, 1.0, -1.0e16, 7.25e-3, 2.0];
+        let d = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6];
+        let ordered = |x: [f64; 6]| (((x[0] + x[2]) + x[4]) + ((x[1] + x[3]) + x[5])).to_bits();
+        let four = PerLeg::<L>::sum4([pb, PerLeg::new(&c), PerLeg::new(&d), pb * PerLeg::new(&d)]);
+        assert_eq!(
+            four.map(f64::to_bits),
+            [ordered(b), ordered(c), ordered(d), ordered(std::array::from_fn(|k| b[k] * d[k]))]
+        );
         assert_eq!(PerLeg::<L>::splat(2.5).to_array(), [2.5; 6]);
         let (lo, hi) = (PerLeg::<L>::splat(-1.0), PerLeg::<L>::splat(1.0));
         assert!(!PerLeg::<L>::new(&[0.0, 0.5, -0.5, 1.0, -1.0, 0.9]).any_outside(lo, hi));

@@ -165,26 +165,31 @@ impl SpecialForm {
         let b = length.where_positive(drive_force + stop - c * PerLeg::splat(m_a));
         let rn = PerLeg::cross(&arm, &n);
         let s = [n[0], n[1], n[2], rn[0], rn[1], rn[2]];
-        // The system's lower triangle and right-hand side.
+        // The system's lower triangle (`sum S_k S_k^T`, row by row) and `sum b_k S_k`, four
+        // sums at a time.
+        let sum4 = PerLeg::<V>::sum4;
+        let [g00, g10, g11, g20] = sum4([s[0] * s[0], s[1] * s[0], s[1] * s[1], s[2] * s[0]]);
+        let [g21, g22, g30, g31] = sum4([s[2] * s[1], s[2] * s[2], s[3] * s[0], s[3] * s[1]]);
+        let [g32, g33, g40, g41] = sum4([s[3] * s[2], s[3] * s[3], s[4] * s[0], s[4] * s[1]]);
+        let [g42, g43, g44, g50] = sum4([s[4] * s[2], s[4] * s[3], s[4] * s[4], s[5] * s[0]]);
+        let [g51, g52, g53, g54] = sum4([s[5] * s[1], s[5] * s[2], s[5] * s[3], s[5] * s[4]]);
+        let [g55, bs0, bs1, bs2] = sum4([s[5] * s[5], b * s[0], b * s[1], b * s[2]]);
+        let [bs3, bs4, bs5, _] = sum4([b * s[3], b * s[4], b * s[5], PerLeg::splat(0.0)]);
         let (mass, j, e) = (self.stand.mass, &self.stand.inertia, &state.e);
-        let mut matrix = [[0.0; 6]; 6];
-        for r in 0..6 {
-            for col in 0..=r {
-                matrix[r][col] = (s[r] * s[col]).sum() * m_a;
-            }
-        }
-        for r in 0..3 {
-            matrix[r][r] += mass;
-            for col in 0..=r {
-                matrix[3 + r][3 + col] +=
-                    e[0][r] * e[0][col] * j[0] + e[1][r] * e[1][col] * j[1] + e[2][r] * e[2][col] * j[2];
-            }
-        }
-        let j_w =
-            |x: &Vector3<f64>| e[0] * (e[0].dot(x) * j[0]) + e[1] * (e[1].dot(x) * j[1]) + e[2] * (e[2].dot(x) * j[2]);
-        let mut force = Vector3::new((b * n[0]).sum(), (b * n[1]).sum(), (b * n[2]).sum() - mass * self.stand.gravity);
-        let mut moment =
-            Vector3::new((b * rn[0]).sum(), (b * rn[1]).sum(), (b * rn[2]).sum()) - omega.cross(&j_w(&omega));
+        // `J_w = sum_a J_a e_a e_a^T`, from `J_a e_a`.
+        let je = [e[0] * j[0], e[1] * j[1], e[2] * j[2]];
+        let j_w = |r: usize, col: usize| je[0][r] * e[0][col] + je[1][r] * e[1][col] + je[2][r] * e[2][col];
+        let matrix = [
+            [g00 * m_a + mass, 0.0, 0.0, 0.0, 0.0, 0.0],
+            [g10 * m_a, g11 * m_a + mass, 0.0, 0.0, 0.0, 0.0],
+            [g20 * m_a, g21 * m_a, g22 * m_a + mass, 0.0, 0.0, 0.0],
+            [g30 * m_a, g31 * m_a, g32 * m_a, g33 * m_a + j_w(0, 0), 0.0, 0.0],
+            [g40 * m_a, g41 * m_a, g42 * m_a, g43 * m_a + j_w(1, 0), g44 * m_a + j_w(1, 1), 0.0],
+            [g50 * m_a, g51 * m_a, g52 * m_a, g53 * m_a + j_w(2, 0), g54 * m_a + j_w(2, 1), g55 * m_a + j_w(2, 2)],
+        ];
+        let j_omega = je[0] * e[0].dot(&omega) + je[1] * e[1].dot(&omega) + je[2] * e[2].dot(&omega);
+        let mut force = Vector3::new(bs0, bs1, bs2 - mass * self.stand.gravity);
+        let mut moment = Vector3::new(bs3, bs4, bs5) - omega.cross(&j_omega);
         if let Some(m) = &machine {
             force += m.force;
             moment += m.moment;
@@ -197,9 +202,11 @@ impl SpecialForm {
             + s[4] * PerLeg::splat(q[4])
             + s[5] * PerLeg::splat(q[5]);
         let f = b - along * PerLeg::splat(m_a);
+        let [f0, f1, f2, f3] = sum4([f * s[0], f * s[1], f * s[2], f * s[3]]);
+        let [f4, f5, _, _] = sum4([f * s[4], f * s[5], PerLeg::splat(0.0), PerLeg::splat(0.0)]);
         let w = LegWrench {
-            force: Vector3::new((f * n[0]).sum(), (f * n[1]).sum(), (f * n[2]).sum()),
-            moment: Vector3::new((f * rn[0]).sum(), (f * rn[1]).sum(), (f * rn[2]).sum()),
+            force: Vector3::new(f0, f1, f2),
+            moment: Vector3::new(f3, f4, f5),
             stop: StopWrench { dissipation: stop_dissipation, ..StopWrench::default() },
             machine,
         };
