@@ -14,7 +14,7 @@
 //! platform at the joints for the prescribed motion (all known then) are taken from `F` and
 //! `L` before the system is solved.
 
-use nalgebra::{Matrix6, SVD, U6, Vector3, Vector6};
+use nalgebra::{Matrix6, SVD, U6, Vector3};
 
 use super::body::kinematics::PoseTrajectoryPoint;
 use super::body::state::BodyState;
@@ -32,6 +32,11 @@ pub const SINGULAR_CONDITION_NUMBER: f64 = 1e8;
 /// tell the matrix from a singular one, and at a singular arrangement the condition number is
 /// this bound (a finite number: an FMU output is never infinite).
 pub const CONDITION_NUMBER_BOUND: f64 = 1.0 / f64::EPSILON;
+
+/// Condition numbers up to this are computed from the Gram matrix `M^T M` (relative error a
+/// few `eps kappa^2`, at most about 1e-11), larger ones by the SVD (see
+/// [`ForceMomentMatrix::condition_number`]). A working hexapod's poses lie far below.
+pub const GRAM_CONDITION_LIMIT: f64 = 100.0;
 
 /// Most sweeps the condition number's SVD may take: a 6x6 matrix of numbers converges in a few
 /// dozen; past this it is reported singular rather than iterated without end.
@@ -106,11 +111,37 @@ impl ForceMomentMatrix {
 
     /// 2-norm condition number `sigma_max / sigma_min`, at most [`CONDITION_NUMBER_BOUND`]: the
     /// bound where the matrix is singular (or numerically so, or not made of numbers).
+    ///
+    /// Well-conditioned arrangements (`kappa <= GRAM_CONDITION_LIMIT`, every ordinary pose of a
+    /// working hexapod) take the eigenvalues of the Gram matrix `M^T M`; the others, and the
+    /// decisions near [`SINGULAR_CONDITION_NUMBER`], the SVD of `M`.
     pub fn condition_number(&self) -> f64 {
+        if let Some(kappa) = self.condition_number_from_gram() {
+            return kappa;
+        }
+        self.condition_number_by_svd()
+    }
+
+    /// `kappa` from the SVD of `M`: relative error about `eps kappa`.
+    pub fn condition_number_by_svd(&self) -> f64 {
         let Some(svd) = self.svd(false, false) else { return CONDITION_NUMBER_BOUND };
         let sv = svd.singular_values;
         let (max, min) = (sv.max(), sv.min());
         if min > 0.0 { (max / min).min(CONDITION_NUMBER_BOUND) } else { CONDITION_NUMBER_BOUND }
+    }
+
+    /// `kappa = sqrt(lambda_max / lambda_min)` of `M^T M`, where it is at most
+    /// [`GRAM_CONDITION_LIMIT`]; `None` elsewhere. Squaring the matrix squares its condition:
+    /// the smallest eigenvalue carries an error of a few `eps lambda_max`, so `kappa`'s relative
+    /// error is a few `eps kappa^2` (2e-12 at the limit, against the SVD's `eps kappa`), and
+    /// costs a sixth of the SVD.
+    pub fn condition_number_from_gram(&self) -> Option<f64> {
+        let m = &self.matrix;
+        let gram: [[f64; 6]; 6] =
+            std::array::from_fn(|r| std::array::from_fn(|c| if c <= r { m.column(r).dot(&m.column(c)) } else { 0.0 }));
+        let (min, max) = crate::physics::symmetric6::extreme_eigenvalues(&gram)?;
+        let squared = max / min;
+        (min > 0.0 && squared <= GRAM_CONDITION_LIMIT * GRAM_CONDITION_LIMIT).then(|| squared.sqrt())
     }
 
     /// Leg forces producing the resultant `force` and moment `moment` (about the centre of mass),
@@ -120,26 +151,60 @@ impl ForceMomentMatrix {
     /// LU factors the solve needs anyway, does not already clear the arrangement with a margin
     /// of two for the bound's round-off.
     pub fn solve(&self, force: &Vector3<f64>, moment: &Vector3<f64>) -> Result<[f64; LEG_COUNT], DirectProblemError> {
-        let lu = self.matrix.full_piv_lu();
-        let frobenius_bound = lu.try_inverse().map(|inverse| self.matrix.norm() * inverse.norm());
-        if !frobenius_bound.is_some_and(|bound| bound < 0.5 * SINGULAR_CONDITION_NUMBER) {
-            let condition_number = self.condition_number();
-            if !(condition_number < SINGULAR_CONDITION_NUMBER) {
-                return Err(DirectProblemError::Singular { condition_number });
-            }
-        }
-        let rhs = Vector6::new(
+        let rhs = [
             force.x,
             force.y,
             force.z,
             moment.x / self.moment_scale,
             moment.y / self.moment_scale,
             moment.z / self.moment_scale,
-        );
-        let u =
-            lu.solve(&rhs).ok_or_else(|| DirectProblemError::Singular { condition_number: self.condition_number() })?;
-        Ok([u[0], u[1], u[2], u[3], u[4], u[5]])
+        ];
+        let solved = gauss_jordan(&self.matrix, &rhs);
+        let frobenius_bound =
+            solved.map(|(inverse, _)| self.matrix.norm() * inverse.iter().flatten().fold(0.0, |s, x| s + x * x).sqrt());
+        if !frobenius_bound.is_some_and(|bound| bound < 0.5 * SINGULAR_CONDITION_NUMBER) {
+            let condition_number = self.condition_number();
+            if !(condition_number < SINGULAR_CONDITION_NUMBER) {
+                return Err(DirectProblemError::Singular { condition_number });
+            }
+        }
+        solved.map(|(_, u)| u).ok_or_else(|| DirectProblemError::Singular { condition_number: self.condition_number() })
     }
+}
+
+/// `(M^-1, M^-1 b)` by Gauss-Jordan elimination with partial pivoting on `[M | I | b]`, rows
+/// of fixed width that the compiler unrolls (a fifth of the instructions of nalgebra's
+/// full-pivot LU and inverse); `None` where a pivot is zero or a result is not a number.
+fn gauss_jordan(m: &Matrix6<f64>, b: &[f64; LEG_COUNT]) -> Option<([[f64; LEG_COUNT]; LEG_COUNT], [f64; LEG_COUNT])> {
+    const W: usize = 2 * LEG_COUNT + 1;
+    let mut rows: [[f64; W]; LEG_COUNT] = std::array::from_fn(|i| {
+        std::array::from_fn(|j| match j {
+            j if j < LEG_COUNT => m[(i, j)],
+            j if j < 2 * LEG_COUNT => f64::from(u8::from(j - LEG_COUNT == i)),
+            _ => b[i],
+        })
+    });
+    for k in 0..LEG_COUNT {
+        let pivot = (k..LEG_COUNT).fold(k, |p, i| if rows[i][k].abs() > rows[p][k].abs() { i } else { p });
+        rows.swap(k, pivot);
+        let scale = 1.0 / rows[k][k];
+        if !scale.is_finite() {
+            return None;
+        }
+        let row = rows[k].map(|x| x * scale);
+        rows[k] = row;
+        for i in 0..LEG_COUNT {
+            if i != k {
+                let factor = rows[i][k];
+                for j in 0..W {
+                    rows[i][j] -= factor * row[j];
+                }
+            }
+        }
+    }
+    let inverse = rows.map(|r| std::array::from_fn(|j| r[LEG_COUNT + j]));
+    let solution = rows.map(|r| r[W - 1]);
+    (inverse.iter().flatten().chain(&solution).all(|x| x.is_finite())).then_some((inverse, solution))
 }
 
 /// The legs that take part in a singular arrangement: the entries of the force combination
@@ -281,7 +346,7 @@ mod tests {
     use super::*;
     use crate::physics::legs::geometry::JointArrays;
     use crate::physics::stand::PAPER_EQUILIBRIUM_LEG_FORCE;
-    use nalgebra::Matrix3;
+    use nalgebra::{Matrix3, Vector6};
 
     #[test]
     fn neutral_pose_of_the_default_stand_needs_the_papers_equilibrium_force_in_every_leg() {
@@ -325,6 +390,92 @@ mod tests {
             if by_svd { accepted += 1 } else { refused += 1 }
         }
         assert!(refused > 20 && accepted > 20, "{refused} refused, {accepted} accepted");
+    }
+
+    /// `kappa` from the Gram matrix equals the SVD's to a few `eps kappa^2` on matrices of
+    /// known condition number 1..1e4 (the SVD taking over past the limit) and on the default
+    /// stand over a grid of poses; exactly `kappa` where it is known.
+    #[test]
+    fn the_gram_condition_number_is_the_svds_below_its_limit() {
+        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut random = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let mut worst: f64 = 0.0;
+        let (mut by_gram, mut by_svd) = (0, 0);
+        for i in 0..=64 {
+            let kappa = 10f64.powf(i as f64 / 16.0);
+            let u = Matrix6::from_fn(|_, _| random()).qr().q();
+            let v = Matrix6::from_fn(|_, _| random()).qr().q();
+            let s = Matrix6::from_diagonal(&Vector6::from_fn(|i, _| 1.0 / kappa.powf(i as f64 / 5.0)));
+            let m = ForceMomentMatrix { matrix: u * s * v.transpose(), moment_scale: 1.0 };
+            let error = (m.condition_number() / kappa - 1.0).abs();
+            match m.condition_number_from_gram() {
+                Some(_) => {
+                    by_gram += 1;
+                    worst = worst.max(error / (kappa * kappa));
+                }
+                None => {
+                    by_svd += 1;
+                    assert!(kappa > 0.99 * GRAM_CONDITION_LIMIT, "kappa {kappa:e} left to the SVD");
+                }
+            }
+        }
+        let stand = Stand::truck_cabin();
+        let mut worst_pose: f64 = 0.0;
+        for i in 0..200 {
+            let t = i as f64;
+            let r = Stand::truck_cabin_neutral_position()
+                + Vector3::new(0.3 * (0.7 * t).sin(), 0.3 * (1.1 * t).cos(), 0.4 * (0.3 * t).sin());
+            let angles = Vector3::new(0.3 * (0.5 * t).sin(), 0.3 * (0.9 * t).sin(), 0.6 * (0.2 * t).cos());
+            let rot = crate::physics::body::kinematics::rotation_from_angles(&angles);
+            let state = BodyState::from_pose(r, Vector3::zeros(), &rot, &Vector3::zeros());
+            let m = ForceMomentMatrix::new(&stand, &LegGeometry::new(&stand, &state));
+            if let Some(kappa) = m.condition_number_from_gram() {
+                let svd = m.condition_number_by_svd();
+                worst_pose = worst_pose.max((kappa / svd - 1.0).abs() / (svd * svd));
+            }
+        }
+        println!(
+            "kappa from the Gram matrix against the SVD: {by_gram} known (largest error {worst:.1e} kappa^2), {by_svd} past the limit; stand poses {worst_pose:.1e} kappa^2"
+        );
+        assert!(worst < 50.0 * f64::EPSILON && worst_pose < 50.0 * f64::EPSILON, "{worst:e} {worst_pose:e}");
+        assert!(by_gram > 20 && by_svd > 20, "{by_gram} by the Gram matrix, {by_svd} by the SVD");
+    }
+
+    /// The Gauss-Jordan inverse and solution equal nalgebra's full-pivot LU to round-off
+    /// (relative to `kappa eps`) on the default stand over a grid of poses; a singular matrix
+    /// gives none.
+    #[test]
+    fn gauss_jordan_is_the_lu_solution() {
+        let stand = Stand::truck_cabin();
+        let mut worst: f64 = 0.0;
+        for i in 0..200 {
+            let t = i as f64;
+            let r = Stand::truck_cabin_neutral_position()
+                + Vector3::new(0.3 * (0.7 * t).sin(), 0.3 * (1.1 * t).cos(), 0.4 * (0.3 * t).sin());
+            let angles = Vector3::new(0.3 * (0.5 * t).sin(), 0.3 * (0.9 * t).sin(), 0.6 * (0.2 * t).cos());
+            let rot = crate::physics::body::kinematics::rotation_from_angles(&angles);
+            let state = BodyState::from_pose(r, Vector3::zeros(), &rot, &Vector3::zeros());
+            let m = ForceMomentMatrix::new(&stand, &LegGeometry::new(&stand, &state));
+            let b = [3.0e4, -1.0e3, 2.9e4 + t, 50.0, -20.0, 5.0 * t];
+            let (inverse, x) = gauss_jordan(&m.matrix, &b).expect("regular");
+            let lu = m.matrix.full_piv_lu();
+            let reference = lu.solve(&Vector6::from_row_slice(&b)).unwrap();
+            let reference_inverse = lu.try_inverse().unwrap();
+            let kappa = m.condition_number_by_svd();
+            let x_error = (0..6).map(|k| (x[k] - reference[k]).abs()).fold(0.0, f64::max) / reference.amax();
+            let inverse_error =
+                (0..36).map(|n| (inverse[n / 6][n % 6] - reference_inverse[(n / 6, n % 6)]).abs()).fold(0.0, f64::max)
+                    / reference_inverse.amax();
+            worst = worst.max(x_error.max(inverse_error) / (kappa * f64::EPSILON));
+        }
+        println!("Gauss-Jordan against the full-pivot LU: largest difference {worst:.1} kappa eps");
+        assert!(worst < 10.0, "{worst}");
+        assert!(gauss_jordan(&Matrix6::from_fn(|i, j| (i + j) as f64), &[1.0; 6]).is_none());
     }
 
     #[test]

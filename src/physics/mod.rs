@@ -15,6 +15,7 @@
 //! | [`configuration`] | admissible configurations (legs, base plane, singularity) |
 //! | [`scaling`] | the paper's non-dimensional units |
 //! | [`error`] | parameter errors and physics faults |
+//! | [`symmetric6`] | the extreme eigenvalues of a symmetric 6x6 matrix (for `kappa`) |
 
 pub mod actuators;
 pub mod body;
@@ -27,3 +28,4 @@ pub mod programme;
 pub mod scaling;
 pub mod special_form;
 pub mod stand;
+pub mod symmetric6;

@@ -74,18 +74,21 @@ impl Instance {
         if self.version == FmiVersion::Fmi2 && vrs.len() == values.len() {
             // One element per reference: the cache block of each comes from one table. Loops
             // without calls (so the tables stay in registers): which blocks the references
-            // need, fill the stale ones, copy. A reference outside the cache (or unknown)
-            // takes the element-by-element path.
+            // need, fill the stale ones, copy. Only a reference outside the cache (or unknown)
+            // takes the element-by-element path, alone: a host that reads `kappa` with the leg
+            // lengths still gets the lengths copied.
             let cached = &self.cached;
+            let uncached = 1u32.wrapping_shl(NO_CACHE.into());
             let mut needed = 0u32;
             for &vr in vrs {
                 let block = cached.get(vr as usize).map_or(NO_CACHE, |c| c.block);
                 needed |= 1u32.wrapping_shl(block.into());
             }
+            let blocks = needed & !uncached;
+            self.refresh(blocks & !self.fresh);
+            self.read_since_step |= blocks;
             let mut nan = false;
-            if needed & 1u32.wrapping_shl(NO_CACHE.into()) == 0 {
-                self.refresh(needed & !self.fresh);
-                self.read_since_step |= needed;
+            if needed & uncached == 0 {
                 let cache = &self.value_cache;
                 for (slot, &vr) in values.iter_mut().zip(vrs) {
                     *slot = cache.get(vr as usize).copied().unwrap_or(f64::NAN);
@@ -93,7 +96,10 @@ impl Instance {
                 }
             } else {
                 for (slot, &vr) in values.iter_mut().zip(vrs) {
-                    if let Err(s) = self.read_real(vrs, vr, std::slice::from_mut(slot), 0) {
+                    let in_cache = self.cached.get(vr as usize).is_some_and(|c| c.block != NO_CACHE);
+                    if in_cache {
+                        *slot = self.value_cache.get(vr as usize).copied().unwrap_or(f64::NAN);
+                    } else if let Err(s) = self.read_real(vrs, vr, std::slice::from_mut(slot), 0) {
                         return s;
                     }
                     nan |= slot.is_nan();

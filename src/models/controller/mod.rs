@@ -12,7 +12,7 @@ pub mod variables;
 use crate::models::Initialised;
 use nalgebra::Vector3;
 
-use super::declare::{Binding, IntegerStorage, Variables};
+use super::declare::{Binding, IntegerStorage, Variables, cache_block_of};
 use super::snapshot::{ByteReader, ByteWriter, SnapshotError};
 use super::variables::VariableRef;
 use super::{DefaultExperiment, FmuModel, ModelInfo, StepError, StepReport};
@@ -442,6 +442,15 @@ impl ControllerModel {
 impl FmuModel for ControllerModel {
     fn info(&self) -> &'static ModelInfo {
         &INFO
+    }
+
+    fn cache_block(&self, group: usize) -> Option<u8> {
+        cache_block_of(BINDINGS, group)
+    }
+
+    #[inline]
+    fn fill_cache(&mut self, block: u8, cache: &mut [f64]) -> bool {
+        self.fill_block(block, cache)
     }
 
     fn get_real(&mut self, var: VariableRef) -> f64 {
