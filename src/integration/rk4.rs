@@ -82,11 +82,6 @@ impl Exponential {
     fn range<const N: usize>(&self) -> std::ops::Range<usize> {
         self.block.start.min(N)..(self.block.start + self.block.len).min(N)
     }
-
-    /// The non-stiff part `n = f + rate y` of a stage's rate.
-    fn nonstiff<const N: usize>(&self, j: usize, k: &[f64; N], y: &[f64; N]) -> f64 {
-        k[j] + self.block.rate * y[j]
-    }
 }
 
 #[inline(always)]
@@ -207,40 +202,42 @@ fn exponential_step<S: OdeSystem<N>, const N: usize>(
     h: f64,
     y: &mut [f64; N],
 ) {
-    let block = e.range::<N>();
+    let r = e.range::<N>();
+    let rate = e.block.rate;
+    // A stage's non-stiff rates `n = f + rate y` over the block (slices: no index checks).
+    let nonstiff = |k: &[f64; N], at: &[f64; N], out: &mut [f64; N]| {
+        for ((n, &k), &at) in out[r.clone()].iter_mut().zip(&k[r.clone()]).zip(&at[r.clone()]) {
+            *n = k + rate * at;
+        }
+    };
+    let (mut n1, mut n2, mut n3, mut n4) = ([0.0; N], [0.0; N], [0.0; N], [0.0; N]);
     let k1 = system.derivative_of(t, y);
+    nonstiff(&k1, y, &mut n1);
     let mut a: [f64; N] = std::array::from_fn(|j| y[j] + 0.5 * h * k1[j]);
-    for j in block.clone() {
-        a[j] = e.half * y[j] + e.a1 * e.nonstiff(j, &k1, y);
+    for ((a, &y), &n1) in a[r.clone()].iter_mut().zip(&y[r.clone()]).zip(&n1[r.clone()]) {
+        *a = e.half * y + e.a1 * n1;
     }
     let k2 = system.derivative_of(t_mid, &a);
+    nonstiff(&k2, &a, &mut n2);
     let mut b: [f64; N] = std::array::from_fn(|j| y[j] + 0.5 * h * k2[j]);
-    for j in block.clone() {
-        b[j] = e.half * y[j] + e.b1 * e.nonstiff(j, &k1, y) + e.b2 * e.nonstiff(j, &k2, &a);
+    for (((b, &y), &n1), &n2) in b[r.clone()].iter_mut().zip(&y[r.clone()]).zip(&n1[r.clone()]).zip(&n2[r.clone()]) {
+        *b = e.half * y + e.b1 * n1 + e.b2 * n2;
     }
     let k3 = system.derivative_of(t_mid, &b);
+    nonstiff(&k3, &b, &mut n3);
     let mut c: [f64; N] = std::array::from_fn(|j| y[j] + h * k3[j]);
-    for j in block.clone() {
-        c[j] = e.full * y[j] + e.c1 * e.nonstiff(j, &k1, y) + e.c3 * e.nonstiff(j, &k3, &b);
+    for (((c, &y), &n1), &n3) in c[r.clone()].iter_mut().zip(&y[r.clone()]).zip(&n1[r.clone()]).zip(&n3[r.clone()]) {
+        *c = e.full * y + e.c1 * n1 + e.c3 * n3;
     }
     let k4 = system.derivative_of(t_end, &c);
+    nonstiff(&k4, &c, &mut n4);
     let [w1, w23, w4] = e.weights;
-    let exponential: [f64; N] = std::array::from_fn(|j| {
-        if block.contains(&j) {
-            e.full * y[j]
-                + w1 * e.nonstiff(j, &k1, y)
-                + w23 * (e.nonstiff(j, &k2, &a) + e.nonstiff(j, &k3, &b))
-                + w4 * e.nonstiff(j, &k4, &c)
-        } else {
-            0.0
-        }
-    });
+    // The block's output from the old `y` first, then the classical one elsewhere.
+    let block: [f64; N] = std::array::from_fn(|j| e.full * y[j] + w1 * n1[j] + w23 * (n2[j] + n3[j]) + w4 * n4[j]);
     for j in 0..N {
         y[j] += h / 6.0 * (k1[j] + 2.0 * (k2[j] + k3[j]) + k4[j]);
     }
-    for j in block {
-        y[j] = exponential[j];
-    }
+    y[r.clone()].copy_from_slice(&block[r]);
 }
 
 #[cfg(test)]

@@ -159,6 +159,20 @@ impl JointArrays {
         length: PerLeg<V>,
         inverse_length: PerLeg<V>,
     ) -> ([PerLeg<V>; 3], PerLeg<V>) {
+        let (n, l_dot, _) = self.directions_rates_and_velocities(state, leg, length, inverse_length);
+        (n, l_dot)
+    }
+
+    /// [`JointArrays::directions_and_rates`] and the platform joints' velocities
+    /// `v + d(R A_k)/dt`, m/s, per component.
+    #[inline(always)]
+    pub fn directions_rates_and_velocities<V: Lanes>(
+        &self,
+        state: &BodyState,
+        leg: &[PerLeg<V>; 3],
+        length: PerLeg<V>,
+        inverse_length: PerLeg<V>,
+    ) -> ([PerLeg<V>; 3], PerLeg<V>, [PerLeg<V>; 3]) {
         let [d1, d2, d3] = &state.e_dot;
         let a = components!(|c| PerLeg::<V>::new(&self.platform[c]));
         let n = components!(|c| length.where_positive(leg[c] * inverse_length));
@@ -166,7 +180,7 @@ impl JointArrays {
             PerLeg::splat(state.v[c])
                 + (PerLeg::splat(d1[c]) * a[0] + PerLeg::splat(d2[c]) * a[1] + PerLeg::splat(d3[c]) * a[2])
         });
-        (n, n[0] * velocity[0] + n[1] * velocity[1] + n[2] * velocity[2])
+        (n, n[0] * velocity[0] + n[1] * velocity[1] + n[2] * velocity[2], velocity)
     }
 
     /// Leg length rates `dl_k/dt = n_k . (v + d(R A_k)/dt)`, m/s, as [`LegGeometry::length_rates`]

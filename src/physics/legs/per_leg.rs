@@ -142,6 +142,43 @@ mod lanes {
     #[cfg_attr(not(feature = "avx2"), allow(dead_code))]
     pub struct Wide(__m256d, __m256d);
 
+    impl Wide {
+        /// The sums of [`super::Lanes::sum4`] in one register, in the order `[a, c, b, d]`.
+        ///
+        /// # Safety
+        /// AVX must be available (as wherever a `Wide` exists).
+        #[inline(always)]
+        unsafe fn sums(values: [Wide; 4]) -> __m256d {
+            let [a, b, c, d] = values;
+            unsafe { _mm256_hadd_pd(Wide::pair_sums(a, b), Wide::pair_sums(c, d)) }
+        }
+
+        /// `[(a1 + a3) + a5, (a2 + a4) + a6, the same of b]`: legs 1-4's halves and legs 5-6.
+        /// (A function, not a closure: closures of intrinsics are not inlined into the AVX2
+        /// path.)
+        ///
+        /// # Safety
+        /// AVX must be available.
+        #[inline(always)]
+        unsafe fn pair_sums(a: Wide, b: Wide) -> __m256d {
+            unsafe {
+                let low = _mm256_permute2f128_pd::<0x20>(a.0, b.0);
+                let high = _mm256_permute2f128_pd::<0x31>(a.0, b.0);
+                let tail = _mm256_permute2f128_pd::<0x20>(a.1, b.1);
+                _mm256_add_pd(_mm256_add_pd(low, high), tail)
+            }
+        }
+
+        /// `[a, c, b, d]` in a register as `[a, b, c, d]`.
+        #[inline(always)]
+        fn in_order(sums: __m256d) -> [f64; 4] {
+            let mut out = [0.0; 4];
+            // SAFETY: AVX, as wherever a `Wide` exists.
+            unsafe { _mm256_storeu_pd(out.as_mut_ptr(), sums) };
+            [out[0], out[2], out[1], out[3]]
+        }
+    }
+
     // SAFETY (every `unsafe` block of this impl): a `Wide` exists only where AVX runs (above).
     impl super::Lanes for Wide {
         type Axes = crate::physics::body::per_axis::Quad;
@@ -241,28 +278,18 @@ mod lanes {
             }
         }
 
-        /// Two values' pair sums `((x1 + x3) + x5, (x2 + x4) + x6)` side by side in one
-        /// register, then one horizontal add for each pair of pairs: four sums in about the
+        /// Four sums at once: each value's pair sums `((x1 + x3) + x5, (x2 + x4) + x6)` side by
+        /// side, two values to a register, then one horizontal add; four sums in about the
         /// instructions of two.
         #[inline(always)]
         fn sum4(values: [Self; 4]) -> [f64; 4] {
-            #[inline(always)]
-            unsafe fn pairs(a: Wide, b: Wide) -> __m256d {
-                unsafe {
-                    let low = _mm256_permute2f128_pd::<0x20>(a.0, b.0);
-                    let high = _mm256_permute2f128_pd::<0x31>(a.0, b.0);
-                    let tail = _mm256_permute2f128_pd::<0x20>(a.1, b.1);
-                    _mm256_add_pd(_mm256_add_pd(low, high), tail)
-                }
-            }
-            unsafe {
-                let [a, b, c, d] = values;
-                // [a1 + a2, c1 + c2, b1 + b2, d1 + d2] of the pair sums.
-                let s = _mm256_hadd_pd(pairs(a, b), pairs(c, d));
-                let mut out = [0.0; 4];
-                _mm256_storeu_pd(out.as_mut_ptr(), s);
-                [out[0], out[2], out[1], out[3]]
-            }
+            Wide::in_order(unsafe { Wide::sums(values) })
+        }
+
+        /// [`Wide::sum4`] with the four products in one multiplication.
+        #[inline(always)]
+        fn sum4_times(values: [Self; 4], factor: f64) -> [f64; 4] {
+            Wide::in_order(unsafe { _mm256_mul_pd(Wide::sums(values), _mm256_set1_pd(factor)) })
         }
 
         #[inline(always)]
@@ -390,6 +417,11 @@ pub trait Lanes: Copy {
     fn sum4(values: [Self; 4]) -> [f64; 4] {
         values.map(Self::sum)
     }
+    /// [`Lanes::sum4`], each sum then multiplied by `factor`.
+    #[inline(always)]
+    fn sum4_times(values: [Self; 4], factor: f64) -> [f64; 4] {
+        Self::sum4(values).map(|x| x * factor)
+    }
     fn to_array(self) -> [f64; LEG_COUNT];
 }
 
@@ -482,6 +514,12 @@ impl<L: Lanes> PerLeg<L> {
     #[inline(always)]
     pub fn sum4(values: [Self; 4]) -> [f64; 4] {
         L::sum4(values.map(|v| v.0))
+    }
+
+    /// [`PerLeg::sum4`], each sum multiplied by `factor` (the same bits as multiplying after).
+    #[inline(always)]
+    pub fn sum4_times(values: [Self; 4], factor: f64) -> [f64; 4] {
+        L::sum4_times(values.map(|v| v.0), factor)
     }
 
     #[inline(always)]

@@ -120,14 +120,9 @@ impl SpecialForm {
         let state = BodyState::from_vector(y);
         let LegLanes { arm, leg, length } = self.joints.legs::<V>(&state);
         let inverse_length = PerLeg::splat(1.0) / length;
-        let (n, l_dot) = self.joints.directions_and_rates(&state, &leg, length, inverse_length);
-        // The joints' velocities and the centripetal part of their accelerations.
-        let [d1, d2, d3] = &state.e_dot;
-        let a = components!(|c| PerLeg::<V>::new(&self.joints.platform[c]));
-        let velocity = components!(|c| {
-            PerLeg::splat(state.v[c])
-                + (PerLeg::splat(d1[c]) * a[0] + PerLeg::splat(d2[c]) * a[1] + PerLeg::splat(d3[c]) * a[2])
-        });
+        // The joints' directions, length rates, velocities, and the centripetal part of their
+        // accelerations.
+        let (n, l_dot, velocity) = self.joints.directions_rates_and_velocities(&state, &leg, length, inverse_length);
         let omega = state.angular_velocity_inertial();
         let w = components!(|c| PerLeg::<V>::splat(omega[c]));
         let whirl = PerLeg::cross(&w, &PerLeg::cross(&w, &arm));
@@ -147,12 +142,16 @@ impl SpecialForm {
             + shaft * shaft * PerLeg::splat(drives.damping)
             + shaft * current * PerLeg::splat(drives.ke - drives.kt);
         // The end stops (rare: cold) and the joint limits (only where one may touch).
-        let (stop, stop_dissipation) = match &self.stops {
+        let m_a = self.legs.axial_mass;
+        // The legs' axial forces without their inertia, `b = s - m_a c`.
+        let free = drive_force - c * PerLeg::splat(m_a);
+        let (free, stop_dissipation) = match &self.stops {
             Some(stops) if length.any_outside(PerLeg::new(&self.stroke[0]), PerLeg::new(&self.stroke[1])) => {
                 std::hint::cold_path();
-                self.stop_forces_in(stops, &length, &l_dot)
+                let (stop, dissipation) = self.stop_forces_in(stops, &length, &l_dot);
+                (drive_force + stop - c * PerLeg::splat(m_a), dissipation)
             }
-            _ => (PerLeg::splat(0.0), 0.0),
+            _ => (free, 0.0),
         };
         let machine = match &self.joint_limits {
             Some(_) if self.joints_may_touch(&state, &leg, length) => {
@@ -161,31 +160,31 @@ impl SpecialForm {
             }
             _ => None,
         };
-        let m_a = self.legs.axial_mass;
-        let b = length.where_positive(drive_force + stop - c * PerLeg::splat(m_a));
+        let b = length.where_positive(free);
         let rn = PerLeg::cross(&arm, &n);
         let s = [n[0], n[1], n[2], rn[0], rn[1], rn[2]];
         // The system's lower triangle (`sum S_k S_k^T`, row by row) and `sum b_k S_k`, four
         // sums at a time.
+        let [g00, g10, g11, g20] = PerLeg::sum4_times([s[0] * s[0], s[1] * s[0], s[1] * s[1], s[2] * s[0]], m_a);
+        let [g21, g22, g30, g31] = PerLeg::sum4_times([s[2] * s[1], s[2] * s[2], s[3] * s[0], s[3] * s[1]], m_a);
+        let [g32, g33, g40, g41] = PerLeg::sum4_times([s[3] * s[2], s[3] * s[3], s[4] * s[0], s[4] * s[1]], m_a);
+        let [g42, g43, g44, g50] = PerLeg::sum4_times([s[4] * s[2], s[4] * s[3], s[4] * s[4], s[5] * s[0]], m_a);
+        let [g51, g52, g53, g54] = PerLeg::sum4_times([s[5] * s[1], s[5] * s[2], s[5] * s[3], s[5] * s[4]], m_a);
         let sum4 = PerLeg::<V>::sum4;
-        let [g00, g10, g11, g20] = sum4([s[0] * s[0], s[1] * s[0], s[1] * s[1], s[2] * s[0]]);
-        let [g21, g22, g30, g31] = sum4([s[2] * s[1], s[2] * s[2], s[3] * s[0], s[3] * s[1]]);
-        let [g32, g33, g40, g41] = sum4([s[3] * s[2], s[3] * s[3], s[4] * s[0], s[4] * s[1]]);
-        let [g42, g43, g44, g50] = sum4([s[4] * s[2], s[4] * s[3], s[4] * s[4], s[5] * s[0]]);
-        let [g51, g52, g53, g54] = sum4([s[5] * s[1], s[5] * s[2], s[5] * s[3], s[5] * s[4]]);
         let [g55, bs0, bs1, bs2] = sum4([s[5] * s[5], b * s[0], b * s[1], b * s[2]]);
+        let g55 = g55 * m_a;
         let [bs3, bs4, bs5, _] = sum4([b * s[3], b * s[4], b * s[5], PerLeg::splat(0.0)]);
         let (mass, j, e) = (self.stand.mass, &self.stand.inertia, &state.e);
         // `J_w = sum_a J_a e_a e_a^T`, from `J_a e_a`.
         let je = [e[0] * j[0], e[1] * j[1], e[2] * j[2]];
         let j_w = |r: usize, col: usize| je[0][r] * e[0][col] + je[1][r] * e[1][col] + je[2][r] * e[2][col];
         let matrix = [
-            [g00 * m_a + mass, 0.0, 0.0, 0.0, 0.0, 0.0],
-            [g10 * m_a, g11 * m_a + mass, 0.0, 0.0, 0.0, 0.0],
-            [g20 * m_a, g21 * m_a, g22 * m_a + mass, 0.0, 0.0, 0.0],
-            [g30 * m_a, g31 * m_a, g32 * m_a, g33 * m_a + j_w(0, 0), 0.0, 0.0],
-            [g40 * m_a, g41 * m_a, g42 * m_a, g43 * m_a + j_w(1, 0), g44 * m_a + j_w(1, 1), 0.0],
-            [g50 * m_a, g51 * m_a, g52 * m_a, g53 * m_a + j_w(2, 0), g54 * m_a + j_w(2, 1), g55 * m_a + j_w(2, 2)],
+            [g00 + mass, 0.0, 0.0, 0.0, 0.0, 0.0],
+            [g10, g11 + mass, 0.0, 0.0, 0.0, 0.0],
+            [g20, g21, g22 + mass, 0.0, 0.0, 0.0],
+            [g30, g31, g32, g33 + j_w(0, 0), 0.0, 0.0],
+            [g40, g41, g42, g43 + j_w(1, 0), g44 + j_w(1, 1), 0.0],
+            [g50, g51, g52, g53 + j_w(2, 0), g54 + j_w(2, 1), g55 + j_w(2, 2)],
         ];
         let j_omega = je[0] * e[0].dot(&omega) + je[1] * e[1].dot(&omega) + je[2] * e[2].dot(&omega);
         let mut force = Vector3::new(bs0, bs1, bs2 - mass * self.stand.gravity);
@@ -203,16 +202,17 @@ impl SpecialForm {
             + s[5] * PerLeg::splat(q[5]);
         let f = b - along * PerLeg::splat(m_a);
         let [f0, f1, f2, f3] = sum4([f * s[0], f * s[1], f * s[2], f * s[3]]);
-        let [f4, f5, _, _] = sum4([f * s[4], f * s[5], PerLeg::splat(0.0), PerLeg::splat(0.0)]);
-        let w = LegWrench {
-            force: Vector3::new(f0, f1, f2),
-            moment: Vector3::new(f3, f4, f5),
-            stop: StopWrench { dissipation: stop_dissipation, ..StopWrench::default() },
-            machine,
-        };
+        let [f4, f5, electric_power, lost_power] = sum4([f * s[4], f * s[5], electric, lost]);
+        // The legs' wrench and the machine's (the end stops act through `b`).
+        let (mut force, mut moment, mut dissipation) =
+            (Vector3::new(f0, f1, f2), Vector3::new(f3, f4, f5), stop_dissipation);
+        if let Some(m) = &machine {
+            force += m.force;
+            moment += m.moment;
+            dissipation += m.dissipation;
+        }
         let (e_rows, e_dot) = (AxisRows::<V::Axes>::of(&state.e), AxisRows::of(&state.e_dot));
-        let (acceleration, e_dd) =
-            self.body.accelerations_in(&state, &e_rows, &e_dot, &w.total_force(), &w.total_moment());
+        let (acceleration, e_dd) = self.body.accelerations_in(&state, &e_rows, &e_dot, &force, &moment);
         let [e1, e2, e3] = e_dd;
         let [r1, r2, r3, r4, r5, r6, r7, r8, r9] = *axes_rates(y);
         *dy = [
@@ -241,11 +241,7 @@ impl SpecialForm {
             e3.y,
             e3.z,
         ];
-        DrivenRates {
-            current_rate: current_rate.to_array(),
-            electric_power: electric.sum(),
-            dissipation: w.dissipation() + lost.sum(),
-        }
+        DrivenRates { current_rate: current_rate.to_array(), electric_power, dissipation: dissipation + lost_power }
     }
 
     /// The end stops' forces along the legs ([`EndStops::contact`], leg by leg: 0 inside the
