@@ -383,9 +383,20 @@ impl AnyModel {
     pub fn cache_block(&self, group: usize) -> Option<u8> {
         dispatch!(self, m => m.cache_block(group)).filter(|&b| b < CACHE_BLOCKS)
     }
+    /// (The platform's fill first: it is the one in a step's cycle; the others out of its way.)
     #[inline]
     pub fn fill_cache(&mut self, block: u8, cache: &mut [f64]) -> bool {
-        dispatch!(self, m => m.fill_cache(block, cache))
+        match self {
+            AnyModel::Platform(m) => m.fill_cache(block, cache),
+            other => {
+                std::hint::cold_path();
+                match other {
+                    AnyModel::Controller(m) => m.fill_cache(block, cache),
+                    AnyModel::Trivial(m) => m.fill_cache(block, cache),
+                    AnyModel::Platform(m) => m.fill_cache(block, cache),
+                }
+            }
+        }
     }
     pub fn get_integer(&mut self, var: VariableRef) -> i32 {
         dispatch!(self, m => m.get_integer(var))

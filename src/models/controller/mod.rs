@@ -448,7 +448,9 @@ impl FmuModel for ControllerModel {
         cache_block_of(BINDINGS, group)
     }
 
-    #[inline]
+    // Out of line: the instance's refresh dispatches to both models, and the platform's fill
+    // is the one a step's cycle runs.
+    #[inline(never)]
     fn fill_cache(&mut self, block: u8, cache: &mut [f64]) -> bool {
         self.fill_block(block, cache)
     }
