@@ -94,8 +94,10 @@ def callgrind(n, folder):
     script = Path(folder) / "runs.py"
     script.write_text(CALLGRIND_SCRIPT.format(bench=str(Path(__file__).parent)))
     out = Path(folder) / f"callgrind.{n}"
+    # A fixed hash seed: otherwise Python's own start-up and imports differ by millions of
+    # instructions between the two processes, more than the runs' difference.
     subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", sys.executable, str(script), str(n)],
-                   check=True, capture_output=True)
+                   check=True, capture_output=True, env=dict(os.environ, PYTHONHASHSEED="0"))
     report = subprocess.run(["callgrind_annotate", "--inclusive=yes", "--threshold=100", str(out)], check=True,
                             capture_output=True, text=True).stdout
     counts = {}
