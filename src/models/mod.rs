@@ -250,7 +250,6 @@ pub trait FmuModel {
         Self: Sized;
 }
 
-/// [`FmuModel::set_real_run`] element by element, stopping at the first value refused.
 /// Largest start time, s, at which a double still resolves a microsecond (2^33 s, 272 years):
 /// Unix times fit; beyond it the communication points and a controller's programme lose their
 /// resolution.
@@ -269,6 +268,7 @@ pub fn check_start_time(start_time: f64) -> Result<(), String> {
     Ok(())
 }
 
+/// [`FmuModel::set_real_run`] element by element, stopping at the first value refused.
 pub fn set_one_by_one<M: FmuModel + ?Sized>(model: &mut M, first: VariableRef, values: &[f64]) -> Result<(), String> {
     for (i, &x) in values.iter().enumerate() {
         model.set_real(VariableRef { group: first.group, index: first.index + i }, x)?;
@@ -386,17 +386,11 @@ impl AnyModel {
     /// (The platform's fill first: it is the one in a step's cycle; the others out of its way.)
     #[inline]
     pub fn fill_cache(&mut self, block: u8, cache: &mut [f64]) -> bool {
-        match self {
-            AnyModel::Platform(m) => m.fill_cache(block, cache),
-            other => {
-                std::hint::cold_path();
-                match other {
-                    AnyModel::Controller(m) => m.fill_cache(block, cache),
-                    AnyModel::Trivial(m) => m.fill_cache(block, cache),
-                    AnyModel::Platform(m) => m.fill_cache(block, cache),
-                }
-            }
+        if let AnyModel::Platform(m) = self {
+            return m.fill_cache(block, cache);
         }
+        std::hint::cold_path();
+        dispatch!(self, m => m.fill_cache(block, cache))
     }
     pub fn get_integer(&mut self, var: VariableRef) -> i32 {
         dispatch!(self, m => m.get_integer(var))

@@ -332,28 +332,44 @@ mod tests {
         assert!(kappa > 1.0 && kappa < 100.0, "{kappa}");
     }
 
+    /// Matrices `U diag(s) V^T` of a given condition number `s_max / s_min` (singular values
+    /// spread geometrically), with orthogonal `U`, `V` from the QR of pseudo-random matrices.
+    struct KnownConditionNumbers(u64);
+
+    impl KnownConditionNumbers {
+        fn new(seed: u64) -> Self {
+            KnownConditionNumbers(seed)
+        }
+
+        /// xorshift64, in [-1, 1).
+        fn random(&mut self) -> f64 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        }
+
+        fn matrix(&mut self, kappa: f64) -> ForceMomentMatrix {
+            let u = Matrix6::from_fn(|_, _| self.random()).qr().q();
+            let v = Matrix6::from_fn(|_, _| self.random()).qr().q();
+            let s = Matrix6::from_diagonal(&Vector6::from_fn(|i, _| 1.0 / kappa.powf(i as f64 / 5.0)));
+            ForceMomentMatrix { matrix: u * s * v.transpose(), moment_scale: 1.0 }
+        }
+    }
+
     #[test]
     fn the_solve_refuses_exactly_where_the_svd_condition_number_reaches_the_limit() {
         // M = U diag(s) V^T with orthogonal U, V from the QR of pseudo-random matrices and
         // condition numbers s_max / s_min from 1 to 1e12, dense about the limit 1e8 and about
         // 1e8 / 6 (where the Frobenius bound alone would stop clearing).
-        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
-        let mut random = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        let mut known = KnownConditionNumbers::new(0x2545_f491_4f6c_dd1d);
         let mut kappas: Vec<f64> = (0..=48).map(|i| 10f64.powf(i as f64 / 4.0)).collect();
         for centre in [SINGULAR_CONDITION_NUMBER, SINGULAR_CONDITION_NUMBER / 6.0] {
             kappas.extend((-20..=20).map(|i| centre * (1.0 + i as f64 * 2e-3)));
         }
         let (mut refused, mut accepted) = (0, 0);
         for &kappa in &kappas {
-            let u = Matrix6::from_fn(|_, _| random()).qr().q();
-            let v = Matrix6::from_fn(|_, _| random()).qr().q();
-            let s = Matrix6::from_diagonal(&Vector6::from_fn(|i, _| 1.0 / kappa.powf(i as f64 / 5.0)));
-            let m = ForceMomentMatrix { matrix: u * s * v.transpose(), moment_scale: 1.0 };
+            let m = known.matrix(kappa);
             let by_svd = m.condition_number() < SINGULAR_CONDITION_NUMBER;
             let result = m.solve(&Vector3::new(0.3, -0.2, 1.0), &Vector3::new(0.1, 0.2, -0.1));
             assert_eq!(result.is_ok(), by_svd, "kappa {kappa:e}: svd {:e}, solve {result:?}", m.condition_number());
@@ -367,21 +383,12 @@ mod tests {
     /// stand over a grid of poses; exactly `kappa` where it is known.
     #[test]
     fn the_gram_condition_number_is_the_svds_below_its_limit() {
-        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
-        let mut random = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        let mut known = KnownConditionNumbers::new(0x9e37_79b9_7f4a_7c15);
         let mut worst: f64 = 0.0;
         let (mut by_gram, mut by_svd) = (0, 0);
         for i in 0..=64 {
             let kappa = 10f64.powf(i as f64 / 16.0);
-            let u = Matrix6::from_fn(|_, _| random()).qr().q();
-            let v = Matrix6::from_fn(|_, _| random()).qr().q();
-            let s = Matrix6::from_diagonal(&Vector6::from_fn(|i, _| 1.0 / kappa.powf(i as f64 / 5.0)));
-            let m = ForceMomentMatrix { matrix: u * s * v.transpose(), moment_scale: 1.0 };
+            let m = known.matrix(kappa);
             let error = (m.condition_number() / kappa - 1.0).abs();
             match m.condition_number_from_gram() {
                 Some(_) => {

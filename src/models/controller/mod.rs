@@ -232,7 +232,7 @@ pub struct ControllerModel {
     outputs: Option<ControllerOutputs>,
     /// The programme's direct problem at `time`, kept while only the measured legs `l`,
     /// `ldot` change: it depends on the time, the parameters and the `pose.*` inputs alone, and
-    /// its SVD is most of a step's cost (a closed loop sets `l`, `ldot` after every step).
+    /// its 6x6 solve is most of a step's cost (a closed loop sets `l`, `ldot` after every step).
     programme: Option<Result<(PoseTrajectoryPoint, DirectProblemSolution), String>>,
 }
 

@@ -148,8 +148,8 @@ impl SpecialForm {
         let (free, stop_dissipation) = match &self.stops {
             Some(stops) if length.any_outside(PerLeg::new(&self.stroke[0]), PerLeg::new(&self.stroke[1])) => {
                 std::hint::cold_path();
-                let (stop, dissipation) = self.stop_forces_in(stops, &length, &l_dot);
-                (drive_force + stop - c * PerLeg::splat(m_a), dissipation)
+                let (stop, dissipation) = self.stop_forces(stops, &length.to_array(), &l_dot.to_array());
+                (drive_force + PerLeg::new(&stop) - c * PerLeg::splat(m_a), dissipation)
             }
             _ => (free, 0.0),
         };
@@ -245,10 +245,10 @@ impl SpecialForm {
     }
 
     /// The end stops' forces along the legs ([`EndStops::contact`], leg by leg: 0 inside the
-    /// stroke) and their damping's power, for legs given side by side.
-    #[inline(never)]
-    fn stop_forces_in<V: Lanes>(&self, stops: &EndStops, length: &PerLeg<V>, l_dot: &PerLeg<V>) -> (PerLeg<V>, f64) {
-        let (l, l_dot) = (length.to_array(), l_dot.to_array());
+    /// stroke, and for a collapsed leg) and their damping's power, leg by leg on plain arrays;
+    /// the callers, already in a cold branch, keep the lanes.
+    #[inline(always)]
+    fn stop_forces(&self, stops: &EndStops, l: &[f64; LEG_COUNT], l_dot: &[f64; LEG_COUNT]) -> ([f64; LEG_COUNT], f64) {
         let (mut force, mut dissipation) = ([0.0; LEG_COUNT], [0.0; LEG_COUNT]);
         for k in 0..LEG_COUNT {
             if l[k] > 0.0 && stops.is_outside(k, l[k]) {
@@ -257,7 +257,7 @@ impl SpecialForm {
                 dissipation[k] = contact.dissipation;
             }
         }
-        (PerLeg::new(&force), sum_over_legs(&dissipation))
+        (force, sum_over_legs(&dissipation))
     }
 
     /// The end stops' forces ([`EndStops::contact`], leg by leg) on the legs given side by side.
@@ -271,22 +271,14 @@ impl SpecialForm {
         length: PerLeg<V>,
     ) -> StopWrench {
         let (n, ldot) = self.joints.directions_and_rates(state, leg, length, PerLeg::splat(1.0) / length);
-        let (l, ldot) = (length.to_array(), ldot.to_array());
-        let (mut force, mut dissipation) = ([0.0; LEG_COUNT], [0.0; LEG_COUNT]);
-        for k in 0..LEG_COUNT {
-            if l[k] > 0.0 && stops.is_outside(k, l[k]) {
-                let contact = stops.contact(k, l[k], ldot[k]);
-                force[k] = contact.force;
-                dissipation[k] = contact.dissipation;
-            }
-        }
+        let (force, dissipation) = self.stop_forces(stops, &length.to_array(), &ldot.to_array());
         let force = PerLeg::new(&force);
         let fs = components!(|c| n[c] * force);
         let moment = PerLeg::cross(arm, &fs);
         StopWrench {
             force: Vector3::new(fs[0].sum(), fs[1].sum(), fs[2].sum()),
             moment: Vector3::new(moment[0].sum(), moment[1].sum(), moment[2].sum()),
-            dissipation: sum_over_legs(&dissipation),
+            dissipation,
         }
     }
 
