@@ -14,10 +14,11 @@
 //! platform at the joints for the prescribed motion (all known then) are taken from `F` and
 //! `L` before the system is solved.
 
-use nalgebra::{Matrix6, SVD, U6, Vector3, Vector6};
+use nalgebra::{Matrix6, SVD, U6, Vector3};
 
 use super::body::kinematics::PoseTrajectoryPoint;
 use super::body::state::BodyState;
+use super::full_pivot_lu::FullPivotLu6;
 use super::legs::bodies::{LegBodies, LegMotion};
 use super::legs::geometry::{LegGeometry, LegKinematics};
 use super::stand::{LEG_COUNT, Stand};
@@ -136,9 +137,13 @@ impl ForceMomentMatrix {
     /// error is a few `eps kappa^2` (2e-12 at the limit, against the SVD's `eps kappa`), and
     /// costs a sixth of the SVD.
     pub fn condition_number_from_gram(&self) -> Option<f64> {
-        let m = &self.matrix;
-        let gram: [[f64; 6]; 6] =
-            std::array::from_fn(|r| std::array::from_fn(|c| if c <= r { m.column(r).dot(&m.column(c)) } else { 0.0 }));
+        let columns = &self.matrix.data.0;
+        let mut gram = [[0.0; 6]; 6];
+        for r in 0..6 {
+            for c in 0..=r {
+                gram[r][c] = (0..6).fold(0.0, |s, k| s + columns[r][k] * columns[c][k]);
+            }
+        }
         let (min, max) = crate::physics::symmetric6::extreme_eigenvalues(&gram)?;
         let squared = max / min;
         (min > 0.0 && squared <= GRAM_CONDITION_LIMIT * GRAM_CONDITION_LIMIT).then(|| squared.sqrt())
@@ -151,29 +156,20 @@ impl ForceMomentMatrix {
     /// LU factors the solve needs anyway, does not already clear the arrangement with a margin
     /// of two for the bound's round-off.
     pub fn solve(&self, force: &Vector3<f64>, moment: &Vector3<f64>) -> Result<[f64; LEG_COUNT], DirectProblemError> {
-        // nalgebra's full-pivot LU: its solution's bits are the ones the closed loop has given
-        // since before the machine model (tests/python/test_machine.py compares them); a
-        // Gauss-Jordan elimination with partial pivoting took 40 % fewer instructions but
-        // changed the leg forces in their last bits.
-        let lu = self.matrix.full_piv_lu();
-        let frobenius_bound = lu.try_inverse().map(|inverse| self.matrix.norm() * inverse.norm());
+        // nalgebra's full-pivot LU, written out (its solution's bits are the ones the closed
+        // loop has given since before the machine model: tests/python/test_machine.py
+        // compares them).
+        let lu = FullPivotLu6::new(self.matrix.data.0);
+        let frobenius_bound = lu.inverse_frobenius_norm().map(|inverse| self.matrix.norm() * inverse);
         if !frobenius_bound.is_some_and(|bound| bound < 0.5 * SINGULAR_CONDITION_NUMBER) {
             let condition_number = self.condition_number();
             if !(condition_number < SINGULAR_CONDITION_NUMBER) {
                 return Err(DirectProblemError::Singular { condition_number });
             }
         }
-        let rhs = Vector6::new(
-            force.x,
-            force.y,
-            force.z,
-            moment.x / self.moment_scale,
-            moment.y / self.moment_scale,
-            moment.z / self.moment_scale,
-        );
-        let u =
-            lu.solve(&rhs).ok_or_else(|| DirectProblemError::Singular { condition_number: self.condition_number() })?;
-        Ok([u[0], u[1], u[2], u[3], u[4], u[5]])
+        let s = self.moment_scale;
+        let rhs = [force.x, force.y, force.z, moment.x / s, moment.y / s, moment.z / s];
+        lu.solve(&rhs).ok_or_else(|| DirectProblemError::Singular { condition_number: self.condition_number() })
     }
 }
 
@@ -316,7 +312,7 @@ mod tests {
     use super::*;
     use crate::physics::legs::geometry::JointArrays;
     use crate::physics::stand::PAPER_EQUILIBRIUM_LEG_FORCE;
-    use nalgebra::Matrix3;
+    use nalgebra::{Matrix3, Vector6};
 
     #[test]
     fn neutral_pose_of_the_default_stand_needs_the_papers_equilibrium_force_in_every_leg() {

@@ -22,6 +22,7 @@ pub mod body;
 pub mod configuration;
 pub mod direct_problem;
 pub mod error;
+pub mod full_pivot_lu;
 pub mod legs;
 pub mod number;
 pub mod programme;

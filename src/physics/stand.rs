@@ -84,9 +84,11 @@ impl Stand {
     }
 
     /// Characteristic length of the stand: the largest joint distance from its frame's origin.
-    /// Used to make geometric tolerances scale-free.
+    /// Used to make geometric tolerances scale-free. (One square root, of the largest square:
+    /// the root is monotonic and correctly rounded, so the same bits as the largest root.)
     pub fn characteristic_length(&self) -> f64 {
-        self.base_joints.iter().chain(self.platform_joints.iter()).map(|p| p.norm()).fold(0.0, f64::max)
+        let joints = self.base_joints.iter().chain(self.platform_joints.iter());
+        joints.map(|p| p.norm_squared()).fold(0.0, f64::max).sqrt()
     }
 
     /// The base joint circle radius `R_b`, the paper's unit of length: the largest horizontal
