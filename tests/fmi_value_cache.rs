@@ -196,3 +196,44 @@ fn outputs_not_read_for_some_steps_are_computed_again_when_read() {
         previous = run;
     }
 }
+
+/// The controller's measured lengths and rates set in one call (twelve consecutive references
+/// over two variables, each run stored in one copy) give what twelve single sets give; a call
+/// that also names a value it cannot set, or carries a NaN, sets nothing.
+#[test]
+fn a_set_over_consecutive_variables_is_the_single_sets_and_all_or_nothing() {
+    use stewart_fmu::models::ModelKind;
+    let mut one_call = Host::new("one call", ModelKind::Controller);
+    let mut singly = Host::new("singly", ModelKind::Controller);
+    for h in [&mut one_call, &mut singly] {
+        assert_eq!(h.setup(None), fmi2OK);
+        assert_eq!(h.enter(), fmi2OK);
+        assert_eq!(h.exit(), fmi2OK);
+        assert_eq!(h.step(0.01), fmi2OK);
+    }
+    let names = legs();
+    let names: Vec<&str> = names.iter().map(|n| n.as_str()).collect();
+    let forces: Vec<String> = (1..=6).map(|k| format!("F[{k}]")).collect();
+    let programme = read(&one_call, &(1..=6).map(|k| format!("lp[{k}]")).collect::<Vec<_>>());
+    let measured: Vec<f64> =
+        (0..12).map(|i| if i < 6 { programme[i] - 1e-3 * (i + 1) as f64 } else { 0.01 * (i as f64 - 8.0) }).collect();
+    assert_eq!(one_call.set_many(&names, &measured), fmi2OK);
+    for (name, &x) in names.iter().zip(&measured) {
+        assert_eq!(singly.set(name, x), fmi2OK);
+    }
+    let (f, f_singly) = (read(&one_call, &forces), read(&singly, &forces));
+    println!("F after one set of l, ldot: {f:?}");
+    assert_eq!(f, f_singly);
+    assert!(f.iter().zip(read(&one_call, &(1..=6).map(|k| format!("Fp[{k}]")).collect::<Vec<_>>())).all(|(a, b)| a != &b));
+    // A Real output after the twelve: refused, nothing set; a NaN among them: the same.
+    let mut with_output = names.clone();
+    with_output.push("F[1]");
+    let mut values = measured.iter().map(|x| x + 1e-3).collect::<Vec<_>>();
+    values.push(0.0);
+    assert_ne!(one_call.set_many(&with_output, &values), fmi2OK);
+    let mut with_nan = measured.iter().map(|x| x + 1e-3).collect::<Vec<_>>();
+    with_nan[7] = f64::NAN;
+    assert_ne!(one_call.set_many(&names, &with_nan), fmi2OK);
+    assert_eq!(read(&one_call, &legs().iter().map(|n| n.to_string()).collect::<Vec<_>>()), measured);
+    assert_eq!(read(&one_call, &forces), f);
+}

@@ -17,9 +17,10 @@
 //!         METHOD => V::parameter(...).integer(1, 2); integer(parameters.settings.method),
 //!         STOPS => V::parameter(...).boolean(); boolean(parameters.stops_enabled),
 //!         L => V::output("l", &[6], 121, ...); cached(leg_outputs.l),
+//!         KAPPA => V::output(...); cached_apart(condition.kappa), // a block not in `outputs`
 //!         FP => V::output("Fp", ...); output(outputs.fp),       // read through, not cached
 //!         DER_V => V::local(...).derivative(...); derivative,   // from the state's rate
-//!         KAPPA => V::output(...); computed,                    // the model's own function
+//!         TIME => V::time(0); computed,                         // the model's own function
 //!     }
 //! }
 //! ```
@@ -27,7 +28,9 @@
 //! Bindings: `real`, `integer` and `boolean` name a field of the model (a path) holding the
 //! variable's value ([`RealStorage`], [`IntegerStorage`], `bool`); `cached(block.field)` is an
 //! output read through the cache block `block` (the model method of that name returns the
-//! block's values, `field` the variable's); `output(source.field)` an output read through
+//! block's values, `field` the variable's); `cached_apart(block.field)` the same for a value
+//! that is not a field of the outputs type (its derivative is the model's own);
+//! `output(source.field)` an output read through
 //! the model method `source` element by element; `derivative` a state derivative
 //! (`VariableGroup::derivative_of`), computed from the model's state rate; `computed` a value
 //! the model computes itself ([`Binding::Computed`]).
@@ -311,6 +314,9 @@ macro_rules! declare_variables {
     (@binding cached($block:ident . $field:ident)) => {
         $crate::models::declare::Binding::Cached { block: cache_block::$block }
     };
+    (@binding cached_apart($block:ident . $field:ident)) => {
+        $crate::models::declare::Binding::Cached { block: cache_block::$block }
+    };
     (@binding output($source:ident . $field:ident)) => { $crate::models::declare::Binding::Output };
     (@binding derivative) => { $crate::models::declare::Binding::Derivative };
     (@binding computed) => { $crate::models::declare::Binding::Computed };
@@ -355,6 +361,11 @@ macro_rules! declare_variables {
             return $crate::models::declare::OutputValues::<f64>::element(&$s.$block().$field, $var.index);
         }
     };
+    (@output $s:ident, $var:ident, $id:ident, cached_apart($block:ident . $field:ident)) => {
+        if $var.group == group::$id {
+            return $crate::models::declare::OutputValues::<f64>::element(&$s.$block().$field, $var.index);
+        }
+    };
     (@output $s:ident, $var:ident, $id:ident, output($source:ident . $field:ident)) => {
         if $var.group == group::$id {
             return $crate::models::declare::OutputValues::<f64>::element(&$s.$source().$field, $var.index);
@@ -363,6 +374,12 @@ macro_rules! declare_variables {
     (@output $($rest:tt)*) => {};
 
     (@fill $s:ident, $b:ident, $cache:ident, $nan:ident, $id:ident, cached($block:ident . $field:ident)) => {
+        if $b == cache_block::$block {
+            let g = &GROUPS[group::$id];
+            $nan |= $crate::models::declare::fill($cache, g.first_vr, g.len(), &$s.$block().$field);
+        }
+    };
+    (@fill $s:ident, $b:ident, $cache:ident, $nan:ident, $id:ident, cached_apart($block:ident . $field:ident)) => {
         if $b == cache_block::$block {
             let g = &GROUPS[group::$id];
             $nan |= $crate::models::declare::fill($cache, g.first_vr, g.len(), &$s.$block().$field);

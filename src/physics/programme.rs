@@ -15,7 +15,7 @@
 
 use nalgebra::Vector3;
 
-use super::body::kinematics::PoseTrajectoryPoint;
+use super::body::kinematics::{PoseTrajectoryPoint, sin_cos};
 
 /// `q(t) = offset + amplitude sin(frequency t + phase) (1 - exp(-t/time_constant))²`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -49,7 +49,7 @@ impl SoftStartSinusoid {
             (1.0, 0.0, 0.0)
         };
         let w = self.frequency;
-        let (s, c) = (w * t + self.phase).sin_cos();
+        let (s, c) = sin_cos(w * t + self.phase);
         let a = self.amplitude;
         (self.offset + a * s * g, a * (w * c * g + s * g1), a * (-w * w * s * g + 2.0 * w * c * g1 + s * g2))
     }

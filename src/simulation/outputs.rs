@@ -16,8 +16,9 @@ use crate::physics::number::{Dual, Real, lift};
 use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::{LEG_COUNT, Stand};
 
-/// Everything the platform FMU reports about a state (except `kappa`, which costs a
-/// singular value decomposition and is computed on request: [`condition_number`]), in the
+/// Everything the platform FMU reports about a state (except `kappa`, which costs an
+/// eigenvalue problem and is a cache block of its own, computed when read:
+/// [`condition_number`]), in the
 /// number type `T`: `f64` for the values, [`Dual`] for their directional derivatives.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PlatformOutputs<T: Scalar = f64> {

@@ -203,6 +203,12 @@ pub struct ControllerOutputs {
     pub lp: [f64; LEG_COUNT],
     pub ldotp: [f64; LEG_COUNT],
     pub rp: Vector3<f64>,
+}
+
+/// The programme's roll, pitch and yaw: a cache block of their own, computed only when read
+/// (three inverse trigonometric functions a closed loop does not need).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProgrammeAngles {
     pub anglesp: Vector3<f64>,
 }
 
@@ -216,7 +222,6 @@ impl ControllerOutputs {
         lp: [f64::NAN; LEG_COUNT],
         ldotp: [f64::NAN; LEG_COUNT],
         rp: Vector3::new(f64::NAN, f64::NAN, f64::NAN),
-        anglesp: Vector3::new(f64::NAN, f64::NAN, f64::NAN),
     };
 }
 
@@ -230,10 +235,11 @@ pub struct ControllerModel {
     pub pose: ExternalPose,
     pub time: f64,
     outputs: Option<ControllerOutputs>,
+    angles: Option<ProgrammeAngles>,
     /// The programme's direct problem at `time`, kept while only the measured legs `l`,
     /// `ldot` change: it depends on the time, the parameters and the `pose.*` inputs alone, and
     /// its 6x6 solve is most of a step's cost (a closed loop sets `l`, `ldot` after every step).
-    programme: Option<Result<(PoseTrajectoryPoint, DirectProblemSolution), String>>,
+    programme: Option<(PoseTrajectoryPoint, DirectProblemSolution)>,
 }
 
 impl Default for ControllerModel {
@@ -254,6 +260,7 @@ impl Default for ControllerModel {
             pose: ExternalPose { r: [centre.x, centre.y, centre.z], ..Default::default() },
             time: 0.0,
             outputs: None,
+            angles: None,
             programme: None,
         }
     }
@@ -302,7 +309,7 @@ impl ControllerModel {
 
     /// Why a programme pose cannot be a stand's pose (not numbers, or beyond any stand), naming
     /// where it comes from; `None` if it can.
-    fn implausible(&self, point: &PoseTrajectoryPoint) -> Option<String> {
+    fn implausible(&self, time: f64, point: &PoseTrajectoryPoint) -> Option<String> {
         let numbers = [point.r, point.v, point.a, point.w, point.w_dot].iter().all(|v| v.iter().all(|x| x.is_finite()))
             && point.rotation.iter().all(|x| x.is_finite());
         if numbers && point.r.amax() <= MAX_COORDINATE {
@@ -335,7 +342,7 @@ impl ControllerModel {
         Some(format!(
             "the programme pose at t = {:?} is {} (its centre of mass at {:?} m, acceleration {:?} m/s2): it comes \
              from {source}",
-            self.time,
+            time,
             if numbers { "beyond any stand" } else { "not a number" },
             point.r.as_slice(),
             point.a.as_slice()
@@ -344,30 +351,28 @@ impl ControllerModel {
 
     /// Direct problem and feedback at the current time and inputs.
     pub fn compute(&self) -> Result<ControllerOutputs, String> {
-        let (point, solution) = self.direct_problem()?;
+        let (point, solution) = self.direct_problem(self.time)?;
         Ok(self.feedback(&point, &solution))
     }
 
-    /// [`ControllerModel::compute`] with the direct problem kept in `programme` (the same
-    /// numbers).
-    fn compute_kept(&mut self) -> Result<ControllerOutputs, String> {
-        let kept = self.programme.take().unwrap_or_else(|| self.direct_problem());
-        let outputs = match &kept {
-            Ok((point, solution)) => Ok(self.feedback(point, solution)),
-            Err(why) => Err(why.clone()),
-        };
-        self.programme = Some(kept);
-        outputs
+    /// The programme's direct problem at the current time, kept in `programme` (the same
+    /// numbers as [`ControllerModel::compute`]'s); `None` where it has none (the reason:
+    /// [`FmuModel::undefined_reason`]).
+    fn kept_programme(&mut self) -> Option<&(PoseTrajectoryPoint, DirectProblemSolution)> {
+        if self.programme.is_none() {
+            self.programme = self.direct_problem(self.time).ok();
+        }
+        self.programme.as_ref()
     }
 
-    /// The programme point and its direct problem at the current time.
-    fn direct_problem(&self) -> Result<(PoseTrajectoryPoint, DirectProblemSolution), String> {
-        let point = self.programme_point(self.time);
-        if let Some(why) = self.implausible(&point) {
+    /// The programme point and its direct problem at time `time`.
+    fn direct_problem(&self, time: f64) -> Result<(PoseTrajectoryPoint, DirectProblemSolution), String> {
+        let point = self.programme_point(time);
+        if let Some(why) = self.implausible(time, &point) {
             return Err(why);
         }
         let solution = solve_direct_problem(&self.parameters.stand, &self.parameters.leg_bodies(), &point)
-            .map_err(|e| format!("the programme pose at t = {:?} cannot be produced by the legs: {e}", self.time))?;
+            .map_err(|e| format!("the programme pose at t = {time:?} cannot be produced by the legs: {e}"))?;
         Ok((point, solution))
     }
 
@@ -396,7 +401,6 @@ impl ControllerModel {
             lp: solution.lengths,
             ldotp: solution.rates,
             rp: point.r,
-            anglesp: angles_from_rotation(&point.rotation),
         }
     }
 
@@ -404,9 +408,35 @@ impl ControllerModel {
     /// change ([`ControllerOutputs::UNDEFINED`] where the programme cannot be produced).
     fn outputs(&mut self) -> &ControllerOutputs {
         if self.outputs.is_none() {
-            self.outputs = Some(self.compute_kept().unwrap_or(ControllerOutputs::UNDEFINED));
+            self.kept_programme();
+            let outputs = match &self.programme {
+                Some((point, solution)) => self.feedback(point, solution),
+                None => ControllerOutputs::UNDEFINED,
+            };
+            self.outputs = Some(outputs);
         }
         self.outputs.as_ref().unwrap_or(&ControllerOutputs::UNDEFINED)
+    }
+
+    /// The programme's angles at the current time, computed on their first read.
+    fn programme_angles(&mut self) -> &ProgrammeAngles {
+        const UNDEFINED: ProgrammeAngles = ProgrammeAngles { anglesp: Vector3::new(f64::NAN, f64::NAN, f64::NAN) };
+        if self.angles.is_none() {
+            let angles = match self.kept_programme() {
+                Some((point, _)) => ProgrammeAngles { anglesp: angles_from_rotation(&point.rotation) },
+                None => UNDEFINED,
+            };
+            self.angles = Some(angles);
+        }
+        self.angles.as_ref().unwrap_or(&UNDEFINED)
+    }
+
+    /// The time, a parameter or a `pose.*` input changed: the programme and every output
+    /// follow.
+    fn programme_changed(&mut self) {
+        self.programme = None;
+        self.outputs = None;
+        self.angles = None;
     }
 
     fn validate(&self) -> Result<(), String> {
@@ -467,11 +497,28 @@ impl FmuModel for ControllerModel {
 
     fn set_real(&mut self, var: VariableRef, value: f64) -> Result<(), String> {
         *self.real_slot(var).ok_or("not a settable Real variable")? = value;
-        self.outputs = None;
-        if var.group != variables::group::L && var.group != variables::group::LDOT {
-            self.programme = None;
+        if var.group == variables::group::L || var.group == variables::group::LDOT {
+            self.outputs = None;
+        } else {
+            self.programme_changed();
         }
         Ok(())
+    }
+
+    #[inline]
+    fn set_real_run(&mut self, first: VariableRef, values: &[f64]) -> Result<(), String> {
+        // The measured legs, set every step: one copy, the programme kept.
+        let measured = match first.group {
+            variables::group::L => Some(&mut self.l),
+            variables::group::LDOT => Some(&mut self.ldot),
+            _ => None,
+        };
+        if let Some(slots) = measured.and_then(|m| m.get_mut(first.index..first.index + values.len())) {
+            slots.copy_from_slice(values);
+            self.outputs = None;
+            return Ok(());
+        }
+        super::set_one_by_one(self, first, values)
     }
 
     fn get_integer(&mut self, var: VariableRef) -> i32 {
@@ -480,8 +527,7 @@ impl FmuModel for ControllerModel {
 
     fn set_integer(&mut self, var: VariableRef, value: i32) -> Result<(), String> {
         self.set_integer_code(var, value).unwrap_or_else(|| Err("not a settable Integer variable".into()))?;
-        self.outputs = None;
-        self.programme = None;
+        self.programme_changed();
         Ok(())
     }
 
@@ -494,8 +540,7 @@ impl FmuModel for ControllerModel {
         super::check_start_time(start_time)?;
         let before = self.time;
         self.time = start_time;
-        self.outputs = None;
-        self.programme = None;
+        self.programme_changed();
         if let Err(e) = self.validate() {
             self.time = before;
             return Err(e);
@@ -521,21 +566,21 @@ impl FmuModel for ControllerModel {
     }
 
     fn do_step(&mut self, t: f64, h: f64, _stop_at_event: bool) -> Result<StepReport, StepError> {
-        let before = (self.time, self.outputs, self.programme.take());
-        self.time = t + h;
-        self.outputs = None;
-        match self.compute_kept() {
-            Ok(o) => {
-                self.outputs = Some(o);
-                Ok(StepReport { reached: t + h, event: false })
+        // The programme's direct problem at the new time decides whether the step can be
+        // taken; the feedback waits for the outputs' first read (a closed loop sets the
+        // measured legs first).
+        let time = t + h;
+        match self.direct_problem(time) {
+            Ok(programme) => {
+                self.time = time;
+                self.programme_changed();
+                self.programme = Some(programme);
+                Ok(StepReport { reached: time, event: false })
             }
-            Err(message) => {
-                (self.time, self.outputs, self.programme) = before;
-                Err(StepError {
-                    message: format!("step from t = {t:?} to {:?} rolled back: {message}", t + h),
-                    retry_shorter: false,
-                })
-            }
+            Err(message) => Err(StepError {
+                message: format!("step from t = {t:?} to {time:?} rolled back: {message}"),
+                retry_shorter: false,
+            }),
         }
     }
 
@@ -562,8 +607,7 @@ impl FmuModel for ControllerModel {
         let mut model = ControllerModel::default();
         model.restore_variables(r)?;
         model.time = r.finite("time")?;
-        model.outputs = None;
-        model.programme = None;
+        model.programme_changed();
         Ok(model)
     }
 }

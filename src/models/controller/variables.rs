@@ -83,7 +83,7 @@ const ALL_KNOWNS: &[crate::models::variables::Dependency] = &[
 
 declare_variables! {
     model: super::ControllerModel,
-    cache_blocks: [outputs],
+    cache_blocks: [outputs, programme_angles],
     variables: {
         TIME => V::time(0); computed,
         L => V::input("l", &[6], 1, Some("m"), "Measured leg length l_k (from the platform's output l)"); real(l),
@@ -173,7 +173,7 @@ declare_variables! {
         RP => V::output("rp", &[3], 174, Some("m"), "Programme centre of mass", ALL_KNOWNS).depends_on(&[All("pose.r")]); cached(outputs.rp),
         ANGLESP => V::output("anglesp", &[3], 177, Some("rad"), "Programme roll, pitch, yaw", ALL_KNOWNS)
             .display("deg")
-            .depends_on(&[All("pose.angles")]); cached(outputs.anglesp),
+            .depends_on(&[All("pose.angles")]); cached(programme_angles.anglesp),
         STARTUP_POSITION => V::parameter(
             "startup.position",
             &[3],

@@ -117,9 +117,9 @@ impl PlatformModel {
         });
         for (value, u) in out.iter_mut().zip(unknowns) {
             let derivative = match BINDINGS.get(u.group) {
+                _ if u.group == group::KAPPA => Some(dkappa),
                 Some(Binding::Cached { .. } | Binding::Output) => output_element(&outputs, *u).map(|d| d.eps),
                 Some(Binding::Derivative) => INFO.derivative_state_index(*u).and_then(|i| rate.get(i)).map(|d| d.eps),
-                Some(Binding::Computed) if u.group == group::KAPPA => Some(dkappa),
                 _ => None,
             };
             *value = derivative

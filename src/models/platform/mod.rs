@@ -73,7 +73,7 @@ pub struct PlatformModel {
     /// they are computed alone (the leg geometry) rather than with every other output.
     legs: Option<LegOutputs>,
     /// `kappa` of the current state, computed on its first read after a change.
-    kappa: Option<f64>,
+    kappa: Option<Condition>,
     /// The joints' forces of the current state and leg forces, computed on the first read
     /// after a change.
     joint_forces: Option<JointForceOutputs>,
@@ -104,6 +104,12 @@ impl Default for PlatformModel {
             host_step: 0.0,
         }
     }
+}
+
+/// The condition number of the current state's leg arrangement (a cache block of its own).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Condition {
+    pub kappa: f64,
 }
 
 /// The joints' forces alone (the field of [`PlatformOutputs`] of the same name): they depend
@@ -168,11 +174,13 @@ impl PlatformModel {
     }
 
     /// `kappa` of the current state, computed on its first read after a change.
-    fn kappa(&mut self) -> f64 {
+    fn condition(&mut self) -> &Condition {
         let (simulation, parameters) = (&self.simulation, &self.parameters);
-        *self.kappa.get_or_insert_with(|| match simulation {
-            Some((sim, _)) => condition_number(sim.stand(), &sim.state),
-            None => condition_number(&parameters.stand, &parameters.initial_simulation_state()),
+        self.kappa.get_or_insert_with(|| Condition {
+            kappa: match simulation {
+                Some((sim, _)) => condition_number(sim.stand(), &sim.state),
+                None => condition_number(&parameters.stand, &parameters.initial_simulation_state()),
+            },
         })
     }
 
@@ -316,7 +324,6 @@ impl FmuModel for PlatformModel {
             Some(Binding::Derivative) => self.derivative_value(var),
             Some(Binding::Computed) => Some(match var.group {
                 group::TIME => self.sim().map_or(0.0, |s| s.time),
-                group::KAPPA => self.kappa(),
                 _ => {
                     let mut z = [0.0; switching::COUNT];
                     self.event_indicators(&mut z);

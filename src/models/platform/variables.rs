@@ -216,6 +216,9 @@ declare_variables! {
         outputs,
         // The joints' forces: they depend on the leg forces too.
         joint_force_outputs,
+        // The condition number `kappa` (an eigenvalue problem): read by studies every step,
+        // by most hosts never.
+        condition,
     ],
     variables: {
         TIME => V::time(0); computed,
@@ -457,7 +460,7 @@ declare_variables! {
              1/eps = 4.5e15, its largest value",
             &[All("A"), All("B"), All("r0"), All("angles0")],
         )
-        .depends_on(POSE_STATES); computed,
+        .depends_on(POSE_STATES); cached_apart(condition.kappa),
         WORK_F => V::output(
             "work.F",
             &[],

@@ -9,21 +9,29 @@ use crate::physics::number::Real;
 
 use crate::physics::stand::{LEG_COUNT, Stand};
 
+/// `(sin x, cos x)`, at `x = ±0` the exact `(±0, 1)` without the library call: a programme's
+/// constant degrees of freedom and zero angles are most of the controller's sines (the same
+/// bits as `x.sin_cos()` everywhere).
+#[inline(always)]
+pub fn sin_cos(x: f64) -> (f64, f64) {
+    if x == 0.0 { (x, 1.0) } else { x.sin_cos() }
+}
+
 /// Elementary rotation about x by `angle` (textbook `c1`).
 pub fn rotation_x(angle: f64) -> Matrix3<f64> {
-    let (s, c) = angle.sin_cos();
+    let (s, c) = sin_cos(angle);
     Matrix3::new(1.0, 0.0, 0.0, 0.0, c, -s, 0.0, s, c)
 }
 
 /// Elementary rotation about y by `angle` (textbook `c2`).
 pub fn rotation_y(angle: f64) -> Matrix3<f64> {
-    let (s, c) = angle.sin_cos();
+    let (s, c) = sin_cos(angle);
     Matrix3::new(c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c)
 }
 
 /// Elementary rotation about z by `angle` (textbook `c3`).
 pub fn rotation_z(angle: f64) -> Matrix3<f64> {
-    let (s, c) = angle.sin_cos();
+    let (s, c) = sin_cos(angle);
     Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
 }
 
@@ -107,8 +115,8 @@ pub fn body_rates_from_angle_rates(
     d: &Vector3<f64>,
     dd: &Vector3<f64>,
 ) -> (Vector3<f64>, Vector3<f64>) {
-    let (sb, cb) = angles.y.sin_cos();
-    let (sc, cc) = angles.z.sin_cos();
+    let (sb, cb) = sin_cos(angles.y);
+    let (sc, cc) = sin_cos(angles.z);
     let (ad, bd, cd) = (d.x, d.y, d.z);
     let w = Vector3::new(ad * cb * cc + bd * sc, -ad * cb * sc + bd * cc, ad * sb + cd);
     // Differentiate each component by the product rule.
