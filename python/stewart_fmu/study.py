@@ -375,7 +375,7 @@ def execute_many(spec, runs, fmus):
             results = _compiled_system(fmus, closed, drive).study(closed, [p for _, p in batch])
         except Exception as e:  # noqa: BLE001 - the system cannot be made or run: its runs are error rows
             _drop_compiled()
-            results = [{"status": "error", "message": f"{type(e).__name__}: {e}", "seconds": 0.0}] * len(batch)
+            results = [{"status": "error", "message": f"{type(e).__name__}: {e}", "seconds": 0.0} for _ in batch]
         for (i, _), result in zip(batch, results):
             row = out[i]
             seconds = result.pop("seconds")

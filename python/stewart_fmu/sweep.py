@@ -308,8 +308,9 @@ def parser():
                         "running anything")
     p.add_argument("--max-runs", type=_positive_int, default=st.DEFAULT_MAX_RUNS,
                    help=f"refuse a study of more runs (default {st.DEFAULT_MAX_RUNS}: on a 2-core, 24 GiB machine the "
-                        "shipped studies run at 5-40 runs/s, so that is 1-6 hours, and the run list (about 0.4 kB a "
-                        "run) and the rows stay far below the memory; raise it for a bigger cluster)")
+                        "shipped studies run at about 60 runs/s with the compiled master (5-40 with the FMPy master), so "
+                        "that is about half an hour, and the run list (about 0.4 kB a run) and the rows stay far below "
+                        "the memory; raise it for a bigger cluster)")
     p.add_argument("--fmu", metavar="PATH",
                    help="the StewartPlatform.fmu to run (default: the package's: the repository's target/fmu/ or "
                         "the copy an installed wheel carries; or the environment variable STEWART_PLATFORM_FMU)")
@@ -435,6 +436,9 @@ def first_error(failed, order):
 # enough to keep a large cluster busy, and the client's and scheduler's memory stay bounded
 # whatever the number of runs.
 WINDOW = 1000
+# A task that failed without killing its workers (its inputs lost with workers another run
+# crashed, say) is submitted again up to this many times before its runs become error rows.
+LOST_INPUT_RETRIES = 3
 
 
 def run_on_dask(spec, todo, fmus, args, writer, progress, master="fmpy"):
@@ -456,32 +460,42 @@ def run_on_dask(spec, todo, fmus, args, writer, progress, master="fmpy"):
                                dashboard_address=None)
         client = Client(cluster)
     try:
-        shared = client.scatter(fmus, broadcast=True)
+        # The FMUs on every worker, once. Scattered data lives only on the workers: when every
+        # worker that held it has died (a run that crashes each worker it reaches), it is
+        # scattered again before anything more is submitted.
+        shared = [client.scatter(fmus, broadcast=True)]
         workers = len(client.scheduler_info().get("workers", {})) or args.workers
         pending = iter(batches(spec, todo, master, workers))
         submitted = {}
 
-        def submit(batch):
+        def submit(batch, attempt=0):
+            if any(f.status != "finished" for f in shared[0].values()):
+                shared[0] = client.scatter(fmus, broadcast=True)
             key = f"runs-{st.run_id(batch[0])}-{len(batch)}-{uuid.uuid4().hex[:6]}"
-            future = client.submit(run_batch, spec, batch, shared, master, key=key, pure=False)
-            submitted[future] = batch
+            future = client.submit(run_batch, spec, batch, shared[0], master, key=key, pure=False)
+            submitted[future] = (batch, attempt)
             return future
 
         window = max(WINDOW, 4 * workers)
         futures = as_completed([submit(batch) for batch in itertools.islice(pending, window)])
         for future in futures:
-            batch = submitted.pop(future)
+            batch, attempt = submitted.pop(future)
             try:
                 rows = future.result()
             except Exception as e:  # noqa: BLE001 - e.g. KilledWorker: the runs are rows, not the study's crash
                 future.release()
+                if type(e).__name__ != "KilledWorker" and attempt < LOST_INPUT_RETRIES:
+                    # Not the batch's own doing (its FMUs were lost with the workers that held
+                    # them, say): the same batch again.
+                    futures.add(submit(batch, attempt + 1))
+                    continue
                 if len(batch) > 1:
                     # Which run took the workers down is not known: each again on its own, so that
                     # only that one ends as an error row.
                     for run in batch:
                         futures.add(submit([run]))
                     continue
-                rows = [make_row(batch[0], st.failed_metrics(f"{type(e).__name__}: {e}"), math.nan, "none")]
+                rows = [make_row(batch[0], st.failed_metrics(failure_message(e)), math.nan, "none")]
             for row in rows:
                 writer.add(row)
             progress.tick(len(rows))
@@ -493,6 +507,18 @@ def run_on_dask(spec, todo, fmus, args, writer, progress, master="fmpy"):
         client.close()
         if cluster is not None:
             cluster.close()
+
+
+def failure_message(error):
+    """A run's error row for a task that failed on the cluster: what happened, in words, with
+    Dask's own message."""
+    text = f"{type(error).__name__}: {error}"
+    if type(error).__name__ == "KilledWorker":
+        # The worker process ended while running the run: a crash inside an FMU (the FMUs'
+        # own code catches its panics, so a foreign binary or the machine), or out of memory.
+        return ("the worker process died while running this run, on every worker that tried it (a crash inside an "
+                "FMU, or the machine out of memory; the worker's log has Python's fault report): " + text)
+    return text
 
 
 def summarise(spec, results, executed, elapsed, order=None, master=None):

@@ -8,10 +8,12 @@ worker killed mid-study loses no run and the rows equal the serial run's."""
 
 import math
 import os
+import shutil
 import signal
 import subprocess
 import sys
 import time
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -22,7 +24,7 @@ from stewart_fmu import ROOT, master
 from stewart_fmu import study as st
 from stewart_fmu.cosim import SYSTEM_SSP, closed_loop
 from stewart_fmu.sweep import load_results, run_batch
-from test_sweep import cluster, comparable, rows_written  # noqa: F401 - cluster is a fixture
+from test_sweep import cluster, comparable, rows_written, start_cluster  # noqa: F401 - cluster is a fixture
 
 SWEEP = str(Path(sys.executable).parent / "stewart-sweep")
 MASTER = str(Path(sys.executable).parent / "stewart-master")
@@ -215,3 +217,121 @@ def test_a_killed_worker_loses_no_run_of_the_compiled_master(tmp_path, cluster):
     assert len(rows) == 40 and rows["run_id"].is_unique
     assert (rows["status"] == "ok").all()
     pd.testing.assert_frame_equal(comparable(rows), comparable(load_results(tmp_path / "serial")))
+
+
+# A platform FMU whose binary crashes: a shim library in front of the real one (which it loads
+# as a dependency) that writes through a null pointer in fmi2DoStep, 50 steps into a run whose
+# platform mass was set to TRIGGER; every other call is the real FMU's.
+CRASHING_SHIM = r"""
+#define _GNU_SOURCE
+#include <dlfcn.h>
+#include <stddef.h>
+typedef int status_t;
+static int armed;
+static long steps;
+status_t fmi2SetReal(void *c, const unsigned int vr[], size_t n, const double value[]) {
+    static status_t (*real)(void *, const unsigned int *, size_t, const double *);
+    if (!real) real = (status_t (*)(void *, const unsigned int *, size_t, const double *))dlsym(RTLD_NEXT, "fmi2SetReal");
+    for (size_t i = 0; i < n; i++)
+        if (vr[i] == MASS_VR) { armed = value[i] == TRIGGER; steps = 0; }
+    return real(c, vr, n, value);
+}
+status_t fmi2DoStep(void *c, double t, double h, int no_prior) {
+    static status_t (*real)(void *, double, double, int);
+    if (!real) real = (status_t (*)(void *, double, double, int))dlsym(RTLD_NEXT, "fmi2DoStep");
+    if (armed && ++steps > 50) {
+        volatile int *volatile nowhere = NULL;
+        *nowhere = 1;
+    }
+    return real(c, t, h, no_prior);
+}
+"""
+TRIGGER = 1.25
+
+
+def crashing_platform_fmu(folder):
+    """StewartPlatform.fmu with the crashing shim as its binary (the real one beside it)."""
+    from fmpy import read_model_description
+    from stewart_fmu.core import PLATFORM_FMU
+    mass_vr = next(v.valueReference for v in read_model_description(str(PLATFORM_FMU)).modelVariables if v.name == "M")
+    unpacked = folder / "unpacked"
+    with zipfile.ZipFile(PLATFORM_FMU) as z:
+        z.extractall(unpacked)
+    binaries = unpacked / "binaries" / "linux64"
+    (binaries / "StewartPlatform.so").rename(binaries / "StewartPlatformInside.so")
+    (folder / "shim.c").write_text(CRASHING_SHIM)
+    subprocess.run(["gcc", "-shared", "-fPIC", "-O1", f"-DMASS_VR={mass_vr}u", f"-DTRIGGER={TRIGGER!r}",
+                    "-o", str(binaries / "StewartPlatform.so"), str(folder / "shim.c"), f"-L{binaries}", "-Wl,--no-as-needed",
+                    "-l:StewartPlatformInside.so", "-Wl,-rpath,$ORIGIN", "-ldl"], check=True)
+    fmu = folder / "crash" / "StewartPlatform.fmu"
+    fmu.parent.mkdir()
+    with zipfile.ZipFile(fmu, "w", zipfile.ZIP_DEFLATED) as z:
+        for path in sorted(unpacked.rglob("*")):
+            if path.is_file():
+                z.write(path, path.relative_to(unpacked).as_posix())
+    return fmu
+
+
+CRASH_STUDY = """
+[study]
+name = "crash"
+system = "closed-loop"
+units = "nondimensional"
+stop_time = 3.0
+step = 0.01
+stable_error = 0.01
+
+[fixed]
+"controller.heave.centre[3]" = 1.3059496109441155
+"controller.heave.amplitude" = 0.2
+"controller.heave.frequency" = 1.0
+"controller.heave.timeConstant" = 2.0
+"controller.G" = 10.0
+"controller.D" = 1.58
+
+[grid]
+"platform.M" = [1.0, 1.05, 1.1, TRIGGER, 1.15, 1.2]
+""".replace("TRIGGER", repr(TRIGGER))
+
+
+def test_an_fmu_that_crashes_its_worker_is_that_runs_error_row(tmp_path):
+    """A segmentation fault inside the platform FMU's fmi2DoStep (a shim binary in front of the
+    real one) in one run of a compiled-master study on a Dask cluster on loopback: the worker
+    process dies (its nanny starts a new one), Dask gives the batch to the other worker once,
+    then stewart-sweep runs the batch's runs one by one: the crashing run ends as its own error
+    row saying that the worker died, every other run is a row equal to the serial run's, and the
+    worker's log has Python's fault report."""
+    fmu = crashing_platform_fmu(tmp_path)
+    from stewart_fmu.core import CONTROLLER_FMU
+    study = tmp_path / "crash.toml"
+    study.write_text(CRASH_STUDY)
+    # The serial reference without the crashing run (in this process it would end the process).
+    serial_study = tmp_path / "serial.toml"
+    serial_study.write_text(CRASH_STUDY.replace(f", {TRIGGER!r}", ""))
+    serial = subprocess.run([SWEEP, str(serial_study), "--out", str(tmp_path / "serial"), "--serial", "--fmu", str(fmu),
+                             "--controller-fmu", str(CONTROLLER_FMU)], capture_output=True, text=True)
+    assert serial.returncode == 0, serial.stderr[-3000:]
+    log = tmp_path / "workers.log"
+    cluster = start_cluster(tmp_path, worker_log=log, DASK_DISTRIBUTED__SCHEDULER__ALLOWED_FAILURES="1")
+    address, _ = next(cluster)
+    try:
+        started = time.monotonic()
+        sweep = subprocess.run([SWEEP, str(study), "--out", str(tmp_path / "cluster"), "--scheduler", address,
+                                "--fmu", str(fmu), "--controller-fmu", str(CONTROLLER_FMU)], capture_output=True,
+                               text=True, timeout=600)
+        seconds = time.monotonic() - started
+    finally:
+        next(cluster, None)
+    assert sweep.returncode == 0, sweep.stderr[-3000:]
+    rows = load_results(tmp_path / "cluster")
+    crashed = rows[rows["param:platform.M"] == TRIGGER]
+    print(f"a run that crashes its worker ({seconds:.0f} s for the study): {len(rows)} rows, statuses "
+          f"{rows['status'].value_counts().to_dict()}; its row: {crashed['message'].iloc[0]!r}")
+    assert len(rows) == 6 and rows["run_id"].is_unique
+    assert list(crashed["status"]) == ["error"]
+    assert "worker process died" in crashed["message"].iloc[0]
+    others = rows[rows["param:platform.M"] != TRIGGER]
+    assert (others["status"] == "ok").all()
+    pd.testing.assert_frame_equal(comparable(others), comparable(load_results(tmp_path / "serial")))
+    report = log.read_text()
+    assert "Fatal Python error: Segmentation fault" in report, report[-3000:]

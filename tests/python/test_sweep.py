@@ -76,8 +76,15 @@ def serial_rows(tmp_path_factory):
 @pytest.fixture
 def cluster(tmp_path):
     """A scheduler and two single-threaded worker processes on 127.0.0.1."""
+    yield from start_cluster(tmp_path)
+
+
+def start_cluster(tmp_path, worker_log=None, **config):
+    """A scheduler and two single-threaded worker processes (each under its nanny, which
+    restarts it when it dies) on 127.0.0.1; `config`: Dask settings as environment variables
+    (DASK_...); `worker_log`: a file for the workers' standard error."""
     scheduler_file = tmp_path / "scheduler.json"
-    env = dict(os.environ, DASK_DISTRIBUTED__WORKER__DAEMON="False")
+    env = dict(os.environ, DASK_DISTRIBUTED__WORKER__DAEMON="False", **config)
     scheduler = subprocess.Popen([DASK, "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
                                   "--scheduler-file", str(scheduler_file)], stdout=subprocess.DEVNULL,
                                  stderr=subprocess.DEVNULL, env=env)
@@ -87,9 +94,10 @@ def cluster(tmp_path):
         time.sleep(0.1)
     import json
     address = json.loads(scheduler_file.read_text())["address"]
+    log = open(worker_log, "a") if worker_log else subprocess.DEVNULL
     workers = [subprocess.Popen([DASK, "worker", address, "--nworkers", "1", "--nthreads", "1", "--no-dashboard",
-                                 "--host", "127.0.0.1", "--name", f"w{i}"], stdout=subprocess.DEVNULL,
-                                stderr=subprocess.DEVNULL, env=env, start_new_session=True) for i in range(2)]
+                                 "--host", "127.0.0.1", "--name", f"w{i}"], stdout=subprocess.DEVNULL, stderr=log,
+                                env=env, start_new_session=True) for i in range(2)]
     from distributed import Client
     with Client(address, timeout=60) as client:
         client.wait_for_workers(2, timeout=60)
@@ -98,6 +106,8 @@ def cluster(tmp_path):
         if p.poll() is None:
             os.killpg(p.pid, signal.SIGKILL) if p in workers else p.kill()
         p.wait()
+    if worker_log:
+        log.close()
 
 
 def test_a_killed_worker_loses_nothing_and_rows_equal_the_serial_run(study_file, tmp_path, cluster, serial_rows):
