@@ -95,9 +95,11 @@ def callgrind(n, folder):
     script.write_text(CALLGRIND_SCRIPT.format(bench=str(Path(__file__).parent)))
     out = Path(folder) / f"callgrind.{n}"
     # A fixed hash seed: otherwise Python's own start-up and imports differ by millions of
-    # instructions between the two processes, more than the runs' difference.
+    # instructions between the two processes, more than the runs' difference. No bytecode
+    # written: the first process after a change of the package would compile its modules and
+    # the second not (the Python share came out negative).
     subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", sys.executable, str(script), str(n)],
-                   check=True, capture_output=True, env=dict(os.environ, PYTHONHASHSEED="0"))
+                   check=True, capture_output=True, env=dict(os.environ, PYTHONHASHSEED="0", PYTHONDONTWRITEBYTECODE="1"))
     report = subprocess.run(["callgrind_annotate", "--inclusive=yes", "--threshold=100", str(out)], check=True,
                             capture_output=True, text=True).stdout
     counts = {}
