@@ -376,8 +376,19 @@ impl AnyModel {
             Ok(())
         })
     }
+    /// (The platform's first, inline: its forces are the set of a step's cycle; the others
+    /// out of its way.)
     #[inline]
     pub fn set_real_run(&mut self, first: VariableRef, values: &[f64]) -> Result<(), String> {
+        if let AnyModel::Platform(m) = self {
+            return m.set_real_run(first, values);
+        }
+        std::hint::cold_path();
+        self.set_real_run_other(first, values)
+    }
+
+    #[inline(never)]
+    fn set_real_run_other(&mut self, first: VariableRef, values: &[f64]) -> Result<(), String> {
         dispatch!(self, m => m.set_real_run(first, values))
     }
     pub fn cache_block(&self, group: usize) -> Option<u8> {

@@ -116,6 +116,11 @@ pub struct Instance {
     /// ends, so that a host reading the same outputs every step gets them computed once per
     /// step and its read is a copy; a block no longer read drops out after one step.
     read_since_step: u32,
+    /// Bit `b`: a set of an input made block `b` stale since the last step. The step's end
+    /// does not fill such a block again: a host that sets the inputs before it reads the
+    /// outputs that follow them (a controller's commands in a closed loop) would discard that
+    /// fill unread; its read fills it.
+    set_since_step: u32,
     /// By element value reference: the cache block of a Real element and the run of
     /// consecutive elements from it in that block, so that a get of consecutive elements is
     /// one copy.
@@ -172,6 +177,7 @@ impl Instance {
             fresh: 0,
             nan: 0,
             read_since_step: 0,
+            set_since_step: 0,
             cached: cached_elements(&access),
             variable_width: access.iter().map(|a| a.map_or(0, |a| u32::try_from(a.width).unwrap_or(0))).collect(),
             model,

@@ -81,10 +81,12 @@ impl Instance {
     }
 
     /// At the end of a step: the cache blocks read since the last one, computed now (see
-    /// `read_since_step`).
+    /// `read_since_step`), but for those a set of an input made stale since the last one
+    /// (see `set_since_step`).
     pub(super) fn refresh_read_blocks(&mut self) {
         let read = std::mem::take(&mut self.read_since_step);
-        self.refresh(read);
+        let set = std::mem::take(&mut self.set_since_step);
+        self.refresh(read & !set);
     }
 
     /// At an event at `t` inside an FMI 3 step with early return allowed: the importer's

@@ -226,6 +226,7 @@ impl Instance {
             // in one call; only the cached values that depend on the input go stale (all the
             // elements share the entry's `stales`, as `stale_after_set` would find).
             self.fresh &= !a.stales;
+            self.set_since_step |= a.stales;
             return match self.model.set_real_run(VariableRef { group: a.group, index: a.index }, values) {
                 Ok(()) => Status::Ok,
                 Err(m) => self.error(&m),
@@ -302,6 +303,7 @@ impl Instance {
             mask | self.access.get(vr as usize).copied().flatten().map_or(u32::MAX, |a| a.stales)
         });
         self.fresh &= !stale;
+        self.set_since_step |= stale;
     }
 
     /// When `vrs` address consecutive elements of one settable Real group (FMI 2:

@@ -193,12 +193,28 @@ pub struct ExternalPose {
     pub angle_accelerations: [f64; 3],
 }
 
-/// Everything the controller reports at one instant.
+/// Everything the controller reports at one instant (but the programme's angles).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ControllerOutputs {
+    pub commands: Commands,
+    pub programme: ProgrammeOutputs,
+}
+
+/// The commands, which follow the measured legs: a cache block of their own, so that the
+/// programme's outputs a closed loop reads after a step do not compute them with the legs it
+/// is about to set.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Commands {
+    /// Leg forces, N.
     pub f: [f64; LEG_COUNT],
     /// The drives' voltage command, V (0 without drives).
     pub u: [f64; LEG_COUNT],
+}
+
+/// The programme at the current time: forces (N), leg lengths (m) and rates (m/s) of the
+/// direct problem, centre of mass (m).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProgrammeOutputs {
     pub fp: [f64; LEG_COUNT],
     pub lp: [f64; LEG_COUNT],
     pub ldotp: [f64; LEG_COUNT],
@@ -212,17 +228,25 @@ pub struct ProgrammeAngles {
     pub anglesp: Vector3<f64>,
 }
 
-impl ControllerOutputs {
-    /// The outputs where the programme cannot be produced: not numbers (the FMI layer refuses
-    /// to return them, naming the variable).
-    const UNDEFINED: ControllerOutputs = ControllerOutputs {
-        f: [f64::NAN; LEG_COUNT],
-        u: [f64::NAN; LEG_COUNT],
-        fp: [f64::NAN; LEG_COUNT],
-        lp: [f64::NAN; LEG_COUNT],
-        ldotp: [f64::NAN; LEG_COUNT],
-        rp: Vector3::new(f64::NAN, f64::NAN, f64::NAN),
-    };
+// Where the programme cannot be produced the outputs are not numbers (the FMI layer refuses to
+// return them, naming the variable).
+const NAN3: Vector3<f64> = Vector3::new(f64::NAN, f64::NAN, f64::NAN);
+
+impl Commands {
+    const UNDEFINED: Commands = Commands { f: [f64::NAN; LEG_COUNT], u: [f64::NAN; LEG_COUNT] };
+}
+
+impl ProgrammeOutputs {
+    const UNDEFINED: ProgrammeOutputs =
+        ProgrammeOutputs { fp: [f64::NAN; LEG_COUNT], lp: [f64::NAN; LEG_COUNT], ldotp: [f64::NAN; LEG_COUNT], rp: NAN3 };
+
+    fn of(point: &PoseTrajectoryPoint, solution: &DirectProblemSolution) -> Self {
+        ProgrammeOutputs { fp: solution.forces, lp: solution.lengths, ldotp: solution.rates, rp: point.r }
+    }
+}
+
+impl ProgrammeAngles {
+    const UNDEFINED: ProgrammeAngles = ProgrammeAngles { anglesp: NAN3 };
 }
 
 /// The controller FMU model.
@@ -234,7 +258,8 @@ pub struct ControllerModel {
     /// Inputs `pose.*`.
     pub pose: ExternalPose,
     pub time: f64,
-    outputs: Option<ControllerOutputs>,
+    commands: Option<Commands>,
+    programme_outputs: Option<ProgrammeOutputs>,
     angles: Option<ProgrammeAngles>,
     /// The programme's direct problem at `time`, kept while only the measured legs `l`,
     /// `ldot` change: it depends on the time, the parameters and the `pose.*` inputs alone, and
@@ -259,7 +284,8 @@ impl Default for ControllerModel {
             ldot: [0.0; LEG_COUNT],
             pose: ExternalPose { r: [centre.x, centre.y, centre.z], ..Default::default() },
             time: 0.0,
-            outputs: None,
+            commands: None,
+            programme_outputs: None,
             angles: None,
             programme: None,
         }
@@ -352,7 +378,7 @@ impl ControllerModel {
     /// Direct problem and feedback at the current time and inputs.
     pub fn compute(&self) -> Result<ControllerOutputs, String> {
         let (point, solution) = self.direct_problem(self.time)?;
-        Ok(self.feedback(&point, &solution))
+        Ok(ControllerOutputs { commands: self.feedback(&solution), programme: ProgrammeOutputs::of(&point, &solution) })
     }
 
     /// The programme's direct problem at the current time, kept in `programme` (the same
@@ -378,7 +404,7 @@ impl ControllerModel {
 
     /// The feedback about the programme: leg forces (and voltages, with drives) for the
     /// measured legs.
-    fn feedback(&self, point: &PoseTrajectoryPoint, solution: &DirectProblemSolution) -> ControllerOutputs {
+    fn feedback(&self, solution: &DirectProblemSolution) -> Commands {
         let mut f = self.parameters.feedback.leg_forces(solution, &self.l, &self.ldot);
         let d = self.parameters.disturbance.at(self.time);
         let (f_min, f_max) = (self.parameters.f_min, self.parameters.f_max);
@@ -394,48 +420,53 @@ impl ControllerModel {
         } else {
             [0.0; LEG_COUNT]
         };
-        ControllerOutputs {
-            f,
-            u,
-            fp: solution.forces,
-            lp: solution.lengths,
-            ldotp: solution.rates,
-            rp: point.r,
-        }
+        Commands { f, u }
     }
 
-    /// The outputs at the current time and inputs, computed on the first read after a
-    /// change ([`ControllerOutputs::UNDEFINED`] where the programme cannot be produced).
-    fn outputs(&mut self) -> &ControllerOutputs {
-        if self.outputs.is_none() {
+    /// The commands for the current time and measured legs, computed on the first read after
+    /// a change (not numbers where the programme cannot be produced).
+    fn commands(&mut self) -> &Commands {
+        if self.commands.is_none() {
             self.kept_programme();
-            let outputs = match &self.programme {
-                Some((point, solution)) => self.feedback(point, solution),
-                None => ControllerOutputs::UNDEFINED,
+            let commands = match &self.programme {
+                Some((_, solution)) => self.feedback(solution),
+                None => Commands::UNDEFINED,
             };
-            self.outputs = Some(outputs);
+            self.commands = Some(commands);
         }
-        self.outputs.as_ref().unwrap_or(&ControllerOutputs::UNDEFINED)
+        self.commands.as_ref().unwrap_or(&Commands::UNDEFINED)
+    }
+
+    /// The programme's outputs at the current time, computed on their first read.
+    fn programme_outputs(&mut self) -> &ProgrammeOutputs {
+        if self.programme_outputs.is_none() {
+            let outputs = match self.kept_programme() {
+                Some((point, solution)) => ProgrammeOutputs::of(point, solution),
+                None => ProgrammeOutputs::UNDEFINED,
+            };
+            self.programme_outputs = Some(outputs);
+        }
+        self.programme_outputs.as_ref().unwrap_or(&ProgrammeOutputs::UNDEFINED)
     }
 
     /// The programme's angles at the current time, computed on their first read.
     fn programme_angles(&mut self) -> &ProgrammeAngles {
-        const UNDEFINED: ProgrammeAngles = ProgrammeAngles { anglesp: Vector3::new(f64::NAN, f64::NAN, f64::NAN) };
         if self.angles.is_none() {
             let angles = match self.kept_programme() {
                 Some((point, _)) => ProgrammeAngles { anglesp: angles_from_rotation(&point.rotation) },
-                None => UNDEFINED,
+                None => ProgrammeAngles::UNDEFINED,
             };
             self.angles = Some(angles);
         }
-        self.angles.as_ref().unwrap_or(&UNDEFINED)
+        self.angles.as_ref().unwrap_or(&ProgrammeAngles::UNDEFINED)
     }
 
     /// The time, a parameter or a `pose.*` input changed: the programme and every output
     /// follow.
     fn programme_changed(&mut self) {
         self.programme = None;
-        self.outputs = None;
+        self.commands = None;
+        self.programme_outputs = None;
         self.angles = None;
     }
 
@@ -498,7 +529,7 @@ impl FmuModel for ControllerModel {
     fn set_real(&mut self, var: VariableRef, value: f64) -> Result<(), String> {
         *self.real_slot(var).ok_or("not a settable Real variable")? = value;
         if var.group == variables::group::L || var.group == variables::group::LDOT {
-            self.outputs = None;
+            self.commands = None;
         } else {
             self.programme_changed();
         }
@@ -515,7 +546,7 @@ impl FmuModel for ControllerModel {
         };
         if let Some(slots) = measured.and_then(|m| m.get_mut(first.index..first.index + values.len())) {
             slots.copy_from_slice(values);
-            self.outputs = None;
+            self.commands = None;
             return Ok(());
         }
         super::set_one_by_one(self, first, values)
@@ -633,9 +664,10 @@ mod tests {
         let c = ControllerModel::default();
         let o = c.compute().unwrap();
         let mg = c.parameters.stand.mass * c.parameters.stand.gravity;
+        let (fp, f) = (o.programme.fp, o.commands.f);
         for k in 0..LEG_COUNT {
-            assert!((o.fp[k] / mg - 0.2005).abs() < 1e-12);
-            assert!((o.f[k] - o.fp[k]).abs() < 1e-6 * mg, "no feedback at the programme's start");
+            assert!((fp[k] / mg - 0.2005).abs() < 1e-12);
+            assert!((f[k] - fp[k]).abs() < 1e-6 * mg, "no feedback at the programme's start");
         }
     }
 }

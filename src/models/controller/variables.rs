@@ -83,7 +83,7 @@ const ALL_KNOWNS: &[crate::models::variables::Dependency] = &[
 
 declare_variables! {
     model: super::ControllerModel,
-    cache_blocks: [outputs, programme_angles],
+    cache_blocks: [commands, programme_outputs, programme_angles],
     variables: {
         TIME => V::time(0); computed,
         L => V::input("l", &[6], 1, Some("m"), "Measured leg length l_k (from the platform's output l)"); real(l),
@@ -163,14 +163,14 @@ declare_variables! {
             "Leg force command F_k = F^p_k + G (l^p_k - l_k) + D (ldot^p_k - ldot_k) + disturbance (to the platform's F)",
             ALL_KNOWNS,
         )
-        .depends_on(FORCE_DEPENDENCIES); cached(outputs.f),
+        .depends_on(FORCE_DEPENDENCIES); cached(commands.f),
         FP => V::output("Fp", &[6], 156, Some("N"), "Programme leg forces F^p from the direct problem", ALL_KNOWNS)
-            .depends_on(POSE_INPUTS); cached(outputs.fp),
+            .depends_on(POSE_INPUTS); cached(programme_outputs.fp),
         LP => V::output("lp", &[6], 162, Some("m"), "Programme leg lengths l^p (inverse kinematics)", ALL_KNOWNS)
-            .depends_on(LENGTH_DEPENDENCIES); cached(outputs.lp),
+            .depends_on(LENGTH_DEPENDENCIES); cached(programme_outputs.lp),
         LDOTP => V::output("ldotp", &[6], 168, Some("m/s"), "Programme leg length rates", ALL_KNOWNS)
-            .depends_on(LENGTH_DEPENDENCIES); cached(outputs.ldotp),
-        RP => V::output("rp", &[3], 174, Some("m"), "Programme centre of mass", ALL_KNOWNS).depends_on(&[All("pose.r")]); cached(outputs.rp),
+            .depends_on(LENGTH_DEPENDENCIES); cached(programme_outputs.ldotp),
+        RP => V::output("rp", &[3], 174, Some("m"), "Programme centre of mass", ALL_KNOWNS).depends_on(&[All("pose.r")]); cached(programme_outputs.rp),
         ANGLESP => V::output("anglesp", &[3], 177, Some("rad"), "Programme roll, pitch, yaw", ALL_KNOWNS)
             .display("deg")
             .depends_on(&[All("pose.angles")]); cached(programme_angles.anglesp),
@@ -242,6 +242,6 @@ declare_variables! {
              when drive = 0)",
             ALL_KNOWNS,
         )
-        .depends_on(FORCE_DEPENDENCIES); cached(outputs.u),
+        .depends_on(FORCE_DEPENDENCIES); cached(commands.u),
     }
 }
