@@ -436,9 +436,12 @@ def first_error(failed, order):
 # enough to keep a large cluster busy, and the client's and scheduler's memory stay bounded
 # whatever the number of runs.
 WINDOW = 1000
-# A task that failed without killing its workers (its inputs lost with workers another run
-# crashed, say) is submitted again up to this many times before its runs become error rows.
+# A task cancelled because its inputs were lost with workers that died is submitted again up
+# to this many times before its runs become error rows.
 LOST_INPUT_RETRIES = 3
+# How long a study waits for a worker to take the FMUs (after every worker died, for one to
+# come back), s.
+WORKER_WAIT = 300
 
 
 def run_on_dask(spec, todo, fmus, args, writer, progress, master="fmpy"):
@@ -460,21 +463,54 @@ def run_on_dask(spec, todo, fmus, args, writer, progress, master="fmpy"):
                                dashboard_address=None)
         client = Client(cluster)
     try:
-        # The FMUs on every worker, once. Scattered data lives only on the workers: when every
-        # worker that held it has died (a run that crashes each worker it reaches), it is
-        # scattered again before anything more is submitted.
-        shared = [client.scatter(fmus, broadcast=True)]
+        # The FMUs on every worker, once, under keys made from their contents (another study on
+        # the same scheduler shares them only if they are the same files). Scattered data lives
+        # only on the workers: after a worker died (a run that crashes each worker it reaches
+        # may take them all) they are scattered again before anything more is submitted (the
+        # client may not have heard yet that they are lost).
+        shared, stale = {}, [True]
+
+        def scattered():
+            # (The old futures are let go only once the new ones hold the keys: a key whose
+            # count of futures reaches 0 is released, which could overtake the new scatter.)
+            if stale[0] or any(f.status != "finished" for f in shared.values()):
+                try:
+                    futures = client.scatter(list(fmus.values()), broadcast=True, timeout=WORKER_WAIT)
+                except TimeoutError:
+                    raise SweepError(f"no Dask worker came for {WORKER_WAIT:g} s to take the FMUs (the workers died and "
+                                     "none came back: their logs say why); the rows written so far are kept, run "
+                                     "the study again to go on") from None
+                shared.update(zip(fmus, futures))
+                stale[0] = False
+            return shared
+
+        scattered()
         workers = len(client.scheduler_info().get("workers", {})) or args.workers
         pending = iter(batches(spec, todo, master, workers))
         submitted = {}
+        # Runs whose worker died under them. Dask blames every task a dying worker held, so the
+        # run that crashed it and its neighbours look alike: each runs again at the end, alone on
+        # the cluster, where a run that still kills its worker is the one.
+        suspects = []
 
         def submit(batch, attempt=0):
-            if any(f.status != "finished" for f in shared[0].values()):
-                shared[0] = client.scatter(fmus, broadcast=True)
             key = f"runs-{st.run_id(batch[0])}-{len(batch)}-{uuid.uuid4().hex[:6]}"
-            future = client.submit(run_batch, spec, batch, shared[0], master, key=key, pure=False)
+            future = client.submit(run_batch, spec, batch, scattered(), master, key=key, pure=False)
             submitted[future] = (batch, attempt)
             return future
+
+        def workers_died(error):
+            return type(error).__name__ == "KilledWorker" or "Cancelled" in type(error).__name__
+
+        def lost(error, attempt):
+            """The task's inputs were lost with workers that died (cancelled, not failed):
+            worth submitting again."""
+            return "Cancelled" in type(error).__name__ and attempt < LOST_INPUT_RETRIES
+
+        def record(rows):
+            for row in rows:
+                writer.add(row)
+            progress.tick(len(rows))
 
         window = max(WINDOW, 4 * workers)
         futures = as_completed([submit(batch) for batch in itertools.islice(pending, window)])
@@ -484,40 +520,61 @@ def run_on_dask(spec, todo, fmus, args, writer, progress, master="fmpy"):
                 rows = future.result()
             except Exception as e:  # noqa: BLE001 - e.g. KilledWorker: the runs are rows, not the study's crash
                 future.release()
-                if type(e).__name__ != "KilledWorker" and attempt < LOST_INPUT_RETRIES:
-                    # Not the batch's own doing (its FMUs were lost with the workers that held
-                    # them, say): the same batch again.
+                if workers_died(e):
+                    stale[0] = True
+                if lost(e, attempt):
                     futures.add(submit(batch, attempt + 1))
                     continue
-                if len(batch) > 1:
-                    # Which run took the workers down is not known: each again on its own, so that
-                    # only that one ends as an error row.
-                    for run in batch:
-                        futures.add(submit([run]))
-                    continue
-                rows = [make_row(batch[0], st.failed_metrics(failure_message(e)), math.nan, "none")]
-            for row in rows:
-                writer.add(row)
-            progress.tick(len(rows))
-            future.release()
+                if type(e).__name__ == "KilledWorker":
+                    suspects.extend(batch)
+                else:
+                    record([make_row(run, st.failed_metrics(failure_message(e)), math.nan, "none") for run in batch])
+            else:
+                record(rows)
+                future.release()
             following = next(pending, None)
             if following is not None:
                 futures.add(submit(following))
+        for run in suspects:
+            attempt = 0
+            while True:
+                future = submit([run], attempt)
+                submitted.pop(future)
+                try:
+                    rows = future.result()
+                except Exception as e:  # noqa: BLE001 - the run's error row
+                    future.release()
+                    if workers_died(e):
+                        # Alone on the cluster, so the run took its workers down: Dask says so
+                        # (KilledWorker) or, when the FMUs went down with the last worker that
+                        # held them first, cancels the run. Once more, in case something else
+                        # killed them.
+                        stale[0] = True
+                        if attempt < 1:
+                            attempt += 1
+                            continue
+                    rows = [make_row(run, st.failed_metrics(failure_message(e, alone=True)), math.nan, "none")]
+                else:
+                    future.release()
+                record(rows)
+                break
     finally:
         client.close()
         if cluster is not None:
             cluster.close()
 
 
-def failure_message(error):
-    """A run's error row for a task that failed on the cluster: what happened, in words, with
-    Dask's own message."""
+def failure_message(error, alone=False):
+    """A run's error row for a task that failed on the cluster (`alone`: the only one on it):
+    what happened, in words, with Dask's own message."""
     text = f"{type(error).__name__}: {error}"
-    if type(error).__name__ == "KilledWorker":
-        # The worker process ended while running the run: a crash inside an FMU (the FMUs'
-        # own code catches its panics, so a foreign binary or the machine), or out of memory.
-        return ("the worker process died while running this run, on every worker that tried it (a crash inside an "
-                "FMU, or the machine out of memory; the worker's log has Python's fault report): " + text)
+    if alone and (type(error).__name__ == "KilledWorker" or "Cancelled" in type(error).__name__):
+        # The worker process ended while running the run alone: a crash inside an FMU (the
+        # FMUs' own code catches its panics, so a foreign binary or the machine), or out of
+        # memory.
+        return ("the worker process died while running this run alone on the cluster, every time it was tried (a "
+                "crash inside an FMU, or the machine out of memory; the worker's log has Python's fault report): "
+                + text)
     return text
 
 

@@ -8,7 +8,6 @@ worker killed mid-study loses no run and the rows equal the serial run's."""
 
 import math
 import os
-import shutil
 import signal
 import subprocess
 import sys
@@ -247,6 +246,9 @@ status_t fmi2DoStep(void *c, double t, double h, int no_prior) {
 }
 """
 TRIGGER = 1.25
+# 18 runs on 2 workers: batches of 3 (sweep.batches), so that the crashing run takes two others
+# down with it.
+MASSES = [round(1.0 + 0.01 * i, 2) for i in range(8)] + [TRIGGER] + [round(1.08 + 0.01 * i, 2) for i in range(9)]
 
 
 def crashing_platform_fmu(folder):
@@ -290,17 +292,19 @@ stable_error = 0.01
 "controller.D" = 1.58
 
 [grid]
-"platform.M" = [1.0, 1.05, 1.1, TRIGGER, 1.15, 1.2]
-""".replace("TRIGGER", repr(TRIGGER))
+"platform.M" = [MASSES]
+""".replace("MASSES", ", ".join(map(repr, MASSES)))
 
 
 def test_an_fmu_that_crashes_its_worker_is_that_runs_error_row(tmp_path):
     """A segmentation fault inside the platform FMU's fmi2DoStep (a shim binary in front of the
     real one) in one run of a compiled-master study on a Dask cluster on loopback: the worker
-    process dies (its nanny starts a new one), Dask gives the batch to the other worker once,
-    then stewart-sweep runs the batch's runs one by one: the crashing run ends as its own error
-    row saying that the worker died, every other run is a row equal to the serial run's, and the
-    worker's log has Python's fault report."""
+    process dies (its nanny starts a new one), Dask gives the task to the other worker once
+    (allowed-failures 1), which dies too; Dask blames every task the dying workers held, so
+    stewart-sweep runs each blamed run again at the end, alone on the cluster: the crashing run
+    ends as its own error row saying that the worker died, every other run is a row equal to the
+    serial run's, and the workers' log has Python's fault report. 18 runs: batches of three, so
+    that the crashing run takes two innocent ones down with it."""
     fmu = crashing_platform_fmu(tmp_path)
     from stewart_fmu.core import CONTROLLER_FMU
     study = tmp_path / "crash.toml"
@@ -308,6 +312,7 @@ def test_an_fmu_that_crashes_its_worker_is_that_runs_error_row(tmp_path):
     # The serial reference without the crashing run (in this process it would end the process).
     serial_study = tmp_path / "serial.toml"
     serial_study.write_text(CRASH_STUDY.replace(f", {TRIGGER!r}", ""))
+    assert str(TRIGGER) not in serial_study.read_text()
     serial = subprocess.run([SWEEP, str(serial_study), "--out", str(tmp_path / "serial"), "--serial", "--fmu", str(fmu),
                              "--controller-fmu", str(CONTROLLER_FMU)], capture_output=True, text=True)
     assert serial.returncode == 0, serial.stderr[-3000:]
@@ -326,8 +331,8 @@ def test_an_fmu_that_crashes_its_worker_is_that_runs_error_row(tmp_path):
     rows = load_results(tmp_path / "cluster")
     crashed = rows[rows["param:platform.M"] == TRIGGER]
     print(f"a run that crashes its worker ({seconds:.0f} s for the study): {len(rows)} rows, statuses "
-          f"{rows['status'].value_counts().to_dict()}; its row: {crashed['message'].iloc[0]!r}")
-    assert len(rows) == 6 and rows["run_id"].is_unique
+          f"{rows['status'].value_counts().to_dict()}; its row: {list(crashed['message'])!r}")
+    assert len(rows) == len(MASSES) and rows["run_id"].is_unique
     assert list(crashed["status"]) == ["error"]
     assert "worker process died" in crashed["message"].iloc[0]
     others = rows[rows["param:platform.M"] != TRIGGER]

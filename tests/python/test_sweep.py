@@ -98,16 +98,18 @@ def start_cluster(tmp_path, worker_log=None, **config):
     workers = [subprocess.Popen([DASK, "worker", address, "--nworkers", "1", "--nthreads", "1", "--no-dashboard",
                                  "--host", "127.0.0.1", "--name", f"w{i}"], stdout=subprocess.DEVNULL, stderr=log,
                                 env=env, start_new_session=True) for i in range(2)]
-    from distributed import Client
-    with Client(address, timeout=60) as client:
-        client.wait_for_workers(2, timeout=60)
-    yield address, workers
-    for p in workers + [scheduler]:
-        if p.poll() is None:
-            os.killpg(p.pid, signal.SIGKILL) if p in workers else p.kill()
-        p.wait()
-    if worker_log:
-        log.close()
+    try:
+        from distributed import Client
+        with Client(address, timeout=60) as client:
+            client.wait_for_workers(2, timeout=60)
+        yield address, workers
+    finally:
+        for p in workers + [scheduler]:
+            if p.poll() is None:
+                os.killpg(p.pid, signal.SIGKILL) if p in workers else p.kill()
+            p.wait()
+        if worker_log:
+            log.close()
 
 
 def test_a_killed_worker_loses_nothing_and_rows_equal_the_serial_run(study_file, tmp_path, cluster, serial_rows):
