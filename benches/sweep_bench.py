@@ -97,9 +97,12 @@ def callgrind(n, folder):
     # A fixed hash seed: otherwise Python's own start-up and imports differ by millions of
     # instructions between the two processes, more than the runs' difference. No bytecode
     # written: the first process after a change of the package would compile its modules and
-    # the second not (the Python share came out negative).
+    # the second not. One BLAS thread: NumPy's OpenBLAS threads spin while they wait, for as
+    # many instructions as the wall time allows (either made the Python share negative).
+    env = dict(os.environ, PYTHONHASHSEED="0", PYTHONDONTWRITEBYTECODE="1", OPENBLAS_NUM_THREADS="1",
+               OMP_NUM_THREADS="1")
     subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", sys.executable, str(script), str(n)],
-                   check=True, capture_output=True, env=dict(os.environ, PYTHONHASHSEED="0", PYTHONDONTWRITEBYTECODE="1"))
+                   check=True, capture_output=True, env=env)
     report = subprocess.run(["callgrind_annotate", "--inclusive=yes", "--threshold=100", str(out)], check=True,
                             capture_output=True, text=True).stdout
     counts = {}
