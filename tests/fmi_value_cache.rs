@@ -224,7 +224,9 @@ fn a_set_over_consecutive_variables_is_the_single_sets_and_all_or_nothing() {
     let (f, f_singly) = (read(&one_call, &forces), read(&singly, &forces));
     println!("F after one set of l, ldot: {f:?}");
     assert_eq!(f, f_singly);
-    assert!(f.iter().zip(read(&one_call, &(1..=6).map(|k| format!("Fp[{k}]")).collect::<Vec<_>>())).all(|(a, b)| a != &b));
+    assert!(
+        f.iter().zip(read(&one_call, &(1..=6).map(|k| format!("Fp[{k}]")).collect::<Vec<_>>())).all(|(a, b)| a != &b)
+    );
     // A Real output after the twelve: refused, nothing set; a NaN among them: the same.
     let mut with_output = names.clone();
     with_output.push("F[1]");

@@ -499,14 +499,6 @@ def run_on_dask(spec, todo, fmus, args, writer, progress, master="fmpy"):
             submitted[future] = (batch, attempt)
             return future
 
-        def workers_died(error):
-            return type(error).__name__ == "KilledWorker" or "Cancelled" in type(error).__name__
-
-        def lost(error, attempt):
-            """The task's inputs were lost with workers that died (cancelled, not failed):
-            worth submitting again."""
-            return "Cancelled" in type(error).__name__ and attempt < LOST_INPUT_RETRIES
-
         def record(rows):
             for row in rows:
                 writer.add(row)
@@ -520,12 +512,13 @@ def run_on_dask(spec, todo, fmus, args, writer, progress, master="fmpy"):
                 rows = future.result()
             except Exception as e:  # noqa: BLE001 - e.g. KilledWorker: the runs are rows, not the study's crash
                 future.release()
-                if workers_died(e):
+                if killed(e) or cancelled(e):
                     stale[0] = True
-                if lost(e, attempt):
+                if cancelled(e) and attempt < LOST_INPUT_RETRIES:
+                    # Its inputs were lost with workers that died: not the task's doing.
                     futures.add(submit(batch, attempt + 1))
                     continue
-                if type(e).__name__ == "KilledWorker":
+                if killed(e):
                     suspects.extend(batch)
                 else:
                     record([make_row(run, st.failed_metrics(failure_message(e)), math.nan, "none") for run in batch])
@@ -544,7 +537,7 @@ def run_on_dask(spec, todo, fmus, args, writer, progress, master="fmpy"):
                     rows = future.result()
                 except Exception as e:  # noqa: BLE001 - the run's error row
                     future.release()
-                    if workers_died(e):
+                    if killed(e) or cancelled(e):
                         # Alone on the cluster, so the run took its workers down: Dask says so
                         # (KilledWorker) or, when the FMUs went down with the last worker that
                         # held them first, cancels the run. Once more, in case something else
@@ -564,11 +557,21 @@ def run_on_dask(spec, todo, fmus, args, writer, progress, master="fmpy"):
             cluster.close()
 
 
+def killed(error):
+    """Dask's KilledWorker: the task was running when workers died, as often as allowed."""
+    return type(error).__name__ == "KilledWorker"
+
+
+def cancelled(error):
+    """A task Dask cancelled, such as one whose inputs were lost with the workers that held them."""
+    return "Cancelled" in type(error).__name__
+
+
 def failure_message(error, alone=False):
     """A run's error row for a task that failed on the cluster (`alone`: the only one on it):
     what happened, in words, with Dask's own message."""
     text = f"{type(error).__name__}: {error}"
-    if alone and (type(error).__name__ == "KilledWorker" or "Cancelled" in type(error).__name__):
+    if alone and (killed(error) or cancelled(error)):
         # The worker process ended while running the run alone: a crash inside an FMU (the
         # FMUs' own code catches its panics, so a foreign binary or the machine), or out of
         # memory.

@@ -314,9 +314,8 @@ macro_rules! declare_variables {
     (@binding cached($block:ident . $field:ident)) => {
         $crate::models::declare::Binding::Cached { block: cache_block::$block }
     };
-    (@binding cached_apart($block:ident . $field:ident)) => {
-        $crate::models::declare::Binding::Cached { block: cache_block::$block }
-    };
+    // `cached_apart` is `cached` in every arm but `@element` (none: not in the outputs type).
+    (@binding cached_apart($($p:tt)*)) => { $crate::models::declare::declare_variables!(@binding cached($($p)*)) };
     (@binding output($source:ident . $field:ident)) => { $crate::models::declare::Binding::Output };
     (@binding derivative) => { $crate::models::declare::Binding::Derivative };
     (@binding computed) => { $crate::models::declare::Binding::Computed };
@@ -361,10 +360,8 @@ macro_rules! declare_variables {
             return $crate::models::declare::OutputValues::<f64>::element(&$s.$block().$field, $var.index);
         }
     };
-    (@output $s:ident, $var:ident, $id:ident, cached_apart($block:ident . $field:ident)) => {
-        if $var.group == group::$id {
-            return $crate::models::declare::OutputValues::<f64>::element(&$s.$block().$field, $var.index);
-        }
+    (@output $s:ident, $var:ident, $id:ident, cached_apart($($p:tt)*)) => {
+        $crate::models::declare::declare_variables!(@output $s, $var, $id, cached($($p)*))
     };
     (@output $s:ident, $var:ident, $id:ident, output($source:ident . $field:ident)) => {
         if $var.group == group::$id {
@@ -379,11 +376,8 @@ macro_rules! declare_variables {
             $nan |= $crate::models::declare::fill($cache, g.first_vr, g.len(), &$s.$block().$field);
         }
     };
-    (@fill $s:ident, $b:ident, $cache:ident, $nan:ident, $id:ident, cached_apart($block:ident . $field:ident)) => {
-        if $b == cache_block::$block {
-            let g = &GROUPS[group::$id];
-            $nan |= $crate::models::declare::fill($cache, g.first_vr, g.len(), &$s.$block().$field);
-        }
+    (@fill $s:ident, $b:ident, $cache:ident, $nan:ident, $id:ident, cached_apart($($p:tt)*)) => {
+        $crate::models::declare::declare_variables!(@fill $s, $b, $cache, $nan, $id, cached($($p)*))
     };
     (@fill $($rest:tt)*) => {};
 

@@ -235,38 +235,37 @@ impl Instance {
         self.set_real_elementwise(vrs, values)
     }
 
-    /// FMI 2: where `vrs` are consecutive runs of settable Real groups (a controller's
-    /// measured lengths and rates in one call) and every value is finite, the number of runs;
-    /// `None`: the element-by-element path decides.
+    /// FMI 2: whether `vrs` fall into runs that each pass [`Instance::settable_run`] (a
+    /// controller's measured lengths and rates in one call); else the element-by-element path
+    /// decides.
     #[inline]
-    pub(super) fn settable_runs(&self, vrs: &[u32], values: &[f64]) -> Option<usize> {
-        if self.version != FmiVersion::Fmi2 || vrs.len() != values.len() || !all_finite(values) {
-            return None;
+    pub(super) fn settable_runs(&self, vrs: &[u32], values: &[f64]) -> bool {
+        if self.version != FmiVersion::Fmi2 || vrs.len() != values.len() {
+            return false;
         }
-        let state = self.state.bit();
-        let (mut at, mut runs) = (0, 0);
-        while at < vrs.len() {
-            let a = (*self.access.get(vrs[at] as usize)?)?;
-            let n = a.run.min(vrs.len() - at);
-            if a.base != BaseType::Real || a.settable_in & state == 0 || !consecutive(&vrs[at..at + n]) {
-                return None;
+        let mut at = 0;
+        while let Some(a) = vrs.get(at).and_then(|&vr| self.access.get(vr as usize).copied().flatten()) {
+            let end = at + a.run.min(vrs.len() - at);
+            if self.settable_run(FmiVersion::Fmi2, &vrs[at..end], &values[at..end]).is_none() {
+                return false;
             }
-            at += n;
-            runs += 1;
+            at = end;
         }
-        Some(runs)
+        at == vrs.len()
     }
 
     /// [`Instance::set_real`] reference by reference, out of line as for gets.
     #[inline(never)]
     pub(super) fn set_real_elementwise(&mut self, vrs: &[u32], values: &[f64]) -> Status {
-        if self.settable_runs(vrs, values).is_some() {
+        if self.settable_runs(vrs, values) {
             // Checked: each run stored in one call, as the single-run path stores it.
             self.stale_after_set(vrs);
             let mut at = 0;
             while let Some(a) = vrs.get(at).and_then(|&vr| self.access.get(vr as usize).copied().flatten()) {
                 let n = a.run.min(vrs.len() - at);
-                if let Err(m) = self.model.set_real_run(VariableRef { group: a.group, index: a.index }, &values[at..at + n]) {
+                if let Err(m) =
+                    self.model.set_real_run(VariableRef { group: a.group, index: a.index }, &values[at..at + n])
+                {
                     return self.error(&m);
                 }
                 at += n;

@@ -237,8 +237,12 @@ impl Commands {
 }
 
 impl ProgrammeOutputs {
-    const UNDEFINED: ProgrammeOutputs =
-        ProgrammeOutputs { fp: [f64::NAN; LEG_COUNT], lp: [f64::NAN; LEG_COUNT], ldotp: [f64::NAN; LEG_COUNT], rp: NAN3 };
+    const UNDEFINED: ProgrammeOutputs = ProgrammeOutputs {
+        fp: [f64::NAN; LEG_COUNT],
+        lp: [f64::NAN; LEG_COUNT],
+        ldotp: [f64::NAN; LEG_COUNT],
+        rp: NAN3,
+    };
 
     fn of(point: &PoseTrajectoryPoint, solution: &DirectProblemSolution) -> Self {
         ProgrammeOutputs { fp: solution.forces, lp: solution.lengths, ldotp: solution.rates, rp: point.r }
@@ -428,11 +432,7 @@ impl ControllerModel {
     fn commands(&mut self) -> &Commands {
         if self.commands.is_none() {
             self.kept_programme();
-            let commands = match &self.programme {
-                Some((_, solution)) => self.feedback(solution),
-                None => Commands::UNDEFINED,
-            };
-            self.commands = Some(commands);
+            self.commands = Some(self.programme.as_ref().map_or(Commands::UNDEFINED, |(_, s)| self.feedback(s)));
         }
         self.commands.as_ref().unwrap_or(&Commands::UNDEFINED)
     }
@@ -440,10 +440,8 @@ impl ControllerModel {
     /// The programme's outputs at the current time, computed on their first read.
     fn programme_outputs(&mut self) -> &ProgrammeOutputs {
         if self.programme_outputs.is_none() {
-            let outputs = match self.kept_programme() {
-                Some((point, solution)) => ProgrammeOutputs::of(point, solution),
-                None => ProgrammeOutputs::UNDEFINED,
-            };
+            let outputs =
+                self.kept_programme().map_or(ProgrammeOutputs::UNDEFINED, |(p, s)| ProgrammeOutputs::of(p, s));
             self.programme_outputs = Some(outputs);
         }
         self.programme_outputs.as_ref().unwrap_or(&ProgrammeOutputs::UNDEFINED)
@@ -452,10 +450,9 @@ impl ControllerModel {
     /// The programme's angles at the current time, computed on their first read.
     fn programme_angles(&mut self) -> &ProgrammeAngles {
         if self.angles.is_none() {
-            let angles = match self.kept_programme() {
-                Some((point, _)) => ProgrammeAngles { anglesp: angles_from_rotation(&point.rotation) },
-                None => ProgrammeAngles::UNDEFINED,
-            };
+            let angles = self.kept_programme().map_or(ProgrammeAngles::UNDEFINED, |(point, _)| ProgrammeAngles {
+                anglesp: angles_from_rotation(&point.rotation),
+            });
             self.angles = Some(angles);
         }
         self.angles.as_ref().unwrap_or(&ProgrammeAngles::UNDEFINED)
