@@ -7,6 +7,8 @@
 //!
 //! The crate is layered; each layer only uses the ones above it:
 //!
+//! 0. [`maths`]: the elementary functions (`sin`, `exp`, `pow`, ...), one implementation
+//!    compiled into the FMU, so that every platform computes the same bits.
 //! 1. [`physics`]: pure mechanics (the body, the legs, the actuators, the special form, the
 //!    direct problem), written once, generic over the number type.
 //! 2. [`integration`]: generic ODE integrators (Dormand-Prince 5(4), RK4).
@@ -28,6 +30,7 @@ pub mod fmi;
 pub mod fmi2;
 pub mod fmi3;
 pub mod integration;
+pub mod maths;
 pub mod models;
 pub mod physics;
 pub mod simulation;

@@ -9,6 +9,7 @@
 //! inverse kinematics ([`crate::physics::direct_problem`]), measured lengths `l` and rates
 //! `ldot`. Pure functions; the controller FMU ([`crate::models::controller`]) wraps them.
 
+use crate::maths;
 use crate::physics::direct_problem::DirectProblemSolution;
 use crate::physics::stand::LEG_COUNT;
 
@@ -66,8 +67,8 @@ impl Disturbance {
             return 0.0;
         }
         // Soft-started at t = 0; nothing before (the formula would overflow for t far below 0).
-        let soft = if self.time_constant > 0.0 { (1.0 - (-t / self.time_constant).exp()).max(0.0) } else { 1.0 };
-        self.amplitude * (self.frequency * t).sin() * soft
+        let soft = if self.time_constant > 0.0 { (1.0 - maths::exp(-t / self.time_constant)).max(0.0) } else { 1.0 };
+        self.amplitude * maths::sin(self.frequency * t) * soft
     }
 }
 

@@ -115,7 +115,7 @@ fn initial_step<S: OdeSystem<N>, const N: usize>(
     }
     let d2 = scaled_rms(&df, y0, y0, s, n) / h0;
     let dm = d1.max(d2);
-    let h1 = if dm <= 1e-15 { (h0 * 1e-3).max(1e-6) } else { (0.01 / dm).powf(0.2) };
+    let h1 = if dm <= 1e-15 { (h0 * 1e-3).max(1e-6) } else { crate::maths::pow(0.01 / dm, 0.2) };
     (100.0 * h0).min(h1).min(h_max)
 }
 
@@ -276,7 +276,7 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
         }
         steps += 1;
 
-        let fac11 = err.powf(EXPO1);
+        let fac11 = crate::maths::pow(err, EXPO1);
         if err <= 1.0 {
             let logged_before = events.log.as_slice().len();
             if switching > 0 {
@@ -308,7 +308,7 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
                 }
             }
             // Accept.
-            let fac = (fac11 / memory.err_old.powf(BETA) / SAFETY).clamp(FAC_GROW_LIMIT, FAC_SHRINK_LIMIT);
+            let fac = (fac11 / crate::maths::pow(memory.err_old, BETA) / SAFETY).clamp(FAC_GROW_LIMIT, FAC_SHRINK_LIMIT);
             let mut h_new = h / fac;
             if rejected_last {
                 h_new = h_new.min(h);

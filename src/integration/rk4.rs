@@ -62,7 +62,7 @@ impl Exponential {
     fn new(block: LinearDecay, h: f64) -> Self {
         let z = -block.rate * h;
         // One exponential: e^z - 1 = (e^(z/2) - 1)(e^(z/2) + 1), without cancellation.
-        let half_m1 = (0.5 * z).exp_m1();
+        let half_m1 = crate::maths::exp_m1(0.5 * z);
         let full_m1 = half_m1 * (half_m1 + 2.0);
         let [p1, p2, p3] = phi123(z, full_m1);
         let [q1, q2, _] = phi123(0.5 * z, half_m1);

@@ -13,6 +13,8 @@ use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssi
 use nalgebra::{ClosedAddAssign, ClosedDivAssign, ClosedMulAssign, ClosedSubAssign, Scalar, Vector3};
 use num_traits::{One, Zero};
 
+use crate::maths;
+
 /// A real number of the physics: `f64`, or a [`Dual`] carrying a directional derivative.
 pub trait Real:
     Scalar
@@ -81,27 +83,27 @@ impl Real for f64 {
     }
     #[inline(always)]
     fn asin(self) -> Self {
-        f64::asin(self)
+        maths::asin(self)
     }
     #[inline(always)]
     fn acos(self) -> Self {
-        f64::acos(self)
+        maths::acos(self)
     }
     #[inline(always)]
     fn sin(self) -> Self {
-        f64::sin(self)
+        maths::sin(self)
     }
     #[inline(always)]
     fn atan2(self, x: Self) -> Self {
-        f64::atan2(self, x)
+        maths::atan2(self, x)
     }
     #[inline(always)]
     fn exp(self) -> Self {
-        f64::exp(self)
+        maths::exp(self)
     }
     #[inline(always)]
     fn tanh(self) -> Self {
-        f64::tanh(self)
+        maths::tanh(self)
     }
 }
 
@@ -270,32 +272,32 @@ impl Real for Dual {
     fn asin(self) -> Self {
         // Infinite at |x| = 1 (pitch at the gimbal lock): 0 there, never NaN.
         let slope = if self.re.abs() < 1.0 { 1.0 / (1.0 - self.re * self.re).sqrt() } else { 0.0 };
-        Dual::new(self.re.asin(), self.eps * slope)
+        Dual::new(maths::asin(self.re), self.eps * slope)
     }
     #[inline(always)]
     fn acos(self) -> Self {
         // Infinite at |x| = 1: 0 there, never NaN.
         let slope = if self.re.abs() < 1.0 { -1.0 / (1.0 - self.re * self.re).sqrt() } else { 0.0 };
-        Dual::new(self.re.acos(), self.eps * slope)
+        Dual::new(maths::acos(self.re), self.eps * slope)
     }
     #[inline(always)]
     fn sin(self) -> Self {
-        Dual::new(self.re.sin(), self.re.cos() * self.eps)
+        Dual::new(maths::sin(self.re), maths::cos(self.re) * self.eps)
     }
     #[inline(always)]
     fn atan2(self, x: Self) -> Self {
         let d = x.re * x.re + self.re * self.re;
         let eps = if d > 0.0 { (x.re * self.eps - self.re * x.eps) / d } else { 0.0 };
-        Dual::new(self.re.atan2(x.re), eps)
+        Dual::new(maths::atan2(self.re, x.re), eps)
     }
     #[inline(always)]
     fn exp(self) -> Self {
-        let e = self.re.exp();
+        let e = maths::exp(self.re);
         Dual::new(e, e * self.eps)
     }
     #[inline(always)]
     fn tanh(self) -> Self {
-        let t = self.re.tanh();
+        let t = maths::tanh(self.re);
         Dual::new(t, (1.0 - t * t) * self.eps)
     }
 }

@@ -16,6 +16,7 @@
 use nalgebra::Vector3;
 
 use super::body::kinematics::{PoseTrajectoryPoint, sin_cos};
+use crate::maths;
 
 /// `q(t) = offset + amplitude sin(frequency t + phase) (1 - exp(-t/time_constant))²`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -43,7 +44,7 @@ impl SoftStartSinusoid {
             (0.0, 0.0, 0.0)
         } else if self.time_constant > 0.0 {
             let tc = self.time_constant;
-            let e = (-t / tc).exp();
+            let e = maths::exp(-t / tc);
             ((1.0 - e) * (1.0 - e), 2.0 * (e - e * e) / tc, 2.0 * (2.0 * e * e - e) / (tc * tc))
         } else {
             (1.0, 0.0, 0.0)

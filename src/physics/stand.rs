@@ -3,6 +3,7 @@
 use nalgebra::Vector3;
 
 use super::error::ParameterError;
+use crate::maths;
 
 /// Number of legs (hydraulic cylinders) of a Stewart platform.
 pub const LEG_COUNT: usize = 6;
@@ -62,11 +63,11 @@ impl Stand {
     pub fn truck_cabin() -> Self {
         let base_joints = DEFAULT_BASE_AZIMUTHS_DEG.map(|deg: f64| {
             let phi = deg.to_radians();
-            Vector3::new(DEFAULT_BASE_RADIUS * phi.cos(), DEFAULT_BASE_RADIUS * phi.sin(), 0.0)
+            Vector3::new(DEFAULT_BASE_RADIUS * maths::cos(phi), DEFAULT_BASE_RADIUS * maths::sin(phi), 0.0)
         });
         let platform_joints = DEFAULT_PLATFORM_AZIMUTHS_DEG.map(|deg: f64| {
             let phi = deg.to_radians();
-            Vector3::new(DEFAULT_PLATFORM_RADIUS * phi.cos(), DEFAULT_PLATFORM_RADIUS * phi.sin(), -DEFAULT_JOINT_DEPTH)
+            Vector3::new(DEFAULT_PLATFORM_RADIUS * maths::cos(phi), DEFAULT_PLATFORM_RADIUS * maths::sin(phi), -DEFAULT_JOINT_DEPTH)
         });
         Stand { mass: 3000.0, inertia: [1500.0, 1500.0, 2200.0], gravity: 9.81, base_joints, platform_joints }
     }

@@ -1,11 +1,17 @@
 """The rigid-leg regression: four motions of the paper's machine (massless legs, no friction)
-through a platform FMU, sampled every 0.1 s, as exact bits. `tests/data/rigid_legs_db183c0.json`
+through a platform FMU, sampled every 0.1 s, as exact bits. `tests/data/rigid_legs_db183c0_libm.json`
 holds them as the release before the machine (legs as bodies, joint limits, friction) computed
-them (commit db183c0, whose FMUs wrote it with this file's `main`); test_machine.py checks
-that the FMU still computes them to the bit, with the joint limits off and, where no joint
-reaches its limit, on.
+them (commit db183c0, whose FMUs wrote it with this file's `main`), with its elementary
+functions taken from the libm crate as the FMU's are since they give every platform the same
+bits (`tests/data/rigid_legs_db183c0_libm.patch`: db183c0's calls of `sin`, `exp`, `pow`, ...
+replaced one for one, nalgebra's `libm-force`); test_machine.py checks that the FMU still
+computes them to the bit, with the joint limits off and, where no joint reaches its limit, on.
 
-    .venv/bin/python tests/python/rigid_legs.py PLATFORM.fmu CONTROLLER.fmu OUT.json
+To write the file again: `git worktree add /tmp/old db183c0 && cd /tmp/old && git apply
+.../tests/data/rigid_legs_db183c0_libm.patch && cargo run --release --bin build-fmu`, then
+
+    .venv/bin/python tests/python/rigid_legs.py /tmp/old/target/fmu/StewartPlatform.fmu \
+        /tmp/old/target/fmu/StewartController.fmu tests/data/rigid_legs_db183c0_libm.json
 """
 
 import json

@@ -26,9 +26,9 @@ from test_importers import fmi_sim_binary  # noqa: E402
 def test_the_papers_machine_gives_the_previous_releases_numbers_to_the_bit():
     """Massless legs, no friction: heave in closed loop, a power loss onto the stops, a tumble
     through singular arrangements, a tip-over; against the bits the release before the machine
-    wrote (tests/data/rigid_legs_db183c0.json), with the joint limits off, and on where no
+    wrote (tests/data/rigid_legs_db183c0_libm.json), with the joint limits off, and on where no
     joint reaches its limit."""
-    reference = json.loads((ROOT / "tests" / "data" / "rigid_legs_db183c0.json").read_text())
+    reference = json.loads((ROOT / "tests" / "data" / "rigid_legs_db183c0_libm.json").read_text())
     for joints in (False, True):
         motions = rigid_legs.motions(str(PLATFORM_FMU), str(CONTROLLER_FMU), joints)
         for name, rows in reference["motions"].items():

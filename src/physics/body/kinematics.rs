@@ -5,16 +5,17 @@
 
 use nalgebra::{Matrix3, Vector3};
 
+use crate::maths;
 use crate::physics::number::Real;
 
 use crate::physics::stand::{LEG_COUNT, Stand};
 
 /// `(sin x, cos x)`, at `x = ±0` the exact `(±0, 1)` without the library call: a programme's
 /// constant degrees of freedom and zero angles are most of the controller's sines (the same
-/// bits as `x.sin_cos()` everywhere).
+/// bits as `maths::sin_cos(x)` everywhere).
 #[inline(always)]
 pub fn sin_cos(x: f64) -> (f64, f64) {
-    if x == 0.0 { (x, 1.0) } else { x.sin_cos() }
+    if x == 0.0 { (x, 1.0) } else { maths::sin_cos(x) }
 }
 
 /// Elementary rotation about x by `angle` (textbook `c1`).
@@ -57,8 +58,8 @@ pub fn angles_from_rotation<T: Real>(rot: &Matrix3<T>) -> Vector3<T> {
 /// pitch rate is meaningful.
 pub fn angle_rates(angles: &Vector3<f64>, w: &Vector3<f64>) -> Vector3<f64> {
     // w1 = a' cos b cos c + b' sin c, w2 = -a' cos b sin c + b' cos c, w3 = a' sin b + c'.
-    let (sb, cb) = angles.y.sin_cos();
-    let (sc, cc) = angles.z.sin_cos();
+    let (sb, cb) = maths::sin_cos(angles.y);
+    let (sc, cc) = maths::sin_cos(angles.z);
     let pitch_rate = w.x * sc + w.y * cc;
     let roll_rate = if cb.abs() > 1e-12 { (w.x * cc - w.y * sc) / cb } else { 0.0 };
     let yaw_rate = if cb.abs() > 1e-12 { w.z - roll_rate * sb } else { 0.0 };

@@ -21,6 +21,7 @@
 
 use nalgebra::Vector3;
 
+use crate::maths;
 use crate::physics::error::ParameterError;
 use crate::physics::number::Real;
 use crate::physics::stand::LEG_COUNT;
@@ -106,8 +107,8 @@ impl JointLimits {
                 rotation0.column(1).into_owned(),
                 rotation0.column(2).into_owned(),
             ],
-            cos_base_max: base_max.cos(),
-            cos_platform_max: platform_max.cos(),
+            cos_base_max: maths::cos(base_max),
+            cos_platform_max: maths::cos(platform_max),
         }
     }
 

@@ -29,6 +29,7 @@ mod tests;
 use nalgebra::Vector3;
 
 use super::actuators::LegForceLaw;
+use crate::maths;
 use super::actuators::drives::{DriveRate, ElectricDrives};
 use super::body::accelerations::RigidBody;
 use super::body::per_axis::AxisRows;
@@ -124,7 +125,7 @@ impl SpecialForm {
             self.base_reference = std::array::from_fn(|c| j.base_reference.map(|n| n[c]));
             self.platform_reference = std::array::from_fn(|c| j.platform_reference.map(|m| m[c]));
             self.reference_axes = j.reference_axes;
-            self.joint_cosines = [j.base_max.cos(), j.platform_max.cos(), j.platform_max.sin()];
+            self.joint_cosines = [maths::cos(j.base_max), maths::cos(j.platform_max), maths::sin(j.platform_max)];
         }
         self.joint_limits = joint_limits;
         self.fast = self.takes_fast_path();
