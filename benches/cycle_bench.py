@@ -27,6 +27,9 @@ lengths and rates, through the packaged FMI 2 and FMI 3 platform FMUs. Prints on
   with median.
 
     .venv/bin/python benches/cycle_bench.py [output-folder]   # after cargo run --release --bin build-fmu
+    .venv/bin/python benches/cycle_bench.py --counts FMU_DIR [FMU_DIR ...]
+        # only the instruction table, for each folder of FMUs (target/fmu's layout: two builds
+        # compared in one run; printed, nothing written)
 """
 
 import os
@@ -40,21 +43,28 @@ import zipfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-OUT = Path(sys.argv[1] if len(sys.argv) > 1 else ROOT / "benches" / "results")
-FMUS = {"fmi2": ROOT / "target" / "fmu" / "StewartPlatform.fmu",
-        "fmi3": ROOT / "target" / "fmu" / "fmi3" / "StewartPlatform.fmu"}
+OUT = Path(sys.argv[1] if len(sys.argv) > 1 and sys.argv[1] != "--counts" else ROOT / "benches" / "results")
+FMU_DIR = ROOT / "target" / "fmu"
+
+
+def fmu_files(fmu_dir):
+    return {"fmi2": fmu_dir / "StewartPlatform.fmu", "fmi3": fmu_dir / "fmi3" / "StewartPlatform.fmu"}
+
+
+FMUS = fmu_files(FMU_DIR)
 COUNT_CYCLES = 5000
 LATENCY_CYCLES = 1_000_000
 LOOP_CYCLES, LOOP_RUNS = 50_000, 21
 MUJOCO_STEPS, MUJOCO_RUNS, WARM_UP_SECONDS = 250, 21, 0.3
 
 
-def unpack(version, folder):
-    with zipfile.ZipFile(FMUS[version]) as z:
+def unpack(version, folder, fmus=FMUS):
+    with zipfile.ZipFile(fmus[version]) as z:
         z.extractall(folder / version)
     md = (folder / version / "modelDescription.xml").read_text()
     token = re.search(r'(?:guid|instantiationToken)="([^"]+)"', md).group(1)
-    binary = next((folder / version / "binaries").rglob("StewartPlatform.so"))
+    # This machine's binary (the FMUs carry other platforms' too).
+    binary = folder / version / "binaries" / ("linux64" if version == "fmi2" else "x86_64-linux") / "StewartPlatform.so"
     return str(binary), token
 
 
@@ -176,14 +186,35 @@ def loop_time(host, fmus, version, method):
     return f"FMI {version[-1]} {method}: {text}", (float(m.group(1)), float(m.group(2)))
 
 
-def main():
-    if not shutil.which("valgrind") or not shutil.which("gcc"):
-        sys.exit("cycle_bench: valgrind and gcc are needed")
-    OUT.mkdir(parents=True, exist_ok=True)
-    folder = Path(tempfile.mkdtemp(prefix="cycle_bench_"))
+def build_host(folder):
     host = str(folder / "cycle_host")
     subprocess.run(["gcc", "-O2", "-g", "-Wall", "-Wextra", "-Werror", "-o", host,
                     str(ROOT / "benches" / "c" / "cycle_host.c"), "-ldl", "-lpthread"], check=True)
+    return host
+
+
+def counts_only(fmu_dirs):
+    """The instruction table of each folder of FMUs, one after the other in one run."""
+    folder = Path(tempfile.mkdtemp(prefix="cycle_bench_"))
+    host = build_host(folder)
+    for n, fmu_dir in enumerate(fmu_dirs):
+        unpacked = folder / f"build{n}"
+        fmus = {version: unpack(version, unpacked, fmu_files(Path(fmu_dir))) for version in FMUS}
+        table, _ = instruction_table(host, fmus, unpacked)
+        print(f"{fmu_dir}:")
+        print("\n".join(table[3:]))
+        print()
+    shutil.rmtree(folder, ignore_errors=True)
+
+
+def main():
+    if not shutil.which("valgrind") or not shutil.which("gcc"):
+        sys.exit("cycle_bench: valgrind and gcc are needed")
+    if sys.argv[1:2] == ["--counts"]:
+        return counts_only(sys.argv[2:] or [FMU_DIR])
+    OUT.mkdir(parents=True, exist_ok=True)
+    folder = Path(tempfile.mkdtemp(prefix="cycle_bench_"))
+    host = build_host(folder)
     header = [f"cycle_bench: {time.strftime('%Y-%m-%d %H:%M')}, {os.cpu_count()} cores, "
               f"{open('/proc/cpuinfo').read().split('model name')[1].split(':')[1].splitlines()[0].strip()}", ""]
     fmus = {version: unpack(version, folder) for version in FMUS}

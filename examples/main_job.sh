@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The main job: build and package the FMU, then run the paper's experiments, the workspace
+# The main job: build and package the FMUs (Linux x86-64 and aarch64, Windows x64), then run the paper's experiments, the workspace
 # scenarios (end stops, singular arrangements) and the machine's (heavy legs, joint limits,
 # friction, electric drives) through it with FMPy, and the design studies on
 # Dask, writing CSV and Parquet data and PNG plots to output/ (or the folder given as the first

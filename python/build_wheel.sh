@@ -3,7 +3,8 @@
 # SSP systems, the built viewer page and the compiled co-simulation master (the extension module
 # stewart_fmu._master, built for Python 3.11+'s stable ABI), so that it works wherever it is installed:
 #   target/wheels/stewart_fmu-<version>-py3-none-linux_x86_64.whl
-# (linux_x86_64: the FMUs inside carry only a Linux x86-64 binary). Needs the FMUs and the
+# (linux_x86_64: the compiled master inside is a Linux x86-64 extension; the FMUs carry every
+# platform's binary). Needs the FMUs and the
 # viewer built first (`bash examples/main_job.sh` does both; or `cargo run --release --bin
 # build-fmu` and `npm ci && npm run build` in viewer/). The build runs in a copy of python/
 # under target/wheel/, so nothing is written into the repository's source folders.

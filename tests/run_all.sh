@@ -6,7 +6,8 @@
 #
 # Installs what it needs on a fresh Debian machine (tests/setup.sh checks the prerequisites):
 # valgrind, libclang (for building fmi-sim) and Chromium (for the viewer's browser test) from
-# Debian's packages without their recommends, the viewer's Node packages with npm ci, fmi-sim
+# Debian's packages without their recommends, the cross toolchains for the Windows and aarch64
+# binaries and wine and qemu-user that run them (tests/setup_cross.sh), the viewer's Node packages with npm ci, fmi-sim
 # from crates.io (into target/tools), the Python packages from tests/requirements.txt (into
 # .venv). Each step that takes more than a few seconds starts with a progress line.
 set -euo pipefail

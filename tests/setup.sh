@@ -86,11 +86,17 @@ python_env() {
     .venv/bin/python -m pip install --quiet --disable-pip-version-check --no-deps -e python
 }
 
-# The FMUs: the Rust library in release mode, packaged (the first build takes a few minutes);
-# then the compiled co-simulation master, the Python extension stewart_fmu.master loads
-# (target/release/libstewart_master_py.so) and its command target/release/stewart-master.
+# The cross toolchains (Debian 12's packages) for the Windows and aarch64 binaries.
+source "$(dirname "${BASH_SOURCE[0]}")/setup_cross.sh"
+
+# The FMUs: the Rust library in release mode for Linux x86-64, Linux aarch64 and Windows x64,
+# checked and packaged (the first build takes minutes: the standard library is compiled for
+# each foreign target); then the compiled co-simulation master, the Python extension
+# stewart_fmu.master loads (target/release/libstewart_master_py.so) and its command
+# target/release/stewart-master.
 build_fmus() {
-    step "building the FMUs: cargo build --release of the Rust library, then packaging into target/fmu/ (a minute or more the first time, seconds after)"
+    cross_toolchains
+    step "building the FMUs for Linux x86-64, Linux aarch64 and Windows x64, then packaging into target/fmu/ (about 5 minutes the first time on 2 cores, seconds after; a line per platform)"
     cargo run --release --bin build-fmu
     step "building the compiled co-simulation master (crates/stewart-master, its Python extension; a minute the first time)"
     cargo build --release -p stewart-master -p stewart-master-py

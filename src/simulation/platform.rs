@@ -211,7 +211,7 @@ impl<'a, L: ?Sized> PlatformDynamics<'a, L> {
 
 impl<'a, L: ?Sized, V: Lanes> PlatformDynamics<'a, L, V> {
     /// The same dynamics computed in lanes `W`.
-    #[cfg_attr(not(feature = "avx2"), allow(dead_code))]
+    #[cfg_attr(not(all(target_arch = "x86_64", feature = "avx2")), allow(dead_code))]
     pub(crate) fn in_lanes<W: Lanes>(&self) -> PlatformDynamics<'a, L, W> {
         PlatformDynamics {
             form: self.form,

@@ -162,6 +162,7 @@ mod lanes {
     pub struct Pair([f64; 4]);
 
     /// No wider registers here: the same four values.
+    #[allow(dead_code)] // named only by the AVX2 path, which is x86-64 only
     pub type Quad = Pair;
 
     impl super::AxisLanes for Pair {
@@ -242,7 +243,7 @@ pub trait AxisLanes: Copy {
 
 pub use lanes::Pair;
 // Crate-private: its operations execute AVX2 instructions.
-#[cfg_attr(not(feature = "avx2"), allow(unused_imports))]
+#[cfg_attr(not(all(target_arch = "x86_64", feature = "avx2")), allow(unused_imports))]
 pub(crate) use lanes::Quad;
 
 /// Three vectors given one per axis (`e1, e2, e3`, or their rates) as rows: `x` holds their

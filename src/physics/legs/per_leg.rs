@@ -318,6 +318,7 @@ mod lanes {
     }
 
     /// No wider registers here: the same six values.
+    #[allow(dead_code)] // named only by the AVX2 path, which is x86-64 only
     pub type Wide = Narrow;
 
     impl super::Lanes for Narrow {
@@ -428,7 +429,7 @@ pub trait Lanes: Copy {
 pub use lanes::Narrow;
 // Crate-private: its operations execute AVX instructions, so only the steps' AVX2 path
 // (behind `unsafe fn integrate_avx2`) may make one.
-#[cfg_attr(not(feature = "avx2"), allow(unused_imports))]
+#[cfg_attr(not(all(target_arch = "x86_64", feature = "avx2")), allow(unused_imports))]
 pub(crate) use lanes::Wide;
 
 /// `components!(|c| expr)` is `[expr with c = 0, 1, 2]`: a vector's three components, each

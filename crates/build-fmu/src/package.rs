@@ -1,30 +1,32 @@
 //! Writing the `.fmu` (a zip archive with forward-slash paths, deflated).
 
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use zip::write::SimpleFileOptions;
 
-/// Writes an FMU with the binary at `binary_path` inside the archive.
+/// Writes an FMU with each `(path inside the archive, file)` of `binaries`.
 pub fn write_fmu(
     path: &Path,
-    binary_path: &str,
+    binaries: &[(String, PathBuf)],
     model_description: &str,
-    library: &Path,
     documentation: &str,
 ) -> Result<(), String> {
-    let binary = std::fs::read(library).map_err(|e| format!("cannot read {}: {e}", library.display()))?;
+    let mut contents = vec![];
+    for (_, library) in binaries {
+        contents.push(std::fs::read(library).map_err(|e| format!("cannot read {}: {e}", library.display()))?);
+    }
     let file = std::fs::File::create(path).map_err(|e| format!("cannot create {}: {e}", path.display()))?;
     let mut zip = zip::ZipWriter::new(file);
     let text = SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
     let executable = text.unix_permissions(0o755);
-    let entries: [(String, &[u8], SimpleFileOptions); 3] = [
-        ("modelDescription.xml".into(), model_description.as_bytes(), text),
-        (binary_path.to_string(), &binary, executable),
-        ("documentation/index.html".into(), documentation.as_bytes(), text),
-    ];
+    let mut entries: Vec<(&str, &[u8], SimpleFileOptions)> = vec![("modelDescription.xml", model_description.as_bytes(), text)];
+    for ((inside, _), bytes) in binaries.iter().zip(&contents) {
+        entries.push((inside, bytes, executable));
+    }
+    entries.push(("documentation/index.html", documentation.as_bytes(), text));
     for (name, bytes, options) in entries {
-        zip.start_file(name.as_str(), options).map_err(|e| format!("zip {name}: {e}"))?;
+        zip.start_file(name, options).map_err(|e| format!("zip {name}: {e}"))?;
         zip.write_all(bytes).map_err(|e| format!("zip {name}: {e}"))?;
     }
     zip.finish().map_err(|e| format!("cannot finish {}: {e}", path.display()))?;
