@@ -7,9 +7,9 @@
 //! path takes every such function from here: the `libm` crate (the Rust port of musl's libm),
 //! compiled into the FMU, the same code on Linux, Windows and macOS, x86-64 and aarch64.
 //! nalgebra's own calls (the SVD's `hypot`) go to the same crate through its `libm-force`
-//! feature. `build-fmu` refuses a binary that imports any of them from the system
-//! (`crates/build-fmu/src/file_check.rs`), and `tests/python/test_platforms.py` compares the
-//! platforms' results bit for bit.
+//! feature. `build-fmu` refuses a binary that takes any of them from a C library, imported or
+//! linked in (`crates/build-fmu/src/file_check.rs`), and `tests/python/test_platforms.py`
+//! compares the platforms' results bit for bit.
 //!
 //! Rust never fuses a multiply and an add by itself, so no platform's fused multiply-add can
 //! change a result either.

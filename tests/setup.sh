@@ -34,6 +34,7 @@ apt_install() {
 # `require main` (the main job) or `require tests` (the tests: also gcc, valgrind, libclang,
 # Chromium). Rust is not a Debian package here: rustup installs it.
 require() {
+    SETUP_KIND="$1"  # what cross_toolchains installs: the linkers, and for the tests wine and qemu
     local need=()
     command -v cargo >/dev/null || die "cargo is not installed: install Rust 1.85 or newer (the crate uses edition 2024) with rustup (https://rustup.rs), then open a new shell"
     local rust
@@ -94,10 +95,17 @@ source "$(dirname "${BASH_SOURCE[0]}")/setup_cross.sh"
 # each foreign target); then the compiled co-simulation master, the Python extension
 # stewart_fmu.master loads (target/release/libstewart_master_py.so) and its command
 # target/release/stewart-master.
+# STEWART_FMU_TARGETS=x86_64-linux (a build-fmu target list) builds those alone, with no
+# cross set-up (the platform tests then fail: they need the other binaries).
 build_fmus() {
-    cross_toolchains
-    step "building the FMUs for Linux x86-64, Linux aarch64 and Windows x64, then packaging into target/fmu/ (about 5 minutes the first time on 2 cores, seconds after; a line per platform)"
-    cargo run --release --bin build-fmu
+    if [ -n "${STEWART_FMU_TARGETS:-}" ]; then
+        step "building the FMUs for $STEWART_FMU_TARGETS (STEWART_FMU_TARGETS), then packaging into target/fmu/"
+        cargo run --release --bin build-fmu -- --targets "$STEWART_FMU_TARGETS"
+    else
+        cross_toolchains "${SETUP_KIND:-tests}"
+        step "building the FMUs for Linux x86-64, Linux aarch64 and Windows x64, then packaging into target/fmu/ (about 5 minutes the first time on 2 cores, seconds after; a line per platform)"
+        cargo run --release --bin build-fmu
+    fi
     step "building the compiled co-simulation master (crates/stewart-master, its Python extension; a minute the first time)"
     cargo build --release -p stewart-master -p stewart-master-py
 }

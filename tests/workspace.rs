@@ -394,4 +394,3 @@ fn singular_passages_are_tracked_only_while_reported_and_the_motion_is_the_same(
     assert_eq!(always, later, "the motion does not depend on the tracking");
     assert_eq!(always, never, "the motion does not depend on the tracking");
 }
-

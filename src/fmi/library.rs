@@ -65,13 +65,21 @@ fn own_file() -> Option<String> {
     if unsafe { GetModuleHandleExW(FROM_ADDRESS | UNCHANGED_REFCOUNT, address, &mut module) } == 0 {
         return None;
     }
-    let mut name = [0u16; 32768]; // the longest path Windows has (with the `\\?\` prefix)
-    // SAFETY: the buffer is ours and its length is passed.
-    let length = unsafe { GetModuleFileNameW(module, name.as_mut_ptr(), name.len() as u32) } as usize;
-    if length == 0 || length >= name.len() {
-        return None;
+    // MAX_PATH first, doubled while the name fills the buffer (up to the longest path Windows
+    // has, 32,767 with the `\\?\` prefix): on the heap, the host's thread may have a small stack.
+    let mut name = vec![0u16; 260];
+    while name.len() <= 32768 {
+        // SAFETY: the buffer is ours and its length is passed.
+        let length = unsafe { GetModuleFileNameW(module, name.as_mut_ptr(), name.len() as u32) } as usize;
+        if length == 0 {
+            return None;
+        }
+        if length < name.len() {
+            return Some(String::from_utf16_lossy(&name[..length]));
+        }
+        name.resize(name.len() * 2, 0);
     }
-    Some(String::from_utf16_lossy(&name[..length]))
+    None
 }
 
 #[cfg(not(any(unix, windows)))]
@@ -82,7 +90,10 @@ fn own_file() -> Option<String> {
 /// The model a token selects, or why it is refused (the message lists what this binary
 /// accepts).
 pub fn model_for_token(token: &str, version: FmiVersion) -> Result<ModelKind, String> {
-    let own = loaded_as().and_then(|stem| ModelKind::ALL.iter().copied().find(|k| k.info().model_identifier == stem));
+    // Case-insensitive: Windows finds `stewartplatform.dll` for `StewartPlatform.dll`.
+    let own = loaded_as().and_then(|stem| {
+        ModelKind::ALL.iter().copied().find(|k| k.info().model_identifier.eq_ignore_ascii_case(&stem))
+    });
     match (model_of_token(token, version), own) {
         (Some(kind), Some(own)) if kind != own => Err(format!(
             "{token} is the token of {}, but this binary was loaded as {} (expected {}); the model description and \

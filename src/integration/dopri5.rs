@@ -308,7 +308,8 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
                 }
             }
             // Accept.
-            let fac = (fac11 / crate::maths::pow(memory.err_old, BETA) / SAFETY).clamp(FAC_GROW_LIMIT, FAC_SHRINK_LIMIT);
+            let fac =
+                (fac11 / crate::maths::pow(memory.err_old, BETA) / SAFETY).clamp(FAC_GROW_LIMIT, FAC_SHRINK_LIMIT);
             let mut h_new = h / fac;
             if rejected_last {
                 h_new = h_new.min(h);

@@ -67,7 +67,11 @@ impl Stand {
         });
         let platform_joints = DEFAULT_PLATFORM_AZIMUTHS_DEG.map(|deg: f64| {
             let phi = deg.to_radians();
-            Vector3::new(DEFAULT_PLATFORM_RADIUS * maths::cos(phi), DEFAULT_PLATFORM_RADIUS * maths::sin(phi), -DEFAULT_JOINT_DEPTH)
+            Vector3::new(
+                DEFAULT_PLATFORM_RADIUS * maths::cos(phi),
+                DEFAULT_PLATFORM_RADIUS * maths::sin(phi),
+                -DEFAULT_JOINT_DEPTH,
+            )
         });
         Stand { mass: 3000.0, inertia: [1500.0, 1500.0, 2200.0], gravity: 9.81, base_joints, platform_joints }
     }

@@ -333,13 +333,14 @@ static int do_step(Slave *s, double h) {
     Api *a = &apis[s->model];
     int status;
     if (version == 2) {
-        status = CALL(a, fmi2DoStep, int (*)(Instance, double, double, int), s->instance, s->time, h, 1);
+        /* noSetFMUStatePriorToCurrentPoint false: the scripts restore earlier states. */
+        status = CALL(a, fmi2DoStep, int (*)(Instance, double, double, int), s->instance, s->time, h, 0);
     } else {
         unsigned char event, terminate, early;
         double last;
         status = CALL(a, fmi3DoStep,
                       int (*)(Instance, double, double, unsigned char, unsigned char *, unsigned char *, unsigned char *, double *),
-                      s->instance, s->time, h, 1, &event, &terminate, &early, &last);
+                      s->instance, s->time, h, 0, &event, &terminate, &early, &last);
     }
     if (status <= 1) s->time += h;
     return status;
@@ -365,13 +366,13 @@ static void euler_step(Slave *s, double h) {
         int enter2 = 0, terminate2 = 0;
         check(CALL(a, fmi2SetTime, int (*)(Instance, double), s->instance, s->time), "setTime", s);
         check(CALL(a, fmi2SetContinuousStates, int (*)(Instance, const double *, size_t), s->instance, x, (size_t)n), "setContinuousStates", s);
-        check(CALL(a, fmi2CompletedIntegratorStep, int (*)(Instance, int, int *, int *), s->instance, 1, &enter2, &terminate2),
+        check(CALL(a, fmi2CompletedIntegratorStep, int (*)(Instance, int, int *, int *), s->instance, 0, &enter2, &terminate2),
               "completedIntegratorStep", s);
         enter = (unsigned char)enter2;
     } else {
         check(CALL(a, fmi3SetTime, int (*)(Instance, double), s->instance, s->time), "setTime", s);
         check(CALL(a, fmi3SetContinuousStates, int (*)(Instance, const double *, size_t), s->instance, x, (size_t)n), "setContinuousStates", s);
-        check(CALL(a, fmi3CompletedIntegratorStep, int (*)(Instance, unsigned char, unsigned char *, unsigned char *), s->instance, 1,
+        check(CALL(a, fmi3CompletedIntegratorStep, int (*)(Instance, unsigned char, unsigned char *, unsigned char *), s->instance, 0,
                    &enter, &terminate),
               "completedIntegratorStep", s);
     }
@@ -427,6 +428,16 @@ static int load(Api *api, const char *path) {
     return 1;
 }
 
+/* A state slot's number, 0 to MAX_SLOTS - 1. */
+static int slot(const char *word) {
+    int k = word ? atoi(word) : -1;
+    if (k < 0 || k >= MAX_SLOTS) {
+        fprintf(stdout, "error slot %s: 0 to %d\n", word ? word : "(none)", MAX_SLOTS - 1);
+        exit(2);
+    }
+    return k;
+}
+
 static char *next_word(char **cursor) {
     char *s = *cursor;
     while (*s == ' ' || *s == '\t') s++;
@@ -474,6 +485,10 @@ static int run(int argc, char **argv) {
             int m = model_of(next_word(&cursor));
             n_states[m] = atoi(next_word(&cursor));
             n_indicators[m] = atoi(next_word(&cursor));
+            if (n_states[m] < 0 || n_states[m] > MAX_STATES || n_indicators[m] < 0 || n_indicators[m] > MAX_STATES) {
+                fprintf(stdout, "error %d states, %d event indicators: 0 to %d here\n", n_states[m], n_indicators[m], MAX_STATES);
+                return 2;
+            }
         } else if (!strcmp(command, "var")) {
             if (n_vars == MAX_VARS) {
                 fprintf(stdout, "error more than %d variables\n", MAX_VARS);
@@ -547,7 +562,7 @@ static int run(int argc, char **argv) {
             Variable *l = var(0, "l"), *ldot = var(0, "ldot"), *F = var(0, "F");
             Variable *cl = var(1, "l"), *cldot = var(1, "ldot"), *cF = var(1, "F");
             for (int i = 0; i < n; i++) {
-                double x[6];
+                double x[MAX_VALUES];
                 check(get_reals(p, l, x), "get l", p);
                 check(set_values(c, cl, x), "set l", c);
                 check(get_reals(p, ldot, x), "get ldot", p);
@@ -565,7 +580,11 @@ static int run(int argc, char **argv) {
             char *name;
             while ((name = next_word(&cursor))) {
                 Variable *v = var(s->model, name);
-                double x[MAX_VALUES];
+                double x[MAX_VALUES] = {0};
+                if (v->type != 'R') {
+                    fprintf(stdout, "error print reads Real/Float64 variables only, not %s\n", name);
+                    return 2;
+                }
                 check(get_reals(s, v, x), "get", s);
                 char label[256];
                 snprintf(label, sizeof label, "%s %s", s->name, name);
@@ -573,7 +592,7 @@ static int run(int argc, char **argv) {
             }
         } else if (!strcmp(command, "save") || !strcmp(command, "restore") || !strcmp(command, "release")) {
             Slave *s = slave(next_word(&cursor));
-            int k = atoi(next_word(&cursor));
+            int k = slot(next_word(&cursor));
             Api *a = &apis[s->model];
             int status;
             if (command[0] == 's')
@@ -593,7 +612,7 @@ static int run(int argc, char **argv) {
             fprintf(stdout, "%s %s %d\n", command, s->name, status);
         } else if (!strcmp(command, "serialize")) {
             Slave *s = slave(next_word(&cursor));
-            int k = atoi(next_word(&cursor));
+            int k = slot(next_word(&cursor));
             Api *a = &apis[s->model];
             size_t size = 0;
             if (version == 2)
@@ -613,10 +632,14 @@ static int run(int argc, char **argv) {
         } else if (!strcmp(command, "deserialize")) {
             /* The bytes of slot K (from any instance of the same model) into this one's slot K. */
             Slave *s = slave(next_word(&cursor));
-            int k = atoi(next_word(&cursor));
+            int k = slot(next_word(&cursor));
             Slave *from = NULL;
             for (int i = 0; i < MAX_INSTANCES; i++)
                 if (slaves[i].instance && slaves[i].bytes[k] && slaves[i].model == s->model) from = &slaves[i];
+            if (!from) {
+                fprintf(stdout, "error no serialized state in slot %d for %s\n", k, s->name);
+                return 2;
+            }
             Api *a = &apis[s->model];
             State state = NULL;
             int status = version == 2

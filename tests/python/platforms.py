@@ -21,9 +21,14 @@ ROOT = Path(__file__).resolve().parents[2]
 HOST_SOURCE = ROOT / "tests" / "c" / "platform_host.c"
 WINE_SHIM_SOURCE = ROOT / "tests" / "c" / "wine_bcryptprimitives.c"
 BUILD = ROOT / "target" / "platform-hosts"
-WINE = "/usr/lib/wine/wine64"
-QEMU = "qemu-aarch64-static"
-AARCH64_SYSROOT = "/usr/aarch64-linux-gnu"
+# Debian 12's places (tests/setup_cross.sh); elsewhere wine64 or wine and qemu-aarch64 on
+# PATH, and the aarch64 C library's root named by STEWART_AARCH64_SYSROOT.
+WINE = "/usr/lib/wine/wine64" if Path("/usr/lib/wine/wine64").exists() else (
+    shutil.which("wine64") or shutil.which("wine") or "/usr/lib/wine/wine64")
+WINESERVER = "/usr/lib/wine/wineserver64" if Path("/usr/lib/wine/wineserver64").exists() else (
+    shutil.which("wineserver") or "/usr/lib/wine/wineserver64")
+QEMU = shutil.which("qemu-aarch64-static") or shutil.which("qemu-aarch64") or "qemu-aarch64-static"
+AARCH64_SYSROOT = os.environ.get("STEWART_AARCH64_SYSROOT", "/usr/aarch64-linux-gnu")
 
 # platform: the FMI 2 folder (None: FMI 3 only), the extension, the C compiler and its
 # flags, the command that runs a program built for it here.
@@ -72,10 +77,14 @@ def windows_path(path):
     return "Z:" + str(path).replace("/", "\\")
 
 
-def resource_uri(path, platform):
-    """The FMU's resources folder as the file URI a host on `platform` passes (percent-encoded;
-    `file:///Z:/...` on Windows)."""
-    text = windows_path(path).replace("\\", "/") if platform == "x86_64-windows" else str(path)
+def resource_location(path, platform, version):
+    """The FMU's resources folder as a host on `platform` passes it: FMI 2 a file URI
+    (percent-encoded; `file:///Z:/...` on Windows), FMI 3 a native path with a trailing
+    separator."""
+    native = windows_path(path) if platform == "x86_64-windows" else str(path)
+    if version == 3:
+        return native + ("\\" if platform == "x86_64-windows" else "/")
+    text = native.replace("\\", "/")
     return "file://" + ("/" if not text.startswith("/") else "") + urllib.parse.quote(text, safe="/:")
 
 
@@ -131,8 +140,7 @@ def ensure_wine_prefix():
     env = wine_environment()
     if not Path(env["WINEPREFIX"], "system.reg").exists():
         subprocess.run([WINE, "wineboot", "--init"], env=env, capture_output=True, timeout=600)
-        server = "/usr/lib/wine/wineserver64"
-        subprocess.run([server, "-w"], env=env, capture_output=True, timeout=600)
+        subprocess.run([WINESERVER, "-w"], env=env, capture_output=True, timeout=600)
 
 
 def run_host(platform, version, platform_binary, controller_binary, uri, script, timeout=600):
@@ -177,10 +185,11 @@ def compare(reference, other):
 
 def tools_missing():
     """The cross tools this machine lacks (tests/setup_cross.sh installs them)."""
-    needed = ["gcc", "x86_64-w64-mingw32-gcc", "aarch64-linux-gnu-gcc", QEMU]
+    needed = ["gcc", "x86_64-w64-mingw32-gcc", "x86_64-w64-mingw32-objdump", "aarch64-linux-gnu-gcc",
+              "aarch64-linux-gnu-nm", QEMU]
     missing = [t for t in needed if shutil.which(t) is None]
     if not Path(WINE).exists():
-        missing.append(WINE)
+        missing.append("wine64")
     if not Path(AARCH64_SYSROOT, "lib", "libc.so.6").exists():
         missing.append(AARCH64_SYSROOT + "/lib/libc.so.6")
     return missing

@@ -21,7 +21,8 @@ from stewart_fmu import CONTROLLER_FMU, NEUTRAL_Z, PLATFORM_FMU
 
 FMI3_DIR = PLATFORM_FMU.parent / "fmi3"
 # An unpacking folder with spaces and characters beyond ASCII: the binaries must find
-# themselves there (Windows: UTF-16 paths) and take such a resource URI.
+# themselves there (Windows: UTF-16 paths) and take such a resource location (FMI 2 a
+# percent-encoded file URI, FMI 3 a native path).
 FOLDER = "Stewart FMU Ünïcödé ✓"
 
 # The scenarios: scripts for the host after the models' declarations. Each names the FMI
@@ -190,7 +191,7 @@ def platforms_of(version):
 def run(setting, version, platform, script):
     p, c, declarations = setting[version]
     binaries = (P.binary(p, version, platform, "StewartPlatform"), P.binary(c, version, platform, "StewartController"))
-    code, out, err = P.run_host(platform, version, *binaries, P.resource_uri(p / "resources", platform),
+    code, out, err = P.run_host(platform, version, *binaries, P.resource_location(p / "resources", platform, version),
                                 declarations + script)
     assert code == 0 and out.endswith("done\n"), f"{platform} FMI {version}: exit {code}\n{out[-2000:]}\n{err[-2000:]}"
     return out
@@ -291,9 +292,11 @@ def test_the_windows_binary_needs_only_windows_own_dlls_and_no_platform_maths(tm
     system = {"kernel32.dll", "ntdll.dll", "msvcrt.dll", "bcryptprimitives.dll", "userenv.dll", "ws2_32.dll",
               "advapi32.dll", "api-ms-win-core-synch-l1-2-0.dll"}
     assert dlls and set(dlls) <= system, dlls
+    assert "kernel32.dll" in dlls
     maths = {"sin", "cos", "tan", "sincos", "asin", "acos", "atan", "atan2", "exp", "expm1", "log", "log2", "pow",
              "tanh", "hypot", "cbrt"}
     imported = {m.group(1) for m in re.finditer(r"^\s+[0-9a-f]+\s+\d+\s+(\S+)$", dump, re.M)}
+    assert "GetModuleFileNameW" in imported, "the import table was read"
     assert not imported & maths, imported & maths
     for so, nm in ((tmp_path / "binaries/linux64/StewartPlatform.so", "nm"),
                    (tmp_path / "binaries/aarch64-linux/StewartPlatform.so", "aarch64-linux-gnu-nm")):
@@ -341,6 +344,7 @@ def test_fmpy_on_arm64_runs_the_aarch64_binary_with_the_bits_of_x86_64(tmp_path,
     assert arm_runs["platform"] == "aarch64-linux" and x86_runs["platform"] == "x86_64-linux"
     for name, rows in x86_runs["runs"].items():
         other = arm_runs["runs"][name]
+        assert [len(r) for r in rows] == [len(r) for r in other], name
         differing = sum(a != b for r, s in zip(rows, other) for a, b in zip(r, s))
         print(f"FMPy FMI 3 {name}: {len(rows)} rows of {len(rows[0])} values, aarch64 (qemu) against x86-64: "
               f"{differing} differ")

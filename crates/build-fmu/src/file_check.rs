@@ -1,8 +1,9 @@
 //! Checks of a binary from its file, whatever its platform (ELF, PE, Mach-O), for binaries
-//! this machine cannot load: it exports every FMI 2.0 and FMI 3.0 function and nothing else;
-//! it imports no transcendental function from the system's C library (the model's maths is
-//! compiled into it, so every platform computes the same bits); it needs only the system's
-//! own libraries. Returns a one-line summary for the build log.
+//! this machine cannot load: it exports the FMI 2.0 and FMI 3.0 functions and nothing else;
+//! it takes no elementary function from a C library, neither imported nor linked in from a
+//! static one such as MinGW's libmingwex (the model's maths is compiled into it, so every
+//! platform computes the same bits); it needs only the system's own libraries, and on Linux no
+//! glibc newer than [`GLIBC_CEILING`]. Returns a one-line summary for the build log.
 
 use std::path::Path;
 
@@ -14,12 +15,27 @@ use crate::binary_check::{REQUIRED_SYMBOLS, REQUIRED_SYMBOLS_FMI3};
 use crate::platforms::{Format, Platform};
 
 /// The C library's functions whose results differ between platforms (they are not required
-/// to be correctly rounded): the FMU must not import any of them.
-pub const PLATFORM_MATHS: [&str; 34] = [
-    "sin", "cos", "tan", "sincos", "asin", "acos", "atan", "atan2", "sinh", "cosh", "tanh", "asinh", "acosh", "atanh",
-    "exp", "exp2", "exp10", "expm1", "log", "log2", "log10", "log1p", "pow", "cbrt", "hypot", "erf", "erfc", "lgamma",
-    "tgamma", "fma", "j0", "j1", "y0", "y1",
+/// to be correctly rounded): the FMU must take none of them from a C library. Their `float`
+/// forms (`sinf`), glibc's `__sin_finite` aliases and Apple's `__sincos_stret` count too
+/// ([`c_maths_name`]).
+#[rustfmt::skip]
+pub const PLATFORM_MATHS: [&str; 35] = [
+    "sin", "cos", "tan", "sincos", "sincos_stret", "asin", "acos", "atan", "atan2", "sinh", "cosh", "tanh", "asinh",
+    "acosh", "atanh", "exp", "exp2", "exp10", "expm1", "log", "log2", "log10", "log1p", "pow", "cbrt", "hypot", "erf",
+    "erfc", "lgamma", "tgamma", "fma", "j0", "j1", "y0", "y1",
 ];
+
+/// The newest glibc the Linux binaries may ask for: Debian 12, Ubuntu 22.04 and RHEL 9 have
+/// it. A toolchain that raises it fails the build instead of silently dropping those systems.
+pub const GLIBC_CEILING: (u32, u32) = (2, 34);
+
+/// `name` as one of [`PLATFORM_MATHS`] if it is a C library's elementary function: leading
+/// underscores, glibc's `_finite` and the `float` suffix `f` removed.
+pub fn c_maths_name(name: &str) -> Option<&'static str> {
+    let bare = name.trim_start_matches('_');
+    let bare = bare.strip_suffix("_finite").unwrap_or(bare);
+    PLATFORM_MATHS.iter().copied().find(|m| *m == bare || bare.strip_suffix('f').is_some_and(|b| b == *m))
+}
 
 /// The DLLs every Windows 10 or newer has (Rust's standard library needs Windows 10:
 /// `ProcessPrng` in `bcryptprimitives.dll`); anything else (MinGW's `libgcc_s_seh-1.dll`,
@@ -40,11 +56,19 @@ const WINDOWS_SYSTEM_DLLS: [&str; 9] = [
 /// (underscore removed): two linker-defined symbols and its compiler runtime's OS-version
 /// checks. macOS binds symbols per library (two-level namespaces), so they cannot stand in
 /// for a host's.
-const ZIG_MACHO_EXPORTS: [&str; 4] = ["_mh_dylib_header", "__dso_handle", "__isOSVersionAtLeast", "__isPlatformVersionAtLeast"];
+const ZIG_MACHO_EXPORTS: [&str; 4] =
+    ["_mh_dylib_header", "__dso_handle", "__isOSVersionAtLeast", "__isPlatformVersionAtLeast"];
 
 /// The GNU/Linux system libraries the binary may need (glibc and GCC's unwinder).
-const LINUX_SYSTEM_LIBRARIES: [&str; 7] =
-    ["libc.so.6", "libm.so.6", "libgcc_s.so.1", "libdl.so.2", "libpthread.so.0", "ld-linux-x86-64.so.2", "ld-linux-aarch64.so.1"];
+const LINUX_SYSTEM_LIBRARIES: [&str; 7] = [
+    "libc.so.6",
+    "libm.so.6",
+    "libgcc_s.so.1",
+    "libdl.so.2",
+    "libpthread.so.0",
+    "ld-linux-x86-64.so.2",
+    "ld-linux-aarch64.so.1",
+];
 
 /// Checks the binary at `path` built for `platform`; the summary names its size, exports and
 /// what it needs from the system.
@@ -67,14 +91,16 @@ pub fn check(path: &Path, platform: &Platform) -> Result<String, String> {
     }
 
     let exports = exported_names(&file)?;
-    for name in REQUIRED_SYMBOLS.iter().chain(REQUIRED_SYMBOLS_FMI3.iter()) {
+    let fmi_functions = || REQUIRED_SYMBOLS.iter().chain(REQUIRED_SYMBOLS_FMI3.iter());
+    for name in fmi_functions() {
         if !exports.iter().any(|e| e == name) {
             return Err(format!("{} does not export {name}", path.display()));
         }
     }
+    // Exactly the standard's names: a stray `fmi2Probe` or a misspelt function is foreign.
     let foreign: Vec<&str> = exports
         .iter()
-        .filter(|e| !(e.starts_with("fmi2") || e.starts_with("fmi3")))
+        .filter(|e| !fmi_functions().any(|f| f == e))
         .filter(|e| !(platform.format == Format::MachO && ZIG_MACHO_EXPORTS.contains(&e.as_str())))
         .map(|e| e.as_str())
         .collect();
@@ -93,19 +119,39 @@ pub fn check(path: &Path, platform: &Platform) -> Result<String, String> {
         .imports()
         .and_then(|table| table.collect::<Result<Vec<_>, _>>())
         .map_err(|e| format!("{}: import table: {e}", path.display()))?;
-    let mut maths: Vec<String> = imports
+    let mut maths: Vec<&str> = imports
         .iter()
-        .filter_map(|i| i.name().name().map(|n| String::from_utf8_lossy(n).trim_start_matches('_').to_string()))
-        .filter(|name| PLATFORM_MATHS.contains(&name.as_str()))
+        .filter_map(|i| i.name().name().and_then(|n| c_maths_name(&String::from_utf8_lossy(n))))
         .collect();
     maths.sort();
     maths.dedup();
     if !maths.is_empty() {
         return Err(format!(
             "{} imports {} from the system's C library: the model's maths must be the crate's own \
-             (stewart_fmu::physics::maths), or the platforms give different numbers",
+             (stewart_fmu::maths), or the platforms give different numbers",
             path.display(),
             maths.join(", ")
+        ));
+    }
+    // A C library's maths linked in (MinGW's libmingwex defines `expm1`, `log2`, `cbrt`, which
+    // msvcrt.dll lacks): its functions keep their C names in the symbol table, which the
+    // release profile keeps (`strip = "debuginfo"`), where the crate's are Rust paths.
+    use object::{ObjectSymbol, ObjectSymbolTable};
+    let table = file.symbol_table().ok_or_else(|| {
+        format!(
+            "{} has no symbol table: nothing shows what is linked into it (build without strip = \"symbols\")",
+            path.display()
+        )
+    })?;
+    let mut linked: Vec<&str> =
+        table.symbols().filter(|s| s.is_definition()).filter_map(|s| s.name().ok().and_then(c_maths_name)).collect();
+    linked.sort();
+    linked.dedup();
+    if !linked.is_empty() {
+        return Err(format!(
+            "{} has a C library's {} linked in: the model's maths must be the crate's own (stewart_fmu::maths)",
+            path.display(),
+            linked.join(", ")
         ));
     }
 
@@ -160,6 +206,9 @@ fn elf_needs(data: &[u8]) -> Result<String, String> {
     if let Some(other) = needed.iter().find(|n| !LINUX_SYSTEM_LIBRARIES.contains(&n.as_str())) {
         return Err(format!("needs {other}, which is not a system library"));
     }
+    if needed.iter().any(|n| n == "libm.so.6") {
+        return Err("needs libm.so.6: the model's maths must be the crate's own (stewart_fmu::maths)".into());
+    }
     // The newest GLIBC_2.N among the version names the dynamic string table holds.
     let mut newest = (2u32, 0u32);
     if let Some(dynstr) = elf.section_by_name(".dynstr") {
@@ -174,6 +223,13 @@ fn elf_needs(data: &[u8]) -> Result<String, String> {
             }
         }
     }
+    if newest > GLIBC_CEILING {
+        return Err(format!(
+            "asks for glibc {}.{}, newer than the {}.{} the FMUs promise (docs/platforms.md): a new toolchain or \
+             dependency raised it",
+            newest.0, newest.1, GLIBC_CEILING.0, GLIBC_CEILING.1
+        ));
+    }
     let needed = if needed.is_empty() { "no library".to_string() } else { needed.join(", ") };
     Ok(format!("{needed} (glibc {}.{} or newer)", newest.0, newest.1))
 }
@@ -184,7 +240,9 @@ fn pe_needs(imports: &[object::Import]) -> Result<String, String> {
     dlls.sort_by_key(|d| d.to_ascii_lowercase());
     dlls.dedup_by_key(|d| d.to_ascii_lowercase());
     if let Some(other) = dlls.iter().find(|d| !WINDOWS_SYSTEM_DLLS.contains(&d.to_ascii_lowercase().as_str())) {
-        return Err(format!("imports {other}, which is not a Windows system DLL (it would have to ship beside the FMU)"));
+        return Err(format!(
+            "imports {other}, which is not a Windows system DLL (it would have to ship beside the FMU)"
+        ));
     }
     Ok(dlls.join(", "))
 }
@@ -215,7 +273,8 @@ fn macho_needs(data: &[u8], imports: &[object::Import]) -> Result<String, String
         return Err(format!("install name {install_name} is absolute (it must be @rpath/... or the file's name)"));
     }
     let minimum = minimum.ok_or("no deployment target (LC_BUILD_VERSION)")?;
-    let mut libraries: Vec<String> = imports.iter().map(|i| String::from_utf8_lossy(i.library()).into_owned()).collect();
+    let mut libraries: Vec<String> =
+        imports.iter().map(|i| String::from_utf8_lossy(i.library()).into_owned()).collect();
     libraries.sort();
     libraries.dedup();
     if let Some(other) = libraries.iter().find(|l| !l.starts_with("/usr/lib/") && !l.starts_with("/System/")) {
@@ -231,26 +290,35 @@ mod tests {
     use std::path::{Path, PathBuf};
     use std::process::Command;
 
-    use super::check;
+    use super::{c_maths_name, check};
     use crate::binary_check::{REQUIRED_SYMBOLS, REQUIRED_SYMBOLS_FMI3};
-    use crate::platforms::{PLATFORMS, Platform};
+    use crate::platforms::{PLATFORMS, Platform, host_triple};
 
     fn platform(name: &str) -> &'static Platform {
         PLATFORMS.iter().find(|p| p.name == name).expect("known platform")
     }
 
-    /// A shared library exporting every FMI function (each returning 0), plus `extra` C code.
-    fn library(compiler: &str, file: &str, extra: &str, libraries: &[&str]) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("build-fmu-file-check-{}-{file}", std::process::id()));
+    /// This machine's platform, which `cc` builds for.
+    fn native() -> &'static str {
+        PLATFORMS.iter().find(|p| p.triple == host_triple()).expect("a known host").name
+    }
+
+    /// A shared library exporting every FMI function (each returning 0 but `fmi2DoStep`, whose
+    /// body is `step`), after the C declarations `head`.
+    fn library(compiler: &str, file: &str, head: &str, step: &str, libraries: &[&str]) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("build-fmu-file-check-{}", std::process::id()));
         std::fs::create_dir_all(&dir).expect("temporary folder");
-        let mut source = String::new();
+        let mut source = String::from(
+            "#ifdef _WIN32\n#define EXPORT __declspec(dllexport)\n#else\n#define EXPORT \
+             __attribute__((visibility(\"default\")))\n#endif\n",
+        );
+        source.push_str(head);
         for name in REQUIRED_SYMBOLS.iter().chain(REQUIRED_SYMBOLS_FMI3.iter()) {
-            source.push_str(&format!("EXPORT int {name}(void) {{ return 0; }}\n"));
+            let body = if *name == "fmi2DoStep" { step } else { "return 0;" };
+            source.push_str(&format!("EXPORT int {name}(void) {{ {body} }}\n"));
         }
-        let prefix = "#ifdef _WIN32\n#define EXPORT __declspec(dllexport)\n#else\n#define EXPORT \
-                      __attribute__((visibility(\"default\")))\n#endif\n";
         let c = dir.join(format!("{file}.c"));
-        std::fs::write(&c, format!("{prefix}{source}{extra}")).expect("write the C file");
+        std::fs::write(&c, source).expect("write the C file");
         let out = dir.join(file);
         let status = Command::new(compiler)
             .args(["-shared", "-fPIC", "-O1", "-fvisibility=hidden", "-o"])
@@ -271,41 +339,73 @@ mod tests {
 
     #[test]
     fn a_library_with_the_fmi_functions_alone_passes_on_linux_and_windows() {
-        let so = library("cc", "plain.so", "", &[]);
-        let summary = checked(&so, "x86_64-linux").expect("a plain library passes");
+        let so = library("cc", "plain.so", "", "return 0;", &[]);
+        let summary = checked(&so, native()).expect("a plain library passes");
         assert!(summary.contains("119 FMI exports and no other"), "{summary}");
-        let dll = library("x86_64-w64-mingw32-gcc", "plain.dll", "", &[]);
+        let dll = library("x86_64-w64-mingw32-gcc", "plain.dll", "", "return 0;", &[]);
         let summary = checked(&dll, "x86_64-windows").expect("a plain DLL passes");
         assert!(summary.contains("KERNEL32.dll"), "{summary}");
-        // The wrong platform is refused: an ELF file is no Windows binary, x86-64 no aarch64.
+        // The wrong platform is refused: an ELF file is no Windows binary, nor of another
+        // architecture.
         assert!(checked(&so, "x86_64-windows").is_err());
-        assert!(checked(&so, "aarch64-linux").is_err());
+        let other = if native() == "aarch64-linux" { "x86_64-linux" } else { "aarch64-linux" };
+        assert!(checked(&so, other).is_err());
     }
 
     #[test]
-    fn the_c_librarys_maths_is_refused() {
-        let extra = "#include <math.h>\nEXPORT double fmi2Probe(double x) { return sin(x) + pow(x, 0.3); }\n";
-        let so = library("cc", "maths.so", extra, &["-lm"]);
-        let error = checked(&so, "x86_64-linux").expect_err("sin and pow from libm");
-        assert!(error.contains("pow, sin"), "{error}");
-        // MinGW's gcc would link its own static `sin`; Rust's standard library imports the
-        // functions from msvcrt.dll, which is what the check must catch.
-        let imported = "__declspec(dllimport) double sin(double);\n__declspec(dllimport) double pow(double, double);\n\
-                        EXPORT double fmi2Probe(double x) { return sin(x) + pow(x, 0.3); }\n";
-        let dll = library("x86_64-w64-mingw32-gcc", "maths.dll", imported, &["-lmsvcrt"]);
+    fn the_c_librarys_maths_is_refused_imported_or_linked_in() {
+        let call = "volatile double x = 0.3; return (int)(sin(x) + pow(x, 0.3));";
+        let so = library("cc", "maths.so", "#include <math.h>\n", call, &["-lm"]);
+        let error = checked(&so, native()).expect_err("sin and pow from libm");
+        assert!(error.contains("imports pow, sin") || error.contains("libm.so.6"), "{error}");
+        // Rust's standard library imports them from msvcrt.dll (MinGW's gcc would link its own).
+        let imported = "__declspec(dllimport) double sin(double);\n__declspec(dllimport) double pow(double, double);\n";
+        let dll = library("x86_64-w64-mingw32-gcc", "maths.dll", imported, call, &["-lmsvcrt"]);
         let error = checked(&dll, "x86_64-windows").expect_err("sin and pow from msvcrt");
-        assert!(error.contains("pow, sin"), "{error}");
+        assert!(error.contains("imports pow, sin"), "{error}");
+        // What msvcrt.dll lacks, MinGW links in from libmingwex: no import, but the C name is
+        // in the symbol table.
+        let call = "volatile double x = 0.3; return (int)(expm1(x) + log2f((float)x));";
+        let dll = library("x86_64-w64-mingw32-gcc", "static.dll", "#include <math.h>\n", call, &[]);
+        let error = checked(&dll, "x86_64-windows").expect_err("expm1 and log2f from libmingwex");
+        assert!(error.contains("expm1") && error.contains("log2"), "{error}");
     }
 
     #[test]
     fn a_function_that_is_not_fmis_or_a_foreign_dll_is_refused() {
-        let so = library("cc", "extra.so", "EXPORT int helper(void) { return 1; }\n", &[]);
-        let error = checked(&so, "x86_64-linux").expect_err("an extra export");
-        assert!(error.contains("helper"), "{error}");
+        let head = "EXPORT int helper(void) { return 1; }\nEXPORT int fmi2Probe(void) { return 2; }\n";
+        let so = library("cc", "extra.so", head, "return 0;", &[]);
+        let error = checked(&so, native()).expect_err("two extra exports");
+        assert!(error.contains("helper") && error.contains("fmi2Probe"), "{error}");
         // A DLL linked to MinGW's shared runtime needs a DLL that Windows does not have.
-        let extra = "#include <pthread.h>\nEXPORT int fmi2Probe(void) { return (int)pthread_self(); }\n";
-        let dll = library("x86_64-w64-mingw32-gcc", "runtime.dll", extra, &["-lpthread"]);
+        let dll = library(
+            "x86_64-w64-mingw32-gcc",
+            "runtime.dll",
+            "#include <pthread.h>\n",
+            "return (int)pthread_self();",
+            &["-lpthread"],
+        );
         let error = checked(&dll, "x86_64-windows").expect_err("libwinpthread-1.dll");
         assert!(error.contains("libwinpthread-1.dll"), "{error}");
+    }
+
+    #[test]
+    fn c_names_of_the_elementary_functions_in_every_spelling() {
+        for (name, found) in [
+            ("sin", Some("sin")),
+            ("_sin", Some("sin")),
+            ("sinf", Some("sin")),
+            ("__exp_finite", Some("exp")),
+            ("___sincos_stret", Some("sincos_stret")),
+            ("log2f", Some("log2")),
+            ("erf", Some("erf")),
+            ("erff", Some("erf")),
+            ("ceil", None),
+            ("sqrt", None),
+            ("fmi2DoStep", None),
+            ("modf", None),
+        ] {
+            assert_eq!(c_maths_name(name), found, "{name}");
+        }
     }
 }

@@ -81,7 +81,11 @@ fn run() -> Result<(), String> {
         }
     }
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..").canonicalize().map_err(|e| e.to_string())?;
-    let target_dir = std::env::var("CARGO_TARGET_DIR").map(PathBuf::from).unwrap_or_else(|_| root.join("target"));
+    // Absolute: the nested builds run in the repository's root, whatever this one's folder.
+    let target_dir = match std::env::var("CARGO_TARGET_DIR") {
+        Ok(dir) => std::env::current_dir().map_err(|e| e.to_string())?.join(dir),
+        Err(_) => root.join("target"),
+    };
 
     let platforms = platforms::selected(targets.as_deref())?;
     let mut binaries = vec![];
@@ -90,7 +94,10 @@ fn run() -> Result<(), String> {
     }
     let native = binaries.iter().find(|b| b.platform.triple == platforms::host_triple()).map(|b| b.path.clone());
     if native.is_none() {
-        println!("build-fmu: this machine's platform ({}) is not among the targets: no binary is loaded to check its tokens", platforms::host_triple());
+        println!(
+            "build-fmu: this machine's platform ({}) is not among the targets: no binary is loaded to check its tokens",
+            platforms::host_triple()
+        );
     }
 
     let out_dir = target_dir.join("fmu");
@@ -110,12 +117,16 @@ fn run() -> Result<(), String> {
         let ssd = std::fs::read_to_string(&ssd_path).map_err(|e| format!("cannot read {}: {e}", ssd_path.display()))?;
         let sources = ssd_check::check(&ssd).map_err(|e| format!("{}: {e}", ssd_path.display()))?;
         let fmus: Vec<PathBuf> = sources.iter().map(|s| out_dir.join(s)).collect();
+        let ssp = out_dir.join(format!("{system}.ssp"));
         if let Some(missing) = fmus.iter().find(|f| !f.exists()) {
-            println!("build-fmu: {system}: {} was not built (no FMI 2 platform among the targets), no SSP", missing.display());
+            println!(
+                "build-fmu: {system}: {} was not built (no FMI 2 platform among the targets), no SSP",
+                missing.display()
+            );
+            let _ = std::fs::remove_file(&ssp);
             continue;
         }
         let fmu_refs: Vec<&Path> = fmus.iter().map(|p| p.as_path()).collect();
-        let ssp = out_dir.join(format!("{system}.ssp"));
         package::write_ssp(&ssp, &ssd, &fmu_refs)?;
         println!("build-fmu: {system} ({} components) -> {}", fmus.len(), ssp.display());
     }
@@ -134,9 +145,17 @@ fn build_binary(platform: &'static Platform, root: &Path, target_dir: &Path) -> 
         platform.name, build.how
     );
     let started = Instant::now();
-    let status = build.command.status().map_err(|e| format!("{}: cannot run {:?}: {e}", platform.name, build.command.get_program()))?;
+    let status = build
+        .command
+        .status()
+        .map_err(|e| format!("{}: cannot run {:?}: {e}", platform.name, build.command.get_program()))?;
     if !status.success() {
-        return Err(format!("{}: the build failed ({:?} {:?})", platform.name, build.command.get_program(), build.command.get_args().collect::<Vec<_>>()));
+        return Err(format!(
+            "{}: the build failed ({:?} {:?})",
+            platform.name,
+            build.command.get_program(),
+            build.command.get_args().collect::<Vec<_>>()
+        ));
     }
     if !build.output.exists() {
         return Err(format!("{}: {} was not built", platform.name, build.output.display()));
@@ -258,7 +277,11 @@ fn build_one_fmi3(
 
 /// `binaries/linux64, binaries/win64` for the build log.
 fn folders(carried: &[(String, PathBuf)]) -> String {
-    carried.iter().map(|(inside, _)| inside.rsplit_once('/').map_or(inside.as_str(), |(dir, _)| dir)).collect::<Vec<_>>().join(", ")
+    carried
+        .iter()
+        .map(|(inside, _)| inside.rsplit_once('/').map_or(inside.as_str(), |(dir, _)| dir))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// The interface tables of `docs/model.md`, which must be those the declarations generate

@@ -20,7 +20,8 @@ pub fn write_fmu(
     let mut zip = zip::ZipWriter::new(file);
     let text = SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
     let executable = text.unix_permissions(0o755);
-    let mut entries: Vec<(&str, &[u8], SimpleFileOptions)> = vec![("modelDescription.xml", model_description.as_bytes(), text)];
+    let mut entries: Vec<(&str, &[u8], SimpleFileOptions)> =
+        vec![("modelDescription.xml", model_description.as_bytes(), text)];
     for ((inside, _), bytes) in binaries.iter().zip(&contents) {
         entries.push((inside, bytes, executable));
     }

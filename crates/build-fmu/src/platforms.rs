@@ -169,7 +169,10 @@ pub fn build_command(platform: &Platform, root: &Path, target_dir: &Path) -> Res
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     if platform.triple == host_triple() {
         let mut command = Command::new(cargo);
-        command.args(["build", "--release", "-p", "stewart_fmu", "--lib"]).current_dir(root);
+        command
+            .args(["build", "--release", "-p", "stewart_fmu", "--lib", "--target-dir"])
+            .arg(target_dir)
+            .current_dir(root);
         return Ok(Build {
             command,
             output: target_dir.join("release").join(platform.built_file),
@@ -303,7 +306,7 @@ fn zig_build(platform: &Platform, root: &Path, cross_dir: &Path, output: PathBuf
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let mut command = Command::new("cargo-zigbuild");
     command
-        .args(["zigbuild", "--release", "-p", "stewart_fmu", "--lib", "--target", platform.triple])
+        .args(["rustc", "--release", "-p", "stewart_fmu", "--lib", "--target", platform.triple])
         .arg("--target-dir")
         .arg(cross_dir)
         .current_dir(root)
@@ -311,11 +314,12 @@ fn zig_build(platform: &Platform, root: &Path, cross_dir: &Path, output: PathBuf
         // rustc strips Apple binaries with rustup's `rust-objcopy`, which other toolchains
         // lack; the release profile compiles no debug information anyway.
         .env("CARGO_PROFILE_RELEASE_STRIP", "none")
-        // zig's Mach-O linker does not take rustc's list of exported symbols: hidden by
-        // default, every symbol but the FMI functions stays inside the library (the standard
-        // library compiled with it, too).
-        // and it names the library by its build path unless told: a relative install name.
-        .env("RUSTFLAGS", "-Zdefault-visibility=hidden -Clink-arg=-Wl,-install_name,@rpath/libstewart_fmu.dylib");
+        // zig's Mach-O linker takes neither rustc's list of exported symbols (so every symbol
+        // but the FMI functions is hidden when compiled, the standard library's too) nor its
+        // install name (so it is given: relative, not the build path). `-Z` needs
+        // RUSTC_BOOTSTRAP on a stable compiler.
+        .env("RUSTFLAGS", "-Zdefault-visibility=hidden -Clink-arg=-Wl,-install_name,@rpath/libstewart_fmu.dylib")
+        .env("RUSTC_BOOTSTRAP", "1");
     let how = if has_target_std(&cargo, platform.triple) {
         format!("cargo zigbuild with the installed {} standard library", platform.triple)
     } else {
@@ -326,9 +330,9 @@ fn zig_build(platform: &Platform, root: &Path, cross_dir: &Path, output: PathBuf
             .arg("-Zbuild-std=std,panic_unwind")
             .env("CARGO", &std_cargo)
             .env("RUSTC", &std_rustc)
-            .env("RUSTC_BOOTSTRAP", "1")
             .env_remove("RUSTUP_TOOLCHAIN");
         format!("cargo zigbuild, {} with the standard library compiled from its source", rustc_version(&std_rustc))
     };
+    command.args(["--", "-D", "warnings"]);
     Ok(Build { command, output, how })
 }

@@ -29,7 +29,6 @@ mod tests;
 use nalgebra::Vector3;
 
 use super::actuators::LegForceLaw;
-use crate::maths;
 use super::actuators::drives::{DriveRate, ElectricDrives};
 use super::body::accelerations::RigidBody;
 use super::body::per_axis::AxisRows;
@@ -42,6 +41,7 @@ use super::legs::joint_limits::JointLimits;
 use super::legs::per_leg::{Lanes, Narrow, PerLeg, components};
 use super::number::{Dual, Real};
 use super::stand::{LEG_COUNT, Stand};
+use crate::maths;
 
 /// A stand with its legs' end stops, and the coefficients a right-hand side needs.
 #[derive(Clone, Debug, PartialEq)]
