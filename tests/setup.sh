@@ -36,11 +36,11 @@ apt_install() {
 require() {
     SETUP_KIND="$1"  # what cross_toolchains installs: the linkers, and for the tests wine and qemu
     local need=()
-    command -v cargo >/dev/null || die "cargo is not installed: install Rust 1.85 or newer (the crate uses edition 2024) with rustup (https://rustup.rs), then open a new shell"
+    command -v cargo >/dev/null || die "cargo is not installed: install Rust 1.95 or newer (the FMU crate uses std::hint::cold_path) with rustup (https://rustup.rs), then open a new shell"
     local rust
     rust=$(rustc --version | awk '{print $2}')
-    if ! printf '1.85.0\n%s\n' "$rust" | sort -V -C; then
-        die "rustc $rust is too old: 1.85 or newer is needed (edition 2024): rustup update"
+    if ! printf '1.95.0\n%s\n' "$rust" | sort -V -C; then
+        die "rustc $rust is too old: 1.95 or newer is needed (std::hint::cold_path): rustup update"
     fi
     command -v python3 >/dev/null || need+=(python3)
     if command -v python3 >/dev/null; then
