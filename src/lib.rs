@@ -33,4 +33,5 @@ pub mod integration;
 pub mod maths;
 pub mod models;
 pub mod physics;
+pub mod simd;
 pub mod simulation;

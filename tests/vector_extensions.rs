@@ -52,7 +52,9 @@ fn run(
 #[test]
 fn avx2_and_baseline_code_give_the_same_bits() {
     let fastest = VectorPath::fastest();
-    if fastest == VectorPath::Baseline {
+    // Fails on an x86-64 processor without AVX2 and FMA unless STEWART_FMU_NO_WIDE=1 says so:
+    // there both runs would take the baseline code and compare nothing.
+    if !stewart_fmu::simd::wide_testable() {
         println!("this build or processor has no AVX2 path: both runs take the baseline code");
     }
     let default = common::simulation(

@@ -1,9 +1,16 @@
-//! The number type the physics is written in: [`Real`], implemented by `f64` (values) and
-//! by [`Dual`] (a value and one directional derivative, forward-mode automatic
-//! differentiation). The right-hand side, the end-stop law and the outputs are written once,
-//! generic over `Real`; evaluated on duals seeded with a direction they give the exact
-//! directional derivative along it (Model Exchange Jacobians, FMI 3 adjoints, output
-//! derivatives), with no hand-derived tangent to keep in step with the physics.
+//! The number types the physics is written in.
+//!
+//! - [`Number`]: what every one has: arithmetic, constants, `sqrt`, comparisons as masks and
+//!   `select`. Implemented by `f64`, by [`Dual`], and by the six legs side by side
+//!   (`crate::physics::legs::per_leg::PerLeg`, in vector registers). A per-leg law written
+//!   over `Number` (the drive law, the leg kinematics) is written once and runs on all three.
+//! - [`Real`]: a `Number` that is one value (`f64`, or [`Dual`]: a value and one directional
+//!   derivative, forward-mode automatic differentiation): ordered, held in `nalgebra`
+//!   vectors, with the elementary functions. The right-hand side, the end-stop law and the
+//!   outputs are written once, generic over `Real`; evaluated on duals seeded with a
+//!   direction they give the exact directional derivative along it (Model Exchange
+//!   Jacobians, FMI 3 adjoints, output derivatives), with no hand-derived tangent to keep in
+//!   step with the physics.
 //!
 //! Branches compare values only (`PartialOrd` of a dual is its value's): at a kink (an end
 //! stop's onset, the clamp of its damper) the derivative is that of the branch taken.
@@ -15,10 +22,42 @@ use num_traits::{One, Zero};
 
 use crate::maths;
 
+/// A number of the physics: one value (`f64`, [`Dual`]) or one per lane (the six legs side by
+/// side). Every operation acts lane by lane with the rounding of the `f64` operation, and
+/// none fuses a multiply-add, so a law gives the same bits in every form.
+pub trait Number:
+    Copy
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Add<f64, Output = Self>
+    + Sub<f64, Output = Self>
+    + Mul<f64, Output = Self>
+    + Div<f64, Output = Self>
+{
+    /// The result of a comparison: `bool` for one value, a lane mask for lanes.
+    type Mask: Copy;
+    /// A constant (derivative zero; the same in every lane).
+    fn constant(x: f64) -> Self;
+    fn sqrt(self) -> Self;
+    /// `self > other` (false where either is NaN), by value.
+    fn greater(self, other: Self) -> Self::Mask;
+    /// `yes` where `mask` holds, else `no`.
+    fn select(mask: Self::Mask, yes: Self, no: Self) -> Self;
+    /// `value` where `self > 0`, else 0 (also where `self` is NaN): a leg's direction and
+    /// its other quantities that vanish with a collapsed leg.
+    #[inline(always)]
+    fn where_positive(self, value: Self) -> Self {
+        let zero = Self::constant(0.0);
+        Self::select(self.greater(zero), value, zero)
+    }
+}
+
 /// A real number of the physics: `f64`, or a [`Dual`] carrying a directional derivative.
 pub trait Real:
-    Scalar
-    + Copy
+    Number<Mask = bool>
+    + Scalar
     + PartialOrd
     + Zero
     + One
@@ -27,16 +66,9 @@ pub trait Real:
     + ClosedMulAssign
     + ClosedDivAssign
     + Neg<Output = Self>
-    + Add<f64, Output = Self>
-    + Sub<f64, Output = Self>
-    + Mul<f64, Output = Self>
-    + Div<f64, Output = Self>
 {
-    /// A constant (derivative zero).
-    fn constant(x: f64) -> Self;
     /// The value (a dual's real part).
     fn value(self) -> f64;
-    fn sqrt(self) -> Self;
     fn abs(self) -> Self;
     fn asin(self) -> Self;
     fn acos(self) -> Self;
@@ -64,18 +96,30 @@ pub trait Real:
     }
 }
 
-impl Real for f64 {
+impl Number for f64 {
+    type Mask = bool;
     #[inline(always)]
     fn constant(x: f64) -> Self {
         x
     }
     #[inline(always)]
-    fn value(self) -> f64 {
-        self
-    }
-    #[inline(always)]
     fn sqrt(self) -> Self {
         f64::sqrt(self)
+    }
+    #[inline(always)]
+    fn greater(self, other: Self) -> bool {
+        self > other
+    }
+    #[inline(always)]
+    fn select(mask: bool, yes: Self, no: Self) -> Self {
+        if mask { yes } else { no }
+    }
+}
+
+impl Real for f64 {
+    #[inline(always)]
+    fn value(self) -> f64 {
+        self
     }
     #[inline(always)]
     fn abs(self) -> Self {
@@ -250,19 +294,31 @@ macro_rules! assign_from_binary {
 
 assign_from_binary!(AddAssign add_assign +, SubAssign sub_assign -, MulAssign mul_assign *, DivAssign div_assign /);
 
-impl Real for Dual {
+impl Number for Dual {
+    type Mask = bool;
     #[inline(always)]
     fn constant(x: f64) -> Self {
         Dual::new(x, 0.0)
     }
     #[inline(always)]
-    fn value(self) -> f64 {
-        self.re
-    }
-    #[inline(always)]
     fn sqrt(self) -> Self {
         let s = self.re.sqrt();
         Dual::new(s, self.eps / (2.0 * s))
+    }
+    #[inline(always)]
+    fn greater(self, other: Self) -> bool {
+        self.re > other.re
+    }
+    #[inline(always)]
+    fn select(mask: bool, yes: Self, no: Self) -> Self {
+        if mask { yes } else { no }
+    }
+}
+
+impl Real for Dual {
+    #[inline(always)]
+    fn value(self) -> f64 {
+        self.re
     }
     #[inline(always)]
     fn abs(self) -> Self {

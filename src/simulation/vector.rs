@@ -26,11 +26,7 @@ pub enum VectorPath {
 impl VectorPath {
     /// The fastest path this build and processor allow.
     pub fn fastest() -> Self {
-        #[cfg(all(target_arch = "x86_64", feature = "avx2"))]
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
-            return VectorPath::Avx2;
-        }
-        VectorPath::Baseline
+        if crate::simd::wide_available() { VectorPath::Avx2 } else { VectorPath::Baseline }
     }
 
     /// `path` if this build and processor allow it, else the baseline.
@@ -79,7 +75,7 @@ unsafe fn integrate_avx2<L: LegForceLaw + ?Sized>(
     dynamics: &PlatformDynamics<'_, L, Narrow>,
     call: Call<'_>,
 ) -> Result<f64, IntegrationError<PhysicsFault>> {
-    let wide = dynamics.in_lanes::<crate::physics::legs::per_leg::Wide>();
+    let wide = dynamics.in_lanes::<crate::simd::Wide>();
     let result = integrator.integrate_until_event(&wide, call.t0, call.y, call.t1, call.log, call.stop_at_restart);
     dynamics.checked_legs.set(wide.checked_legs.get());
     result

@@ -11,7 +11,7 @@ use crate::models::declare::Binding;
 use crate::models::variables::VariableRef;
 use crate::physics::actuators::HeldForces;
 use crate::physics::configuration::ConfigurationGuard;
-use crate::physics::number::{Dual, Real};
+use crate::physics::number::{Dual, Number};
 use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::LEG_COUNT;
 use crate::simulation::outputs::condition_number_tangent;
@@ -118,7 +118,7 @@ impl PlatformModel {
         for (value, u) in out.iter_mut().zip(unknowns) {
             let derivative = match BINDINGS.get(u.group) {
                 _ if u.group == group::KAPPA => Some(dkappa),
-                Some(Binding::Cached { .. } | Binding::Output) => output_element(&outputs, *u).map(|d| d.eps),
+                Some(Binding::Cached { .. }) => output_element(&outputs, *u).map(|d| d.eps),
                 Some(Binding::Derivative) => INFO.derivative_state_index(*u).and_then(|i| rate.get(i)).map(|d| d.eps),
                 _ => None,
             };

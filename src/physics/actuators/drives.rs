@@ -20,7 +20,7 @@
 //! (`crate::integration::LinearDecay`).
 
 use crate::physics::error::ParameterError;
-use crate::physics::number::Real;
+use crate::physics::number::{Number, Real};
 use crate::physics::stand::{LEG_COUNT, check_finite};
 
 /// Default armature resistance, Ohm: a 7.5 kW, 300 V servo motor (25 A continuous); it holds
@@ -118,9 +118,10 @@ impl ElectricDrives {
     }
 
     /// The axial force, the current's rate and the powers of a drive at voltage `u`, current
-    /// `i` and leg rate `l_dot`.
-    #[inline]
-    pub fn rate<T: Real>(&self, voltage: T, current: T, l_dot: T) -> DriveRate<T> {
+    /// `i` and leg rate `l_dot`: the drive law, for one leg (`f64`, `Dual`) or six side by
+    /// side (the step's fast path).
+    #[inline(always)]
+    pub fn rate<T: Number>(&self, voltage: T, current: T, l_dot: T) -> DriveRate<T> {
         let n = self.transmission();
         let omega = l_dot * n;
         DriveRate {

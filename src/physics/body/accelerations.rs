@@ -15,16 +15,17 @@
 //! `p_a = -(c'_(a-1) (e_(a-1)'.e_a') + L_(a+1)/(I_(a-1) + I_a))`, where
 //! `c_a = 2 I_(a+1)/(I_a + I_(a+1))` and `c'_a = 2 I_a/(I_a + I_(a+1))`.
 //!
-//! [`RigidBody::accelerations`] is the definition, generic over the number type;
-//! [`RigidBody::accelerations_in`] computes the same operations in the same order with the
-//! three axes side by side in vector registers (the step's fast path), so the two agree to
-//! the bit (tested).
+//! [`RigidBody::axis_accelerations`] is the law, written once over [`AxisValues`]: the three
+//! axes as a [`crate::physics::body::per_axis::Triple`] of any number type
+//! ([`RigidBody::accelerations`], values and derivatives) or side by side in vector registers
+//! ([`RigidBody::accelerations_in`], the step's fast path); the same operations in the same
+//! order, so the same bits (tested).
 
 use nalgebra::Vector3;
 
-use super::per_axis::{AxisLanes, AxisRows};
+use super::per_axis::{AxisLanes, AxisRows, AxisValues};
 use super::state::BodyState;
-use crate::physics::number::Real;
+use crate::physics::number::{Number, Real};
 use crate::physics::stand::Stand;
 
 /// The stand-dependent coefficients of the special form, computed once per parameter set so
@@ -37,6 +38,8 @@ pub struct RigidBody {
     pub gravity: f64,
     /// `1/(I_a + I_(a+1))`: `1/(I1+I2) = 1/J3`, `1/(I2+I3) = 1/J1`, `1/(I3+I1) = 1/J2`.
     inverse_pair: [f64; 4],
+    /// `1/(I_(a-1) + I_a)`: [`RigidBody::inverse_pair`] of the previous axis.
+    inverse_pair_previous: [f64; 4],
     /// `c_a = 2 I_(a+1)/(I_a + I_(a+1))`, the coupling of `e_a'.e_(a+1)'` into `e_a''`.
     coupling_next: [f64; 4],
     /// `-c'_a`, `c'_a = 2 I_a/(I_a + I_(a+1))` its coupling into `e_(a+1)''`; kept negative,
@@ -58,6 +61,7 @@ impl RigidBody {
             inverse_mass: 1.0 / stand.mass,
             gravity: stand.gravity,
             inverse_pair: [1.0 / (i1 + i2), 1.0 / (i2 + i3), 1.0 / (i3 + i1), 0.0],
+            inverse_pair_previous: [1.0 / (i3 + i1), 1.0 / (i1 + i2), 1.0 / (i2 + i3), 0.0],
             coupling_next: [2.0 * i2 / (i1 + i2), 2.0 * i3 / (i2 + i3), 2.0 * i1 / (i3 + i1), 0.0],
             minus_coupling_previous: [-2.0 * i1 / (i1 + i2), -2.0 * i2 / (i2 + i3), -2.0 * i3 / (i3 + i1), 0.0],
             baumgarte_rate: 0.0,
@@ -73,28 +77,18 @@ impl RigidBody {
         force: &Vector3<T>,
         moment: &Vector3<T>,
     ) -> (Vector3<T>, [Vector3<T>; 3]) {
-        let mut a = force * T::constant(self.inverse_mass);
-        a.z -= T::constant(self.gravity);
-        let (e, d) = (&state.e, &state.e_dot);
-        let l: [T; 3] = std::array::from_fn(|i| e[i].dot(moment));
-        let pairs: [T; 3] = std::array::from_fn(|i| d[i].dot(&d[(i + 1) % 3]));
-        let mut e_dd = std::array::from_fn(|i| {
-            let (next, previous) = ((i + 1) % 3, (i + 2) % 3);
-            let own = T::zero() - d[i].dot(&d[i]);
-            let n = l[previous] * self.inverse_pair[i] - pairs[i] * self.coupling_next[i];
-            let p = pairs[previous] * self.minus_coupling_previous[previous] - l[next] * self.inverse_pair[previous];
-            e[i] * own + e[next] * n + e[previous] * p
-        });
+        let (e, e_dot) = (AxisRows::of_vectors(&state.e), AxisRows::of_vectors(&state.e_dot));
+        let mut e_dd = self.axis_accelerations(&e, &e_dot, &[moment.x, moment.y, moment.z]).to_vectors();
         if self.baumgarte_rate > 0.0 {
             for (e_dd_a, c) in e_dd.iter_mut().zip(self.baumgarte_terms(state)) {
                 *e_dd_a -= c;
             }
         }
-        (a, e_dd)
+        (self.translational(force), e_dd)
     }
 
-    /// [`RigidBody::accelerations`] for `f64` with the axes and their rates given as rows
-    /// (lanes `A`): the same operations in the same order, so the same bits.
+    /// [`RigidBody::accelerations`] for `f64` with the axes and their rates given as rows in
+    /// vector registers (lanes `A`): the same law, so the same bits.
     #[inline(always)]
     pub(crate) fn accelerations_in<A: AxisLanes>(
         &self,
@@ -104,22 +98,43 @@ impl RigidBody {
         force: &Vector3<f64>,
         moment: &Vector3<f64>,
     ) -> (Vector3<f64>, [Vector3<f64>; 3]) {
-        let mut a = force * self.inverse_mass;
-        a.z -= self.gravity;
-        let l = e.dot_with(moment);
-        let pairs = e_dot.dot(&e_dot.next());
-        let inverse = A::load(&self.inverse_pair);
-        let own = A::splat(0.0).sub(e_dot.dot(e_dot));
-        let next = l.previous().mul(inverse).sub(pairs.mul(A::load(&self.coupling_next)));
-        let previous =
-            pairs.mul(A::load(&self.minus_coupling_previous)).previous().sub(l.next().mul(inverse.previous()));
-        let mut e_dd = e.combine(own, next, previous).vectors();
+        let a = self.translational(force);
+        let mut e_dd = self.axis_accelerations(e, e_dot, &[moment.x, moment.y, moment.z]).vectors();
         if self.baumgarte_rate > 0.0 {
             for (e_dd_a, c) in e_dd.iter_mut().zip(self.baumgarte_terms_out_of_line(state)) {
                 *e_dd_a -= c;
             }
         }
         (a, e_dd)
+    }
+
+    /// `r'' = F / M - g ez`.
+    #[inline(always)]
+    fn translational<T: Real>(&self, force: &Vector3<T>) -> Vector3<T> {
+        let mut a = force * T::constant(self.inverse_mass);
+        a.z -= T::constant(self.gravity);
+        a
+    }
+
+    /// The axes' accelerations without the Baumgarte terms, `e_a'' = k_a e_a + n_a e_(a+1) +
+    /// p_a e_(a-1)` (the module's formula), for the axes `e` and their rates `e_dot` as rows
+    /// and the moment `moment`: the one law for every number type and every register.
+    #[inline(always)]
+    pub fn axis_accelerations<X: AxisValues>(
+        &self,
+        e: &AxisRows<X>,
+        e_dot: &AxisRows<X>,
+        moment: &[X::Scalar; 3],
+    ) -> AxisRows<X> {
+        let l = e.dot_with(moment);
+        let pairs = e_dot.dot(&e_dot.next());
+        let own = X::splat(X::Scalar::constant(0.0)).sub(e_dot.dot(e_dot));
+        let next = l.previous().mul_constants(&self.inverse_pair).sub(pairs.mul_constants(&self.coupling_next));
+        let previous = pairs
+            .mul_constants(&self.minus_coupling_previous)
+            .previous()
+            .sub(l.next().mul_constants(&self.inverse_pair_previous));
+        e.combine(own, next, previous)
     }
 
     /// The Baumgarte terms for the fast path, out of line so that the right-hand side without

@@ -7,252 +7,161 @@
 //! (lane `a` holds axis `a+1`'s value), the dot products are lanewise products and sums,
 //! and the combination is lane rotations: no sums across a register (fewer instructions than
 //! `nalgebra` three-vectors or plain arrays, which the compiler splits into scalars, shuffles
-//! and spills). As for [`crate::physics::legs::per_leg`], the lanes are written out by hand:
-//! `Pair` holds the three lanes (and a padding lane) in two SSE2 registers, for every x86-64;
-//! `Quad` in one AVX register, for the steps' AVX2 path only. Every operation is
-//! lanewise and exactly rounded, and [`AxisLanes::sum3`] adds in one fixed order, so both
-//! give the same bits.
+//! and spills). The lanes are `crate::simd`'s: `Pair` (two SSE2 registers, every x86-64),
+//! `Quad` (one AVX register, the steps' AVX2 path only); every operation is lanewise and
+//! exactly rounded, and [`AxisLanes::sum3`] adds in one fixed order, so both give the same bits.
 
 use nalgebra::Vector3;
 
-#[cfg(target_arch = "x86_64")]
-mod lanes {
-    use core::arch::x86_64::{
-        __m128d, __m256d, _mm_add_pd, _mm_cvtsd_f64, _mm_loadu_pd, _mm_mul_pd, _mm_set_pd, _mm_set1_pd, _mm_shuffle_pd,
-        _mm_storeu_pd, _mm_sub_pd, _mm_unpackhi_pd, _mm256_add_pd, _mm256_loadu_pd, _mm256_mul_pd,
-        _mm256_permute4x64_pd, _mm256_set_pd, _mm256_set1_pd, _mm256_storeu_pd, _mm256_sub_pd,
-    };
+use crate::physics::number::{Number, Real};
 
-    /// Axes 1-2 and 3 (and the padding lane) in two SSE2 registers.
-    #[derive(Clone, Copy)]
-    pub struct Pair(__m128d, __m128d);
+pub use crate::simd::{AxisLanes, Pair};
 
-    // SAFETY (every `unsafe` block of this impl): SSE2 is part of the x86-64 baseline.
-    impl super::AxisLanes for Pair {
-        #[inline(always)]
-        fn new(x: [f64; 3]) -> Self {
-            unsafe { Pair(_mm_set_pd(x[1], x[0]), _mm_set_pd(0.0, x[2])) }
-        }
-
-        #[inline(always)]
-        fn load(x: &[f64; 4]) -> Self {
-            unsafe { Pair(_mm_loadu_pd(x.as_ptr()), _mm_loadu_pd(x.as_ptr().add(2))) }
-        }
-
-        #[inline(always)]
-        fn splat(x: f64) -> Self {
-            unsafe { Pair(_mm_set1_pd(x), _mm_set1_pd(x)) }
-        }
-
-        #[inline(always)]
-        fn add(self, o: Self) -> Self {
-            unsafe { Pair(_mm_add_pd(self.0, o.0), _mm_add_pd(self.1, o.1)) }
-        }
-
-        #[inline(always)]
-        fn sub(self, o: Self) -> Self {
-            unsafe { Pair(_mm_sub_pd(self.0, o.0), _mm_sub_pd(self.1, o.1)) }
-        }
-
-        #[inline(always)]
-        fn mul(self, o: Self) -> Self {
-            unsafe { Pair(_mm_mul_pd(self.0, o.0), _mm_mul_pd(self.1, o.1)) }
-        }
-
-        /// `[x1, x2, x0, x3]`: `_mm_shuffle_pd(a, b, m)` is `[a[m & 1], b[m >> 1]]`.
-        #[inline(always)]
-        fn next(self) -> Self {
-            unsafe { Pair(_mm_shuffle_pd::<0b01>(self.0, self.1), _mm_shuffle_pd::<0b10>(self.0, self.1)) }
-        }
-
-        /// `[x2, x0, x1, x3]`.
-        #[inline(always)]
-        fn previous(self) -> Self {
-            unsafe { Pair(_mm_shuffle_pd::<0b00>(self.1, self.0), _mm_shuffle_pd::<0b11>(self.0, self.1)) }
-        }
-
-        #[inline(always)]
-        fn sum3(self) -> f64 {
-            unsafe { (_mm_cvtsd_f64(self.0) + _mm_cvtsd_f64(_mm_unpackhi_pd(self.0, self.0))) + _mm_cvtsd_f64(self.1) }
-        }
-
-        #[inline(always)]
-        fn to_array(self) -> [f64; 4] {
-            let mut x = [0.0; 4];
-            unsafe {
-                _mm_storeu_pd(x.as_mut_ptr(), self.0);
-                _mm_storeu_pd(x.as_mut_ptr().add(2), self.1);
-            }
-            x
-        }
-    }
-
-    /// The three axes (and the padding lane) in one AVX register.
-    ///
-    /// Only for code compiled with AVX2 enabled and run where the processor has it: the steps'
-    /// AVX2 path (see `crate::physics::legs::per_leg::Wide`, which names this type as its
-    /// axes). Written without closures, so that all of it inlines there.
-    #[derive(Clone, Copy)]
-    #[cfg_attr(not(feature = "avx2"), allow(dead_code))]
-    pub struct Quad(__m256d);
-
-    // SAFETY (every `unsafe` block of this impl): a `Quad` exists only where AVX2 runs (above).
-    impl super::AxisLanes for Quad {
-        #[inline(always)]
-        fn new(x: [f64; 3]) -> Self {
-            unsafe { Quad(_mm256_set_pd(0.0, x[2], x[1], x[0])) }
-        }
-
-        #[inline(always)]
-        fn load(x: &[f64; 4]) -> Self {
-            unsafe { Quad(_mm256_loadu_pd(x.as_ptr())) }
-        }
-
-        #[inline(always)]
-        fn splat(x: f64) -> Self {
-            unsafe { Quad(_mm256_set1_pd(x)) }
-        }
-
-        #[inline(always)]
-        fn add(self, o: Self) -> Self {
-            unsafe { Quad(_mm256_add_pd(self.0, o.0)) }
-        }
-
-        #[inline(always)]
-        fn sub(self, o: Self) -> Self {
-            unsafe { Quad(_mm256_sub_pd(self.0, o.0)) }
-        }
-
-        #[inline(always)]
-        fn mul(self, o: Self) -> Self {
-            unsafe { Quad(_mm256_mul_pd(self.0, o.0)) }
-        }
-
-        /// Lanes `[1, 2, 0, 3]`.
-        #[inline(always)]
-        fn next(self) -> Self {
-            unsafe { Quad(_mm256_permute4x64_pd::<0b11_00_10_01>(self.0)) }
-        }
-
-        /// Lanes `[2, 0, 1, 3]`.
-        #[inline(always)]
-        fn previous(self) -> Self {
-            unsafe { Quad(_mm256_permute4x64_pd::<0b11_01_00_10>(self.0)) }
-        }
-
-        #[inline(always)]
-        fn sum3(self) -> f64 {
-            let x = self.to_array();
-            (x[0] + x[1]) + x[2]
-        }
-
-        #[inline(always)]
-        fn to_array(self) -> [f64; 4] {
-            let mut x = [0.0; 4];
-            unsafe { _mm256_storeu_pd(x.as_mut_ptr(), self.0) };
-            x
-        }
-    }
-}
-
-#[cfg(not(target_arch = "x86_64"))]
-mod lanes {
-    /// Four plain values, with the operations and the order of the sum of the x86-64 forms.
-    #[derive(Clone, Copy)]
-    pub struct Pair([f64; 4]);
-
-    /// No wider registers here: the same four values.
-    #[allow(dead_code)] // named only by the AVX2 path, which is x86-64 only
-    pub type Quad = Pair;
-
-    impl super::AxisLanes for Pair {
-        #[inline(always)]
-        fn new(x: [f64; 3]) -> Self {
-            Pair([x[0], x[1], x[2], 0.0])
-        }
-
-        #[inline(always)]
-        fn load(x: &[f64; 4]) -> Self {
-            Pair(*x)
-        }
-
-        #[inline(always)]
-        fn splat(x: f64) -> Self {
-            Pair([x; 4])
-        }
-
-        #[inline(always)]
-        fn add(self, o: Self) -> Self {
-            Pair(std::array::from_fn(|k| self.0[k] + o.0[k]))
-        }
-
-        #[inline(always)]
-        fn sub(self, o: Self) -> Self {
-            Pair(std::array::from_fn(|k| self.0[k] - o.0[k]))
-        }
-
-        #[inline(always)]
-        fn mul(self, o: Self) -> Self {
-            Pair(std::array::from_fn(|k| self.0[k] * o.0[k]))
-        }
-
-        #[inline(always)]
-        fn next(self) -> Self {
-            let x = self.0;
-            Pair([x[1], x[2], x[0], x[3]])
-        }
-
-        #[inline(always)]
-        fn previous(self) -> Self {
-            let x = self.0;
-            Pair([x[2], x[0], x[1], x[3]])
-        }
-
-        #[inline(always)]
-        fn sum3(self) -> f64 {
-            (self.0[0] + self.0[1]) + self.0[2]
-        }
-
-        #[inline(always)]
-        fn to_array(self) -> [f64; 4] {
-            self.0
-        }
-    }
-}
-
-/// How three per-axis values (lane `a` for axis `a+1`, and a padding lane that takes part in
-/// the arithmetic and is never read) are held and operated on: `Pair` (SSE2, every x86-64)
-/// or `Quad` (AVX2). Both give the same bits.
-pub trait AxisLanes: Copy {
-    fn new(x: [f64; 3]) -> Self;
-    /// Four lanes read as they are stored (for per-axis constants kept padded).
-    fn load(x: &[f64; 4]) -> Self;
-    fn splat(x: f64) -> Self;
+/// Three per-axis values (lane `a` for axis `a+1`) as the special form's per-axis law needs
+/// them: lanewise arithmetic and the rotations to the next and previous axis. Implemented by
+/// the registers ([`AxisLanes`], `f64`) and by [`Triple`] (any [`Real`], duals included), so
+/// the law is written once ([`crate::physics::body::accelerations::RigidBody::axis_accelerations`]).
+pub trait AxisValues: Copy {
+    /// The number of one lane.
+    type Scalar: Number;
+    fn splat(x: Self::Scalar) -> Self;
     fn add(self, other: Self) -> Self;
     fn sub(self, other: Self) -> Self;
     fn mul(self, other: Self) -> Self;
-    /// Lane `a` takes the value of axis `a+1` (mod 3): `[x2, x3, x1]` for axes 1, 2, 3.
+    /// Lane `a` times the constant `c[a]` (the fourth, padding, lane of `c` ignored).
+    fn mul_constants(self, c: &[f64; 4]) -> Self;
+    /// Lane `a` takes the value of axis `a+1` (mod 3).
     fn next(self) -> Self;
-    /// Lane `a` takes the value of axis `a-1` (mod 3): `[x3, x1, x2]`.
+    /// Lane `a` takes the value of axis `a-1` (mod 3).
     fn previous(self) -> Self;
-    /// `(x1 + x2) + x3`.
-    fn sum3(self) -> f64;
-    /// The lanes, padding last.
-    fn to_array(self) -> [f64; 4];
 }
 
-pub use lanes::Pair;
-// Crate-private: its operations execute AVX2 instructions.
-#[cfg_attr(not(all(target_arch = "x86_64", feature = "avx2")), allow(unused_imports))]
-pub(crate) use lanes::Quad;
+impl<A: AxisLanes> AxisValues for A {
+    type Scalar = f64;
+    #[inline(always)]
+    fn splat(x: f64) -> Self {
+        AxisLanes::splat(x)
+    }
+    #[inline(always)]
+    fn add(self, other: Self) -> Self {
+        AxisLanes::add(self, other)
+    }
+    #[inline(always)]
+    fn sub(self, other: Self) -> Self {
+        AxisLanes::sub(self, other)
+    }
+    #[inline(always)]
+    fn mul(self, other: Self) -> Self {
+        AxisLanes::mul(self, other)
+    }
+    #[inline(always)]
+    fn mul_constants(self, c: &[f64; 4]) -> Self {
+        AxisLanes::mul(self, A::load(c))
+    }
+    #[inline(always)]
+    fn next(self) -> Self {
+        AxisLanes::next(self)
+    }
+    #[inline(always)]
+    fn previous(self) -> Self {
+        AxisLanes::previous(self)
+    }
+}
+
+/// Three per-axis values of one number type, one after the other.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Triple<T>(pub [T; 3]);
+
+impl<T: Real> AxisValues for Triple<T> {
+    type Scalar = T;
+    #[inline(always)]
+    fn splat(x: T) -> Self {
+        Triple([x; 3])
+    }
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        Triple(std::array::from_fn(|a| self.0[a] + o.0[a]))
+    }
+    #[inline(always)]
+    fn sub(self, o: Self) -> Self {
+        Triple(std::array::from_fn(|a| self.0[a] - o.0[a]))
+    }
+    #[inline(always)]
+    fn mul(self, o: Self) -> Self {
+        Triple(std::array::from_fn(|a| self.0[a] * o.0[a]))
+    }
+    #[inline(always)]
+    fn mul_constants(self, c: &[f64; 4]) -> Self {
+        Triple(std::array::from_fn(|a| self.0[a] * c[a]))
+    }
+    #[inline(always)]
+    fn next(self) -> Self {
+        let [x1, x2, x3] = self.0;
+        Triple([x2, x3, x1])
+    }
+    #[inline(always)]
+    fn previous(self) -> Self {
+        let [x1, x2, x3] = self.0;
+        Triple([x3, x1, x2])
+    }
+}
 
 /// Three vectors given one per axis (`e1, e2, e3`, or their rates) as rows: `x` holds their
 /// three x components, lane `a` for axis `a+1` (a 3x3 transpose).
 #[derive(Clone, Copy)]
-pub struct AxisRows<A: AxisLanes> {
+pub struct AxisRows<A: AxisValues> {
     pub x: A,
     pub y: A,
     pub z: A,
+}
+
+impl<X: AxisValues> AxisRows<X> {
+    /// Lane `a`: `v_a . w_a`, summed `(x + y) + z` as `nalgebra`'s `dot`.
+    #[inline(always)]
+    pub fn dot(&self, w: &Self) -> X {
+        self.x.mul(w.x).add(self.y.mul(w.y)).add(self.z.mul(w.z))
+    }
+
+    /// Lane `a`: `v_a . m` for one vector `m`.
+    #[inline(always)]
+    pub fn dot_with(&self, m: &[X::Scalar; 3]) -> X {
+        self.x.mul(X::splat(m[0])).add(self.y.mul(X::splat(m[1]))).add(self.z.mul(X::splat(m[2])))
+    }
+
+    /// The rows of `v_(a+1)`: lane `a` holds the next axis's vector.
+    #[inline(always)]
+    pub fn next(&self) -> Self {
+        AxisRows { x: self.x.next(), y: self.y.next(), z: self.z.next() }
+    }
+
+    /// Rows of `u_a = own_a v_a + next_a v_(a+1) + previous_a v_(a-1)`: each axis's
+    /// combination of the three vectors, with per-axis coefficients.
+    #[inline(always)]
+    pub fn combine(&self, own: X, next: X, previous: X) -> Self {
+        AxisRows {
+            x: self.x.mul(own).add(self.x.next().mul(next)).add(self.x.previous().mul(previous)),
+            y: self.y.mul(own).add(self.y.next().mul(next)).add(self.y.previous().mul(previous)),
+            z: self.z.mul(own).add(self.z.next().mul(next)).add(self.z.previous().mul(previous)),
+        }
+    }
+}
+
+impl<T: Real> AxisRows<Triple<T>> {
+    #[inline(always)]
+    pub fn of_vectors(v: &[Vector3<T>; 3]) -> Self {
+        AxisRows {
+            x: Triple([v[0].x, v[1].x, v[2].x]),
+            y: Triple([v[0].y, v[1].y, v[2].y]),
+            z: Triple([v[0].z, v[1].z, v[2].z]),
+        }
+    }
+
+    /// The three vectors back: `[v1, v2, v3]`.
+    #[inline(always)]
+    pub fn to_vectors(&self) -> [Vector3<T>; 3] {
+        let (x, y, z) = (self.x.0, self.y.0, self.z.0);
+        std::array::from_fn(|a| Vector3::new(x[a], y[a], z[a]))
+    }
 }
 
 impl<A: AxisLanes> AxisRows<A> {
@@ -286,44 +195,19 @@ impl<A: AxisLanes> AxisRows<A> {
         [Vector3::new(x[0], y[0], z[0]), Vector3::new(x[1], y[1], z[1]), Vector3::new(x[2], y[2], z[2])]
     }
 
-    /// Lane `a`: `v_a . w_a`, summed `(x + y) + z` as `nalgebra`'s `dot`.
-    #[inline(always)]
-    pub fn dot(&self, w: &Self) -> A {
-        self.x.mul(w.x).add(self.y.mul(w.y)).add(self.z.mul(w.z))
-    }
-
-    /// Lane `a`: `v_a . m` for one vector `m`.
-    #[inline(always)]
-    pub fn dot_with(&self, m: &Vector3<f64>) -> A {
-        self.x.mul(A::splat(m.x)).add(self.y.mul(A::splat(m.y))).add(self.z.mul(A::splat(m.z)))
-    }
-
-    /// The rows of `v_(a+1)`: lane `a` holds the next axis's vector.
-    #[inline(always)]
-    pub fn next(&self) -> Self {
-        AxisRows { x: self.x.next(), y: self.y.next(), z: self.z.next() }
-    }
-
     /// `m . sum_a (v_a x w_a)`: the three cross products lanewise (as `nalgebra`'s), dotted
     /// with `m` lanewise, then one sum over the axes (one sum across the lanes, where summing
     /// the cross products first takes three).
     #[inline(always)]
     pub fn cross_sum_dot(&self, w: &Self, m: &Vector3<f64>) -> f64 {
-        let x = self.y.mul(w.z).sub(self.z.mul(w.y));
-        let y = self.z.mul(w.x).sub(self.x.mul(w.z));
-        let z = self.x.mul(w.y).sub(self.y.mul(w.x));
-        x.mul(A::splat(m.x)).add(y.mul(A::splat(m.y))).add(z.mul(A::splat(m.z))).sum3()
-    }
-
-    /// Rows of `u_a = own_a v_a + next_a v_(a+1) + previous_a v_(a-1)`: each axis's
-    /// combination of the three vectors, with per-axis coefficients.
-    #[inline(always)]
-    pub fn combine(&self, own: A, next: A, previous: A) -> Self {
-        AxisRows {
-            x: self.x.mul(own).add(self.x.next().mul(next)).add(self.x.previous().mul(previous)),
-            y: self.y.mul(own).add(self.y.next().mul(next)).add(self.y.previous().mul(previous)),
-            z: self.z.mul(own).add(self.z.next().mul(next)).add(self.z.previous().mul(previous)),
-        }
+        // The lanes' own operations (`AxisValues` names the same ones).
+        let (mul, add, sub, splat) =
+            (<A as AxisLanes>::mul, <A as AxisLanes>::add, <A as AxisLanes>::sub, <A as AxisLanes>::splat);
+        let (u, v) = (self, w);
+        let x = sub(mul(u.y, v.z), mul(u.z, v.y));
+        let y = sub(mul(u.z, v.x), mul(u.x, v.z));
+        let z = sub(mul(u.x, v.y), mul(u.y, v.x));
+        add(add(mul(x, splat(m.x)), mul(y, splat(m.y))), mul(z, splat(m.z))).sum3()
     }
 }
 
@@ -348,7 +232,7 @@ mod tests {
         let dots = rv.dot(&rw).to_array();
         let next = rv.dot(&rv.next()).to_array();
         let m = Vector3::new(0.9, -0.2, 0.4);
-        let with = rv.dot_with(&m).to_array();
+        let with = rv.dot_with(&[m.x, m.y, m.z]).to_array();
         for a in 0..3 {
             assert_eq!(dots[a], v[a].dot(&w[a]));
             assert_eq!(next[a], v[a].dot(&v[(a + 1) % 3]));
@@ -367,25 +251,25 @@ mod tests {
 
     /// The AVX2 lanes give the bits of the SSE2 ones, where the processor has AVX2.
     #[test]
-    #[cfg(target_arch = "x86_64")]
     fn quad_lanes_equal_pair_lanes() {
-        if !std::arch::is_x86_feature_detected!("avx2") {
+        use crate::simd::Quad;
+        if !crate::simd::wide_testable() {
             return;
         }
         let v = vectors();
         let w = [v[2], v[0] * 3.0, v[1] - v[2]];
         let (pv, pw) = (AxisRows::<Pair>::of(&v), AxisRows::<Pair>::of(&w));
-        // AVX2 detected above: `Quad`'s operations may run.
+        // AVX2 checked above: `Quad`'s operations may run.
         let (qv, qw) = (AxisRows::<Quad>::of(&v), AxisRows::<Quad>::of(&w));
         assert_eq!(pv.dot(&pw).to_array()[..3], qv.dot(&qw).to_array()[..3]);
         assert_eq!(pv.next().x.to_array()[..3], qv.next().x.to_array()[..3]);
-        assert_eq!(pv.x.previous().to_array()[..3], qv.x.previous().to_array()[..3]);
+        assert_eq!(AxisLanes::previous(pv.x).to_array()[..3], AxisLanes::previous(qv.x).to_array()[..3]);
         let m = Vector3::new(0.25, -1.5, 3.0);
         assert_eq!(pv.cross_sum_dot(&pw, &m), qv.cross_sum_dot(&qw, &m));
         let c = [0.5, -2.0, 1.25];
         let (p, q) = (
-            pv.combine(Pair::new(c), Pair::splat(0.75), pw.x).vectors(),
-            qv.combine(Quad::new(c), Quad::splat(0.75), qw.x).vectors(),
+            pv.combine(Pair::new(c), <Pair as AxisLanes>::splat(0.75), pw.x).vectors(),
+            qv.combine(Quad::new(c), <Quad as AxisLanes>::splat(0.75), qw.x).vectors(),
         );
         assert_eq!(p, q);
     }

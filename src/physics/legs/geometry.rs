@@ -6,8 +6,9 @@ use nalgebra::{Scalar, Vector3};
 
 use super::per_leg::{Lanes, Narrow, PerLeg, components};
 use crate::physics::body::state::BodyState;
-use crate::physics::number::{Real, lift};
+use crate::physics::number::{Number, Real};
 use crate::physics::stand::{LEG_COUNT, Stand};
+use crate::simd::Plain;
 
 /// Geometry of the six legs for one state, in the number type `T`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -29,14 +30,12 @@ impl<T: Real> LegGeometry<T> {
         let mut leg = [Vector3::zeros(); LEG_COUNT];
         let mut length = [T::zero(); LEG_COUNT];
         let mut direction = [Vector3::zeros(); LEG_COUNT];
+        let (e, r) = (state.e.map(|v| [v.x, v.y, v.z]), [state.r.x, state.r.y, state.r.z]);
         for k in 0..LEG_COUNT {
-            arm[k] = state.body_vector(&stand.platform_joints[k]);
-            leg[k] = state.r + arm[k] - lift(&stand.base_joints[k]);
-            length[k] = leg[k].dot(&leg[k]).sqrt();
-            // One division, three multiplications.
-            if length[k] > T::zero() {
-                direction[k] = leg[k] * (T::one() / length[k]);
-            }
+            let joints = (constants(&stand.platform_joints[k]), constants(&stand.base_joints[k]));
+            let (a, l, len) = leg_vectors(&e, &r, &joints.0, &joints.1);
+            let n = unit_direction(&l, len, T::one() / len);
+            (arm[k], leg[k], length[k], direction[k]) = (Vector3::from(a), Vector3::from(l), len, Vector3::from(n));
         }
         LegGeometry { arm, leg, length, direction }
     }
@@ -44,8 +43,47 @@ impl<T: Real> LegGeometry<T> {
     /// Leg length rates `dl_k/dt = n_k . (v + d(R A_k)/dt)`, m/s.
     #[inline(always)]
     pub fn length_rates(&self, stand: &Stand, state: &BodyState<T>) -> [T; LEG_COUNT] {
-        std::array::from_fn(|k| self.direction[k].dot(&(state.v + state.body_vector_rate(&stand.platform_joints[k]))))
+        let (v, e_dot) = ([state.v.x, state.v.y, state.v.z], state.e_dot.map(|w| [w.x, w.y, w.z]));
+        std::array::from_fn(|k| {
+            let n = [self.direction[k].x, self.direction[k].y, self.direction[k].z];
+            length_rate(&v, &e_dot, &constants(&stand.platform_joints[k]), &n).0
+        })
     }
+}
+
+/// The laws of one leg, written once over [`Number`]: one leg in `f64` or
+/// [`crate::physics::number::Dual`] ([`LegGeometry`]), or six side by side ([`PerLeg`]: the
+/// step's fast path in vector registers, the checks' arrays in [`Plain`] lanes); the same
+/// arithmetic in every form, so the same bits.
+///
+/// The leg's arm `R A = e1 A_1 + e2 A_2 + e3 A_3` (inertial components), its vector
+/// `a - B = r + R A - B` and its length, for the body axes `e[axis][component]`, the centre of
+/// mass `r`, the platform joint `a` (body frame) and the base joint `b`, m.
+#[inline(always)]
+pub fn leg_vectors<T: Number>(e: &[[T; 3]; 3], r: &[T; 3], a: &[T; 3], b: &[T; 3]) -> ([T; 3], [T; 3], T) {
+    let arm = components!(|c| e[0][c] * a[0] + e[1][c] * a[1] + e[2][c] * a[2]);
+    let leg = components!(|c| r[c] + arm[c] - b[c]);
+    (arm, leg, (leg[0] * leg[0] + leg[1] * leg[1] + leg[2] * leg[2]).sqrt())
+}
+
+/// The leg's unit direction `n = (a - B) / l`, 0 for a collapsed leg (never NaN).
+#[inline(always)]
+pub fn unit_direction<T: Number>(leg: &[T; 3], length: T, inverse_length: T) -> [T; 3] {
+    components!(|c| length.where_positive(leg[c] * inverse_length))
+}
+
+/// The leg's length rate `dl/dt = n . (v + d(R A)/dt)`, m/s, and the platform joint's velocity
+/// `v + e1' A_1 + e2' A_2 + e3' A_3`, for the body axes' rates `e_dot[axis][component]`.
+#[inline(always)]
+pub fn length_rate<T: Number>(v: &[T; 3], e_dot: &[[T; 3]; 3], a: &[T; 3], n: &[T; 3]) -> (T, [T; 3]) {
+    let velocity = components!(|c| v[c] + (e_dot[0][c] * a[0] + e_dot[1][c] * a[1] + e_dot[2][c] * a[2]));
+    (n[0] * velocity[0] + n[1] * velocity[1] + n[2] * velocity[2], velocity)
+}
+
+/// A point's coordinates as constants of the number type.
+#[inline(always)]
+fn constants<T: Number>(p: &Vector3<f64>) -> [T; 3] {
+    [T::constant(p.x), T::constant(p.y), T::constant(p.z)]
 }
 
 impl LegGeometry {
@@ -85,47 +123,34 @@ impl JointArrays {
     /// length), so arms, legs and lengths are equal to the bit.
     #[inline(always)]
     pub fn legs<L: Lanes>(&self, state: &BodyState) -> LegLanes<L> {
-        let [e1, e2, e3] = &state.e;
-        let a = components!(|c| PerLeg::<L>::new(&self.platform[c]));
-        let arm =
-            components!(|c| PerLeg::splat(e1[c]) * a[0] + PerLeg::splat(e2[c]) * a[1] + PerLeg::splat(e3[c]) * a[2]);
-        let leg = components!(|c| PerLeg::splat(state.r[c]) + arm[c] - PerLeg::new(&self.base[c]));
-        let length = (leg[0] * leg[0] + leg[1] * leg[1] + leg[2] * leg[2]).sqrt();
+        let e = components!(|axis| components!(|c| PerLeg::<L>::splat(state.e[axis][c])));
+        let r = components!(|c| PerLeg::splat(state.r[c]));
+        let (a, b) = (components!(|c| PerLeg::new(&self.platform[c])), components!(|c| PerLeg::new(&self.base[c])));
+        let (arm, leg, length) = leg_vectors(&e, &r, &a, &b);
         LegLanes { arm, leg, length }
     }
 
     /// [`JointArrays::legs`] as plain arrays, with the inverse lengths, for the checks at the
-    /// end of a step (the guard, the switching functions, the outputs). Written as loops over
-    /// arrays rather than through [`PerLeg`], which compile to fewer instructions here; the
-    /// same arithmetic in the same order, so the two are equal to the bit (tested).
+    /// end of a step (the guard, the switching functions, the outputs): the same law in
+    /// [`Plain`] lanes (loops over arrays, which compile to fewer instructions here than the
+    /// SSE2 pairs), so the same bits.
     #[inline(always)]
     pub fn kinematics(&self, state: &BodyState) -> LegKinematics {
-        let (a, b) = (&self.platform, &self.base);
-        let [e1, e2, e3] = &state.e;
-        let mut arm = [[0.0; LEG_COUNT]; 3];
-        let mut leg = [[0.0; LEG_COUNT]; 3];
-        for c in 0..3 {
-            for k in 0..LEG_COUNT {
-                arm[c][k] = e1[c] * a[0][k] + e2[c] * a[1][k] + e3[c] * a[2][k];
-                leg[c][k] = state.r[c] + arm[c][k] - b[c][k];
-            }
-        }
-        let mut length = [0.0; LEG_COUNT];
-        let mut inverse_length = [0.0; LEG_COUNT];
-        for k in 0..LEG_COUNT {
-            length[k] = (leg[0][k] * leg[0][k] + leg[1][k] * leg[1][k] + leg[2][k] * leg[2][k]).sqrt();
-            inverse_length[k] = 1.0 / length[k];
-        }
-        LegKinematics { arm, leg, length, inverse_length }
+        self.kinematics_in::<Plain>(state)
     }
 
     /// [`JointArrays::kinematics`], computed in lanes `V` where they are cheaper for it
-    /// ([`Lanes::FOR_CHECKS`]); the same bits either way.
+    /// ([`Lanes::FOR_CHECKS`]), else in [`Plain`] lanes; the same bits either way.
     #[inline(always)]
     pub fn kinematics_in<V: Lanes>(&self, state: &BodyState) -> LegKinematics {
         if !V::FOR_CHECKS {
-            return self.kinematics(state);
+            return self.kinematics_lanes::<Plain>(state);
         }
+        self.kinematics_lanes::<V>(state)
+    }
+
+    #[inline(always)]
+    fn kinematics_lanes<V: Lanes>(&self, state: &BodyState) -> LegKinematics {
         let LegLanes { arm, leg, length } = self.legs::<V>(state);
         LegKinematics {
             arm: components!(|c| arm[c].to_array()),
@@ -173,14 +198,12 @@ impl JointArrays {
         length: PerLeg<V>,
         inverse_length: PerLeg<V>,
     ) -> ([PerLeg<V>; 3], PerLeg<V>, [PerLeg<V>; 3]) {
-        let [d1, d2, d3] = &state.e_dot;
+        let e_dot = components!(|axis| components!(|c| PerLeg::<V>::splat(state.e_dot[axis][c])));
+        let v = components!(|c| PerLeg::splat(state.v[c]));
         let a = components!(|c| PerLeg::<V>::new(&self.platform[c]));
-        let n = components!(|c| length.where_positive(leg[c] * inverse_length));
-        let velocity = components!(|c| {
-            PerLeg::splat(state.v[c])
-                + (PerLeg::splat(d1[c]) * a[0] + PerLeg::splat(d2[c]) * a[1] + PerLeg::splat(d3[c]) * a[2])
-        });
-        (n, n[0] * velocity[0] + n[1] * velocity[1] + n[2] * velocity[2], velocity)
+        let n = unit_direction(leg, length, inverse_length);
+        let (rate, velocity) = length_rate(&v, &e_dot, &a, &n);
+        (n, rate, velocity)
     }
 
     /// Leg length rates `dl_k/dt = n_k . (v + d(R A_k)/dt)`, m/s, as [`LegGeometry::length_rates`]
@@ -188,18 +211,11 @@ impl JointArrays {
     #[inline(always)]
     pub fn length_rates(&self, state: &BodyState, legs: &LegKinematics) -> [f64; LEG_COUNT] {
         let a = &self.platform;
-        let [d1, d2, d3] = &state.e_dot;
-        let mut rates = [0.0; LEG_COUNT];
-        for k in 0..LEG_COUNT {
-            let mut rate = 0.0;
-            for c in 0..3 {
-                let velocity = state.v[c] + (d1[c] * a[0][k] + d2[c] * a[1][k] + d3[c] * a[2][k]);
-                let n = legs.direction_component(c, k);
-                rate = if c == 0 { n * velocity } else { rate + n * velocity };
-            }
-            rates[k] = rate;
-        }
-        rates
+        let (v, e_dot) = ([state.v.x, state.v.y, state.v.z], state.e_dot.map(|w| [w.x, w.y, w.z]));
+        std::array::from_fn(|k| {
+            let n = legs.direction(k);
+            length_rate(&v, &e_dot, &[a[0][k], a[1][k], a[2][k]], &n).0
+        })
     }
 }
 
@@ -239,13 +255,15 @@ impl LegKinematics {
     /// [`LegGeometry::direction`].
     #[inline(always)]
     pub fn directions(&self) -> [[f64; LEG_COUNT]; 3] {
-        std::array::from_fn(|c| std::array::from_fn(|k| self.direction_component(c, k)))
+        let n: [[f64; 3]; LEG_COUNT] = std::array::from_fn(|k| self.direction(k));
+        std::array::from_fn(|c| n.map(|d| d[c]))
     }
 
-    /// Component `c` of the unit direction of leg `k`: the one definition of a direction.
+    /// The unit direction of leg `k` ([`unit_direction`]).
     #[inline(always)]
-    fn direction_component(&self, c: usize, k: usize) -> f64 {
-        if self.length[k] > 0.0 { self.leg[c][k] * self.inverse_length[k] } else { 0.0 }
+    fn direction(&self, k: usize) -> [f64; 3] {
+        let leg = [self.leg[0][k], self.leg[1][k], self.leg[2][k]];
+        unit_direction(&leg, self.length[k], self.inverse_length[k])
     }
 }
 
@@ -271,9 +289,8 @@ mod tests {
             assert_eq!(joints.kinematics_in::<Narrow>(&state), arrays);
             let single = LegGeometry::new(&stand, &state);
             let bits = |x: [f64; LEG_COUNT]| x.map(f64::to_bits);
-            #[cfg(target_arch = "x86_64")]
-            if std::arch::is_x86_feature_detected!("avx") {
-                use super::super::per_leg::Wide;
+            if crate::simd::wide_testable() {
+                use crate::simd::Wide;
                 let wide_arrays = joints.kinematics_in::<Wide>(&state);
                 assert_eq!(wide_arrays, arrays);
                 assert_eq!(

@@ -199,7 +199,7 @@ impl JointLimits {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::physics::number::Dual;
+    use crate::physics::number::{Dual, Number};
 
     fn limits() -> JointLimits {
         let n0 = [Vector3::new(0.3, 0.1, 1.0).normalize(); LEG_COUNT];

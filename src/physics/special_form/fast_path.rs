@@ -129,18 +129,10 @@ impl SpecialForm {
         let speed2 = velocity[0] * velocity[0] + velocity[1] * velocity[1] + velocity[2] * velocity[2];
         let c = length.where_positive((speed2 - l_dot * l_dot) * inverse_length)
             + (n[0] * whirl[0] + n[1] * whirl[1] + n[2] * whirl[2]);
-        // The drives.
-        let ratio = drives.transmission();
-        let (current, voltage) = (PerLeg::<V>::new(currents), PerLeg::<V>::new(voltages));
-        let shaft = l_dot * PerLeg::splat(ratio);
-        let drive_force =
-            (current * PerLeg::splat(drives.kt) - shaft * PerLeg::splat(drives.damping)) * PerLeg::splat(ratio);
-        let current_rate = (voltage - current * PerLeg::splat(drives.resistance) - shaft * PerLeg::splat(drives.ke))
-            / PerLeg::splat(drives.inductance);
-        let electric = voltage * current;
-        let lost = current * current * PerLeg::splat(drives.resistance)
-            + shaft * shaft * PerLeg::splat(drives.damping)
-            + shaft * current * PerLeg::splat(drives.ke - drives.kt);
+        // The drives: the one drive law, six legs at once.
+        let drive = drives.rate(PerLeg::<V>::new(voltages), PerLeg::new(currents), l_dot);
+        let (drive_force, current_rate) = (drive.force, drive.current_rate);
+        let (electric, lost) = (drive.electric_power, drive.dissipation);
         // The end stops (rare: cold) and the joint limits (only where one may touch).
         let m_a = self.legs.axial_mass;
         // The legs' axial forces without their inertia, `b = s - m_a c`.

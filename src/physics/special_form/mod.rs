@@ -39,7 +39,7 @@ use super::legs::friction::Friction;
 use super::legs::geometry::{JointArrays, LegGeometry, LegKinematics, LegLanes};
 use super::legs::joint_limits::JointLimits;
 use super::legs::per_leg::{Lanes, Narrow, PerLeg, components};
-use super::number::{Dual, Real};
+use super::number::{Dual, Number, Real};
 use super::stand::{LEG_COUNT, Stand};
 use crate::maths;
 

@@ -4,8 +4,8 @@ use super::*;
 use crate::physics::actuators::HeldForces;
 use crate::physics::body::kinematics::rotation_from_angles;
 use crate::physics::legs::end_stops::EndStops;
-use crate::physics::legs::per_leg::Wide;
 use crate::physics::legs::{bodies::LegBodies, friction::Friction, joint_limits::JointLimits};
+use crate::simd::Wide;
 
 /// The states the fast paths are checked in: the neutral pose, and deep in the lower and the
 /// upper stops, each moving and tilted, and each slightly off the constraint manifold (so that
@@ -73,10 +73,9 @@ fn the_fast_path_gives_the_bits_of_the_definition() {
                     (p.actuator.to_bits(), p.dissipation.to_bits())
                 );
             }
-            #[cfg(target_arch = "x86_64")]
-            if std::arch::is_x86_feature_detected!("avx2") {
+            if crate::simd::wide_testable() {
                 let mut wide = [0.0; 24];
-                // SAFETY: AVX2 detected just now.
+                // SAFETY: AVX2 and FMA checked just now.
                 let q = unsafe { wide_derivative(&form, &y, &law, &mut wide) };
                 assert_eq!(bits(&wide), bits(&reference), "AVX: z = {}, Baumgarte {rate}", y[2]);
                 assert_eq!(q, p);
@@ -126,10 +125,9 @@ fn the_drives_fast_path_is_the_definition_to_round_off() {
                 let r = drives[k].current_rate;
                 error = error.max((rates.current_rate[k] - r).abs() / r.abs().max(1.0));
             }
-            #[cfg(target_arch = "x86_64")]
-            if std::arch::is_x86_feature_detected!("avx2") {
+            if crate::simd::wide_testable() {
                 let mut wide = [0.0; 24];
-                // SAFETY: AVX2 detected just now.
+                // SAFETY: AVX2 and FMA checked just now.
                 unsafe { wide_driven(&form, &y, &currents, &voltages, &mut wide) };
                 error = error.max((0..24).map(|i| (wide[i] - reference[i]).abs()).fold(0.0, f64::max) / scale);
             }
@@ -142,9 +140,8 @@ fn the_drives_fast_path_is_the_definition_to_round_off() {
 }
 
 /// # Safety
-/// AVX2 must be available.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx,avx2,fma")]
+/// AVX2 and FMA must be available ([`crate::simd::wide_available`]).
+#[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx,avx2,fma"))]
 unsafe fn wide_driven(
     form: &SpecialForm,
     y: &StateVector,
@@ -156,9 +153,8 @@ unsafe fn wide_driven(
 }
 
 /// # Safety
-/// AVX2 must be available.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx,avx2,fma")]
+/// AVX2 and FMA must be available ([`crate::simd::wide_available`]).
+#[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx,avx2,fma"))]
 unsafe fn wide_derivative(form: &SpecialForm, y: &StateVector, law: &HeldForces, dy: &mut StateVector) -> LegPower {
     form.derivative_in::<HeldForces, Wide>(0.3, y, law, dy)
 }
