@@ -356,9 +356,10 @@ fn impossible_motions_are_discarded_with_roll_back() {
         assert_eq!(terminated, fmi2True);
         // Outputs (and everything else) as before the step, apart from the new force inputs
         // and what they determine directly (the accelerations der(v), der(R,2), the power
-        // der(work.F) and the joints' forces jointForce).
+        // der(work.F), the joints' forces jointForce and the actuators' actuatorForce).
         let after = h.all_reals();
-        let f_vrs: Vec<u32> = (1..=6).chain(140..=142).chain(152..=160).chain([210]).chain(352..=369).collect();
+        let f_vrs: Vec<u32> =
+            (1..=6).chain(140..=142).chain(152..=160).chain([210]).chain(352..=369).chain(450..=455).collect();
         let real_vrs: Vec<u32> = h
             .table
             .elements()

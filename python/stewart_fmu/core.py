@@ -46,6 +46,9 @@ def fmu_file(path, option="--fmu"):
                             f"STEWART_PLATFORM_FMU=/path/to/StewartPlatform.fmu (and STEWART_CONTROLLER_FMU; by "
                             f"default StewartController.fmu beside it), or give stewart-sweep {option} PATH")
 
+# The legs' numbers in the FMUs' variable names (`l[1]` .. `l[6]`).
+LEGS = range(1, 7)
+
 # docs/model.md §3: the truck-cabin stand.
 R_B, R_P, H_C = 1.5, 1.0, 0.5
 BASE_AZIMUTHS = [-10, 10, 110, 130, 230, 250]

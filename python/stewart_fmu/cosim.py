@@ -22,13 +22,12 @@ from fmpy.fmi2 import FMU2Slave
 
 from fmpy.fmi1 import FMICallException
 
-from .core import (CONTROLLER_FMU, PLATFORM_FMU, check_names, check_times, fmu_file, recording_callbacks, set_values,
-                   vector_of)
+from .core import (CONTROLLER_FMU, LEGS, PLATFORM_FMU, check_names, check_times, fmu_file, recording_callbacks,
+                   set_values, vector_of)
 
 SYSTEM_SSP = Path(PLATFORM_FMU).parent / "StewartSystem.ssp"
 # The closed loop with electric drives (docs/model.md §9): parameter bindings set drive = 1.
 SYSTEM_DRIVES_SSP = Path(PLATFORM_FMU).parent / "StewartSystemDrives.ssp"
-LEGS = range(1, 7)
 _extracted = {}
 
 

@@ -20,10 +20,9 @@ import numpy as np
 from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 
-from .core import GRAVITY, H_C, MASS, PLATFORM_FMU, Platform, check_times, neutral_leg_geometry
+from .core import GRAVITY, H_C, LEGS, MASS, PLATFORM_FMU, Platform, check_times, neutral_leg_geometry
 from .cosim import closed_loop
 
-LEGS = range(1, 7)
 DRIVE_PARAMETERS = ("motor.R", "motor.L", "motor.ke", "motor.kt", "motor.J", "motor.D", "gear.ratio", "screw.lead")
 CURRENTS = [f"I[{k}]" for k in LEGS]
 

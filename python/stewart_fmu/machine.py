@@ -17,10 +17,9 @@ import re
 import numpy as np
 from fmpy.fmi1 import FMICallException
 
-from .core import GRAVITY, MASS, Platform, check_times
+from .core import GRAVITY, LEGS, MASS, Platform, check_times
 from .cosim import closed_loop
 
-LEGS = range(1, 7)
 EQUILIBRIUM_FORCE_SI = 0.2005 * MASS * GRAVITY
 # An electric actuator of a 3-tonne simulator: 40 kg cylinder, 15 kg rod; transverse inertias
 # of a 1 m barrel (m L^2 / 12 = 3.3 kg m2; 2.5 with the mass towards the joint) and a rod.

@@ -22,7 +22,7 @@ import sys
 
 import numpy as np
 
-from .core import CONTROLLER_FMU, IN_REPOSITORY, PLATFORM_FMU, ROOT, check_names, check_times, fmu_file
+from .core import CONTROLLER_FMU, IN_REPOSITORY, LEGS, PLATFORM_FMU, ROOT, check_names, check_times, fmu_file
 
 REPOSITORY_LIBRARY = ROOT / "target" / "release" / "libstewart_master_py.so"
 BUILD = "cargo build --release -p stewart-master-py"
@@ -99,7 +99,6 @@ def run(system, stop_time, step, scheme="gauss-seidel", values=None, record=(), 
     return times, rows, status, out["message"]
 
 
-LEGS = range(1, 7)
 
 
 def closed_loop(t_end, h, scheme="gauss-seidel", platform_reals=None, controller_reals=None, controller_integers=None,

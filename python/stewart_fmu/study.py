@@ -45,7 +45,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave, fmi2Terminated
 
 from . import study_schema
-from .core import fmu_file, recording_callbacks, set_values, stand_parameters
+from .core import LEGS, fmu_file, recording_callbacks, set_values, stand_parameters
 from .study_schema import DEFAULT_MAX_RUNS, StudyError
 
 
@@ -195,7 +195,6 @@ def couplings():
     return {0: system_description(fmu_file(SYSTEM_SSP)), 1: system_description(fmu_file(SYSTEM_DRIVES_SSP), False)}
 
 
-LEGS = range(1, 7)
 L = [f"l[{k}]" for k in LEGS]
 LDOT = [f"ldot[{k}]" for k in LEGS]
 F = [f"F[{k}]" for k in LEGS]

@@ -18,10 +18,9 @@ from urllib.parse import quote
 import numpy as np
 from fmpy import read_model_description
 
-from .core import DATA, IN_REPOSITORY, PLATFORM_FMU, ROOT, fmu_file
+from .core import DATA, IN_REPOSITORY, LEGS, PLATFORM_FMU, ROOT, fmu_file
 
 VIEWER = ROOT / "viewer"  # the viewer's sources, in the repository
-LEGS = range(1, 7)
 VIEW_OUTPUTS = ([f"r[{i}]" for i in (1, 2, 3)] + [f"R[{a},{b}]" for a in (1, 2, 3) for b in (1, 2, 3)]
                 + [f"angles[{i}]" for i in (1, 2, 3)] + [f"l[{k}]" for k in LEGS] + [f"F[{k}]" for k in LEGS]
                 + [f"Fstop[{k}]" for k in LEGS] + [f"thetaB[{k}]" for k in LEGS] + [f"thetaA[{k}]" for k in LEGS])

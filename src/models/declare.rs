@@ -18,7 +18,6 @@
 //!         STOPS => V::parameter(...).boolean(); boolean(parameters.stops_enabled),
 //!         L => V::output("l", &[6], 121, ...); cached(leg_outputs.l),
 //!         KAPPA => V::output(...); cached_apart(condition.kappa), // a block not in `outputs`
-//!         FP => V::output("Fp", ...); output(outputs.fp),       // read through, not cached
 //!         DER_V => V::local(...).derivative(...); derivative,   // from the state's rate
 //!         TIME => V::time(0); computed,                         // the model's own function
 //!     }
@@ -29,9 +28,8 @@
 //! variable's value ([`RealStorage`], [`IntegerStorage`], `bool`); `cached(block.field)` is an
 //! output read through the cache block `block` (the model method of that name returns the
 //! block's values, `field` the variable's); `cached_apart(block.field)` the same for a value
-//! that is not a field of the outputs type (its derivative is the model's own);
-//! `output(source.field)` an output read through
-//! the model method `source` element by element; `derivative` a state derivative
+//! that is not a field of the outputs type (its derivative is the model's own); `derivative` a
+//! state derivative
 //! (`VariableGroup::derivative_of`), computed from the model's state rate; `computed` a value
 //! the model computes itself ([`Binding::Computed`]).
 
@@ -46,8 +44,6 @@ pub enum Binding {
     Stored,
     /// An output read through cache block `block`.
     Cached { block: u8 },
-    /// An output read through the model element by element.
-    Output,
     /// The time derivative of a state, from the model's state rate.
     Derivative,
     /// Computed by the model on request (the time, a value costly to compute).
@@ -316,7 +312,6 @@ macro_rules! declare_variables {
     };
     // `cached_apart` is `cached` in every arm but `@element` (none: not in the outputs type).
     (@binding cached_apart($($p:tt)*)) => { $crate::models::declare::declare_variables!(@binding cached($($p)*)) };
-    (@binding output($source:ident . $field:ident)) => { $crate::models::declare::Binding::Output };
     (@binding derivative) => { $crate::models::declare::Binding::Derivative };
     (@binding computed) => { $crate::models::declare::Binding::Computed };
 
@@ -362,11 +357,6 @@ macro_rules! declare_variables {
     };
     (@output $s:ident, $var:ident, $id:ident, cached_apart($($p:tt)*)) => {
         $crate::models::declare::declare_variables!(@output $s, $var, $id, cached($($p)*))
-    };
-    (@output $s:ident, $var:ident, $id:ident, output($source:ident . $field:ident)) => {
-        if $var.group == group::$id {
-            return $crate::models::declare::OutputValues::<f64>::element(&$s.$source().$field, $var.index);
-        }
     };
     (@output $($rest:tt)*) => {};
 
@@ -418,11 +408,6 @@ macro_rules! declare_variables {
             return $crate::models::declare::OutputValues::element(&$o.$field, $var.index);
         }
     };
-    (@element $o:ident, $var:ident, $id:ident, output($source:ident . $field:ident)) => {
-        if $var.group == group::$id {
-            return $crate::models::declare::OutputValues::element(&$o.$field, $var.index);
-        }
-    };
     (@element $($rest:tt)*) => {};
 }
 
@@ -440,7 +425,7 @@ pub trait Variables {
     fn set_integer_code(&mut self, var: super::variables::VariableRef, code: i32) -> Option<Result<(), String>>;
     /// The storage of a stored Boolean variable.
     fn boolean_slot(&mut self, var: super::variables::VariableRef) -> Option<&mut bool>;
-    /// The current value of an output element (`cached` or `output`).
+    /// The current value of an output element (`cached` or `cached_apart`).
     fn output_value(&mut self, var: super::variables::VariableRef) -> Option<f64>;
     /// Writes the values of cache block `block` into the cache at their value references;
     /// `true` if one is NaN.

@@ -356,16 +356,57 @@ impl AnyModel {
     }
 }
 
+/// `AnyModel`'s methods that forward to the model's [`FmuModel`] method of the same name and
+/// signature, each named once (`shared` takes `&self`, `exclusive` `&mut self`).
+macro_rules! forward_to_the_model {
+    (@one shared $name:ident($($arg:ident: $ty:ty),*) $(-> $ret:ty)?) => {
+        pub fn $name(&self, $($arg: $ty),*) $(-> $ret)? {
+            dispatch!(self, m => m.$name($($arg),*))
+        }
+    };
+    (@one exclusive $name:ident($($arg:ident: $ty:ty),*) $(-> $ret:ty)?) => {
+        pub fn $name(&mut self, $($arg: $ty),*) $(-> $ret)? {
+            dispatch!(self, m => m.$name($($arg),*))
+        }
+    };
+    ($($receiver:ident fn $name:ident($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)?;)*) => {
+        impl AnyModel {
+            $(forward_to_the_model!(@one $receiver $name($($arg: $ty),*) $(-> $ret)?);)*
+        }
+    };
+}
+
+forward_to_the_model! {
+    shared fn info() -> &'static ModelInfo;
+    exclusive fn get_real(var: VariableRef) -> f64;
+    exclusive fn set_real(var: VariableRef, value: f64) -> Result<(), String>;
+    exclusive fn get_integer(var: VariableRef) -> i32;
+    exclusive fn set_integer(var: VariableRef, value: i32) -> Result<(), String>;
+    exclusive fn get_boolean(var: VariableRef) -> bool;
+    exclusive fn set_boolean(var: VariableRef, value: bool) -> Result<(), String>;
+    exclusive fn report_events(sink: &mut dyn FnMut(&str));
+    exclusive fn set_event_reporting(on: bool);
+    exclusive fn event_indicators(z: &mut [f64]);
+    exclusive fn event_update(sink: &mut dyn FnMut(&str)) -> EventUpdate;
+    exclusive fn exit_initialization(start_time: f64, tolerance: Option<f64>, model_exchange: bool)
+        -> Result<Initialised, String>;
+    exclusive fn set_time(t: f64);
+    shared fn continuous_states(x: &mut [f64]);
+    exclusive fn set_continuous_states(x: &[f64]);
+    exclusive fn derivatives(dx: &mut [f64]);
+    exclusive fn completed_integrator_step() -> Result<(), StepError>;
+    exclusive fn directional_derivative(unknowns: &[VariableRef], knowns: &[VariableRef], seeds: &[f64],
+        out: &mut [f64]) -> Result<(), String>;
+    exclusive fn do_step(t: f64, h: f64, stop_at_event: bool) -> Result<StepReport, StepError>;
+    exclusive fn set_input_derivative(var: VariableRef, value: f64);
+    exclusive fn output_derivative(var: VariableRef) -> f64;
+    shared fn undefined_reason() -> Option<String>;
+    shared fn save(w: &mut ByteWriter);
+}
+
+/// The methods with more than forwarding: several values in one dispatch, and the
+/// platform's calls of a step's cycle first.
 impl AnyModel {
-    pub fn info(&self) -> &'static ModelInfo {
-        dispatch!(self, m => m.info())
-    }
-    pub fn get_real(&mut self, var: VariableRef) -> f64 {
-        dispatch!(self, m => m.get_real(var))
-    }
-    pub fn set_real(&mut self, var: VariableRef, value: f64) -> Result<(), String> {
-        dispatch!(self, m => m.set_real(var, value))
-    }
     /// Sets several values, in order, stopping at the first refused (one dispatch for all).
     #[inline]
     pub fn set_reals(&mut self, values: impl Iterator<Item = (VariableRef, f64)>) -> Result<(), String> {
@@ -402,76 +443,5 @@ impl AnyModel {
         }
         std::hint::cold_path();
         dispatch!(self, m => m.fill_cache(block, cache))
-    }
-    pub fn get_integer(&mut self, var: VariableRef) -> i32 {
-        dispatch!(self, m => m.get_integer(var))
-    }
-    pub fn set_integer(&mut self, var: VariableRef, value: i32) -> Result<(), String> {
-        dispatch!(self, m => m.set_integer(var, value))
-    }
-    pub fn get_boolean(&mut self, var: VariableRef) -> bool {
-        dispatch!(self, m => m.get_boolean(var))
-    }
-    pub fn set_boolean(&mut self, var: VariableRef, value: bool) -> Result<(), String> {
-        dispatch!(self, m => m.set_boolean(var, value))
-    }
-    pub fn report_events(&mut self, sink: &mut dyn FnMut(&str)) {
-        dispatch!(self, m => m.report_events(sink))
-    }
-    pub fn set_event_reporting(&mut self, on: bool) {
-        dispatch!(self, m => m.set_event_reporting(on))
-    }
-    pub fn event_indicators(&mut self, z: &mut [f64]) {
-        dispatch!(self, m => m.event_indicators(z))
-    }
-    pub fn event_update(&mut self, sink: &mut dyn FnMut(&str)) -> EventUpdate {
-        dispatch!(self, m => m.event_update(sink))
-    }
-    pub fn exit_initialization(
-        &mut self,
-        start_time: f64,
-        tolerance: Option<f64>,
-        model_exchange: bool,
-    ) -> Result<Initialised, String> {
-        dispatch!(self, m => m.exit_initialization(start_time, tolerance, model_exchange))
-    }
-    pub fn set_time(&mut self, t: f64) {
-        dispatch!(self, m => m.set_time(t))
-    }
-    pub fn continuous_states(&self, x: &mut [f64]) {
-        dispatch!(self, m => m.continuous_states(x))
-    }
-    pub fn set_continuous_states(&mut self, x: &[f64]) {
-        dispatch!(self, m => m.set_continuous_states(x))
-    }
-    pub fn derivatives(&mut self, dx: &mut [f64]) {
-        dispatch!(self, m => m.derivatives(dx))
-    }
-    pub fn completed_integrator_step(&mut self) -> Result<(), StepError> {
-        dispatch!(self, m => m.completed_integrator_step())
-    }
-    pub fn directional_derivative(
-        &mut self,
-        unknowns: &[VariableRef],
-        knowns: &[VariableRef],
-        seeds: &[f64],
-        out: &mut [f64],
-    ) -> Result<(), String> {
-        dispatch!(self, m => m.directional_derivative(unknowns, knowns, seeds, out))
-    }
-    pub fn do_step(&mut self, t: f64, h: f64, stop_at_event: bool) -> Result<StepReport, StepError> {
-        dispatch!(self, m => m.do_step(t, h, stop_at_event))
-    }
-    pub fn set_input_derivative(&mut self, var: VariableRef, value: f64) {
-        dispatch!(self, m => m.set_input_derivative(var, value))
-    }
-    pub fn output_derivative(&mut self, var: VariableRef) -> f64 {
-        dispatch!(self, m => m.output_derivative(var))
-    }
-    pub fn undefined_reason(&self) -> Option<String> {
-        dispatch!(self, m => m.undefined_reason())
-    }
-    pub fn save(&self, w: &mut ByteWriter) {
-        dispatch!(self, m => m.save(w))
     }
 }

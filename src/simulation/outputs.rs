@@ -16,12 +16,72 @@ use crate::physics::number::{Dual, Real, lift};
 use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::{LEG_COUNT, Stand};
 
+/// A field of an outputs type: its numbers through a function, the shape kept.
+pub trait Numbers<T: Real> {
+    type With<U: Real>;
+    fn map_numbers<U: Real>(&self, f: &impl Fn(T) -> U) -> Self::With<U>;
+}
+
+impl<T: Real> Numbers<T> for T {
+    type With<U: Real> = U;
+    fn map_numbers<U: Real>(&self, f: &impl Fn(T) -> U) -> U {
+        f(*self)
+    }
+}
+
+impl<T: Real, const N: usize> Numbers<T> for [T; N] {
+    type With<U: Real> = [U; N];
+    fn map_numbers<U: Real>(&self, f: &impl Fn(T) -> U) -> [U; N] {
+        self.map(f)
+    }
+}
+
+impl<T: Real> Numbers<T> for Vector3<T> {
+    type With<U: Real> = Vector3<U>;
+    fn map_numbers<U: Real>(&self, f: &impl Fn(T) -> U) -> Vector3<U> {
+        self.map(f)
+    }
+}
+
+impl<T: Real> Numbers<T> for Matrix3<T> {
+    type With<U: Real> = Matrix3<U>;
+    fn map_numbers<U: Real>(&self, f: &impl Fn(T) -> U) -> Matrix3<U> {
+        self.map(f)
+    }
+}
+
+impl<T: Real, const N: usize> Numbers<T> for [Vector3<T>; N] {
+    type With<U: Real> = [Vector3<U>; N];
+    fn map_numbers<U: Real>(&self, f: &impl Fn(T) -> U) -> [Vector3<U>; N] {
+        self.map(|v| v.map(f))
+    }
+}
+
+/// An outputs type in the number type `T` (default `f64`), each field declared once, and its
+/// `map`: every number through a function (a dual's derivative part, say).
+macro_rules! with_map {
+    ($(#[$meta:meta])* pub struct $name:ident<T> { $($(#[$field_meta:meta])* pub $field:ident: $ty:ty,)* }) => {
+        $(#[$meta])*
+        pub struct $name<T: Scalar = f64> {
+            $($(#[$field_meta])* pub $field: $ty,)*
+        }
+
+        impl<T: Real> $name<T> {
+            /// Every value through `f` (a dual's derivative part, say).
+            pub fn map<U: Real>(&self, f: impl Fn(T) -> U) -> $name<U> {
+                $name { $($field: Numbers::map_numbers(&self.$field, &f),)* }
+            }
+        }
+    };
+}
+
+with_map! {
 /// Everything the platform FMU reports about a state (except `kappa`, which costs an
 /// eigenvalue problem and is a cache block of its own, computed when read:
 /// [`condition_number`]), in the
 /// number type `T`: `f64` for the values, [`Dual`] for their directional derivatives.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PlatformOutputs<T: Scalar = f64> {
+pub struct PlatformOutputs<T> {
     /// Centre of mass, m.
     pub r: Vector3<T>,
     /// Centre-of-mass velocity, m/s.
@@ -54,10 +114,14 @@ pub struct PlatformOutputs<T: Scalar = f64> {
     /// The force of each leg on the platform at `A_k`, inertial frame, N (not numbers where
     /// the inputs were not given: see [`PlatformOutputs::compute`]).
     pub joint_force: [Vector3<T>; LEG_COUNT],
+    /// The actuators' axial forces on the legs, N: the leg forces `F`, or the drives' forces of
+    /// their currents (not numbers where the inputs were not given).
+    pub actuator_force: [T; LEG_COUNT],
     /// The drives' armature currents, A (0 without drives).
     pub current: [T; LEG_COUNT],
     /// Electric energy supplied to the drives since the start, J.
     pub electric_work: T,
+}
 }
 
 /// Leg lengths and rates alone: what a controller reads every step, computed without the
@@ -118,10 +182,12 @@ impl<T: Real> PlatformOutputs<T> {
                     limits.potential(theta_b[k], limits.base_max) + limits.potential(theta_a[k], limits.platform_max);
             }
         }
-        let nan = Vector3::from_element(T::constant(f64::NAN));
-        let joint_force = match u {
-            Some(u) => form.joint_forces(body, &actuator_forces(form, y, u)),
-            None => [nan; LEG_COUNT],
+        let (actuator_force, joint_force) = match u {
+            Some(u) => {
+                let actuator = actuator_forces(form, y, u);
+                (actuator, form.joint_forces(body, &actuator))
+            }
+            None => ([T::constant(f64::NAN); LEG_COUNT], [Vector3::from_element(T::constant(f64::NAN)); LEG_COUNT]),
         };
         PlatformOutputs {
             r: state.r,
@@ -139,6 +205,7 @@ impl<T: Real> PlatformOutputs<T> {
             theta_b,
             theta_a,
             joint_force,
+            actuator_force,
             current,
             electric_work: y[quadrature::WORK_ELECTRIC],
         }
@@ -153,32 +220,6 @@ impl PlatformOutputs {
     /// `|e_a.e_b - delta_ab|`.
     pub fn tangent(form: &SpecialForm, y: &SimulationState, dy: &SimulationState) -> Self {
         PlatformOutputs::<Dual>::compute(form, &Dual::seeded(y, dy), None).map(|d| d.eps)
-    }
-}
-
-impl<T: Real> PlatformOutputs<T> {
-    /// Every value through `f` (a dual's derivative part, say).
-    pub fn map<U: Real>(&self, f: impl Fn(T) -> U) -> PlatformOutputs<U> {
-        let v3 = |v: &Vector3<T>| v.map(&f);
-        PlatformOutputs {
-            r: v3(&self.r),
-            v: v3(&self.v),
-            rotation: self.rotation.map(&f),
-            angles: v3(&self.angles),
-            w: v3(&self.w),
-            l: self.l.map(&f),
-            ldot: self.ldot.map(&f),
-            energy: f(self.energy),
-            constraint_error: f(self.constraint_error),
-            stop_force: self.stop_force.map(&f),
-            work_of_forces: f(self.work_of_forces),
-            dissipated_energy: f(self.dissipated_energy),
-            theta_b: self.theta_b.map(&f),
-            theta_a: self.theta_a.map(&f),
-            joint_force: self.joint_force.map(|v| v.map(&f)),
-            current: self.current.map(&f),
-            electric_work: f(self.electric_work),
-        }
     }
 }
 

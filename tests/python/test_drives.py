@@ -250,3 +250,30 @@ def test_an_fmu_state_with_drives_continues_bit_for_bit():
     assert np.array_equal(np.array(reference), np.array(restored))
     pl.free()
     other.free()
+
+
+def test_the_actuator_force_is_the_input_or_the_drives_law_in_every_mode():
+    """`actuatorForce[k]`: with drives the force of the drive law N (k_t I_k - D N ldot_k),
+    computed here from the model description's parameters and the recorded currents and leg
+    rates, through a power loss (holding, then braking with the windings shorted: the force
+    changes sign of its rate and the legs move); with forces as inputs the input F_k itself."""
+    legs = list(dr.LEGS)
+    record = [f"actuatorForce[{k}]" for k in legs] + [f"I[{k}]" for k in legs] + [f"ldot[{k}]" for k in legs]
+    c, _, status = dr.open_loop(lambda t: [U_HOLD if t < 0.3 else 0.0] * 6, 1.5, h=0.01, record=record)
+    assert status == "ok"
+    n = 2.0 * math.pi * P["gear.ratio"] / P["screw.lead"]
+    worst, moving = 0.0, 0.0
+    for k in legs:
+        law = n * (P["motor.kt"] * c[f"I[{k}]"] - P["motor.D"] * n * c[f"ldot[{k}]"])
+        worst = max(worst, float(np.max(np.abs(c[f"actuatorForce[{k}]"] - law) / np.maximum(np.abs(law), 1.0))))
+        moving = max(moving, float(np.max(np.abs(c[f"ldot[{k}]"]))))
+    print(f"actuatorForce with drives: largest relative difference from N (k_t I - D N ldot) {worst:.1e} "
+          f"(legs moving at up to {moving * 1e3:.1f} mm/s)")
+    assert worst < 1e-12 and moving > 1e-3
+
+    forces = [5000.0, 5200.0, 5400.0, 5600.0, 5800.0, 6000.0]
+    f, _, status = dr.open_loop(lambda t: forces, 0.05, h=0.01, record=record[:6], drive=False)
+    assert status == "ok"
+    for k in legs:
+        # The first row is read before any input was set: the default leg forces.
+        assert np.all(f[f"actuatorForce[{k}]"][1:] == forces[k - 1]), k

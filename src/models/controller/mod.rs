@@ -516,7 +516,7 @@ impl FmuModel for ControllerModel {
     fn get_real(&mut self, var: VariableRef) -> f64 {
         let value = match BINDINGS.get(var.group) {
             Some(Binding::Stored) => self.real_stored(var),
-            Some(Binding::Output | Binding::Cached { .. }) => self.output_value(var),
+            Some(Binding::Cached { .. }) => self.output_value(var),
             Some(Binding::Computed) => Some(self.time),
             _ => None,
         };

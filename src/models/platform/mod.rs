@@ -25,10 +25,11 @@ use crate::physics::body::state::BodyState;
 use crate::physics::direct_problem::singular_legs;
 use crate::physics::error::leg_list;
 use crate::physics::legs::geometry::LegGeometry;
+use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::LEG_COUNT;
 use crate::simulation::outputs::condition_number;
 use crate::simulation::platform::{Reached, SIMULATION_DIM, actuator_forces, body, state_rate, switching};
-use crate::simulation::{LegOutputs, PlatformOutputs, PlatformSimulation};
+use crate::simulation::{LegOutputs, PlatformOutputs, PlatformSimulation, SimulationState};
 pub use parameters::{Experiment, PlatformParameters, default_leg_force};
 use variables::{BINDINGS, group};
 
@@ -112,11 +113,12 @@ pub struct Condition {
     pub kappa: f64,
 }
 
-/// The joints' forces alone (the field of [`PlatformOutputs`] of the same name): they depend
-/// on the leg forces, so they are a cache block of their own.
+/// The actuators' and the joints' forces alone (the fields of [`PlatformOutputs`] of the same
+/// names): they depend on the inputs, so they are a cache block of their own.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct JointForceOutputs {
     pub joint_force: [nalgebra::Vector3<f64>; LEG_COUNT],
+    pub actuator_force: [f64; LEG_COUNT],
 }
 
 impl PlatformModel {
@@ -138,22 +140,20 @@ impl PlatformModel {
         })
     }
 
-    /// The joints' forces of the current state and leg forces, computed on the first read
-    /// after a change.
+    /// The actuators' and the joints' forces of the current state and inputs, computed on the
+    /// first read after a change.
     fn joint_force_outputs(&mut self) -> &JointForceOutputs {
         let inputs = self.inputs();
         let (simulation, parameters) = (&self.simulation, &self.parameters);
         self.joint_forces.get_or_insert_with(|| {
-            let joint_force = match simulation {
-                Some((sim, _)) => {
-                    sim.form.joint_forces(body(&sim.state), &actuator_forces(&sim.form, &sim.state, &inputs))
-                }
-                None => {
-                    let (form, y) = (parameters.special_form(), parameters.initial_simulation_state());
-                    form.joint_forces(body(&y), &actuator_forces(&form, &y, &inputs))
-                }
+            let forces = |form: &SpecialForm, y: &SimulationState| {
+                let actuator_force = actuator_forces(form, y, &inputs);
+                JointForceOutputs { joint_force: form.joint_forces(body(y), &actuator_force), actuator_force }
             };
-            JointForceOutputs { joint_force }
+            match simulation {
+                Some((sim, _)) => forces(&sim.form, &sim.state),
+                None => forces(&parameters.special_form(), &parameters.initial_simulation_state()),
+            }
         })
     }
 
@@ -320,7 +320,7 @@ impl FmuModel for PlatformModel {
     fn get_real(&mut self, var: VariableRef) -> f64 {
         let value = match BINDINGS.get(var.group) {
             Some(Binding::Stored) => self.real_stored(var),
-            Some(Binding::Cached { .. } | Binding::Output) => self.output_value(var),
+            Some(Binding::Cached { .. }) => self.output_value(var),
             Some(Binding::Derivative) => self.derivative_value(var),
             Some(Binding::Computed) => Some(match var.group {
                 group::TIME => self.sim().map_or(0.0, |s| s.time),

@@ -214,7 +214,7 @@ declare_variables! {
         leg_outputs,
         // Every other output of `PlatformOutputs` that depends on the state alone.
         outputs,
-        // The joints' forces: they depend on the leg forces too.
+        // The actuators' and the joints' forces: they depend on the inputs too.
         joint_force_outputs,
         // The condition number `kappa` (an eigenvalue problem): read by studies every step,
         // by most hosts never.
@@ -672,5 +672,12 @@ declare_variables! {
             &[All("drive"), All("I0"), All("U")],
         )
         .derivative("work.electric", "work.electric", 1, &[All("I"), All("U")]); derivative,
+        ACTUATOR_FORCE => V::output(
+            "actuatorForce", &[6], 450, Some("N"),
+            "Axial force of actuator k on leg k: the input F_k (drive = 0), or the electric drive's N (k_t I_k - D N \
+             ldot_k) (drive = 1); the end stops, friction and the leg's own inertia apart",
+            ALL_PARAMETERS,
+        )
+        .depends_on(MOTION_KNOWNS); cached(joint_force_outputs.actuator_force),
     }
 }
