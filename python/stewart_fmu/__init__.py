@@ -5,9 +5,10 @@ the controller, run the workspace scenarios, linearise, and run design studies o
 FMUs and the viewer page."""
 
 from .core import (BASE_AZIMUTHS, CONTROLLER_FMU, EQUILIBRIUM_FORCE, GRAVITY, H_C, INERTIA, MASS, NEUTRAL_Z,
-                   PLATFORM_AZIMUTHS, PLATFORM_FMU, R_B, R_P, ROOT, Platform, bisect_boundary, heave_forces,
+                   PLATFORM_AZIMUTHS, PLATFORM_FMU, R_B, R_P, ROOT, Component, Platform, bisect_boundary, heave_forces,
                    heave_programme, neutral_leg_geometry, recording_callbacks, set_values, stand_parameters)
 
 __all__ = ["BASE_AZIMUTHS", "CONTROLLER_FMU", "EQUILIBRIUM_FORCE", "GRAVITY", "H_C", "INERTIA", "MASS", "NEUTRAL_Z",
-           "PLATFORM_AZIMUTHS", "PLATFORM_FMU", "R_B", "R_P", "ROOT", "Platform", "bisect_boundary", "heave_forces",
-           "heave_programme", "neutral_leg_geometry", "recording_callbacks", "set_values", "stand_parameters"]
+           "PLATFORM_AZIMUTHS", "PLATFORM_FMU", "R_B", "R_P", "ROOT", "Component", "Platform", "bisect_boundary",
+           "heave_forces", "heave_programme", "neutral_leg_geometry", "recording_callbacks", "set_values",
+           "stand_parameters"]

@@ -212,21 +212,35 @@ def recording_callbacks(messages):
     return callbacks
 
 
-class Platform:
-    """One FMU2Slave instance of StewartPlatform with name-based access."""
+class NamedValues:
+    """Reals of an FMU2Slave (`self.slave`) by variable name (`self.vr`), as arrays."""
+
+    def values(self, names):
+        return np.array(self.slave.getReal([self.vr[n] for n in names]))
+
+    def set_values(self, names, values):
+        self.slave.setReal([self.vr[n] for n in names], [float(v) for v in values])
+
+
+class Component(NamedValues):
+    """One FMU2Slave instance of a packaged FMU, initialised with `values` (and `integers`)
+    and ready to step: the one FMPy driver of the package (the closed loop's platform and
+    controller, `Platform`)."""
 
     _extracted = {}
 
-    def __init__(self, fmu=PLATFORM_FMU, parameters=None, integers=None, start_time=0.0, stop_time=None,
-                 tolerance=None, name="platform", logger=None, events=None):
-        """`events`: a list that receives the FMU's logEvents messages (contacts, singular
-        arrangements passed) as (status, category, message)."""
+    def __init__(self, fmu, name, reals=None, integers=None, start_time=0.0, stop_time=None, tolerance=None,
+                 events=None, logger=None, what=("parameters", "integers")):
+        """`reals`, `integers`: start values by name (booleans among them too); `events`: a list
+        that receives the FMU's logEvents messages (contacts, singular arrangements passed) as
+        (status, category, message); `what`: the names the arguments `reals` and `integers`
+        came in, for messages."""
         fmu = fmu_file(fmu)
         self.md = read_model_description(fmu)
-        if fmu not in Platform._extracted:
-            Platform._extracted[fmu] = extract(fmu)
+        if fmu not in Component._extracted:
+            Component._extracted[fmu] = extract(fmu)
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
-        self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=Platform._extracted[fmu],
+        self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=Component._extracted[fmu],
                                modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
         if events is not None:
             logger = recording_callbacks(events)
@@ -236,30 +250,29 @@ class Platform:
         self.slave.setupExperiment(tolerance=tolerance, startTime=start_time, stopTime=stop_time)
         self.slave.enterInitializationMode()
         try:
-            set_values(self.slave, self.md, dict(parameters or {}), "parameters")
-            set_values(self.slave, self.md, dict(integers or {}), "integers")
+            set_values(self.slave, self.md, dict(reals or {}), what[0])
+            set_values(self.slave, self.md, dict(integers or {}), what[1])
         except ValueError:
             self.slave.freeInstance()
             raise
         self.slave.exitInitializationMode()
         self.time = start_time
 
-    def set(self, values):
-        """Sets variables by name; ValueError for a name the platform does not have."""
+    def set(self, *args):
+        """`set({name: value, ...})`: sets variables of any type by name (ValueError for a name
+        the FMU does not have); `set(names, values)`: Reals, a list of names and their values."""
+        if len(args) == 2:
+            names, values = args
+            check_names(names, self.vr, self.md.modelName, "set")
+            return self.set_values(names, values)
+        (values,) = args
         set_values(self.slave, self.md, values, "set")
 
-    def set_forces(self, forces, rates=None):
-        """The six leg forces F[1] .. F[6] (and their time derivatives); ValueError unless six
-        finite numbers each."""
-        forces = vector_of(forces, 6, "set_forces: forces", lambda i: f"F[{i + 1}]")
-        vrs = [self.vr[f"F[{k + 1}]"] for k in range(6)]
-        if rates is not None:
-            rates = vector_of(rates, 6, "set_forces: rates", lambda i: f"der(F[{i + 1}])")
-        self.slave.setReal(vrs, [float(f) for f in forces])
-        if rates is not None:
-            self.slave.setRealInputDerivatives(vrs, [1] * 6, [float(r) for r in rates])
-
     def get(self, *names):
+        """`get("r[3]", "v[3]")`: the Reals as a list; `get(["l[1]", ...])`: as an array."""
+        if len(names) == 1 and not isinstance(names[0], str):
+            check_names(list(names[0]), self.vr, self.md.modelName, "get")
+            return self.values(names[0])
         check_names(names, self.vr, self.md.modelName, "get")
         return self.slave.getReal([self.vr[n] for n in names])
 
@@ -276,6 +289,25 @@ class Platform:
     def free(self):
         self.slave.terminate()
         self.slave.freeInstance()
+
+
+class Platform(Component):
+    """One instance of StewartPlatform with name-based access."""
+
+    def __init__(self, fmu=PLATFORM_FMU, parameters=None, integers=None, start_time=0.0, stop_time=None,
+                 tolerance=None, name="platform", logger=None, events=None):
+        super().__init__(fmu, name, parameters, integers, start_time, stop_time, tolerance, events, logger)
+
+    def set_forces(self, forces, rates=None):
+        """The six leg forces F[1] .. F[6] (and their time derivatives); ValueError unless six
+        finite numbers each."""
+        forces = vector_of(forces, 6, "set_forces: forces", lambda i: f"F[{i + 1}]")
+        vrs = [self.vr[f"F[{k + 1}]"] for k in range(6)]
+        if rates is not None:
+            rates = vector_of(rates, 6, "set_forces: rates", lambda i: f"der(F[{i + 1}])")
+        self.slave.setReal(vrs, [float(f) for f in forces])
+        if rates is not None:
+            self.slave.setRealInputDerivatives(vrs, [1] * 6, [float(r) for r in rates])
 
 
 def bisect_boundary(holds_at, lo, hi, tolerance):

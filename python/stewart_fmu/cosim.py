@@ -14,62 +14,13 @@ Two coupling schemes:
   one communication step later.
 """
 
-from pathlib import Path
-
 import numpy as np
-from fmpy import extract, read_model_description
-from fmpy.fmi2 import FMU2Slave
-
 from fmpy.fmi1 import FMICallException
 
-from .core import (CONTROLLER_FMU, LEGS, PLATFORM_FMU, check_names, check_times, fmu_file, recording_callbacks,
-                   set_values, vector_of)
-
-SYSTEM_SSP = Path(PLATFORM_FMU).parent / "StewartSystem.ssp"
-# The closed loop with electric drives (docs/model.md §9): parameter bindings set drive = 1.
-SYSTEM_DRIVES_SSP = Path(PLATFORM_FMU).parent / "StewartSystemDrives.ssp"
-_extracted = {}
-
+from .core import CONTROLLER_FMU, LEGS, PLATFORM_FMU, Component, check_names, check_times, vector_of
+from .ssp import SYSTEM_DRIVES_SSP, SYSTEM_SSP  # noqa: F401 (the systems this master runs, for its users)
 
 SCHEMES = ("gauss-seidel", "jacobi")
-
-
-class Component:
-    def __init__(self, fmu, name, reals=None, integers=None, start_time=0.0, events=None, what=None):
-        """`what`: the names of the arguments `reals` and `integers` came in, for messages."""
-        fmu = fmu_file(fmu)
-        self.md = read_model_description(fmu)
-        if fmu not in _extracted:
-            _extracted[fmu] = extract(fmu)
-        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
-        self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=_extracted[fmu],
-                             modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
-        if events is None:
-            self.fmu.instantiate()
-        else:
-            self.fmu.instantiate(callbacks=recording_callbacks(events))
-            self.fmu.setDebugLogging(True, ["logEvents"])
-        self.fmu.setupExperiment(startTime=start_time)
-        reals_name, integers_name = what or ("reals", "integers")
-        try:
-            set_values(self.fmu, self.md, dict(reals or {}), reals_name)
-            set_values(self.fmu, self.md, dict(integers or {}), integers_name)
-        except ValueError:
-            self.fmu.freeInstance()
-            raise
-        self.fmu.enterInitializationMode()
-        self.fmu.exitInitializationMode()
-
-    def get(self, names):
-        return np.array(self.fmu.getReal([self.vr[n] for n in names]))
-
-    def set(self, names, values):
-        self.fmu.setReal([self.vr[n] for n in names], [float(v) for v in values])
-
-    def free(self):
-        self.fmu.terminate()
-        self.fmu.freeInstance()
-
 
 L = [f"l[{k}]" for k in LEGS]
 LDOT = [f"ldot[{k}]" for k in LEGS]
@@ -98,11 +49,11 @@ def closed_loop(t_end, h, scheme="gauss-seidel", platform_reals=None, controller
                          "controller's voltage commands U drive the platform only when both have drive = 1")
     commands = U if drives[0] == 1 else F
     record = list(record)
-    platform = Component(PLATFORM_FMU, "platform", reals=platform_reals, events=events,
+    platform = Component(PLATFORM_FMU, "platform", platform_reals, events=events,
                          what=("platform_reals", "platform_integers"))
     try:
         check_names(record, platform.vr, platform.md.modelName, "record")
-        controller = Component(CONTROLLER_FMU, "controller", reals=controller_reals, integers=controller_integers,
+        controller = Component(CONTROLLER_FMU, "controller", controller_reals, controller_integers,
                                what=("controller_reals", "controller_integers"))
     except ValueError:
         platform.free()
@@ -124,28 +75,28 @@ def _run(platform, controller, t_end, h, scheme, record, force_hook, commands=F)
     try:
         for _ in range(n):
             if scheme == "gauss-seidel":
-                controller.set(L + LDOT, np.concatenate([platform.get(L), platform.get(LDOT)]))
-                forces = controller.get(commands)
+                controller.set_values(L + LDOT, np.concatenate([platform.values(L), platform.values(LDOT)]))
+                forces = controller.values(commands)
                 if force_hook:
                     what = "force_hook's forces" if commands is F else "force_hook's voltages"
                     forces = vector_of(force_hook(time, forces), 6, what, lambda i: commands[i])
-                platform.set(commands, forces)
-                platform.fmu.doStep(currentCommunicationPoint=time, communicationStepSize=h)
-                controller.fmu.doStep(currentCommunicationPoint=time, communicationStepSize=h)
+                platform.set_values(commands, forces)
+                platform.slave.doStep(currentCommunicationPoint=time, communicationStepSize=h)
+                controller.slave.doStep(currentCommunicationPoint=time, communicationStepSize=h)
                 time += h
             else:
                 # fmpy.ssp.simulation: platform first (the SSD's element order), then controller.
-                platform.set(commands, connection_f)
-                platform.fmu.doStep(currentCommunicationPoint=time, communicationStepSize=h)
-                out_l, out_ldot = platform.get(L), platform.get(LDOT)
-                controller.set(L + LDOT, np.concatenate([connection_l, connection_ldot]))
-                controller.fmu.doStep(currentCommunicationPoint=time, communicationStepSize=h)
-                out_f = controller.get(commands)
+                platform.set_values(commands, connection_f)
+                platform.slave.doStep(currentCommunicationPoint=time, communicationStepSize=h)
+                out_l, out_ldot = platform.values(L), platform.values(LDOT)
+                controller.set_values(L + LDOT, np.concatenate([connection_l, connection_ldot]))
+                controller.slave.doStep(currentCommunicationPoint=time, communicationStepSize=h)
+                out_f = controller.values(commands)
                 connection_f, connection_l, connection_ldot = out_f, out_l, out_ldot
                 time += h
             times.append(time)
-            rows.append(platform.get(record))
-            errors.append(np.max(np.abs(platform.get(L) - controller.get(LP))))
+            rows.append(platform.values(record))
+            errors.append(np.max(np.abs(platform.values(L) - controller.values(LP))))
     except FMICallException as e:  # a discarded or failed step ends the run; a bug in Python is raised
         status = str(e)
     return np.array(times), np.array(rows), np.array(errors), status

@@ -23,6 +23,7 @@ import sys
 import numpy as np
 
 from .core import CONTROLLER_FMU, IN_REPOSITORY, LEGS, PLATFORM_FMU, ROOT, check_names, check_times, fmu_file
+from .ssp import SYSTEM_DRIVES_SSP, SYSTEM_SSP, system_description
 
 REPOSITORY_LIBRARY = ROOT / "target" / "release" / "libstewart_master_py.so"
 BUILD = "cargo build --release -p stewart-master-py"
@@ -107,8 +108,6 @@ def closed_loop(t_end, h, scheme="gauss-seidel", platform_reals=None, controller
     `force_hook` and `events`), the same numbers to the bit, the same (times, recorded platform
     outputs, max |l - l^p| per step, status). With `drive = 1` in both components the system
     is StewartSystemDrives.ssp's (voltages U), otherwise StewartSystem.ssp's (forces F)."""
-    from .cosim import SYSTEM_DRIVES_SSP, SYSTEM_SSP
-    from .study import system_description
     check_times(t_end, h, "t_end", "h")
     controller_values = {**(controller_reals or {}), **(controller_integers or {})}
     drives = [int(dict(p or {}).get("drive", 0)) for p in (platform_reals, controller_values)]

@@ -32,7 +32,6 @@ import itertools
 import json
 import math
 import os
-import re
 import time
 import tempfile
 import tomllib
@@ -44,8 +43,9 @@ from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave, fmi2Terminated
 
-from . import study_schema
-from .core import LEGS, fmu_file, recording_callbacks, set_values, stand_parameters
+from . import master, study_schema
+from .core import LEGS, NamedValues, fmu_file, recording_callbacks, set_values, stand_parameters
+from .ssp import couplings
 from .study_schema import DEFAULT_MAX_RUNS, StudyError
 
 
@@ -101,18 +101,18 @@ def run_id(run):
 
 # ----- execution -------------------------------------------------------------------------------
 
-class _Component:
+class _Component(NamedValues):
     """One FMU2Slave kept for the life of the worker process, reset between runs."""
 
     def __init__(self, unzipped, md, name):
         self.md = md
         self.vr = {v.name: v.valueReference for v in md.modelVariables}
         self.variables = study_schema.variables_of(md)
-        self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.coSimulation.modelIdentifier,
+        self.slave = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.coSimulation.modelIdentifier,
                              instanceName=name)
         # The FMU's messages are kept, not printed: a failed run's row carries its message.
         self.messages = []
-        self.fmu.instantiate(callbacks=recording_callbacks(self.messages))
+        self.slave.instantiate(callbacks=recording_callbacks(self.messages))
         self.fresh = True
 
     def last_problem(self):
@@ -122,18 +122,13 @@ class _Component:
     def start(self, values):
         self.messages.clear()
         if not self.fresh:
-            self.fmu.reset()
+            self.slave.reset()
         self.fresh = False
-        self.fmu.setupExperiment(startTime=0.0)
-        self.fmu.enterInitializationMode()
-        set_values(self.fmu, self.md, values)
-        self.fmu.exitInitializationMode()
+        self.slave.setupExperiment(startTime=0.0)
+        self.slave.enterInitializationMode()
+        set_values(self.slave, self.md, values)
+        self.slave.exitInitializationMode()
 
-    def get(self, names):
-        return np.array(self.fmu.getReal([self.vr[n] for n in names]))
-
-    def set(self, names, values):
-        self.fmu.setReal([self.vr[n] for n in names], [float(v) for v in values])
 
 
 _PROCESS = {}  # per worker process: components by role and FMU content hash
@@ -161,7 +156,7 @@ def _drop_components():
     """After a run failed in an unforeseen way its instances may be in any state: free them, so
     the next run on this worker starts from new ones."""
     for key in list(_PROCESS):
-        _safe(_PROCESS.pop(key).fmu.freeInstance, None)
+        _safe(_PROCESS.pop(key).slave.freeInstance, None)
 
 
 def fmus_for(spec, paths=None):
@@ -177,22 +172,6 @@ def fmus_for(spec, paths=None):
         except FileNotFoundError:
             pass  # no SSP files here: the FMPy master runs the study (sweep.choose_master says so)
     return fmus
-
-
-def system_description(ssp, bindings=True):
-    """The text of an SSP file's SystemStructure.ssd (`bindings=False`: without its parameter
-    bindings, for a master that sets every value itself, as the studies and
-    `stewart_fmu.cosim.closed_loop` do)."""
-    with zipfile.ZipFile(ssp) as z:
-        text = z.read("SystemStructure.ssd").decode()
-    return text if bindings else re.sub(r"<ssd:ParameterBindings>.*?</ssd:ParameterBindings>", "", text, flags=re.S)
-
-
-def couplings():
-    """The closed loop's couplings the compiled master runs, by `drive`: the package's
-    StewartSystem.ssd (forces) and StewartSystemDrives.ssd (voltages), without bindings."""
-    from .cosim import SYSTEM_DRIVES_SSP, SYSTEM_SSP
-    return {0: system_description(fmu_file(SYSTEM_SSP)), 1: system_description(fmu_file(SYSTEM_DRIVES_SSP), False)}
 
 
 L = [f"l[{k}]" for k in LEGS]
@@ -315,7 +294,6 @@ def _description(data):
 
 
 def _compiled_system(fmus, closed, drive):
-    from . import master
     platform, controller = fmus["platform"], fmus.get("controller")
     key = (closed, drive, hashlib.sha256(platform).hexdigest(), hashlib.sha256(controller or b"").hexdigest())
     if key not in _COMPILED:
@@ -420,7 +398,7 @@ def _execute(spec, run, fmus, row):
     held = [(commands.index(name), value, at) for name, value, at in _scenario(run, closed, commands)]
     n = int(round(stop / h))
     t = 0.0
-    e0 = platform.get(["E"])[0]
+    e0 = platform.values(["E"])[0]
     leg_error = pose_error = stop_force = residual = deceleration = 0.0
     kappa_min = math.inf
     v_prev = None
@@ -428,37 +406,37 @@ def _execute(spec, run, fmus, row):
     try:
         for i in range(n):
             if closed:
-                legs = platform.get(L + LDOT)
-                controller.set(L + LDOT, legs)
-                forces = controller.get(commands)
+                legs = platform.values(L + LDOT)
+                controller.set_values(L + LDOT, legs)
+                forces = controller.values(commands)
                 for k, value, at in held:
                     if t >= at:
                         forces[k] = value
-                platform.set(commands, forces)
+                platform.set_values(commands, forces)
             else:
                 active = [(commands[k], value) for k, value, at in held if t >= at]
                 if active:
-                    platform.set([name for name, _ in active], [value for _, value in active])
-            platform.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+                    platform.set_values([name for name, _ in active], [value for _, value in active])
+            platform.slave.doStep(currentCommunicationPoint=t, communicationStepSize=h)
             if closed:
-                controller.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+                controller.slave.doStep(currentCommunicationPoint=t, communicationStepSize=h)
             t = (i + 1) * h
-            values = platform.get(ENERGY)
+            values = platform.values(ENERGY)
             energy, work, dissipated, kappa, z, vz = values[0], values[1], values[2], values[3], values[6], values[7]
             residual = max(residual, abs(energy - e0 - (work - dissipated)))
             kappa_min = min(kappa_min, kappa)
-            stop_force = max(stop_force, float(np.max(np.abs(platform.get(FSTOP)))))
+            stop_force = max(stop_force, float(np.max(np.abs(platform.values(FSTOP)))))
             if v_prev is not None:
                 deceleration = max(deceleration, (vz - v_prev) / h)
             v_prev = vz
             if closed:
-                leg_error = max(leg_error, float(np.max(np.abs(platform.get(L) - controller.get(LP)))))
-                rp = controller.get(["rp[1]", "rp[2]", "rp[3]"])
+                leg_error = max(leg_error, float(np.max(np.abs(platform.values(L) - controller.values(LP)))))
+                rp = controller.values(["rp[1]", "rp[2]", "rp[3]"])
                 # |r - r^p| written out, so that both masters sum the squares in one order.
                 dx, dy, dz = (float(values[4 + i] - rp[i]) for i in range(3))
                 pose_error = max(pose_error, math.sqrt(dx * dx + dy * dy + dz * dz))
     except FMICallException as e:
-        terminated = _safe(lambda: platform.fmu.getBooleanStatus(fmi2Terminated), True)
+        terminated = _safe(lambda: platform.slave.getBooleanStatus(fmi2Terminated), True)
         problem = platform.last_problem() or (controller.last_problem() if controller else "") or str(e)
         row.update(status="discard" if e.status == 2 else "error", discard_time=t,
                    message=problem + ("" if terminated else " (recoverable with shorter steps)"))

@@ -319,7 +319,7 @@ def test_fmi3_controller_closes_the_loop_like_fmi2():
         if fmi3:
             c = Fmu3(controller, name="c")
         else:
-            from stewart_fmu.cosim import Component
+            from stewart_fmu.core import Component
             c = Component(controller, "c")
         errors = []
         for i in range(2000):
@@ -333,11 +333,11 @@ def test_fmi3_controller_closes_the_loop_like_fmi2():
             else:
                 legs = [f"l[{k}]" for k in range(1, 7)]
                 rates = [f"ldot[{k}]" for k in range(1, 7)]
-                c.set(legs + rates, np.concatenate([p.vector("l", 6), p.vector("ldot", 6)]))
-                p.set_forces(c.get([f"F[{k}]" for k in range(1, 7)]))
+                c.set_values(legs + rates, np.concatenate([p.vector("l", 6), p.vector("ldot", 6)]))
+                p.set_forces(c.values([f"F[{k}]" for k in range(1, 7)]))
                 p.step(1e-3)
-                c.fmu.doStep(currentCommunicationPoint=i * 1e-3, communicationStepSize=1e-3)
-                errors.append(np.max(np.abs(p.vector("l", 6) - c.get([f"lp[{k}]" for k in range(1, 7)]))))
+                c.slave.doStep(currentCommunicationPoint=i * 1e-3, communicationStepSize=1e-3)
+                errors.append(np.max(np.abs(p.vector("l", 6) - c.values([f"lp[{k}]" for k in range(1, 7)]))))
         return np.array(errors)
 
     e3 = run(PLATFORM3, CONTROLLER3, True)

@@ -206,3 +206,22 @@ def test_the_browser_draws_the_legs_as_two_bodies_and_the_joints_at_their_limits
     assert seen[0] == 0 and seen[-1] >= 1
     assert red_limits > red_calm + 100
     shutil.copyfile(limits, ROOT / "target" / "viewer_joint_limits_screenshot.png")
+
+
+def test_the_viewers_default_stand_is_the_fmus():
+    """viewer/src/result.js's defaultStand() (drawn when no stand file is given) has the
+    FMU's start values of B, A, lmin and lmax, read from its model description."""
+    if not shutil.which("node"):
+        pytest.fail("node is needed (tests/run_all.sh installs it)")
+    script = "import { defaultStand } from './viewer/src/result.js'; console.log(JSON.stringify(defaultStand()));"
+    run = subprocess.run(["node", "--input-type=module", "-e", script], cwd=ROOT, capture_output=True, text=True,
+                         timeout=60)
+    assert run.returncode == 0, run.stderr
+    drawn, fmu = json.loads(run.stdout), stand()
+    worst = max(abs(a - b) for name in ("B", "A") for row_a, row_b in zip(drawn[name], fmu[name])
+                for a, b in zip(row_a, row_b))
+    print(f"viewer's default stand against the FMU's start values: B and A within {worst:.1e} m; lmin "
+          f"{drawn['lmin']}, lmax {drawn['lmax']}")
+    assert len(drawn["B"]) == len(drawn["A"]) == 6
+    assert worst < 1e-12
+    assert drawn["lmin"] == fmu["lmin"] and drawn["lmax"] == fmu["lmax"]

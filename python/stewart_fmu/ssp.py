@@ -1,0 +1,29 @@
+"""The SSP systems the package ships (StewartSystem.ssp: the closed loop on leg forces;
+StewartSystemDrives.ssp: on the drives' voltages, `drive = 1`) and the reading of their
+system structure, for the Python master (`stewart_fmu.cosim`), the compiled one
+(`stewart_fmu.master`) and the studies (`stewart_fmu.study`)."""
+
+import re
+import zipfile
+from pathlib import Path
+
+from .core import PLATFORM_FMU, fmu_file
+
+SYSTEM_SSP = Path(PLATFORM_FMU).parent / "StewartSystem.ssp"
+# The closed loop with electric drives (docs/model.md §9): parameter bindings set drive = 1.
+SYSTEM_DRIVES_SSP = Path(PLATFORM_FMU).parent / "StewartSystemDrives.ssp"
+
+
+def system_description(ssp, bindings=True):
+    """The text of an SSP file's SystemStructure.ssd (`bindings=False`: without its parameter
+    bindings, for a master that sets every value itself, as the studies and
+    `stewart_fmu.cosim.closed_loop` do)."""
+    with zipfile.ZipFile(ssp) as z:
+        text = z.read("SystemStructure.ssd").decode()
+    return text if bindings else re.sub(r"<ssd:ParameterBindings>.*?</ssd:ParameterBindings>", "", text, flags=re.S)
+
+
+def couplings():
+    """The closed loop's couplings the compiled master runs, by `drive`: the package's
+    StewartSystem.ssd (forces) and StewartSystemDrives.ssd (voltages), without bindings."""
+    return {0: system_description(fmu_file(SYSTEM_SSP)), 1: system_description(fmu_file(SYSTEM_DRIVES_SSP), False)}
