@@ -19,6 +19,7 @@
 
 pub mod controller;
 pub mod declare;
+pub mod machine;
 pub mod platform;
 pub mod snapshot;
 pub mod trivial;

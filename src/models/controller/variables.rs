@@ -2,6 +2,7 @@
 //! platform's, so one parameter set describes both.
 
 use crate::models::declare::declare_variables;
+use crate::models::machine;
 use crate::models::variables::Dependency::{All, SameIndex};
 use crate::models::variables::VariableGroup as V;
 
@@ -100,11 +101,11 @@ declare_variables! {
             Some("rad/s2"),
             "Programme 3 (external): second derivatives of roll, pitch, yaw",
         ); real(pose.angle_accelerations),
-        M => V::parameter("M", &[], 40, Some("kg"), "Mass of the loaded platform"); real(parameters.stand.mass),
-        J => V::parameter("J", &[3], 41, Some("kg.m2"), "Principal central moments of inertia"); real(parameters.stand.inertia),
-        G_GRAVITY => V::parameter("g", &[], 44, Some("m/s2"), "Gravitational acceleration, along -z"); real(parameters.stand.gravity),
-        B => V::parameter("B", &[6, 3], 50, Some("m"), "Base joint B_k, inertial frame"); real(parameters.stand.base_joints),
-        A => V::parameter("A", &[6, 3], 70, Some("m"), "Platform joint A_k, body frame from the centre of mass"); real(parameters.stand.platform_joints),
+        M => machine::mass(40); real(parameters.stand.mass),
+        J => machine::inertia(41); real(parameters.stand.inertia),
+        G_GRAVITY => machine::gravity(44); real(parameters.stand.gravity),
+        B => machine::base_joints(50); real(parameters.stand.base_joints),
+        A => machine::platform_joints(70); real(parameters.stand.platform_joints),
         GAIN => V::parameter("G", &[], 90, Some("N/m"), "Feedback gain on the leg-length error l^p - l (tunable)").tunable(); real(parameters.feedback.gain),
         DAMPING => V::parameter("D", &[], 91, Some("N.s/m"), "Feedback gain on the leg-rate error ldot^p - ldot (tunable)").tunable(); real(parameters.feedback.damping),
         FEEDFORWARD => V::parameter(
@@ -203,19 +204,11 @@ declare_variables! {
             "Mass m_c of each leg's cylinder: the programme forces F^p carry the legs' weight and inertia (as the \
              platform's leg.* parameters)",
         ); real(parameters.legs.cylinder_mass),
-        LEG_ROD_MASS => V::parameter("leg.rodMass", &[], 191, Some("kg"), "Mass m_r of each leg's rod"); real(parameters.legs.rod_mass),
-        LEG_CYLINDER_COM => V::parameter(
-            "leg.cylinderCoM", &[], 192, Some("m"), "Distance d_c of the cylinder's centre of mass from B_k along the leg",
-        ); real(parameters.legs.cylinder_com),
-        LEG_ROD_COM => V::parameter(
-            "leg.rodCoM", &[], 193, Some("m"), "Distance d_r of the rod's centre of mass from A_k back along the leg",
-        ); real(parameters.legs.rod_com),
-        LEG_CYLINDER_INERTIA => V::parameter(
-            "leg.cylinderInertia", &[], 194, Some("kg.m2"), "Transverse moment of inertia J_c of the cylinder",
-        ); real(parameters.legs.cylinder_inertia),
-        LEG_ROD_INERTIA => V::parameter(
-            "leg.rodInertia", &[], 195, Some("kg.m2"), "Transverse moment of inertia J_r of the rod",
-        ); real(parameters.legs.rod_inertia),
+        LEG_ROD_MASS => machine::rod_mass(191); real(parameters.legs.rod_mass),
+        LEG_CYLINDER_COM => machine::cylinder_com(192); real(parameters.legs.cylinder_com),
+        LEG_ROD_COM => machine::rod_com(193); real(parameters.legs.rod_com),
+        LEG_CYLINDER_INERTIA => machine::cylinder_inertia(194); real(parameters.legs.cylinder_inertia),
+        LEG_ROD_INERTIA => machine::rod_inertia(195); real(parameters.legs.rod_inertia),
         DRIVE => V::parameter(
             "drive", &[], 200, None,
             "0 = force commands F only (U = 0); 1 = the platform's legs are electric drives: also the voltage commands \
@@ -223,16 +216,14 @@ declare_variables! {
              gear.ratio, screw.lead as the platform), and the programme forces carry the rotors' inertia",
         )
         .integer(0, 1); integer(parameters.drives_enabled),
-        MOTOR_R => V::parameter("motor.R", &[], 201, Some("Ohm"), "Armature resistance R of each drive's motor"); real(parameters.drives.resistance),
-        MOTOR_L => V::parameter("motor.L", &[], 202, Some("H"), "Armature inductance L"); real(parameters.drives.inductance),
-        MOTOR_KE => V::parameter("motor.ke", &[], 203, Some("V.s/rad"), "Back-EMF constant k_e"); real(parameters.drives.ke),
-        MOTOR_KT => V::parameter("motor.kt", &[], 204, Some("N.m/A"), "Torque constant k_t"); real(parameters.drives.kt),
-        MOTOR_J => V::parameter(
-            "motor.J", &[], 205, Some("kg.m2"), "Inertia J_m of rotor, reducer and screw at the motor shaft",
-        ); real(parameters.drives.rotor_inertia),
-        MOTOR_D => V::parameter("motor.D", &[], 206, Some("N.m.s/rad"), "Viscous friction D at the motor shaft"); real(parameters.drives.damping),
-        GEAR_RATIO => V::parameter("gear.ratio", &[], 207, Some("1"), "Reducer ratio i: motor turns per screw turn"); real(parameters.drives.gear_ratio),
-        SCREW_LEAD => V::parameter("screw.lead", &[], 208, Some("m"), "Ball screw lead p: leg travel per screw turn"); real(parameters.drives.screw_lead),
+        MOTOR_R => machine::motor_resistance(201); real(parameters.drives.resistance),
+        MOTOR_L => machine::motor_inductance(202); real(parameters.drives.inductance),
+        MOTOR_KE => machine::motor_ke(203); real(parameters.drives.ke),
+        MOTOR_KT => machine::motor_kt(204); real(parameters.drives.kt),
+        MOTOR_J => machine::motor_inertia(205); real(parameters.drives.rotor_inertia),
+        MOTOR_D => machine::motor_damping(206); real(parameters.drives.damping),
+        GEAR_RATIO => machine::gear_ratio(207); real(parameters.drives.gear_ratio),
+        SCREW_LEAD => machine::screw_lead(208); real(parameters.drives.screw_lead),
         UMAX => V::parameter(
             "Umax", &[], 209, Some("V"), "Voltage saturation: the voltage command U_k is limited to [-Umax, Umax] (the drives' supply)",
         ); real(parameters.u_max),

@@ -2,6 +2,7 @@
 //! contract with hosts and tests: keep them.
 
 use crate::models::declare::declare_variables;
+use crate::models::machine;
 use crate::models::variables::Dependency::{All, SameIndex};
 use crate::models::variables::VariableGroup as V;
 use crate::simulation::PlatformOutputs;
@@ -231,23 +232,11 @@ declare_variables! {
              base). Held over each communication step, or interpolated to first order when fmi2SetRealInputDerivatives \
              gave its derivative",
         ); real(forces),
-        M => V::parameter("M", &[], 10, Some("kg"), "Mass of the loaded platform (platform plus payload)"); real(parameters.stand.mass),
-        J => V::parameter(
-            "J",
-            &[3],
-            11,
-            Some("kg.m2"),
-            "Principal central moments of inertia about the body axes e1, e2, e3 (must satisfy the triangle inequality)",
-        ); real(parameters.stand.inertia),
-        G => V::parameter("g", &[], 14, Some("m/s2"), "Gravitational acceleration, acting along -z"); real(parameters.stand.gravity),
-        B => V::parameter("B", &[6, 3], 20, Some("m"), "Base joint B_k (row k: x, y, z) in the inertial frame"); real(parameters.stand.base_joints),
-        A => V::parameter(
-            "A",
-            &[6, 3],
-            40,
-            Some("m"),
-            "Platform joint A_k (row k: components along e1, e2, e3) in the body frame, from the centre of mass",
-        ); real(parameters.stand.platform_joints),
+        M => machine::mass(10); real(parameters.stand.mass),
+        J => machine::inertia(11); real(parameters.stand.inertia),
+        G => machine::gravity(14); real(parameters.stand.gravity),
+        B => machine::base_joints(20); real(parameters.stand.base_joints),
+        A => machine::platform_joints(40); real(parameters.stand.platform_joints),
         R0 => V::parameter("r0", &[3], 60, Some("m"), "Initial position of the centre of mass"); real(parameters.r0),
         ANGLES0 => V::parameter("angles0", &[3], 63, Some("rad"), "Initial roll, pitch, yaw (1-2-3 sequence, R = Rx Ry Rz)")
             .display("deg"); real(parameters.angles0),
@@ -516,22 +505,11 @@ declare_variables! {
             "Mass m_c of each leg's cylinder (barrel), hinged at B_k; 0 with leg.rodMass and the inertias = the paper's \
              massless legs",
         ); real(parameters.legs.cylinder_mass),
-        LEG_ROD_MASS => V::parameter(
-            "leg.rodMass", &[], 301, Some("kg"), "Mass m_r of each leg's rod (piston), hinged at A_k",
-        ); real(parameters.legs.rod_mass),
-        LEG_CYLINDER_COM => V::parameter(
-            "leg.cylinderCoM", &[], 302, Some("m"), "Distance d_c of the cylinder's centre of mass from B_k along the leg",
-        ); real(parameters.legs.cylinder_com),
-        LEG_ROD_COM => V::parameter(
-            "leg.rodCoM", &[], 303, Some("m"), "Distance d_r of the rod's centre of mass from A_k back along the leg",
-        ); real(parameters.legs.rod_com),
-        LEG_CYLINDER_INERTIA => V::parameter(
-            "leg.cylinderInertia", &[], 304, Some("kg.m2"),
-            "Transverse moment of inertia J_c of the cylinder about its centre of mass (spin about the leg is ignored)",
-        ); real(parameters.legs.cylinder_inertia),
-        LEG_ROD_INERTIA => V::parameter(
-            "leg.rodInertia", &[], 305, Some("kg.m2"), "Transverse moment of inertia J_r of the rod about its centre of mass",
-        ); real(parameters.legs.rod_inertia),
+        LEG_ROD_MASS => machine::rod_mass(301); real(parameters.legs.rod_mass),
+        LEG_CYLINDER_COM => machine::cylinder_com(302); real(parameters.legs.cylinder_com),
+        LEG_ROD_COM => machine::rod_com(303); real(parameters.legs.rod_com),
+        LEG_CYLINDER_INERTIA => machine::cylinder_inertia(304); real(parameters.legs.cylinder_inertia),
+        LEG_ROD_INERTIA => machine::rod_inertia(305); real(parameters.legs.rod_inertia),
         JOINTS => V::parameter(
             "joints", &[], 310, None,
             "Joint limits on: each base and platform joint angle (from the reference pose joints.r0, joints.angles0) is \
@@ -613,33 +591,14 @@ declare_variables! {
              (a DC motor turning a ball screw) with the armature voltage U as its input, F ignored",
         )
         .integer(0, 1); integer(parameters.drives_enabled),
-        MOTOR_R => V::parameter(
-            "motor.R", &[], 401, Some("Ohm"), "Armature resistance R of each drive's motor",
-        ); real(parameters.drives.resistance),
-        MOTOR_L => V::parameter(
-            "motor.L", &[], 402, Some("H"), "Armature inductance L (L/R is the current's time constant)",
-        ); real(parameters.drives.inductance),
-        MOTOR_KE => V::parameter(
-            "motor.ke", &[], 403, Some("V.s/rad"), "Back-EMF constant k_e: the motor's voltage per shaft rate",
-        ); real(parameters.drives.ke),
-        MOTOR_KT => V::parameter(
-            "motor.kt", &[], 404, Some("N.m/A"),
-            "Torque constant k_t: the motor's torque per ampere (= k_e in SI units for an ideal machine)",
-        ); real(parameters.drives.kt),
-        MOTOR_J => V::parameter(
-            "motor.J", &[], 405, Some("kg.m2"),
-            "Inertia J_m of the rotor, reducer and screw at the motor shaft: a mass J_m N^2 moving with the leg's length",
-        ); real(parameters.drives.rotor_inertia),
-        MOTOR_D => V::parameter(
-            "motor.D", &[], 406, Some("N.m.s/rad"), "Viscous friction D at the motor shaft (bearings, screw)",
-        ); real(parameters.drives.damping),
-        GEAR_RATIO => V::parameter(
-            "gear.ratio", &[], 407, Some("1"), "Reducer ratio i: motor turns per screw turn",
-        ); real(parameters.drives.gear_ratio),
-        SCREW_LEAD => V::parameter(
-            "screw.lead", &[], 408, Some("m"),
-            "Ball screw lead p: leg travel per screw turn (the motor turns N = 2 pi i / p rad per metre of leg)",
-        ); real(parameters.drives.screw_lead),
+        MOTOR_R => machine::motor_resistance(401); real(parameters.drives.resistance),
+        MOTOR_L => machine::motor_inductance(402); real(parameters.drives.inductance),
+        MOTOR_KE => machine::motor_ke(403); real(parameters.drives.ke),
+        MOTOR_KT => machine::motor_kt(404); real(parameters.drives.kt),
+        MOTOR_J => machine::motor_inertia(405); real(parameters.drives.rotor_inertia),
+        MOTOR_D => machine::motor_damping(406); real(parameters.drives.damping),
+        GEAR_RATIO => machine::gear_ratio(407); real(parameters.drives.gear_ratio),
+        SCREW_LEAD => machine::screw_lead(408); real(parameters.drives.screw_lead),
         I0 => V::parameter(
             "I0", &[6], 410, Some("A"),
             "Initial armature current of drive k (a run that starts holding the stand starts at the holding current)",
