@@ -8,9 +8,12 @@
 //! The crate is layered; each layer only uses the ones above it:
 //!
 //! 0. [`maths`]: the elementary functions (`sin`, `exp`, `pow`, ...), one implementation
-//!    compiled into the FMU, so that every platform computes the same bits.
+//!    compiled into the FMU, so that every platform computes the same bits; [`simd`]: how
+//!    per-leg and per-axis values sit side by side in vector registers, and whether the wide
+//!    ones may be used.
 //! 1. [`physics`]: pure mechanics (the body, the legs, the actuators, the special form, the
-//!    direct problem), written once, generic over the number type.
+//!    direct problem), each law written once over the number type (`f64`, dual numbers, six
+//!    legs side by side).
 //! 2. [`integration`]: generic ODE integrators (Dormand-Prince 5(4), RK4).
 //! 3. [`simulation`]: a stand in motion (integration + constraint projection + roll-back, the
 //!    choice of vector registers).

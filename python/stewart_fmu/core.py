@@ -223,14 +223,14 @@ class NamedValues:
 
 
 class Component(NamedValues):
-    """One FMU2Slave instance of a packaged FMU, initialised with `values` (and `integers`)
-    and ready to step: the one FMPy driver of the package (the closed loop's platform and
-    controller, `Platform`)."""
+    """One FMU2Slave instance of a packaged FMU, initialised with its start values and ready to
+    step: the one FMPy driver of the package (the closed loop's platform and controller;
+    `Platform`). Reals by name: `get(names)` (an array), `set(names, values)`."""
 
     _extracted = {}
 
-    def __init__(self, fmu, name, reals=None, integers=None, start_time=0.0, stop_time=None, tolerance=None,
-                 events=None, logger=None, what=("parameters", "integers")):
+    def __init__(self, fmu, name, reals=None, integers=None, start_time=0.0, events=None, what=None, stop_time=None,
+                 tolerance=None, logger=None):
         """`reals`, `integers`: start values by name (booleans among them too); `events`: a list
         that receives the FMU's logEvents messages (contacts, singular arrangements passed) as
         (status, category, message); `what`: the names the arguments `reals` and `integers`
@@ -249,37 +249,29 @@ class Component(NamedValues):
             self.slave.setDebugLogging(True, ["logEvents"])
         self.slave.setupExperiment(tolerance=tolerance, startTime=start_time, stopTime=stop_time)
         self.slave.enterInitializationMode()
+        reals_name, integers_name = what or ("reals", "integers")
         try:
-            set_values(self.slave, self.md, dict(reals or {}), what[0])
-            set_values(self.slave, self.md, dict(integers or {}), what[1])
+            set_values(self.slave, self.md, dict(reals or {}), reals_name)
+            set_values(self.slave, self.md, dict(integers or {}), integers_name)
         except ValueError:
             self.slave.freeInstance()
             raise
         self.slave.exitInitializationMode()
         self.time = start_time
 
-    def set(self, *args):
-        """`set({name: value, ...})`: sets variables of any type by name (ValueError for a name
-        the FMU does not have); `set(names, values)`: Reals, a list of names and their values."""
-        if len(args) == 2:
-            names, values = args
-            check_names(names, self.vr, self.md.modelName, "set")
-            return self.set_values(names, values)
-        (values,) = args
-        set_values(self.slave, self.md, values, "set")
-
-    def get(self, *names):
-        """`get("r[3]", "v[3]")`: the Reals as a list; `get(["l[1]", ...])`: as an array."""
-        if len(names) == 1 and not isinstance(names[0], str):
-            check_names(list(names[0]), self.vr, self.md.modelName, "get")
-            return self.values(names[0])
+    def get(self, names):
+        """The Reals `names` (a list) as an array; ValueError for a name the FMU does not have."""
         check_names(names, self.vr, self.md.modelName, "get")
-        return self.slave.getReal([self.vr[n] for n in names])
+        return self.values(names)
 
-    def vector(self, base, n):
-        return np.array(self.get(*[f"{base}[{i + 1}]" for i in range(n)]))
+    def set(self, names, values):
+        """Sets the Reals `names` (a list) to `values`; ValueError for a name the FMU does not
+        have."""
+        check_names(names, self.vr, self.md.modelName, "set")
+        self.set_values(names, values)
 
     def step(self, h):
+        """One communication step of `h` seconds from the component's time."""
         if isinstance(h, bool) or not isinstance(h, (int, float, np.floating, np.integer)) or not (
                 math.isfinite(h) and h > 0):
             raise ValueError(f"step: h = {h!r}: the communication step must be a positive, finite number of seconds")
@@ -292,11 +284,24 @@ class Component(NamedValues):
 
 
 class Platform(Component):
-    """One instance of StewartPlatform with name-based access."""
+    """One instance of StewartPlatform, with the platform's own forms: `get("r[3]", ...)` (a
+    list), `set({name: value})` (any type), `vector`, `set_forces`."""
 
     def __init__(self, fmu=PLATFORM_FMU, parameters=None, integers=None, start_time=0.0, stop_time=None,
                  tolerance=None, name="platform", logger=None, events=None):
-        super().__init__(fmu, name, parameters, integers, start_time, stop_time, tolerance, events, logger)
+        super().__init__(fmu, name, parameters, integers, start_time, events, ("parameters", "integers"), stop_time,
+                         tolerance, logger)
+
+    def get(self, *names):
+        check_names(names, self.vr, self.md.modelName, "get")
+        return self.slave.getReal([self.vr[n] for n in names])
+
+    def set(self, values):
+        """Sets variables by name; ValueError for a name the platform does not have."""
+        set_values(self.slave, self.md, values, "set")
+
+    def vector(self, base, n):
+        return np.array(self.get(*[f"{base}[{i + 1}]" for i in range(n)]))
 
     def set_forces(self, forces, rates=None):
         """The six leg forces F[1] .. F[6] (and their time derivatives); ValueError unless six

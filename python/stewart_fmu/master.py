@@ -100,8 +100,6 @@ def run(system, stop_time, step, scheme="gauss-seidel", values=None, record=(), 
     return times, rows, status, out["message"]
 
 
-
-
 def closed_loop(t_end, h, scheme="gauss-seidel", platform_reals=None, controller_reals=None, controller_integers=None,
                 record=("r[3]",)):
     """`stewart_fmu.cosim.closed_loop` with the compiled master: the same arguments (without

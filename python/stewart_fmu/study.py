@@ -43,7 +43,7 @@ from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave, fmi2Terminated
 
-from . import master, study_schema
+from . import study_schema
 from .core import LEGS, NamedValues, fmu_file, recording_callbacks, set_values, stand_parameters
 from .ssp import couplings
 from .study_schema import DEFAULT_MAX_RUNS, StudyError
@@ -108,8 +108,8 @@ class _Component(NamedValues):
         self.md = md
         self.vr = {v.name: v.valueReference for v in md.modelVariables}
         self.variables = study_schema.variables_of(md)
-        self.slave = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.coSimulation.modelIdentifier,
-                             instanceName=name)
+        self.slave = FMU2Slave(guid=md.guid, unzipDirectory=unzipped,
+                               modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
         # The FMU's messages are kept, not printed: a failed run's row carries its message.
         self.messages = []
         self.slave.instantiate(callbacks=recording_callbacks(self.messages))
@@ -128,7 +128,6 @@ class _Component(NamedValues):
         self.slave.enterInitializationMode()
         set_values(self.slave, self.md, values)
         self.slave.exitInitializationMode()
-
 
 
 _PROCESS = {}  # per worker process: components by role and FMU content hash
@@ -294,6 +293,8 @@ def _description(data):
 
 
 def _compiled_system(fmus, closed, drive):
+    from . import master  # here, not at the top: it loads the compiled master's library, which a study with
+    # the FMPy master (and each of its workers) never needs
     platform, controller = fmus["platform"], fmus.get("controller")
     key = (closed, drive, hashlib.sha256(platform).hexdigest(), hashlib.sha256(controller or b"").hexdigest())
     if key not in _COMPILED:

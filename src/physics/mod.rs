@@ -4,7 +4,7 @@
 //!
 //! | module | what it holds |
 //! |---|---|
-//! | [`number`] | the number type `Real` (`f64`, or `Dual` for exact derivatives) |
+//! | [`number`] | the number types: `Number` (`f64`, `Dual` for exact derivatives, six legs side by side) and `Real` (one value) |
 //! | [`stand`] | mass, inertia, gravity, joint positions; the default truck-cabin stand; validation |
 //! | [`body`] | the rigid body: its 24 redundant coordinates, the special form's accelerations, projection, angles, invariants |
 //! | [`legs`] | the legs: geometry, end stops, the six legs side by side |

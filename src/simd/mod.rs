@@ -1,5 +1,6 @@
-//! The one door to the vector registers: how the physics' per-leg and per-axis values are held
-//! side by side, and whether the wide registers may be used.
+//! How the physics' per-leg and per-axis values are held side by side in vector registers, and
+//! whether the wide registers may be used (the code compiled for them is entered through
+//! `crate::simulation::vector`).
 //!
 //! - [`Lanes`]: six values, one per leg. `Narrow` is three SSE2 pairs (every x86-64
 //!   processor); `Wide` is legs 1-4 and 5-6 in two AVX registers (only where
@@ -8,8 +9,8 @@
 //!   `Quad` (AVX2).
 //!
 //! `Plain` is six plain values with the same operations (`portable.rs`): the checks at the end
-//! of a step use it on every processor, and on others than x86-64 (aarch64) it is `Narrow`
-//! and `Wide` too, as plain arrays are the axes' lanes there.
+//! of a step use it (except on the AVX2 path, which checks in `Wide`), and on others than
+//! x86-64 (aarch64) it is `Narrow` and `Wide` too, as plain arrays are the axes' lanes there.
 //! Every operation is per lane and exactly rounded (IEEE 754 `+ - * / sqrt`, no fused
 //! multiply-add), and every sum adds in one fixed order, so all forms give the same bits. The
 //! physics never names a register: it is written once over `crate::physics::number::Number`,
@@ -60,7 +61,7 @@ pub fn wide_testable() -> bool {
     }
     let built_in = cfg!(all(target_arch = "x86_64", feature = "avx2"));
     assert!(
-        !built_in || std::env::var_os("STEWART_FMU_NO_WIDE").is_some(),
+        !built_in || std::env::var("STEWART_FMU_NO_WIDE").is_ok_and(|v| v == "1"),
         "this processor lacks AVX2 or FMA: the wide forms cannot be compared with the narrow ones here (set \
          STEWART_FMU_NO_WIDE=1 to run the other tests)"
     );

@@ -6,7 +6,7 @@
 //! |---|---|
 //! | [`platform`] | [`PlatformSimulation`]: state, time, integrator; `advance` with roll-back |
 //! | [`outputs`] | the FMU outputs derived from a state, and their time derivatives |
-//! | [`vector`] | which vector registers a step computes in (the one door to AVX2) |
+//! | [`vector`] | which vector registers a step computes in (the door to the AVX2-compiled integrators) |
 
 pub mod outputs;
 pub mod platform;

@@ -142,8 +142,8 @@ impl LegOutputs {
 
 impl<T: Real> PlatformOutputs<T> {
     /// The outputs of the simulation state `y`; with the inputs `u` (leg forces, or with
-    /// drives voltages), the joints' forces too (they depend on them), else those are not
-    /// numbers.
+    /// drives voltages), the actuators' and the joints' forces too (they depend on them), else
+    /// those are not numbers.
     pub fn compute(form: &SpecialForm, y: &[T; SIMULATION_DIM], u: Option<&[T; LEG_COUNT]>) -> Self {
         let stand = &form.stand;
         let zero = [T::zero(); STATE_DIM];

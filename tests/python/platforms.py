@@ -153,6 +153,14 @@ def run_host(platform, version, platform_binary, controller_binary, uri, script,
     command = PLATFORMS[platform]["runner"] + [str(exe), str(version)] + [str(p) for p in paths] + [uri]
     done = subprocess.run(command, input=script, capture_output=True, text=True, encoding="utf-8", env=env,
                           timeout=timeout)
+    if platform == "x86_64-windows" and done.returncode != 0 and not done.stdout and not done.stderr:
+        # Nothing printed, not even the host's first line or a load error: wine itself did not
+        # start the host (seen once, in the test command on d15d8cf; the same run passed alone).
+        # Wait for the wineserver and run once more; the host's own failures always print.
+        print(f"platforms: wine exited {done.returncode} before the host printed anything; again after wineserver -w")
+        subprocess.run([WINESERVER, "-w"], env=env, timeout=120, check=False)
+        done = subprocess.run(command, input=script, capture_output=True, text=True, encoding="utf-8", env=env,
+                              timeout=timeout)
     return done.returncode, done.stdout, done.stderr
 
 

@@ -182,11 +182,13 @@ def test_model_exchange_with_drives_matches_co_simulation():
 
 def test_directional_derivatives_with_drives_match_central_differences():
     """d(derivatives)/d(states) and d(derivatives)/d(U) from fmi2GetDirectionalDerivative
-    (the currents' rates, the accelerations through the drives' forces) against central
-    differences of fmi2GetDerivatives: relative error <= 1e-6."""
+    (the currents' rates, the accelerations through the drives' forces), and of the drives'
+    forces actuatorForce, against central differences of fmi2GetDerivatives and fmi2GetReal:
+    relative error <= 1e-6."""
     from stewart_fmu.linearise import PlatformModel
     m = PlatformModel(dr.drive_start(), [0.0] * 6)
     u_vrs = [m.vr[f"U[{k}]"] for k in dr.LEGS]
+    out_vrs = [m.vr[f"actuatorForce[{k}]"] for k in (1, 4)]
     rng = np.random.default_rng(5)
     x0 = m.states()
     worst = 0.0
@@ -198,7 +200,8 @@ def test_directional_derivatives_with_drives_match_central_differences():
         m.fmu.setReal(u_vrs, list(u))
         for known_set, knowns in (("states", m.all_state_vrs), ("inputs", u_vrs)):
             exact = m.jacobian(m.all_derivative_vrs, knowns)
-            fd = np.zeros_like(exact)
+            exact_out = m.jacobian(out_vrs, knowns)
+            fd, fd_out = np.zeros_like(exact), np.zeros_like(exact_out)
             for j in range(len(knowns)):
                 values = []
                 for sign in (1, -1):
@@ -211,11 +214,13 @@ def test_directional_derivatives_with_drives_match_central_differences():
                         us = u.copy()
                         us[j] += sign * h
                         m.fmu.setReal(u_vrs, list(us))
-                    values.append(m.derivatives())
+                    values.append((m.derivatives(), np.array(m.fmu.getReal(out_vrs))))
                 m.set_states(x)
                 m.fmu.setReal(u_vrs, list(u))
-                fd[:, j] = (values[0] - values[1]) / (2 * h)
-            worst = max(worst, np.max(np.abs(exact - fd)) / max(np.max(np.abs(exact)), 1e-12))
+                fd[:, j] = (values[0][0] - values[1][0]) / (2 * h)
+                fd_out[:, j] = (values[0][1] - values[1][1]) / (2 * h)
+            for a, b in ((exact, fd), (exact_out, fd_out)):
+                worst = max(worst, np.max(np.abs(a - b)) / max(np.max(np.abs(a)), 1e-12))
     m.free()
     print(f"directional derivatives with drives vs central differences: max relative error {worst:.1e}")
     assert worst <= 1e-6

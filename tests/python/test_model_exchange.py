@@ -129,7 +129,8 @@ def test_directional_derivatives_match_central_differences():
     m = PlatformModel(P, [EQUILIBRIUM_FORCE] * 6)
     rng = np.random.default_rng(11)
     x0 = m.states()
-    outputs = [m.vr[n] for n in ["l[1]", "l[5]", "ldot[2]", "angles[1]", "angles[3]", "w[2]", "E", "kappa", "work.F"]]
+    outputs = [m.vr[n] for n in ["l[1]", "l[5]", "ldot[2]", "angles[1]", "angles[3]", "w[2]", "E", "kappa", "work.F",
+                                 "actuatorForce[2]"]]
     worst = 0.0
     for case in range(5):
         # The 24 special-form states; the quadratures and the (unused) drive currents stay.

@@ -179,3 +179,21 @@ def test_the_links_between_the_pages_resolve():
                     broken.append(f"{page.name}: {target}: no heading with that anchor")
     print(f"links between the pages: {checked} checked")
     assert checked > 30 and not broken, broken
+
+
+def test_the_performance_page_quotes_only_figures_the_benches_record():
+    """docs/performance.md's measured figures (instruction counts with thousands separators,
+    decimals) are each in a file of benches/results/ (its counts are written there without the
+    separators); a ratio ("7.3 times") is read from the figures beside it."""
+    page = ROOT / "docs" / "performance.md"
+    text = prose(page.read_text())
+    recorded = "\n".join(p.read_text() for p in sorted((ROOT / "benches" / "results").glob("*.txt")))
+    figures = [m.group(1) for m in re.finditer(r"(?<![\w.,])(\d{1,3}(?:,\d{3})+|\d+\.\d+)(?![\d])(?! times)", text)]
+
+    def recorded_as(figure):
+        return any(re.search(rf"(?<![\d.]){re.escape(f)}(?![\d])", recorded) for f in (figure, figure.replace(",", "")))
+
+    missing = [f for f in figures if not recorded_as(f)]
+    print(f"docs/performance.md quotes {len(figures)} measured figures, each in benches/results/: {figures}")
+    assert len(figures) >= 10
+    assert not missing, f"figures of docs/performance.md that no file of benches/results/ records: {missing}"

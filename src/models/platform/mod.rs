@@ -75,9 +75,9 @@ pub struct PlatformModel {
     legs: Option<LegOutputs>,
     /// `kappa` of the current state, computed on its first read after a change.
     kappa: Option<Condition>,
-    /// The joints' forces of the current state and leg forces, computed on the first read
-    /// after a change.
-    joint_forces: Option<JointForceOutputs>,
+    /// The actuators' and the joints' forces of the current state and inputs, computed on the
+    /// first read after a change.
+    input_dependent: Option<InputDependentOutputs>,
     /// Whether passages through singular arrangements are reported (see
     /// [`FmuModel::set_event_reporting`]).
     events_reported: bool,
@@ -99,7 +99,7 @@ impl Default for PlatformModel {
             outputs: None,
             legs: None,
             kappa: None,
-            joint_forces: None,
+            input_dependent: None,
             events_reported: true,
             last_completed_step: 0.0,
             host_step: 0.0,
@@ -116,7 +116,7 @@ pub struct Condition {
 /// The actuators' and the joints' forces alone (the fields of [`PlatformOutputs`] of the same
 /// names): they depend on the inputs, so they are a cache block of their own.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct JointForceOutputs {
+pub struct InputDependentOutputs {
     pub joint_force: [nalgebra::Vector3<f64>; LEG_COUNT],
     pub actuator_force: [f64; LEG_COUNT],
 }
@@ -142,13 +142,13 @@ impl PlatformModel {
 
     /// The actuators' and the joints' forces of the current state and inputs, computed on the
     /// first read after a change.
-    fn joint_force_outputs(&mut self) -> &JointForceOutputs {
+    fn input_dependent_outputs(&mut self) -> &InputDependentOutputs {
         let inputs = self.inputs();
         let (simulation, parameters) = (&self.simulation, &self.parameters);
-        self.joint_forces.get_or_insert_with(|| {
+        self.input_dependent.get_or_insert_with(|| {
             let forces = |form: &SpecialForm, y: &SimulationState| {
                 let actuator_force = actuator_forces(form, y, &inputs);
-                JointForceOutputs { joint_force: form.joint_forces(body(y), &actuator_force), actuator_force }
+                InputDependentOutputs { joint_force: form.joint_forces(body(y), &actuator_force), actuator_force }
             };
             match simulation {
                 Some((sim, _)) => forces(&sim.form, &sim.state),
@@ -185,9 +185,9 @@ impl PlatformModel {
     }
 
     /// After a set of values: in Initialization Mode the outputs follow the parameters; the
-    /// joints' forces follow the leg forces always.
+    /// actuators' and the joints' forces follow the inputs always.
     fn values_set(&mut self) {
-        self.joint_forces = None;
+        self.input_dependent = None;
         if self.simulation.is_none() {
             self.invalidate_outputs();
         }
@@ -198,7 +198,7 @@ impl PlatformModel {
         self.outputs = None;
         self.legs = None;
         self.kappa = None;
-        self.joint_forces = None;
+        self.input_dependent = None;
     }
 
     /// The inputs over the next step: the leg forces, or with drives the voltages, with

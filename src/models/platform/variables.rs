@@ -215,8 +215,9 @@ declare_variables! {
         leg_outputs,
         // Every other output of `PlatformOutputs` that depends on the state alone.
         outputs,
-        // The actuators' and the joints' forces: they depend on the inputs too.
-        joint_force_outputs,
+        // The actuators' and the joints' forces: they depend on the inputs too. (The declared
+        // dependencies are those of both drive modes: F in mode 0, the currents in mode 1.)
+        input_dependent_outputs,
         // The condition number `kappa` (an eigenvalue problem): read by studies every step,
         // by most hosts never.
         condition,
@@ -584,7 +585,7 @@ declare_variables! {
              end-stop and joint-limit forces and the leg's weight and inertia; what the joint must be sized for",
             ALL_PARAMETERS,
         )
-        .depends_on(MOTION_KNOWNS); cached(joint_force_outputs.joint_force),
+        .depends_on(MOTION_KNOWNS); cached(input_dependent_outputs.joint_force),
         DRIVE => V::parameter(
             "drive", &[], 400, None,
             "Actuators: 0 = the leg forces F are the inputs (ideal force actuators); 1 = each leg is an electric drive \
@@ -633,10 +634,10 @@ declare_variables! {
         .derivative("work.electric", "work.electric", 1, &[All("I"), All("U")]); derivative,
         ACTUATOR_FORCE => V::output(
             "actuatorForce", &[6], 450, Some("N"),
-            "Axial force of actuator k on leg k: the input F_k (drive = 0), or the electric drive's N (k_t I_k - D N \
-             ldot_k) (drive = 1); the end stops, friction and the leg's own inertia apart",
+            "Axial force of actuator k on leg k: the input F_k as last set (drive = 0), or the electric drive's N (k_t \
+             I_k - D N ldot_k), independent of F (drive = 1); the end stops, friction and the leg's own inertia apart",
             ALL_PARAMETERS,
         )
-        .depends_on(MOTION_KNOWNS); cached(joint_force_outputs.actuator_force),
+        .depends_on(MOTION_KNOWNS); cached(input_dependent_outputs.actuator_force),
     }
 }

@@ -38,7 +38,10 @@ pub struct RigidBody {
     pub gravity: f64,
     /// `1/(I_a + I_(a+1))`: `1/(I1+I2) = 1/J3`, `1/(I2+I3) = 1/J1`, `1/(I3+I1) = 1/J2`.
     inverse_pair: [f64; 4],
-    /// `1/(I_(a-1) + I_a)`: [`RigidBody::inverse_pair`] of the previous axis.
+    /// `1/(I_(a-1) + I_a)`: [`RigidBody::inverse_pair`] of the previous axis, stored rather
+    /// than rotated from it: `mul_constants` takes constants as stored. (An arrangement of
+    /// this law that rotated the loaded register made LLVM emit a `vmovq` form, 66 0F D6
+    /// register to register, that valgrind 3.19 cannot decode: the cycle bench died there.)
     inverse_pair_previous: [f64; 4],
     /// `c_a = 2 I_(a+1)/(I_a + I_(a+1))`, the coupling of `e_a'.e_(a+1)'` into `e_a''`.
     coupling_next: [f64; 4],

@@ -132,8 +132,8 @@ impl JointArrays {
 
     /// [`JointArrays::legs`] as plain arrays, with the inverse lengths, for the checks at the
     /// end of a step (the guard, the switching functions, the outputs): the same law in
-    /// [`Plain`] lanes (loops over arrays, which compile to fewer instructions here than the
-    /// SSE2 pairs), so the same bits.
+    /// [`Plain`] lanes, so the same bits. (In SSE2 pairs instead the hover cycle counted 4,166
+    /// instructions against 4,154, the adaptive one 7,247 against 7,241: callgrind, one run.)
     #[inline(always)]
     pub fn kinematics(&self, state: &BodyState) -> LegKinematics {
         self.kinematics_in::<Plain>(state)
