@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 from fmpy import extract, read_model_description
+from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
 
 # Where the FMUs are. Used from its repository (python/stewart_fmu/, an editable install) the
@@ -313,6 +314,33 @@ class Platform(Component):
         self.slave.setReal(vrs, [float(f) for f in forces])
         if rates is not None:
             self.slave.setRealInputDerivatives(vrs, [1] * 6, [float(r) for r in rates])
+
+
+def open_loop(inputs_of_t, t_end, h, parameters=None, record=(), events=None, inputs="F", name="platform"):
+    """The platform alone through FMPy: `inputs_of_t(t)` -> six values of `inputs` ("F", the
+    leg forces, N; "U", the drives' voltages, V), set at each communication point and held over
+    the step of `h` to `t_end`. Returns (columns: `time` and `record`, status: "ok" or the
+    FMU's message of the step it discarded, where the run ends). `events`: a list that receives
+    the logEvents messages (None: not delivered, nor the singular passages tracked). The one
+    open-loop runner of the package (the workspace, machine and drives scenarios)."""
+    check_times(t_end, h)
+    record = list(record)
+    pl = Platform(parameters=parameters, events=events, name=name)
+    try:
+        check_names(record, pl.vr, pl.md.modelName, "record")
+        vrs = [pl.vr[f"{inputs}[{k}]"] for k in LEGS]
+        times, rows, status = [pl.time], [pl.get(*record)], "ok"
+        for i in range(int(round(t_end / h))):
+            pl.slave.setReal(vrs, [float(x) for x in inputs_of_t(i * h)])
+            pl.step(h)
+            times.append(pl.time)
+            rows.append(pl.get(*record))
+    except FMICallException:
+        status = next((text for s, _, text in reversed(events or []) if s >= 2), "the step was discarded")
+    finally:
+        pl.free()
+    rows = np.array(rows)
+    return {"time": np.array(times), **{n: rows[:, j] for j, n in enumerate(record)}}, status
 
 
 def bisect_boundary(holds_at, lo, hi, tolerance):

@@ -65,35 +65,48 @@ def closed_loop(t_end, h, scheme="gauss-seidel", platform_reals=None, controller
         controller.free()
 
 
+def steps(platform, controller, n, h, scheme="gauss-seidel", commands=F, force_hook=None):
+    """The package's one Python master loop: `n` communication steps of `h` of the platform and
+    the controller (any objects with `values`, `set_values` and `slave`, as
+    `stewart_fmu.core.Component`), coupled by `scheme`; yields the time after each step (`t +=
+    h`, as the compiled master and FMPy's SSP master count it). `force_hook(t, commands)` may
+    change the commands on their way to the platform (Gauss-Seidel). An FMU's failed step is
+    raised from the loop (FMICallException) at the time of the last step yielded."""
+    time = 0.0
+    connection_f, connection_l, connection_ldot = np.zeros(6), np.zeros(6), np.zeros(6)
+    for _ in range(n):
+        if scheme == "gauss-seidel":
+            controller.set_values(L + LDOT, platform.values(L + LDOT))
+            forces = controller.values(commands)
+            if force_hook:
+                forces = force_hook(time, forces)
+            platform.set_values(commands, forces)
+            platform.slave.doStep(currentCommunicationPoint=time, communicationStepSize=h)
+            controller.slave.doStep(currentCommunicationPoint=time, communicationStepSize=h)
+        else:
+            # fmpy.ssp.simulation: platform first (the SSD's element order), then controller.
+            platform.set_values(commands, connection_f)
+            platform.slave.doStep(currentCommunicationPoint=time, communicationStepSize=h)
+            out_l, out_ldot = platform.values(L), platform.values(LDOT)
+            controller.set_values(L + LDOT, np.concatenate([connection_l, connection_ldot]))
+            controller.slave.doStep(currentCommunicationPoint=time, communicationStepSize=h)
+            out_f = controller.values(commands)
+            connection_f, connection_l, connection_ldot = out_f, out_l, out_ldot
+        time += h
+        yield time
+
+
+def _checked(force_hook, commands):
+    """`force_hook` with its six commands checked (ValueError naming the element)."""
+    what = "force_hook's forces" if commands is F else "force_hook's voltages"
+    return lambda t, forces: vector_of(force_hook(t, forces), 6, what, lambda i: commands[i])
+
+
 def _run(platform, controller, t_end, h, scheme, record, force_hook, commands=F):
     times, rows, errors, status = [], [], [], "ok"
-    n = int(round(t_end / h))
-    time = 0.0
-    connection_f = np.zeros(6)
-    connection_l = np.zeros(6)
-    connection_ldot = np.zeros(6)
+    hook = _checked(force_hook, commands) if force_hook else None
     try:
-        for _ in range(n):
-            if scheme == "gauss-seidel":
-                controller.set_values(L + LDOT, np.concatenate([platform.values(L), platform.values(LDOT)]))
-                forces = controller.values(commands)
-                if force_hook:
-                    what = "force_hook's forces" if commands is F else "force_hook's voltages"
-                    forces = vector_of(force_hook(time, forces), 6, what, lambda i: commands[i])
-                platform.set_values(commands, forces)
-                platform.slave.doStep(currentCommunicationPoint=time, communicationStepSize=h)
-                controller.slave.doStep(currentCommunicationPoint=time, communicationStepSize=h)
-                time += h
-            else:
-                # fmpy.ssp.simulation: platform first (the SSD's element order), then controller.
-                platform.set_values(commands, connection_f)
-                platform.slave.doStep(currentCommunicationPoint=time, communicationStepSize=h)
-                out_l, out_ldot = platform.values(L), platform.values(LDOT)
-                controller.set_values(L + LDOT, np.concatenate([connection_l, connection_ldot]))
-                controller.slave.doStep(currentCommunicationPoint=time, communicationStepSize=h)
-                out_f = controller.values(commands)
-                connection_f, connection_l, connection_ldot = out_f, out_l, out_ldot
-                time += h
+        for time in steps(platform, controller, int(round(t_end / h)), h, scheme, commands, hook):
             times.append(time)
             rows.append(platform.values(record))
             errors.append(np.max(np.abs(platform.values(L) - controller.values(LP))))

@@ -16,11 +16,10 @@ FMU's code.
 
 import math
 
-import numpy as np
 from fmpy import read_model_description
-from fmpy.fmi1 import FMICallException
 
-from .core import GRAVITY, H_C, LEGS, MASS, PLATFORM_FMU, Platform, check_times, neutral_leg_geometry
+from .core import GRAVITY, H_C, LEGS, MASS, PLATFORM_FMU, neutral_leg_geometry
+from .core import open_loop as core_open_loop
 from .cosim import closed_loop
 
 DRIVE_PARAMETERS = ("motor.R", "motor.L", "motor.ke", "motor.kt", "motor.J", "motor.D", "gear.ratio", "screw.lead")
@@ -87,25 +86,11 @@ def open_loop(voltage_of_t, t_end, h=0.01, parameters=None, record=(), drive=Tru
     """The platform with drives (or with `drive=False` the same parameters with forces as
     inputs) under `voltage_of_t(t)` -> six voltages (or forces), through FMPy; returns (columns,
     logEvents messages, status)."""
-    check_times(t_end, h)
-    names = list(dict.fromkeys(RECORD + list(record)))
     messages = []
     start = {**(drive_start() if drive else {}), **(parameters or {})}
-    pl = Platform(parameters=start, events=messages, name="drives")
-    inputs = [pl.vr[f"{'U' if drive else 'F'}[{k}]"] for k in LEGS]
-    times, rows, status = [0.0], [pl.get(*names)], "ok"
-    try:
-        for i in range(int(round(t_end / h))):
-            pl.slave.setReal(inputs, [float(x) for x in voltage_of_t(i * h)])
-            pl.step(h)
-            times.append(pl.time)
-            rows.append(pl.get(*names))
-    except FMICallException:
-        status = next((text for s, _, text in reversed(messages) if s >= 2), "the step was discarded")
-    finally:
-        pl.free()
-    rows = np.array(rows)
-    return {"time": np.array(times), **{n: rows[:, j] for j, n in enumerate(names)}}, messages, status
+    columns, status = core_open_loop(voltage_of_t, t_end, h, start, list(dict.fromkeys(RECORD + list(record))),
+                                     messages, "U" if drive else "F", "drives")
+    return columns, messages, status
 
 
 def holding_run(t_end=3.0):

@@ -15,9 +15,8 @@ import math
 import re
 
 import numpy as np
-from fmpy.fmi1 import FMICallException
 
-from .core import GRAVITY, LEGS, MASS, Platform, check_times
+from .core import GRAVITY, LEGS, MASS, open_loop
 from .cosim import closed_loop
 
 EQUILIBRIUM_FORCE_SI = 0.2005 * MASS * GRAVITY
@@ -52,26 +51,13 @@ def ripple_run(t_end=10.0, h=0.01, joints=True, parameters=None, record=()):
     """The open-loop ripple through FMPy: returns a dict of columns (`time` and `record`
     plus r, R, angles, the joint angles, Fstop and the energy terms), `events` (the joint-limit
     messages, `joint_events`) and `status` ("ok" or the FMU's message of a discarded step)."""
-    check_times(t_end, h)
     names = list(dict.fromkeys(["r[1]", "r[2]", "r[3]"] + [f"R[{a},{b}]" for a in (1, 2, 3) for b in (1, 2, 3)]
                                 + ["angles[1]", "angles[2]", "angles[3]"] + [f"l[{k}]" for k in LEGS]
                                 + [f"F[{k}]" for k in LEGS] + [f"Fstop[{k}]" for k in LEGS] + JOINT_ANGLES
                                 + ["E", "work.F", "work.dissipated"] + list(record)))
     messages = []
-    pl = Platform(parameters={"joints": joints, **(parameters or {})}, events=messages, name="ripple")
-    times, rows, status = [0.0], [pl.get(*names)], "ok"
-    try:
-        for i in range(int(round(t_end / h))):
-            pl.set_forces(ripple(i * h))
-            pl.step(h)
-            times.append(pl.time)
-            rows.append(pl.get(*names))
-    except FMICallException:
-        status = next((text for s, _, text in reversed(messages) if s >= 2), "the step was discarded")
-    finally:
-        pl.free()
-    rows = np.array(rows)
-    columns = {"time": np.array(times), **{n: rows[:, j] for j, n in enumerate(names)}}
+    columns, status = open_loop(ripple, t_end, h, {"joints": joints, **(parameters or {})}, names, messages,
+                                name="ripple")
     return columns, joint_events(messages), status
 
 

@@ -43,7 +43,8 @@ from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave, fmi2Terminated
 
-from . import study_schema
+from . import cosim, study_schema
+from .cosim import F, L, LP, U
 from .core import LEGS, NamedValues, fmu_file, recording_callbacks, set_values, stand_parameters
 from .ssp import couplings
 from .study_schema import DEFAULT_MAX_RUNS, StudyError
@@ -173,11 +174,6 @@ def fmus_for(spec, paths=None):
     return fmus
 
 
-L = [f"l[{k}]" for k in LEGS]
-LDOT = [f"ldot[{k}]" for k in LEGS]
-F = [f"F[{k}]" for k in LEGS]
-U = [f"U[{k}]" for k in LEGS]
-LP = [f"lp[{k}]" for k in LEGS]
 FSTOP = [f"Fstop[{k}]" for k in LEGS]
 ENERGY = ["E", "work.F", "work.dissipated", "kappa", "r[1]", "r[2]", "r[3]", "v[3]"]
 
@@ -405,23 +401,7 @@ def _execute(spec, run, fmus, row):
     v_prev = None
     values = None
     try:
-        for i in range(n):
-            if closed:
-                legs = platform.values(L + LDOT)
-                controller.set_values(L + LDOT, legs)
-                forces = controller.values(commands)
-                for k, value, at in held:
-                    if t >= at:
-                        forces[k] = value
-                platform.set_values(commands, forces)
-            else:
-                active = [(commands[k], value) for k, value, at in held if t >= at]
-                if active:
-                    platform.set_values([name for name, _ in active], [value for _, value in active])
-            platform.slave.doStep(currentCommunicationPoint=t, communicationStepSize=h)
-            if closed:
-                controller.slave.doStep(currentCommunicationPoint=t, communicationStepSize=h)
-            t = (i + 1) * h
+        for t in _steps(platform, controller if closed else None, n, h, commands, held):
             values = platform.values(ENERGY)
             energy, work, dissipated, kappa, z, vz = values[0], values[1], values[2], values[3], values[6], values[7]
             residual = max(residual, abs(energy - e0 - (work - dissipated)))
@@ -446,6 +426,28 @@ def _execute(spec, run, fmus, row):
     if closed:
         row.update(max_leg_error=leg_error, max_pose_error=pose_error)
     _finish(study, row, closed)
+
+
+def _steps(platform, controller, n, h, commands, held):
+    """A run's communication steps, yielding the time after each: the closed loop through the
+    package's one master loop (`stewart_fmu.cosim.steps`, Gauss-Seidel), the platform alone
+    otherwise; `held`: inputs (index in `commands`, value, from time) held from a time on."""
+    def hold(t, forces):
+        for k, value, at in held:
+            if t >= at:
+                forces[k] = value
+        return forces
+    if controller is not None:
+        yield from cosim.steps(platform, controller, n, h, "gauss-seidel", commands, hold)
+        return
+    t = 0.0
+    for _ in range(n):
+        active = [(commands[k], value) for k, value, at in held if t >= at]
+        if active:
+            platform.set_values([name for name, _ in active], [value for _, value in active])
+        platform.slave.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+        t += h  # as the master loop counts the time
+        yield t
 
 
 def _safe(f, default):

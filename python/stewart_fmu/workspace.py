@@ -21,8 +21,8 @@ import numpy as np
 from fmpy import read_model_description, simulate_fmu
 
 from .cosim import closed_loop
-from .core import (BASE_AZIMUTHS, GRAVITY, H_C, LEGS, MASS, PLATFORM_AZIMUTHS, PLATFORM_FMU, R_B, R_P, Platform,
-                   check_names, check_times, fmu_file)
+from .core import (BASE_AZIMUTHS, GRAVITY, H_C, LEGS, MASS, PLATFORM_AZIMUTHS, PLATFORM_FMU, R_B, R_P, check_names,
+                   fmu_file, open_loop)
 
 EQUILIBRIUM_FORCE_SI = 0.2005 * MASS * GRAVITY
 
@@ -80,20 +80,11 @@ RECORD = (["r[1]", "r[2]", "r[3]", "v[3]", "der(v[3])", "angles[1]", "angles[2]"
 
 
 def _platform_run(force_of_t, t_end, h, parameters=None, record=RECORD, events=None):
-    """Open loop through FMU2Slave: forces held over each step; returns a dict of arrays."""
-    check_times(t_end, h, "t_end", "h")
-    pl = Platform(parameters=parameters, events=events)
-    rows = [pl.get(*record)]
-    times = [0.0]
-    n = int(round(t_end / h))
-    for i in range(n):
-        pl.set_forces(force_of_t(i * h))
-        pl.step(h)
-        times.append((i + 1) * h)
-        rows.append(pl.get(*record))
-    pl.free()
-    data = {name: np.array([r[j] for r in rows]) for j, name in enumerate(record)}
-    data["time"] = np.array(times)
+    """Open loop, forces held over each step (`stewart_fmu.core.open_loop`); returns a dict of
+    arrays. RuntimeError if a step is discarded: every scenario here runs to its end."""
+    data, status = open_loop(force_of_t, t_end, h, parameters, record, events)
+    if status != "ok":
+        raise RuntimeError(f"the open-loop run ended at t = {data['time'][-1]}: {status}")
     return data
 
 

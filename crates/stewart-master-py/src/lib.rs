@@ -16,7 +16,7 @@ use pyo3::types::{PyBool, PyBytes, PyDict, PyFloat, PyInt};
 use stewart_master::record::Recorder;
 use stewart_master::ssd::SystemDescription;
 use stewart_master::system::convert;
-use stewart_master::{Fmu, Given, Override, RunSpec, Scheme, System, TimeRule};
+use stewart_master::{Fmu, Given, Override, RunSpec, Scheme, System};
 
 fn panic_text(payload: Box<dyn std::any::Any + Send>) -> String {
     let text = payload
@@ -59,16 +59,6 @@ struct PySystem {
 /// A study point from Python: (steps, step, values by qualified name, overrides as (qualified
 /// name, value, from time)).
 type Point<'py> = (usize, f64, Vec<(String, Bound<'py, PyAny>)>, Vec<(String, f64, f64)>);
-
-fn scheme_and_rule(scheme: &str, time_rule: &str) -> PyResult<(Scheme, TimeRule)> {
-    let scheme = Scheme::parse(scheme).map_err(PyValueError::new_err)?;
-    let rule = match time_rule {
-        "sum" => TimeRule::Sum,
-        "product" => TimeRule::Product,
-        other => return Err(PyValueError::new_err(format!("time_rule {other:?}: 'sum' or 'product'"))),
-    };
-    Ok((scheme, rule))
-}
 
 impl PySystem {
     fn wrap(system: System) -> PySystem {
@@ -166,7 +156,7 @@ impl PySystem {
     /// point), `steps` done, `time` reached, `status` ("ok", "discard", "error"), `message`
     /// (the FMU's last problem), `call` (the FMI call that failed, e.g. "fmi2DoStep failed
     /// with status 2 (discard).") and `component` (its component).
-    #[pyo3(signature = (steps, step, *, scheme = "gauss-seidel", time_rule = "sum", start_time = 0.0,
+    #[pyo3(signature = (steps, step, *, scheme = "gauss-seidel", start_time = 0.0,
                         values = vec![], overrides = vec![], record = vec![], every = 1))]
     #[allow(clippy::too_many_arguments)]
     fn run<'py>(
@@ -175,7 +165,6 @@ impl PySystem {
         steps: usize,
         step: f64,
         scheme: &str,
-        time_rule: &str,
         start_time: f64,
         values: Vec<(String, Bound<'py, PyAny>)>,
         overrides: Vec<(String, f64, f64)>,
@@ -187,13 +176,13 @@ impl PySystem {
         if !good {
             return Err(PyValueError::new_err(format!("step = {step}, start_time = {start_time}: finite, step > 0")));
         }
-        let (scheme, time_rule) = scheme_and_rule(scheme, time_rule)?;
+        let scheme = Scheme::parse(scheme).map_err(PyValueError::new_err)?;
         let mut guard =
             self.inner.lock().map_err(|_| PyRuntimeError::new_err("the system is unusable after a panic"))?;
         let system = guard.as_mut().ok_or_else(|| PyRuntimeError::new_err("the system is closed"))?;
         let (values, overrides) = PySystem::spec(system, values, overrides)?;
         let mut recorder = Recorder::new(system, &record, every).map_err(PyValueError::new_err)?;
-        let spec = RunSpec { start_time, step, steps, scheme, time_rule, values, overrides };
+        let spec = RunSpec { start_time, step, steps, scheme, values, overrides };
         let outcome = py.detach(|| catch_unwind(AssertUnwindSafe(|| system.run(&spec, &mut recorder))));
         let outcome = match outcome {
             Ok(outcome) => outcome,
@@ -251,7 +240,6 @@ impl PySystem {
                 step,
                 steps,
                 scheme: Scheme::GaussSeidel,
-                time_rule: TimeRule::Product,
                 values,
                 overrides,
             });

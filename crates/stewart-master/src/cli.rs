@@ -6,7 +6,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use crate::record::Recorder;
-use crate::system::{Given, Override, RunSpec, Scheme, TimeRule, convert};
+use crate::system::{Given, Override, RunSpec, Scheme, convert};
 
 pub const USAGE: &str = "\
 usage: stewart-master run SYSTEM.ssp --stop-time T --step H [--scheme gauss-seidel|jacobi]
@@ -152,8 +152,7 @@ fn command(args: &[String]) -> Result<i32, String> {
         }
     };
     let mut recorder = Recorder::new(&system, &record, every)?;
-    let spec =
-        RunSpec { start_time: 0.0, step, steps: steps as usize, scheme, time_rule: TimeRule::Sum, values, overrides };
+    let spec = RunSpec { start_time: 0.0, step, steps: steps as usize, scheme, values, overrides };
     let started = Instant::now();
     let outcome = system.run(&spec, &mut recorder);
     let seconds = started.elapsed().as_secs_f64();

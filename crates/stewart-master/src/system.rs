@@ -37,16 +37,6 @@ impl Scheme {
     }
 }
 
-/// How the communication points are computed: `Sum` adds the step each time (`t += h`, as
-/// FMPy's SSP master and `stewart_fmu.cosim` do); `Product` multiplies (`t = t0 + (i + 1) h`,
-/// as `stewart_fmu.study` does). The FMUs see the time, so a master that is to give the bits of
-/// another must count it the same way.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum TimeRule {
-    Sum,
-    Product,
-}
-
 /// A value given for a variable before its type is known (from Python, the command line or
 /// an SSP): converted by the variable's type as FMPy's `set_values` converts.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -183,7 +173,6 @@ pub struct RunSpec {
     pub step: f64,
     pub steps: usize,
     pub scheme: Scheme,
-    pub time_rule: TimeRule,
     pub values: Vec<Vec<(u32, Value)>>,
     pub overrides: Vec<Override>,
 }
@@ -465,10 +454,10 @@ impl System {
             if let Err((k, error)) = result {
                 return Outcome { steps: i, time, failure: Some(self.failure(k, error, false)) };
             }
-            time = match spec.time_rule {
-                TimeRule::Sum => time + spec.step,
-                TimeRule::Product => spec.start_time + (i + 1) as f64 * spec.step,
-            };
+            // The communication points add the step each time (`t += h`), as FMPy's SSP master and
+            // the package's Python masters count them: the FMUs see the time, so the masters give
+            // the same bits only if they count alike.
+            time += spec.step;
             observer.step(i, time, &readings);
         }
         Outcome { steps: spec.steps, time, failure: None }
