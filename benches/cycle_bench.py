@@ -158,7 +158,8 @@ def instruction_table(host, fmus, folder):
     lines = ["Instructions per cycle (callgrind, 5000 cycles): set 6 forces + fmi2DoStep/fmi3DoStep 1 ms + get 12 values",
              "(hover: leg feedback, no stop touched; contact: resting on all six lower stops; nostops: hover with "
              "stops = false; nojoints: hover with joints = false; heavylegs: hover with 40 kg cylinders and 15 kg "
-             "rods; drives: hover with the default electric drives, voltages in; logevents: hover with logEvents delivered, "
+             "rods; drives: hover with the default electric drives, voltages in; hydraulics: hover with the default hydraulic "
+             "legs, valve commands in, 12 pressures out besides the legs; logevents: hover with logEvents delivered, "
              "singular passages tracked)",
              "(set, step, get: the host's functions, each around one call; in the FMU: that exported call alone, "
              "per call)",
@@ -167,8 +168,8 @@ def instruction_table(host, fmus, folder):
     cycles = {}
     for version, (binary, token) in fmus.items():
         for method in ("rk4", "dopri5"):
-            scenarios = (("hover", "contact", "nostops", "nojoints", "heavylegs", "drives", "logevents")
-                         if version == "fmi2" else ("hover", "contact", "drives"))
+            scenarios = (("hover", "contact", "nostops", "nojoints", "heavylegs", "drives", "hydraulics", "logevents")
+                         if version == "fmi2" else ("hover", "contact", "drives", "hydraulics"))
             for scenario in scenarios:
                 c = instructions(host, version, binary, token, method, folder, scenario)
                 cycles[(version, method, scenario)] = c

@@ -24,6 +24,8 @@ step "the machine scenarios: heavy legs, joint limits, friction"
 .venv/bin/python examples/machine_scenarios.py "$OUT"
 step "the drive scenarios: holding, dynamic braking, voltage commands, a failed drive"
 .venv/bin/python examples/drive_scenarios.py "$OUT"
+step "the hydraulic scenarios: holding, heave, loss of control power, pump failure, a stuck valve"
+.venv/bin/python examples/hydraulic_scenarios.py "$OUT"
 step "the linearisation about the neutral pose"
 .venv/bin/python examples/linearise.py --output "$OUT"
 # Design studies on a local Dask cluster (one worker per core) with the compiled co-simulation
@@ -34,7 +36,7 @@ for study in stability payload power_loss workspace; do
 done
 step "the payload Monte Carlo: 10,000 runs of 1,500 closed-loop steps on a local Dask cluster (under a minute on 2 cores; a progress bar)"
 .venv/bin/stewart-sweep studies/payload_monte_carlo.toml --out "$OUT/payload_monte_carlo"
-# The viewer with six results (heave, power loss, actuator failure, start-up, heavy legs, the ripple on its joint limits).
+# The viewer with seven results (heave, power loss, actuator failure, start-up, heavy legs, hydraulic legs, the ripple on its joint limits).
 step "the viewer's results"
 .venv/bin/python examples/viewer_data.py "$OUT/viewer"
 # What each file in the output folder is.

@@ -61,6 +61,19 @@ SECTIONS = [
         ("drive_heave.png", "voltage mode: leg error, voltages, electric power"),
         ("drive_failure.png", "a shorted drive against a force actuator that loses its force"),
     ]),
+    ("The hydraulic servo legs: holding, the heave in hydraulic mode, loss of control power, pump failure, a "
+     "stuck valve, work-precision (`examples/hydraulic_scenarios.py`; SI; [docs/model.md](../docs/model.md) §10)", [
+        ("hydraulic_summary.txt", "the defaults' figures and the scenarios' results as printed by the main job"),
+        ("hydraulic1_holding.csv", "the neutral pose held under control: pressures, spools, supply flow"),
+        ("hydraulic2_heave.csv", "the heave programme in hydraulic mode: pressures, spools, flow, power, leg error"),
+        ("hydraulic3_control_power_loss.csv", "every valve command 0 at 1 s: the locked legs creep"),
+        ("hydraulic4_pump_failure.csv", "pS to 0 at 1 s: the platform settles onto its stops; pmin"),
+        ("hydraulic5_stuck_valve.csv", "leg 1's valve stuck at +0.2 from 1 s under feedback"),
+        ("hydraulic_heave.png", "hydraulic mode: leg error, chamber pressures, spools, pump flow and power"),
+        ("hydraulic_failures.png", "creep after the loss of control power, pump failure, stuck valve"),
+        ("hydraulic_work_precision.png", "error against wall time of RK4 and the adaptive method, stiff regime"),
+        ("hydraulic_work_precision.md", "the same as a table"),
+    ]),
     ("Linearisation (`examples/linearise.py`; [docs/control.md](../docs/control.md))", [
         ("linearisation.json", "A, B, C, D about the neutral pose, the modes, the critical gain"),
         ("root_locus.png", "closed-loop eigenvalues against the feedback gain"),

@@ -1,4 +1,4 @@
-"""The main job's 3-D viewer: writes the built page and six results into output/viewer/ (or the
+"""The main job's 3-D viewer: writes the built page and seven results into output/viewer/ (or the
 folder given), listed in its dataset menu, and prints how to serve it.
 
 - the default controller driving the heave programme (SI, 10 s at 1 ms);
@@ -6,7 +6,9 @@ folder given), listed in its dataset menu, and prints how to serve it.
 - actuator failure: leg 1's force falls to 0 at 1 s under feedback;
 - start-up: the controller lifts the platform from its parked pose on the stops (programme 4);
 - heavy legs (40 kg cylinders, 15 kg rods) on the heave programme;
-- the open-loop 5 % ripple per leg tips the platform onto its joint limits (red joints).
+- the open-loop 5 % ripple per leg tips the platform onto its joint limits (red joints);
+- hydraulic servo legs on the heave programme: the cylinders coloured by their load pressure,
+  the pressures and spools plotted.
 """
 
 import sys
@@ -17,23 +19,23 @@ import numpy as np
 from stewart_fmu import Platform
 from stewart_fmu.cosim import closed_loop
 from stewart_fmu.machine import HEAVY, ripple_run
-from stewart_fmu.viewer import VIEW_OUTPUTS, stand, view
+from stewart_fmu.viewer import HYDRAULIC_VIEW_OUTPUTS, VIEW_OUTPUTS, stand, view
 
 OUT = Path(sys.argv[1] if len(sys.argv) > 1 else "output/viewer")
 RECORD = VIEW_OUTPUTS
 
 
-def as_columns(times, rows):
+def as_columns(times, rows, record=RECORD):
     columns = {"time": np.asarray(times)}
     rows = np.asarray(rows)
-    for j, name in enumerate(RECORD):
+    for j, name in enumerate(record):
         columns[name] = rows[:, j]
     return columns
 
 
-def loop(name, title, **kwargs):
-    t, rows, _, status = closed_loop(record=tuple(RECORD), **kwargs)
-    url = view(as_columns(t, rows), stand(kwargs.get("platform_reals")), OUT, name, title)
+def loop(name, title, record=RECORD, **kwargs):
+    t, rows, _, status = closed_loop(record=tuple(record), **kwargs)
+    url = view(as_columns(t, rows, record), stand(kwargs.get("platform_reals")), OUT, name, title)
     print(f"viewer: {title}: {len(t)} rows ({status}) -> {url}")
 
 
@@ -61,6 +63,9 @@ def main():
          controller_integers={"programme": 4})
     loop("heavy_legs", "heavy legs (40 kg cylinders, 15 kg rods), heave programme (SI)", t_end=10.0, h=1e-3,
          platform_reals=HEAVY, controller_reals=HEAVY)
+    loop("hydraulic_heave", "hydraulic servo legs, heave programme: cylinders coloured by load pressure (SI)",
+         record=RECORD + HYDRAULIC_VIEW_OUTPUTS, t_end=10.0, h=1e-3, platform_reals={"drive": 2},
+         controller_integers={"drive": 2})
     columns, events, status = ripple_run(10.0, 0.01)
     url = view(columns, stand(), OUT, "ripple_joint_limits", "open-loop 5 % ripple per leg: resting on the joint limits (SI)")
     print(f"viewer: ripple: {len(columns['time'])} rows ({status}, {len(events)} joint-limit events) -> {url}")

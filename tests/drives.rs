@@ -79,6 +79,10 @@ fn oracle_state(s: &BodyState, currents: [f64; 6]) -> OracleState {
         v: s.v.into(),
         w: s.angular_velocity_body().into(),
         currents,
+        pa: [0.0; 6],
+        pb: [0.0; 6],
+        spool: [0.0; 6],
+        spool_rate: [0.0; 6],
     }
 }
 
@@ -234,10 +238,10 @@ impl OdeSystem<SIMULATION_DIM> for Classical<'_> {
         self.0.after_step(y)
     }
     fn modifies_state_after_step(&self) -> bool {
-        self.0.modifies_state_after_step()
+        OdeSystem::<SIMULATION_DIM>::modifies_state_after_step(&self.0)
     }
     fn active_dimension(&self) -> usize {
-        self.0.active_dimension()
+        OdeSystem::<SIMULATION_DIM>::active_dimension(&self.0)
     }
     fn linear_decay(&self) -> Option<LinearDecay> {
         None
@@ -246,13 +250,13 @@ impl OdeSystem<SIMULATION_DIM> for Classical<'_> {
         self.0.check(t, y)
     }
     fn switching_count(&self) -> usize {
-        self.0.switching_count()
+        OdeSystem::<SIMULATION_DIM>::switching_count(&self.0)
     }
     fn switching(&self, t: f64, y: &[f64; SIMULATION_DIM], g: &mut [f64; MAX_SWITCHING]) {
         self.0.switching(t, y, g)
     }
     fn switching_kind(&self, index: usize) -> SwitchingKind {
-        self.0.switching_kind(index)
+        OdeSystem::<SIMULATION_DIM>::switching_kind(&self.0, index)
     }
 }
 

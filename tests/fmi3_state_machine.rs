@@ -156,7 +156,7 @@ const FUNCTIONS: [&str; 45] = [
 ];
 
 /// Continuous states of the platform and its event indicators (Model Exchange).
-const NX: usize = 33;
+const NX: usize = stewart_fmu::simulation::SIMULATION_DIM;
 const NZ: usize = stewart_fmu::simulation::platform::switching::COUNT;
 
 /// A fresh instance driven into `state` (Co-Simulation instances use Event Mode).
@@ -339,7 +339,7 @@ fn fresh_state_bytes(kind: Kind) -> Vec<u8> {
     Host3::try_new("source", ModelKind::Platform, kind, true).unwrap_or_else(|l| panic!("{l:?}")).state_bytes()
 }
 
-/// The 33 Model Exchange states of the neutral pose, read from an initialised instance.
+/// The Model Exchange states of the neutral pose, read from an initialised instance.
 fn neutral_states() -> [f64; NX] {
     let h = instance_in("continuousTimeMode", Kind::ModelExchange);
     let mut x = [0.0; NX];

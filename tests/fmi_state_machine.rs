@@ -93,7 +93,7 @@ const FUNCTIONS: [&str; 43] = [
 ];
 
 /// Continuous states of the platform (24 special-form coordinates, work.F, work.dissipated).
-const NX: usize = 33;
+const NX: usize = stewart_fmu::simulation::SIMULATION_DIM;
 /// Event indicators: twelve stroke limits and the force/moment determinant.
 const NZ: usize = stewart_fmu::simulation::platform::switching::COUNT;
 

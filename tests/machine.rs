@@ -82,6 +82,10 @@ fn oracle_state(s: &BodyState) -> OracleState {
         v: s.v.into(),
         w: w.into(),
         currents: [0.0; 6],
+        pa: [0.0; 6],
+        pb: [0.0; 6],
+        spool: [0.0; 6],
+        spool_rate: [0.0; 6],
     }
 }
 

@@ -1,16 +1,18 @@
 //! Self-checks of the independent machine oracle (tests/common/machine_oracle.rs): agreement
 //! with the rigid-body Newton-Euler oracle for massless legs, energy conservation and the
 //! energy balance with drives, statics, the equations of motion against Lagrange's equations
-//! by finite differences of the energies, and the joint forces against the platform's
-//! Newton-Euler balance.
+//! by finite differences of the energies, the joint forces against the platform's
+//! Newton-Euler balance, and the hydraulic servo legs of SPEC §10 (power balance per leg,
+//! energy balance over a run, holding pressures).
 
 mod common;
 
 use common::machine_oracle::{
-    EQUILIBRIUM_LEG_FORCE, NEUTRAL_R, OracleDrives, OracleFriction, OracleInputs, OracleJoints, OracleMachine,
-    OracleState, OracleStops, identity_rotation, rotation_from_angles,
+    EQUILIBRIUM_LEG_FORCE, NEUTRAL_R, OracleDrives, OracleFriction, OracleHydraulics, OracleInputs, OracleJoints,
+    OracleMachine, OracleState, OracleStops, identity_rotation, rotation_from_angles,
 };
 use common::newton_euler::{NeState, NewtonEuler};
+use common::rng::Rng;
 use nalgebra::{Matrix3, UnitQuaternion, Vector3, Vector6};
 use std::cell::Cell;
 use stewart_fmu::physics::stand::Stand;
@@ -46,7 +48,7 @@ fn tilted_moving() -> OracleState {
         rotation: rotation_from_angles([0.1, -0.05, 0.2]),
         v: [0.1, -0.05, 0.08],
         w: [0.05, 0.1, -0.12],
-        currents: [0.0; 6],
+        ..OracleState::at_rest(NEUTRAL_R, identity_rotation())
     }
 }
 
@@ -137,7 +139,7 @@ fn energy_conserved_with_heavy_legs_stops_and_joint_limits() {
         rotation: identity_rotation(),
         v: [0.35, -0.25, 0.2],
         w: [0.25, -0.2, 0.3],
-        currents: [0.0; 6],
+        ..OracleState::at_rest(NEUTRAL_R, identity_rotation())
     };
     let t0 = std::time::Instant::now();
     let run = m.simulate_with_work(&start, 1e-3, 3000, &|_| springs);
@@ -437,6 +439,7 @@ fn contact_state(mut m: OracleMachine) -> (OracleMachine, OracleState) {
         v: [0.4, -0.3, 0.25],
         w: [0.3, -0.4, 0.5],
         currents: [10.0, -5.0, 20.0, 15.0, 0.0, 8.0],
+        ..OracleState::at_rest(NEUTRAL_R, identity_rotation())
     };
     let l = m.leg_lengths(&s);
     let mut lmin = l.map(|x| x - 0.05);
@@ -552,4 +555,319 @@ fn joint_forces_balance_the_platform() {
     println!("[6] massless legs: max |G_k - u_k n_k| = {worst:.3e} N");
     let r3 = check("massless legs", &m0, &s0, &OracleInputs::Forces(u0));
     assert!(r1 < 1e-10 && r2 < 1e-10 && r3 < 1e-12 && worst < 1e-9);
+}
+
+// ------------------------------------------------------------------------------------------
+// 7. Hydraulic servo legs (SPEC §10)
+// ------------------------------------------------------------------------------------------
+
+const SUPPLY: f64 = 16e6;
+
+/// The brief's realistic parameter set.
+fn hydraulics() -> OracleHydraulics {
+    OracleHydraulics {
+        bore: 0.063,
+        rod: 0.036,
+        dead_volume_a: 0.5e-3,
+        dead_volume_b: 0.5e-3,
+        bulk_modulus: 1e9,
+        tank_pressure: 0.0,
+        rated_flow: 1.5e-3,
+        rated_pressure_drop: 7e6,
+        omega: 2.0 * std::f64::consts::PI * 100.0,
+        damping: 0.7,
+        pcr: 1e5,
+        valve_leakage: 1e-12,
+        internal_leakage: 1e-13,
+        lmin: [1.45; 6],
+        lmax: [2.05; 6],
+    }
+}
+
+fn hydraulic_machine() -> OracleMachine {
+    let mut m = heavy(OracleMachine::default_stand());
+    m.hydraulics = Some(hydraulics());
+    m
+}
+
+fn uniform(rng: &mut Rng, lo: f64, hi: f64) -> f64 {
+    lo + (hi - lo) * ((rng.next() >> 11) as f64 / (1u64 << 53) as f64)
+}
+
+/// SPEC §10's valve and chamber flows, written out again line by line from the text:
+/// `(Q_A, Q_B, Q_S, Q_T, valve losses)` (losses: `Q dp` of the open lands plus `C_v dp^2` of
+/// all four leakage paths).
+fn spec_valve(h: &OracleHydraulics, s: f64, pa: f64, pb: f64, ps: f64) -> (f64, f64, f64, f64, f64) {
+    let pt = h.tank_pressure;
+    let k = h.rated_flow / (h.rated_pressure_drop / 2.0).sqrt();
+    let phi = |dp: f64| dp / (dp.powi(2) + h.pcr.powi(2)).powf(0.25);
+    let cv = h.valve_leakage;
+    let (mut qa, mut qb) = if s >= 0.0 {
+        (k * s * phi(ps - pa), -k * s * phi(pb - pt))
+    } else {
+        (k * s * phi(pa - pt), -k * s * phi(ps - pb))
+    };
+    qa += cv * (ps - pa) - cv * (pa - pt);
+    qb += cv * (ps - pb) - cv * (pb - pt);
+    // Supply line: the land that connects P to a chamber, plus the P->A and P->B leakage; tank
+    // line: the land that connects a chamber to T, plus the A->T and B->T leakage.
+    let leak_s = cv * (ps - pa) + cv * (ps - pb);
+    let leak_t = cv * (pa - pt) + cv * (pb - pt);
+    let (q_s, q_t, throttling) = if s >= 0.0 {
+        let (to_a, from_b) = (k * s * phi(ps - pa), k * s * phi(pb - pt));
+        (to_a + leak_s, from_b + leak_t, to_a * (ps - pa) + from_b * (pb - pt))
+    } else {
+        let (to_b, from_a) = (k * s.abs() * phi(ps - pb), k * s.abs() * phi(pa - pt));
+        (to_b + leak_s, from_a + leak_t, to_b * (ps - pb) + from_a * (pa - pt))
+    };
+    let leakage = cv * ((ps - pa).powi(2) + (pa - pt).powi(2) + (ps - pb).powi(2) + (pb - pt).powi(2));
+    (qa, qb, q_s, q_t, throttling + leakage)
+}
+
+#[test]
+fn hydraulic_power_balance_per_leg_closes() {
+    let mut rng = Rng(0x5eed_1234_abcd_0042);
+    let (mut worst, mut worst_mass, mut worst_oracle, mut worst_flow, mut worst_spool) =
+        (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    let (mut min_loss, mut largest) = (f64::MAX, 0.0f64);
+    let cases = 2000;
+    for case in 0..cases {
+        let mut m = hydraulic_machine();
+        let mut h = hydraulics();
+        if case % 3 == 1 {
+            h.tank_pressure = 3e5;
+        }
+        if case % 5 == 2 {
+            h.lmin = std::array::from_fn(|_| uniform(&mut rng, 1.40, 1.5));
+            h.lmax = std::array::from_fn(|_| uniform(&mut rng, 2.0, 2.1));
+        }
+        m.hydraulics = Some(h);
+        m.friction =
+            OracleFriction { coulomb: 30.0, static_: 50.0, stribeck_velocity: 0.01, smoothing: 0.002, viscous: 200.0 };
+        let spool = std::array::from_fn(|_| match rng.below(6) {
+            0 => 0.0,
+            1 => -0.0,
+            _ => uniform(&mut rng, -1.1, 1.1),
+        });
+        let s = OracleState {
+            r: add3(NEUTRAL_R, std::array::from_fn(|_| uniform(&mut rng, -0.1, 0.1))),
+            rotation: rotation_from_angles(std::array::from_fn(|_| uniform(&mut rng, -0.1, 0.1))),
+            v: std::array::from_fn(|_| uniform(&mut rng, -0.6, 0.6)),
+            w: std::array::from_fn(|_| uniform(&mut rng, -0.5, 0.5)),
+            currents: [0.0; 6],
+            pa: std::array::from_fn(|_| uniform(&mut rng, -2e6, 2.2e7)),
+            pb: std::array::from_fn(|_| uniform(&mut rng, -2e6, 2.2e7)),
+            spool,
+            spool_rate: std::array::from_fn(|_| uniform(&mut rng, -200.0, 200.0)),
+        };
+        let ps = match case % 4 {
+            0 => SUPPLY,
+            1 => 0.0,
+            _ => uniform(&mut rng, 5e6, 2.1e7),
+        };
+        let valve = std::array::from_fn(|_| uniform(&mut rng, -1.5, 1.5));
+        let inputs = OracleInputs::Valves { valve, supply_pressure: ps };
+
+        // The oracle's pieces.
+        let (pa_dot, pb_dot) = m.hydraulic_rates(&s, &inputs);
+        let (va, vb) = m.chamber_volumes(&s);
+        let ld = m.leg_rates(&s);
+        let l = m.leg_lengths(&s);
+        let powers = m.hydraulic_powers(&s, &inputs);
+        let forces = m.leg_forces(&s, &inputs);
+        let sdd = m.spool_accelerations(&s, &inputs);
+        let (aa, ab) = (
+            std::f64::consts::PI * 0.063f64.powi(2) / 4.0,
+            std::f64::consts::PI * (0.063f64.powi(2) - 0.036f64.powi(2)) / 4.0,
+        );
+        let mut q_supply = 0.0;
+        for k in 0..6 {
+            let (pa, pb) = (s.pa[k], s.pb[k]);
+            let (qa, qb, q_s, q_t, valve_losses) = spec_valve(&h, s.spool[k], pa, pb, ps);
+            q_supply += q_s;
+            // Left: the power drawn from the supply.
+            let drawn = ps * q_s - h.tank_pressure * q_t;
+            // Right: leg power + losses + compression power (the oracle's pressure rates).
+            let u = pa * aa - pb * ab;
+            let leg = u * ld[k];
+            let internal = h.internal_leakage * (pa - pb).powi(2);
+            let compression = pa * va[k] * pa_dot[k] / h.bulk_modulus + pb * vb[k] * pb_dot[k] / h.bulk_modulus;
+            let scale = drawn.abs() + leg.abs() + valve_losses + internal + compression.abs();
+            largest = largest.max(scale);
+            worst = worst.max((drawn - (leg + valve_losses + internal + compression)).abs() / scale);
+            min_loss = min_loss.min(valve_losses).min(internal);
+            // Mass balance of the oil: Q_S - Q_T = Q_A + Q_B = the chambers' volume rates.
+            let x = l[k] - h.lmin[k];
+            let (va_own, vb_own) = (h.dead_volume_a + aa * x, h.dead_volume_b + ab * (h.lmax[k] - h.lmin[k] - x));
+            // V_A' = A_A ldot, V_B' = -A_B ldot; the internal leakage leaves A and enters B.
+            let (dva, dvb) = (aa * ld[k], -ab * ld[k]);
+            let mass = (q_s - q_t) - (qa + qb);
+            let chambers =
+                (qa + qb) - (va_own * pa_dot[k] / h.bulk_modulus + dva + vb_own * pb_dot[k] / h.bulk_modulus + dvb);
+            let qscale = q_s.abs() + q_t.abs() + qa.abs() + qb.abs() + dva.abs() + dvb.abs();
+            worst_mass = worst_mass.max(mass.abs().max(chambers.abs()) / qscale);
+            // The oracle's integrated powers and forces are these.
+            let d = (powers.supply[k] - drawn).abs()
+                + (powers.leg[k] - leg).abs()
+                + (powers.losses[k] - valve_losses - internal).abs()
+                + (powers.compression[k] - compression).abs()
+                + (forces.actuator[k] - u).abs() * ld[k].abs();
+            worst_oracle = worst_oracle.max(d / scale);
+            let c = valve[k].clamp(-1.0, 1.0);
+            let w = 2.0 * std::f64::consts::PI * 100.0;
+            let spool_acc = w * w * (c - s.spool[k]) - 2.0 * 0.7 * w * s.spool_rate[k];
+            worst_spool = worst_spool.max((sdd[k] - spool_acc).abs() / (w * w));
+        }
+        let qs_oracle = m.supply_flow(&s, &inputs);
+        worst_flow = worst_flow.max((qs_oracle - q_supply).abs() / q_supply.abs().max(1e-9));
+    }
+    println!(
+        "[7a] {cases} random states x 6 legs: max |p_S Q_S - p_T Q_T - (u ldot + losses + compression)| / sum|terms| = {worst:.3e} \
+         (largest sum of terms {largest:.3e} W); oil mass balance {worst_mass:.3e}; oracle's powers against these {worst_oracle:.3e}; \
+         Qsupply {worst_flow:.3e}; spool {worst_spool:.3e}; smallest loss {min_loss:.3e} W"
+    );
+    assert!(worst < 1e-13 && worst_mass < 1e-13 && worst_oracle < 1e-13 && worst_flow < 1e-12 && worst_spool < 1e-15);
+    assert!(min_loss >= 0.0);
+}
+
+/// The stand with heavy legs, friction and end stops at the cylinders' stroke ends, starting
+/// at rest `heave` above neutral on the holding pressures.
+fn hydraulic_run_setup(heave: f64) -> (OracleMachine, OracleState) {
+    let mut m = hydraulic_machine();
+    let h = m.hydraulics.unwrap();
+    m.stops = Some(OracleStops { lmin: h.lmin, lmax: h.lmax, stiffness: 1e7, damping: 5e4 });
+    m.friction =
+        OracleFriction { coulomb: 30.0, static_: 50.0, stribeck_velocity: 0.01, smoothing: 0.002, viscous: 200.0 };
+    let r = add3(NEUTRAL_R, [0.0, 0.0, heave]);
+    let (pa, pb) = m.holding_pressures(r, identity_rotation(), SUPPLY);
+    (m, OracleState { pa, pb, ..OracleState::at_rest(r, identity_rotation()) })
+}
+
+/// Valves moving (a different swing per leg) and the supply dropped to 0 after 1.2 s.
+fn hydraulic_profile(t: f64) -> OracleInputs {
+    let valve = std::array::from_fn(|k| 0.6 * (2.0 * std::f64::consts::PI * t / 0.9 + 0.5 * k as f64).sin() + 0.1);
+    OracleInputs::Valves { valve, supply_pressure: if t < 1.2 { SUPPLY } else { 0.0 } }
+}
+
+#[test]
+fn hydraulic_energy_balance_over_a_run() {
+    let (m, start) = hydraulic_run_setup(0.2);
+    let (h, steps) = (1e-3, 1600);
+    let t0 = std::time::Instant::now();
+    let run = m.simulate_with_work(&start, h, steps, &hydraulic_profile);
+    let elapsed = t0.elapsed().as_secs_f64();
+    let e0 = m.energy(&start);
+    let hyd = m.hydraulics.unwrap();
+    let (mut worst, mut scale, mut stop_samples) = (0.0f64, 0.0f64, 0);
+    let (mut lo, mut hi, mut pmin, mut pmax, mut smax) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN, 0.0f64);
+    for (st, w) in &run {
+        assert_eq!(w.forces, 0.0);
+        let balance = m.energy(st) - e0 - (w.hydraulic - w.compression - w.dissipated);
+        worst = worst.max(balance.abs());
+        scale = scale.max(w.hydraulic.abs()).max(w.compression.abs()).max(w.dissipated.abs());
+        let l = m.leg_lengths(st);
+        if (0..6).any(|k| l[k] < hyd.lmin[k] || l[k] > hyd.lmax[k]) {
+            stop_samples += 1;
+        }
+        for k in 0..6 {
+            lo = lo.min(l[k]);
+            hi = hi.max(l[k]);
+            pmin = pmin.min(st.pa[k]).min(st.pb[k]);
+            pmax = pmax.max(st.pa[k]).max(st.pb[k]);
+            smax = smax.max(st.spool[k].abs());
+        }
+    }
+    let (last, lw) = run.last().unwrap();
+    println!(
+        "[7b] {:.1} s in {elapsed:.1} s: E0 = {e0:.1} J, E - E0 = {:.1} J, W_hydraulic = {:.1} J, W_compression = {:.1} J, \
+         W_dissipated = {:.1} J; max |E - E0 - W_h + W_c + W_d| = {worst:.3e} J = {:.3e} of the largest work; \
+         legs {lo:.4}..{hi:.4} m, {stop_samples} samples in stop contact; pressures {pmin:.3e}..{pmax:.3e} Pa; max |s| {smax:.3}; \
+         final r = {:?}",
+        steps as f64 * h,
+        m.energy(last) - e0,
+        lw.hydraulic,
+        lw.compression,
+        lw.dissipated,
+        worst / scale,
+        last.r
+    );
+    assert!(stop_samples > 20, "the run must reach the end stops");
+    assert!(scale > 1e4);
+    assert!(worst / scale < 1e-9, "energy balance {worst:e} J");
+
+    // The balance's error is RK4's: twice the substep.
+    let mut coarse = m.clone();
+    coarse.max_step = 2.0 * m.max_step;
+    let run2 = coarse.simulate_with_work(&start, h, steps, &hydraulic_profile);
+    let (mut worst2, mut dpose, mut dp) = (0.0f64, 0.0f64, 0.0f64);
+    for ((a, _), (b, w)) in run.iter().zip(&run2) {
+        worst2 = worst2.max((coarse.energy(b) - e0 - (w.hydraulic - w.compression - w.dissipated)).abs());
+        dpose = dpose.max((v3(a.r) - v3(b.r)).norm()).max((m3(&a.rotation) - m3(&b.rotation)).abs().max());
+        for k in 0..6 {
+            dp = dp.max((a.pa[k] - b.pa[k]).abs()).max((a.pb[k] - b.pb[k]).abs());
+        }
+    }
+    println!(
+        "[7b] substep {:e} s: balance {worst2:.3e} J ({:.1} x the {:e} s run's); pose difference {dpose:.3e}, pressure difference {dp:.3e} Pa",
+        coarse.max_step,
+        worst2 / worst,
+        m.max_step
+    );
+    assert!(dpose < 1e-8 && dp < 10.0);
+
+    // At coarse substeps the balance's residual is RK4's truncation error, h^4.
+    let mut residuals = Vec::new();
+    for step in [1e-4, 5e-5] {
+        let mut c = m.clone();
+        c.max_step = step;
+        let r = c.simulate_with_work(&start, h, steps, &hydraulic_profile);
+        let res = r
+            .iter()
+            .map(|(s, w)| (c.energy(s) - e0 - (w.hydraulic - w.compression - w.dissipated)).abs())
+            .fold(0.0, f64::max);
+        residuals.push(res);
+    }
+    let order = (residuals[0] / residuals[1]).log2();
+    println!(
+        "[7b] substeps 1e-4 s and 5e-5 s: balance {:.3e} J and {:.3e} J, observed order {order:.2}",
+        residuals[0], residuals[1]
+    );
+    assert!(residuals[0] > 30.0 * worst && order > 3.5 && order < 4.5);
+}
+
+#[test]
+fn holding_pressures_hold_the_stand() {
+    let mut m = hydraulic_machine();
+    let mut h = hydraulics();
+    h.valve_leakage = 0.0;
+    h.internal_leakage = 0.0;
+    m.hydraulics = Some(h);
+    let inputs = OracleInputs::Valves { valve: [0.0; 6], supply_pressure: SUPPLY };
+    let mut worst = 0.0f64;
+    for (name, r, rot) in [
+        ("neutral", NEUTRAL_R, identity_rotation()),
+        ("offset and tilted", add3(NEUTRAL_R, [0.03, -0.02, 0.04]), rotation_from_angles([0.06, -0.04, 0.1])),
+    ] {
+        let (pa, pb) = m.holding_pressures(r, rot, SUPPLY);
+        let start = OracleState { pa, pb, ..OracleState::at_rest(r, rot) };
+        let (vd, wd) = m.accelerations(&start, &inputs);
+        let acc = v3(vd).norm().max(v3(wd).norm());
+        let (pad, pbd) = m.hydraulic_rates(&start, &inputs);
+        let rates = pad.iter().chain(&pbd).fold(0.0f64, |a, x| a.max(x.abs()));
+        let u = m.leg_forces(&start, &inputs).actuator;
+        let us = m.static_leg_forces(r, rot);
+        let du = (0..6).map(|k| (u[k] - us[k]).abs()).fold(0.0, f64::max);
+        let run = m.simulate(&start, 1e-3, 100, &|_| inputs);
+        let drift = run.iter().map(|s| (v3(s.r) - v3(r)).norm()).fold(0.0, f64::max);
+        let dp = run.iter().map(|s| (0..6).map(|k| (s.pa[k] - pa[k]).abs()).fold(0.0, f64::max)).fold(0.0, f64::max);
+        println!(
+            "[7c] {name}: p_A = {:?} Pa, p_B = {:?} Pa; |u - u_static| = {du:.3e} N; |accelerations| = {acc:.3e}; \
+             |p'| = {rates:.3e} Pa/s; over 0.1 s drift {drift:.3e} m, |p_A - p_A0| {dp:.3e} Pa",
+            pa.map(|p| p.round()),
+            pb[0]
+        );
+        worst = worst.max(acc);
+        assert!(acc < 1e-9 && rates == 0.0 && du < 1e-8 && drift < 1e-9);
+    }
+    assert!(worst < 1e-9);
 }

@@ -147,7 +147,7 @@ fn model_exchange_steps_too_long_for_the_stops_are_named() {
     let mut h = Host::with_interface("me", ModelKind::Platform, fmi2ModelExchange);
     assert_eq!(h.initialise(&[]), fmi2OK);
     assert_eq!(h.set_forces([0.0; 6]), fmi2OK);
-    let n = 33;
+    let n = stewart_fmu::simulation::SIMULATION_DIM;
     let (mut x, mut dx) = (vec![0.0; n], vec![0.0; n]);
     unsafe {
         let mut info = fmi2EventInfo::default();

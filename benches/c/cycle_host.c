@@ -26,6 +26,10 @@
  * (hover with legs of 40 kg cylinders and 15 kg rods: leg.cylinderMass, leg.rodMass), drives
  * (hover with the default electric drives: drive = 1, I0 the holding current, the same feedback
  * through the drive's static model set as the voltages U),
+ * hydraulics (hover with the default hydraulic servo legs: drive = 2, the holding pressures'
+ * defaults, the valve commands of the controller's hydraulic mode from the same feedback: a
+ * force loop on the measured pA, pB and the leg error through the flow; the host gets the 12
+ * leg values and the 12 pressures),
  * logevents (FMI 2: hover with a logger that drops messages and logEvents on, so that the FMU
  * tracks passages through singular arrangements, which it skips when nobody can be told).
  */
@@ -91,6 +95,17 @@ static const unsigned VOLTAGES2[6] = {420, 421, 422, 423, 424, 425};
 static const unsigned VOLTAGES3[1] = {420};
 static const double HOLDING_CURRENT = 18.782559200529864, VOLTS_PER_NEWTON = 1.2732395447351628e-3;
 static const unsigned *inputs2 = FORCES2, *inputs3 = FORCES3;
+/* Hydraulic servo legs: valve, and pA, pB read with the legs; the controller's default force
+ * loop gain (1/N), its leg-error gain through the flow (1/s) and the flow per unit opening at
+ * pS / 2: A_A / (K sqrt(8 MPa)). */
+static int hydraulic_on = 0;
+static const unsigned VALVES2[6] = {460, 461, 462, 463, 464, 465};
+static const unsigned VALVES3[1] = {460};
+static const unsigned LEGS_PRESSURES2[24] = {121, 122, 123, 124, 125, 126, 127, 128, 129, 130, 131, 132,
+                                             510, 511, 512, 513, 514, 515, 516, 517, 518, 519, 520, 521};
+static const unsigned LEGS_PRESSURES3[4] = {121, 127, 510, 516};
+static const double FORCE_GAIN = 1.5e-5, LENGTH_GAIN = 50.0, AREA_A = 3.1172453105244723e-3,
+                    AREA_B = 2.0993692907613796e-3, OPENING_PER_RATE = 1.2371183800845102;
 
 /* A logger that drops every message: the FMU can deliver logEvents, nothing is printed. */
 static void ignore_message(void *env, const char *name, int status, const char *category, const char *message, ...) {
@@ -112,7 +127,7 @@ static Instance make(void) {
             double i0[6] = {HOLDING_CURRENT, HOLDING_CURRENT, HOLDING_CURRENT, HOLDING_CURRENT, HOLDING_CURRENT,
                             HOLDING_CURRENT};
             fmi3SetInt32(c, &DRIVE_VR, 1, &drives_on, 1);
-            fmi3SetFloat64(c, I0_VRS, 1, i0, 6);
+            if (drives_on == 1) fmi3SetFloat64(c, I0_VRS, 1, i0, 6);
         }
         if (fmi3ExitInitializationMode(c)) exit(3);
     } else {
@@ -132,7 +147,7 @@ static Instance make(void) {
             double i0[6] = {HOLDING_CURRENT, HOLDING_CURRENT, HOLDING_CURRENT, HOLDING_CURRENT, HOLDING_CURRENT,
                             HOLDING_CURRENT};
             fmi2SetInteger(c, &DRIVE_VR, 1, &drives_on);
-            fmi2SetReal(c, I0_VRS, 6, i0);
+            if (drives_on == 1) fmi2SetReal(c, I0_VRS, 6, i0);
         }
         if (fmi2ExitInitializationMode(c)) exit(3);
     }
@@ -146,6 +161,10 @@ static void release(Instance c) {
 __attribute__((noinline)) static void set_forces(Instance c, const double *legs) {
     double f[6];
     for (int k = 0; k < 6; k++) f[k] = U0 + G * (L0 - legs[k]) - D * legs[6 + k];
+    if (hydraulic_on)
+        for (int k = 0; k < 6; k++)
+            f[k] = FORCE_GAIN * (f[k] - (legs[12 + k] * AREA_A - legs[18 + k] * AREA_B))
+                   + OPENING_PER_RATE * LENGTH_GAIN * (L0 - legs[k]);
     int s = fmi3 ? fmi3SetFloat64(c, inputs3, 1, f, 6) : fmi2SetReal(c, inputs2, 6, f);
     if (s) exit(4);
 }
@@ -158,7 +177,9 @@ __attribute__((noinline)) static void do_step(Instance c, double t) {
 }
 
 __attribute__((noinline)) static void get_outputs(Instance c, double *legs) {
-    int s = fmi3 ? fmi3GetFloat64(c, LEGS3, 2, legs, 12) : fmi2GetReal(c, LEGS2, 12, legs);
+    int s = hydraulic_on ? (fmi3 ? fmi3GetFloat64(c, LEGS_PRESSURES3, 4, legs, 24)
+                                 : fmi2GetReal(c, LEGS_PRESSURES2, 24, legs))
+                         : (fmi3 ? fmi3GetFloat64(c, LEGS3, 2, legs, 12) : fmi2GetReal(c, LEGS2, 12, legs));
     if (s) exit(6);
 }
 
@@ -216,7 +237,7 @@ typedef struct { long n; double seconds; pthread_barrier_t *warm; } Job;
 static void *thread_job(void *arg) {
     Job *job = arg;
     Instance c = make();
-    double legs[12];
+    double legs[24];
     get_outputs(c, legs);
     long first = warm_up_cycles(c, legs);
     pthread_barrier_wait(job->warm); /* every thread starts its timed cycles together */
@@ -258,11 +279,17 @@ int main(int argc, char **argv) {
         U0 = HOLDING_CURRENT * 0.4;
         G *= VOLTS_PER_NEWTON;
         D *= VOLTS_PER_NEWTON;
+    } else if (scenario && strcmp(scenario, "hydraulics") == 0) {
+        drives_on = 2;
+        hydraulic_on = 1;
+        inputs2 = VALVES2;
+        inputs3 = VALVES3;
     } else if (scenario && strcmp(scenario, "logevents") == 0) {
         if (fmi3) { fprintf(stderr, "CYCLE_SCENARIO=logevents is for FMI 2\n"); return 2; }
         log_events = 1;
     } else if (scenario && strcmp(scenario, "hover") != 0) {
-        fprintf(stderr, "CYCLE_SCENARIO must be hover, contact, nostops, nojoints, heavylegs, drives or logevents\n");
+        fprintf(stderr, "CYCLE_SCENARIO must be hover, contact, nostops, nojoints, heavylegs, drives, hydraulics or "
+                        "logevents\n");
         return 2;
     }
     if (fmi3) {
@@ -302,7 +329,7 @@ int main(int argc, char **argv) {
         return 0;
     }
     Instance c = make();
-    double legs[12];
+    double legs[24];
     get_outputs(c, legs);
     if (strcmp(mode, "count") == 0) {
         /* Uncounted: the same calls, outside the counted functions. */

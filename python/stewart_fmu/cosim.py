@@ -26,6 +26,13 @@ L = [f"l[{k}]" for k in LEGS]
 LDOT = [f"ldot[{k}]" for k in LEGS]
 F = [f"F[{k}]" for k in LEGS]
 U = [f"U[{k}]" for k in LEGS]
+VALVE = [f"valve[{k}]" for k in LEGS]
+PA = [f"pA[{k}]" for k in LEGS]
+PB = [f"pB[{k}]" for k in LEGS]
+#: What the controller gets from the platform and what it sends back, by `drive` (0 forces,
+#: 1 electric drives, 2 hydraulic legs).
+MEASURED = {0: L + LDOT, 1: L + LDOT, 2: L + LDOT + PA + PB}
+COMMANDS = {0: F, 1: U, 2: VALVE}
 LP = [f"lp[{k}]" for k in LEGS]
 
 
@@ -46,8 +53,10 @@ def closed_loop(t_end, h, scheme="gauss-seidel", platform_reals=None, controller
                                                                            **(controller_integers or {})})]
     if drives[0] != drives[1]:
         raise ValueError(f"drive = {drives[0]} in platform_reals but {drives[1]} in the controller's parameters: the "
-                         "controller's voltage commands U drive the platform only when both have drive = 1")
-    commands = U if drives[0] == 1 else F
+                         "controller's commands (F, U or valve) drive the platform only when both have the same drive")
+    if drives[0] not in COMMANDS:
+        raise ValueError(f"drive = {drives[0]}: 0 (forces), 1 (electric drives) or 2 (hydraulic legs)")
+    commands, measured = COMMANDS[drives[0]], MEASURED[drives[0]]
     record = list(record)
     platform = Component(PLATFORM_FMU, "platform", platform_reals, events=events,
                          what=("platform_reals", "platform_integers"))
@@ -59,24 +68,25 @@ def closed_loop(t_end, h, scheme="gauss-seidel", platform_reals=None, controller
         platform.free()
         raise
     try:
-        return _run(platform, controller, t_end, h, scheme, record, force_hook, commands)
+        return _run(platform, controller, t_end, h, scheme, record, force_hook, commands, measured)
     finally:
         platform.free()
         controller.free()
 
 
-def steps(platform, controller, n, h, scheme="gauss-seidel", commands=F, force_hook=None):
+def steps(platform, controller, n, h, scheme="gauss-seidel", commands=F, force_hook=None, measured=L + LDOT):
     """The package's one Python master loop: `n` communication steps of `h` of the platform and
     the controller (any objects with `values`, `set_values` and `slave`, as
     `stewart_fmu.core.Component`), coupled by `scheme`; yields the time after each step (`t +=
     h`, as the compiled master and FMPy's SSP master count it). `force_hook(t, commands)` may
     change the commands on their way to the platform (Gauss-Seidel). An FMU's failed step is
-    raised from the loop (FMICallException) at the time of the last step yielded."""
+    raised from the loop (FMICallException) at the time of the last step yielded. `measured`: the
+    platform's outputs the controller reads (the legs; with hydraulics the pressures too)."""
     time = 0.0
-    connection_f, connection_l, connection_ldot = np.zeros(6), np.zeros(6), np.zeros(6)
+    connection_f, connection_measured = np.zeros(6), np.zeros(len(measured))
     for _ in range(n):
         if scheme == "gauss-seidel":
-            controller.set_values(L + LDOT, platform.values(L + LDOT))
+            controller.set_values(measured, platform.values(measured))
             forces = controller.values(commands)
             if force_hook:
                 forces = force_hook(time, forces)
@@ -87,26 +97,26 @@ def steps(platform, controller, n, h, scheme="gauss-seidel", commands=F, force_h
             # fmpy.ssp.simulation: platform first (the SSD's element order), then controller.
             platform.set_values(commands, connection_f)
             platform.slave.doStep(currentCommunicationPoint=time, communicationStepSize=h)
-            out_l, out_ldot = platform.values(L), platform.values(LDOT)
-            controller.set_values(L + LDOT, np.concatenate([connection_l, connection_ldot]))
+            out_measured = platform.values(measured)
+            controller.set_values(measured, connection_measured)
             controller.slave.doStep(currentCommunicationPoint=time, communicationStepSize=h)
             out_f = controller.values(commands)
-            connection_f, connection_l, connection_ldot = out_f, out_l, out_ldot
+            connection_f, connection_measured = out_f, out_measured
         time += h
         yield time
 
 
 def _checked(force_hook, commands):
     """`force_hook` with its six commands checked (ValueError naming the element)."""
-    what = "force_hook's forces" if commands is F else "force_hook's voltages"
+    what = {id(F): "force_hook's forces", id(U): "force_hook's voltages"}.get(id(commands), "force_hook's valve commands")
     return lambda t, forces: vector_of(force_hook(t, forces), 6, what, lambda i: commands[i])
 
 
-def _run(platform, controller, t_end, h, scheme, record, force_hook, commands=F):
+def _run(platform, controller, t_end, h, scheme, record, force_hook, commands=F, measured=L + LDOT):
     times, rows, errors, status = [], [], [], "ok"
     hook = _checked(force_hook, commands) if force_hook else None
     try:
-        for time in steps(platform, controller, int(round(t_end / h)), h, scheme, commands, hook):
+        for time in steps(platform, controller, int(round(t_end / h)), h, scheme, commands, hook, measured):
             times.append(time)
             rows.append(platform.values(record))
             errors.append(np.max(np.abs(platform.values(L) - controller.values(LP))))

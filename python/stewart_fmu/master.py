@@ -23,7 +23,7 @@ import sys
 import numpy as np
 
 from .core import CONTROLLER_FMU, IN_REPOSITORY, LEGS, PLATFORM_FMU, ROOT, check_names, check_times, fmu_file
-from .ssp import SYSTEM_DRIVES_SSP, SYSTEM_SSP, system_description
+from .ssp import SYSTEMS, system_description
 
 REPOSITORY_LIBRARY = ROOT / "target" / "release" / "libstewart_master_py.so"
 BUILD = "cargo build --release -p stewart-master-py"
@@ -105,15 +105,18 @@ def closed_loop(t_end, h, scheme="gauss-seidel", platform_reals=None, controller
     """`stewart_fmu.cosim.closed_loop` with the compiled master: the same arguments (without
     `force_hook` and `events`), the same numbers to the bit, the same (times, recorded platform
     outputs, max |l - l^p| per step, status). With `drive = 1` in both components the system
-    is StewartSystemDrives.ssp's (voltages U), otherwise StewartSystem.ssp's (forces F)."""
+    is StewartSystemDrives.ssp's (voltages U), with `drive = 2` StewartSystemHydraulic.ssp's (valve
+    commands), otherwise StewartSystem.ssp's (forces F)."""
     check_times(t_end, h, "t_end", "h")
     controller_values = {**(controller_reals or {}), **(controller_integers or {})}
     drives = [int(dict(p or {}).get("drive", 0)) for p in (platform_reals, controller_values)]
     if drives[0] != drives[1]:
         raise ValueError(f"drive = {drives[0]} in platform_reals but {drives[1]} in the controller's parameters: the "
-                         "controller's voltage commands U drive the platform only when both have drive = 1")
+                         "controller's commands (F, U or valve) drive the platform only when both have the same drive")
+    if drives[0] not in SYSTEMS:
+        raise ValueError(f"drive = {drives[0]}: 0 (forces), 1 (electric drives) or 2 (hydraulic legs)")
     system = System({"platform": fmu_file(PLATFORM_FMU), "controller": fmu_file(CONTROLLER_FMU)},
-                    system_description(SYSTEM_DRIVES_SSP if drives[0] == 1 else SYSTEM_SSP, bindings=False))
+                    system_description(SYSTEMS[drives[0]], bindings=False))
     try:
         names = {v[0] for v in system.variables("platform")}
         check_names(record, names, "StewartPlatform", "record")

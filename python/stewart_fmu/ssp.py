@@ -1,5 +1,6 @@
 """The SSP systems the package ships (StewartSystem.ssp: the closed loop on leg forces;
-StewartSystemDrives.ssp: on the drives' voltages, `drive = 1`) and the reading of their
+StewartSystemDrives.ssp: on the drives' voltages, `drive = 1`; StewartSystemHydraulic.ssp: on
+the servo valves' commands with the chamber pressures measured, `drive = 2`) and the reading of their
 system structure, for the Python master (`stewart_fmu.cosim`), the compiled one
 (`stewart_fmu.master`) and the studies (`stewart_fmu.study`)."""
 
@@ -12,6 +13,10 @@ from .core import PLATFORM_FMU, fmu_file
 SYSTEM_SSP = Path(PLATFORM_FMU).parent / "StewartSystem.ssp"
 # The closed loop with electric drives (docs/model.md §9): parameter bindings set drive = 1.
 SYSTEM_DRIVES_SSP = Path(PLATFORM_FMU).parent / "StewartSystemDrives.ssp"
+# The closed loop with hydraulic servo legs (docs/model.md §10): parameter bindings set drive = 2.
+SYSTEM_HYDRAULIC_SSP = Path(PLATFORM_FMU).parent / "StewartSystemHydraulic.ssp"
+#: The shipped system of each `drive`.
+SYSTEMS = {0: SYSTEM_SSP, 1: SYSTEM_DRIVES_SSP, 2: SYSTEM_HYDRAULIC_SSP}
 
 
 def system_description(ssp, bindings=True):
@@ -25,5 +30,6 @@ def system_description(ssp, bindings=True):
 
 def couplings():
     """The closed loop's couplings the compiled master runs, by `drive`: the package's
-    StewartSystem.ssd (forces) and StewartSystemDrives.ssd (voltages), without bindings."""
-    return {0: system_description(fmu_file(SYSTEM_SSP)), 1: system_description(fmu_file(SYSTEM_DRIVES_SSP), False)}
+    StewartSystem.ssd (forces), StewartSystemDrives.ssd (voltages) and StewartSystemHydraulic.ssd
+    (valve commands), without bindings."""
+    return {drive: system_description(fmu_file(ssp), drive == 0) for drive, ssp in SYSTEMS.items()}

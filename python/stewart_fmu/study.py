@@ -243,6 +243,9 @@ def _commands(run, closed):
     """The platform's command inputs (F, or U with electric drives) and, if the run's `drive`
     values do not fit together, why it cannot run."""
     drives = [int(run.get(f"{role}.drive", 0)) for role in ("platform", "controller")]
+    if 2 in drives:
+        return F, ("drive = 2 (hydraulic servo legs) is not available in studies yet: run it with "
+                   "stewart_fmu.cosim.closed_loop or StewartSystemHydraulic.ssp")
     if closed and drives[0] != drives[1]:
         return F, (f"platform.drive = {drives[0]} but controller.drive = {drives[1]}: the controller's voltage "
                    f"commands U drive the platform only when both have drive = 1")

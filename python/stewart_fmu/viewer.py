@@ -5,7 +5,9 @@ to open once the folder is served (`python -m http.server`).
 A result is what `fmpy.simulate_fmu` returns (a structured array) or a dict of columns; it needs
 `time` and `r[1..3]` and either `R[a,b]` or `angles[1..3]`; `F[k]`, `Fstop[k]`, `l[k]` and
 the joint angles `thetaB[k]`, `thetaA[k]` colour the legs and joints and feed the plots when
-present (`VIEW_OUTPUTS` lists them all for `simulate_fmu(..., output=VIEW_OUTPUTS)`).
+present (`VIEW_OUTPUTS` lists them all for `simulate_fmu(..., output=VIEW_OUTPUTS)`); with
+hydraulic legs the pressures `pA[k]`, `pB[k]` colour the cylinders by the load pressure and,
+with `spool[k]`, feed two more plots (`HYDRAULIC_VIEW_OUTPUTS`).
 """
 
 import json
@@ -24,10 +26,13 @@ VIEWER = ROOT / "viewer"  # the viewer's sources, in the repository
 VIEW_OUTPUTS = ([f"r[{i}]" for i in (1, 2, 3)] + [f"R[{a},{b}]" for a in (1, 2, 3) for b in (1, 2, 3)]
                 + [f"angles[{i}]" for i in (1, 2, 3)] + [f"l[{k}]" for k in LEGS] + [f"F[{k}]" for k in LEGS]
                 + [f"Fstop[{k}]" for k in LEGS] + [f"thetaB[{k}]" for k in LEGS] + [f"thetaA[{k}]" for k in LEGS])
+# With hydraulic legs (drive = 2): the chamber pressures colour the cylinders by the load
+# pressure and feed a plot, as the spools do theirs.
+HYDRAULIC_VIEW_OUTPUTS = [f"{n}[{k}]" for n in ("pA", "pB", "spool") for k in LEGS]
 # The scalar parameters the viewer draws with: the legs' bodies (docs/model.md §8) and the
 # joint limits (a joint beyond its limit is drawn red).
 STAND_SCALARS = ("leg.cylinderMass", "leg.rodMass", "leg.cylinderCoM", "leg.rodCoM", "joints.baseMaxAngle",
-                 "joints.platformMaxAngle")
+                 "joints.platformMaxAngle", "hydraulic.bore", "hydraulic.rod")
 
 
 def built_viewer():

@@ -3,7 +3,7 @@
 
 use super::{
     Crossing, Events, IntegrationError, IntegratorStats, MAX_SWITCHING, MethodCall, OdeSystem, SolverSettings,
-    SwitchingKind, bits,
+    SwitchingKind, bits, each,
 };
 
 const C2: f64 = 1.0 / 5.0;
@@ -251,25 +251,24 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
         }
 
         // Stages by value (`derivative_of`, `from_fn`): written once, never zeroed first.
-        let stage: [f64; N] = std::array::from_fn(|i| y[i] + h * A21 * k1[i]);
+        let stage: [f64; N] = each(|i| y[i] + h * A21 * k1[i]);
         let k2 = system.derivative_of(t + C2 * h, &stage);
-        let stage: [f64; N] = std::array::from_fn(|i| y[i] + h * (A31 * k1[i] + A32 * k2[i]));
+        let stage: [f64; N] = each(|i| y[i] + h * (A31 * k1[i] + A32 * k2[i]));
         let k3 = system.derivative_of(t + C3 * h, &stage);
-        let stage: [f64; N] = std::array::from_fn(|i| y[i] + h * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i]));
+        let stage: [f64; N] = each(|i| y[i] + h * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i]));
         let k4 = system.derivative_of(t + C4 * h, &stage);
-        let stage: [f64; N] =
-            std::array::from_fn(|i| y[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i]));
+        let stage: [f64; N] = each(|i| y[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i]));
         let k5 = system.derivative_of(t + C5 * h, &stage);
         let stage: [f64; N] =
-            std::array::from_fn(|i| y[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i] + A65 * k5[i]));
+            each(|i| y[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i] + A65 * k5[i]));
         let t_new = if last { t1 } else { t + h };
         let k6 = system.derivative_of(t_new, &stage);
         let y_new: [f64; N] =
-            std::array::from_fn(|i| y[i] + h * (A71 * k1[i] + A73 * k3[i] + A74 * k4[i] + A75 * k5[i] + A76 * k6[i]));
+            each(|i| y[i] + h * (A71 * k1[i] + A73 * k3[i] + A74 * k4[i] + A75 * k5[i] + A76 * k6[i]));
         let k7 = system.derivative_of(t_new, &y_new);
         stats.rhs_evaluations += 6;
         let err_vec: [f64; N] =
-            std::array::from_fn(|i| h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i]));
+            each(|i| h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i]));
         let mut err = scaled_rms(&err_vec, y, &y_new, s, active);
         if !err.is_finite() {
             err = 1e10; // a non-finite trial (e.g. a stage through a singularity): shrink hard

@@ -127,6 +127,17 @@ impl SwitchingSides {
     }
 }
 
+/// The array of `f(0), .., f(N - 1)`: a method's stage, in a loop inlined in the caller's
+/// registers whatever `N` (`std::array::from_fn` is not inlined for every length).
+#[inline(always)]
+pub(crate) fn each<const N: usize>(f: impl Fn(usize) -> f64) -> [f64; N] {
+    let mut out = [0.0; N];
+    for (j, o) in out.iter_mut().enumerate() {
+        *o = f(j);
+    }
+    out
+}
+
 /// A block of components whose rates are linear in themselves with one constant rate:
 /// `y_i' = -rate y_i + n_i(t, y)` for `i` in `start..start + len`, with `n_i` not stiff. A fast
 /// electric circuit is such a block (`rate = R / L`). The fixed-step method integrates the
@@ -171,6 +182,14 @@ pub trait OdeSystem<const N: usize> {
     /// The block of components the fixed-step method integrates exponentially, if any.
     fn linear_decay(&self) -> Option<LinearDecay> {
         None
+    }
+
+    /// The longest step the fixed-step method is stable for at `(t, y)` (`inf`: no bound). A
+    /// longer step is cut into equal sub-steps within it: the cost per interval is then bounded
+    /// by the system's largest rate, known from its parameters.
+    #[inline(always)]
+    fn stable_step(&self, _t: f64, _y: &[f64; N]) -> f64 {
+        f64::INFINITY
     }
 
     /// Whether [`OdeSystem::after_step`] can change the state. If not, the adaptive method

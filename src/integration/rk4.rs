@@ -13,7 +13,7 @@
 //! right-hand side), which the end-stop tests measure.
 
 use super::{
-    Crossing, IntegrationError, LinearDecay, MAX_SWITCHING, MethodCall, OdeSystem, SwitchingKind, bits, in_memory,
+    Crossing, IntegrationError, LinearDecay, MAX_SWITCHING, MethodCall, OdeSystem, SwitchingKind, bits, each, in_memory,
 };
 
 /// The coefficients of Krogstad's ETDRK4 (2005; the phi-function form of Hochbruck and
@@ -121,7 +121,12 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
         if switching > 0 {
             y_start = *y;
         }
+        let stable = system.stable_step(t, y);
         match &exponential {
+            None if h > stable => {
+                std::hint::cold_path();
+                stats.rhs_evaluations += 4 * sub_steps(system, t, t_end, h, stable, y) - 4;
+            }
             None => classical_step(system, t, t_mid, t_end, h, y),
             Some(e) => exponential_step(system, e, t, t_mid, t_end, h, y),
         }
@@ -163,6 +168,36 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
     Ok(t1)
 }
 
+/// A step of `h` from `t` cut into the fewest equal classical steps not longer than `stable`,
+/// each followed by [`OdeSystem::after_step`] but the last (the caller's); returns how many.
+#[inline(never)]
+fn sub_steps<S: OdeSystem<N>, const N: usize>(
+    system: &S,
+    t: f64,
+    t_end: f64,
+    h: f64,
+    stable: f64,
+    y: &mut [f64; N],
+) -> u64 {
+    // Bounded: a NaN or zero bound takes the step whole (the check then refuses its end).
+    let parts = if stable > 0.0 { (h / stable).ceil().min(MAX_SUB_STEPS) } else { 1.0 };
+    let n = parts as u64;
+    let sub = h / parts;
+    for i in 0..n {
+        let start = t + i as f64 * sub;
+        let end = if i + 1 == n { t_end } else { t + (i + 1) as f64 * sub };
+        classical_step(system, start, start + 0.5 * sub, end, sub, y);
+        if i + 1 < n {
+            system.after_step(y);
+        }
+    }
+    n.max(1)
+}
+
+/// The most sub-steps one step is cut into (a state whose rate would need more is past the
+/// model's validity; the steps then go unstable and the check stops them).
+const MAX_SUB_STEPS: f64 = 1000.0;
+
 /// One classical RK4 step.
 #[inline(always)]
 fn classical_step<S: OdeSystem<N>, const N: usize>(
@@ -173,15 +208,16 @@ fn classical_step<S: OdeSystem<N>, const N: usize>(
     h: f64,
     y: &mut [f64; N],
 ) {
-    // Stages by value (`derivative_of`, `from_fn`): written once, never zeroed first.
+    // Stages by value (`derivative_of`, `each`): plain loops, which stay inlined in the
+    // caller's registers whatever `N` (`from_fn` did not for every length).
     let k1 = system.derivative_of(t, y);
-    let mut stage: [f64; N] = std::array::from_fn(|j| y[j] + 0.5 * h * k1[j]);
+    let mut stage: [f64; N] = each(|j| y[j] + 0.5 * h * k1[j]);
     in_memory(&mut stage);
     let k2 = system.derivative_of(t_mid, &stage);
-    let mut stage: [f64; N] = std::array::from_fn(|j| y[j] + 0.5 * h * k2[j]);
+    let mut stage: [f64; N] = each(|j| y[j] + 0.5 * h * k2[j]);
     in_memory(&mut stage);
     let k3 = system.derivative_of(t_mid, &stage);
-    let mut stage: [f64; N] = std::array::from_fn(|j| y[j] + h * k3[j]);
+    let mut stage: [f64; N] = each(|j| y[j] + h * k3[j]);
     in_memory(&mut stage);
     let k4 = system.derivative_of(t_end, &stage);
     for j in 0..N {

@@ -148,3 +148,79 @@ pub const fn screw_lead(vr: u32) -> V {
         "Ball screw lead p: leg travel per screw turn (the motor turns N = 2 pi i / p rad per metre of leg)",
     )
 }
+
+/// What moves the legs (`drive`): the same codes in both models.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Drive {
+    /// 0: ideal force actuators, the leg forces `F` are the inputs.
+    #[default]
+    Forces,
+    /// 1: electric drives, the armature voltages `U` are the inputs.
+    Electric,
+    /// 2: hydraulic servo legs, the valve commands `valve` (and the supply `pS`) are the inputs.
+    Hydraulic,
+}
+
+impl super::declare::IntegerStorage for Drive {
+    fn code(&self) -> i32 {
+        match self {
+            Drive::Forces => 0,
+            Drive::Electric => 1,
+            Drive::Hydraulic => 2,
+        }
+    }
+    fn set_code(&mut self, code: i32) -> Result<(), String> {
+        *self = match code {
+            0 => Drive::Forces,
+            1 => Drive::Electric,
+            2 => Drive::Hydraulic,
+            _ => return Err(format!("{code} is none of 0 (forces), 1 (electric drives), 2 (hydraulic servo legs)")),
+        };
+        Ok(())
+    }
+}
+
+/// `hydraulic.bore`, m.
+pub const fn hydraulic_bore(vr: u32) -> V {
+    V::parameter(
+        "hydraulic.bore",
+        &[],
+        vr,
+        Some("m"),
+        "Bore D of each hydraulic cylinder: cap-side area A_A = pi D^2/4 (drive = 2)",
+    )
+}
+
+/// `hydraulic.rod`, m.
+pub const fn hydraulic_rod(vr: u32) -> V {
+    V::parameter(
+        "hydraulic.rod",
+        &[],
+        vr,
+        Some("m"),
+        "Rod diameter d of each hydraulic cylinder: rod-side area A_B = pi (D^2 - d^2)/4 (drive = 2)",
+    )
+}
+
+/// `valve.ratedFlow`, m³/s.
+pub const fn valve_rated_flow(vr: u32) -> V {
+    V::parameter(
+        "valve.ratedFlow",
+        &[],
+        vr,
+        Some("m3/s"),
+        "Rated flow Q_N of each servo valve, fully open at the rated pressure drop (flow coefficient K = Q_N / \
+         sqrt(dp_N/2))",
+    )
+}
+
+/// `valve.ratedPressureDrop`, Pa.
+pub const fn valve_rated_pressure_drop(vr: u32) -> V {
+    V::parameter(
+        "valve.ratedPressureDrop",
+        &[],
+        vr,
+        Some("Pa"),
+        "Pressure drop dp_N over the valve (both lands) at which it passes its rated flow",
+    )
+}

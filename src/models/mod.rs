@@ -103,13 +103,15 @@ impl Capabilities {
 }
 
 /// What a completed co-simulation step did.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct StepReport {
     /// The time the step reached: its end, or an earlier event where the step was asked to
     /// stop at events.
     pub reached: f64,
     /// Whether a non-smooth event (an end-stop contact onset or release) happened in the step.
     pub event: bool,
+    /// A condition the host should know of (logged as a warning; the step stands).
+    pub warning: Option<String>,
 }
 
 /// Why a co-simulation step could not be completed. The model is left as it was before the

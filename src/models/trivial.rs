@@ -72,7 +72,7 @@ impl FmuModel for TrivialModel {
     }
     fn do_step(&mut self, t: f64, h: f64, _stop_at_event: bool) -> Result<StepReport, StepError> {
         self.time = t + h;
-        Ok(StepReport { reached: t + h, event: false })
+        Ok(StepReport { reached: t + h, event: false, warning: None })
     }
     fn set_input_derivative(&mut self, _var: VariableRef, _value: f64) {}
     fn output_derivative(&mut self, _var: VariableRef) -> f64 {

@@ -49,6 +49,9 @@ pub enum PhysicsFault {
     /// (`stopAtSingularity`). `legs[k]`: leg k+1 takes part in the force combination that
     /// produces no force and no moment there.
     PassedSingularConfiguration { legs: [bool; LEG_COUNT] },
+    /// A hydraulic leg's chamber volume reached zero: the leg went through its end stop by
+    /// more than the dead volume allows.
+    ChamberEmptied { leg: usize, length: f64 },
 }
 
 impl fmt::Display for PhysicsFault {
@@ -63,6 +66,11 @@ impl fmt::Display for PhysicsFault {
             PhysicsFault::NonFiniteState => {
                 write!(f, "the state is no longer finite (the motion diverged)")
             }
+            PhysicsFault::ChamberEmptied { leg, length } => write!(
+                f,
+                "hydraulic leg {leg} at length {length:e} m left a chamber without volume (the piston went through its \
+                 end stop by more than the dead volume allows: stiffer stops or larger dead volumes)"
+            ),
             PhysicsFault::PassedSingularConfiguration { legs } => write!(
                 f,
                 "the legs passed through a singular arrangement (the force/moment matrix's determinant changed sign; \

@@ -4,7 +4,8 @@
 
 use nalgebra::{Matrix3, Matrix6, Scalar, Vector3};
 
-use super::platform::{CURRENTS, SIMULATION_DIM, SimulationState, actuator_forces, body, quadrature};
+use super::platform::{CURRENTS, SIMULATION_DIM, SimulationState, actuator_forces, body, hydraulic, quadrature};
+use crate::physics::actuators::hydraulics::Chambers;
 use crate::physics::body::invariants::mechanical_energy;
 use crate::physics::body::kinematics::angles_from_rotation;
 use crate::physics::body::state::{BodyState, STATE_DIM};
@@ -14,6 +15,7 @@ use crate::physics::legs::geometry::LegGeometry;
 use crate::physics::legs::joint_limits::angle;
 use crate::physics::number::{Dual, Real, lift};
 use crate::physics::special_form::SpecialForm;
+use crate::physics::special_form::sum_over_legs;
 use crate::physics::stand::{LEG_COUNT, Stand};
 
 /// A field of an outputs type: its numbers through a function, the shape kept.
@@ -121,6 +123,15 @@ pub struct PlatformOutputs<T> {
     pub current: [T; LEG_COUNT],
     /// Electric energy supplied to the drives since the start, J.
     pub electric_work: T,
+    /// `pA`, `pB`, Pa; `spool`.
+    pub pa: [T; LEG_COUNT],
+    pub pb: [T; LEG_COUNT],
+    pub spool: [T; LEG_COUNT],
+    /// `Qsupply`, m³/s.
+    pub supply_flow: T,
+    /// `work.hydraulic`, `work.compression`, J.
+    pub hydraulic_work: T,
+    pub compression_work: T,
 }
 }
 
@@ -145,6 +156,18 @@ impl<T: Real> PlatformOutputs<T> {
     /// drives voltages), the actuators' and the joints' forces too (they depend on them), else
     /// those are not numbers.
     pub fn compute(form: &SpecialForm, y: &[T; SIMULATION_DIM], u: Option<&[T; LEG_COUNT]>) -> Self {
+        let supply = T::constant(form.hydraulics().map_or(0.0, |h| h.supply));
+        Self::compute_supplied(form, y, u, supply)
+    }
+
+    /// [`PlatformOutputs::compute`] with the hydraulic supply pressure in the number type (for
+    /// derivatives with respect to `pS`).
+    pub fn compute_supplied(
+        form: &SpecialForm,
+        y: &[T; SIMULATION_DIM],
+        u: Option<&[T; LEG_COUNT]>,
+        supply: T,
+    ) -> Self {
         let stand = &form.stand;
         let zero = [T::zero(); STATE_DIM];
         let body = y.first_chunk::<STATE_DIM>().unwrap_or(&zero);
@@ -189,6 +212,20 @@ impl<T: Real> PlatformOutputs<T> {
             }
             None => ([T::constant(f64::NAN); LEG_COUNT], [Vector3::from_element(T::constant(f64::NAN)); LEG_COUNT]),
         };
+        let pa: [T; LEG_COUNT] = std::array::from_fn(|k| y[hydraulic::PA + k]);
+        let pb: [T; LEG_COUNT] = std::array::from_fn(|k| y[hydraulic::PB + k]);
+        let spool: [T; LEG_COUNT] = std::array::from_fn(|k| y[hydraulic::SPOOL + k]);
+        let supply_flow = match form.hydraulics() {
+            Some(h) => {
+                let flows: [T; LEG_COUNT] = std::array::from_fn(|k| {
+                    let chambers =
+                        Chambers { pa: pa[k], pb: pb[k], spool: spool[k], spool_rate: y[hydraulic::SPOOL_RATE + k] };
+                    h.legs.rate(&chambers, &h.piston(k, legs.length[k], ldot[k]), T::zero(), supply).supply_flow
+                });
+                sum_over_legs(&flows)
+            }
+            None => T::zero(),
+        };
         PlatformOutputs {
             r: state.r,
             v: state.v,
@@ -208,6 +245,12 @@ impl<T: Real> PlatformOutputs<T> {
             actuator_force,
             current,
             electric_work: y[quadrature::WORK_ELECTRIC],
+            pa,
+            pb,
+            spool,
+            supply_flow,
+            hydraulic_work: y[quadrature::WORK_HYDRAULIC],
+            compression_work: y[quadrature::WORK_COMPRESSION],
         }
     }
 }

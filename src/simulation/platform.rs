@@ -1,10 +1,12 @@
 //! [`PlatformSimulation`]: one stand, one state, one integrator.
 
 use crate::integration::{
-    CrossingLog, IntegrationError, Integrator, LinearDecay, MAX_SWITCHING, OdeSystem, SolverSettings, SwitchingKind,
-    SwitchingSides,
+    Crossing, CrossingLog, IntegrationError, Integrator, LinearDecay, MAX_SWITCHING, OdeSystem, SolverSettings,
+    SwitchingKind, SwitchingSides,
 };
+use crate::physics::actuators::HeldForces;
 use crate::physics::actuators::drives::{DriveRate, ElectricDrives};
+use crate::physics::actuators::hydraulics::{Chambers, HydraulicActuators};
 use crate::physics::body::state::{BodyState, STATE_DIM, StateVector, all_finite};
 use crate::physics::number::Real;
 use std::cell::Cell;
@@ -30,14 +32,26 @@ use super::vector::VectorPath;
 /// Length of the simulation state: the 24 special-form coordinates, the work of the
 /// actuator forces and the energy dissipated (quadratures integrated with the motion, so that
 /// the energy balance holds to the integration tolerance), the drives' six armature currents
-/// and the electric energy supplied (constant 0 without drives).
-pub const SIMULATION_DIM: usize = STATE_DIM + 9;
+/// and the electric energy supplied, then the hydraulic legs' 12 chamber pressures, 6 spool
+/// positions and rates and the hydraulic and compression work (each 0 and constant when its
+/// actuator is off).
+pub const SIMULATION_DIM: usize = STATE_DIM + 35;
 
-/// The length of the state without drives: the trailing components stay 0, and the methods
-/// step as they would without them ([`OdeSystem::active_dimension`]).
+/// The length of the state without drives or hydraulics: the trailing components stay 0, and
+/// the methods step as they would without them ([`OdeSystem::active_dimension`]).
 const WITHOUT_DRIVES: usize = STATE_DIM + 2;
+/// The length of the state with drives (the hydraulic components stay 0), and the length the
+/// integrators step without hydraulic legs ([`MECHANICAL_DIM`]).
+const WITH_DRIVES: usize = STATE_DIM + 9;
 
-/// The simulation state, `r, v, e1, e2, e3, e1', e2', e3', W_F, W_d, I_1..I_6, W_e`.
+/// The leading part of a [`SimulationState`] the integrators step when the hydraulic legs are
+/// off (their components are then 0 and constant): the shorter arrays keep the force inputs'
+/// and the drives' steps as cheap as before the hydraulics ([`PlatformSimulation::advance`]).
+pub const MECHANICAL_DIM: usize = WITH_DRIVES;
+const _: () = assert!(MECHANICAL_DIM <= SIMULATION_DIM, "the leading part of the state");
+
+/// The simulation state, `r, v, e1, e2, e3, e1', e2', e3', W_F, W_d, I_1..I_6, W_e, p_A1..6,
+/// p_B1..6, s_1..6, s_1'..6', W_h, W_c`.
 pub type SimulationState = [f64; SIMULATION_DIM];
 
 /// Offsets of the quadratures in a [`SimulationState`].
@@ -48,6 +62,19 @@ pub mod quadrature {
     pub const WORK_DISSIPATED: usize = super::STATE_DIM + 1;
     /// `work.electric = integral of sum_k U_k I_k dt`, J.
     pub const WORK_ELECTRIC: usize = super::STATE_DIM + 8;
+    /// `work.hydraulic = integral of sum_k P_S,k dt`, J.
+    pub const WORK_HYDRAULIC: usize = super::STATE_DIM + 33;
+    /// `work.compression = integral of sum_k (p_A V_A p_A' + p_B V_B p_B') / beta dt`, J.
+    pub const WORK_COMPRESSION: usize = super::STATE_DIM + 34;
+}
+
+/// Offsets of the hydraulic legs' states in a [`SimulationState`]: `p_A`, `p_B` (Pa), the
+/// spools' positions `s` and rates `s'` (1/s), six each.
+pub mod hydraulic {
+    pub const PA: usize = super::STATE_DIM + 9;
+    pub const PB: usize = PA + 6;
+    pub const SPOOL: usize = PB + 6;
+    pub const SPOOL_RATE: usize = SPOOL + 6;
 }
 
 /// Offset of the drives' armature currents `I_1..I_6` (A) in a [`SimulationState`].
@@ -67,27 +94,114 @@ fn drive_rates<T: Real>(
 }
 
 /// The axial forces the actuators exert at the simulation state `y` for the inputs: the
-/// inputs themselves (leg forces `F`), or with drives the forces of their currents.
+/// inputs themselves (leg forces `F`), with drives the forces of their currents, with
+/// hydraulic legs those of their chamber pressures.
 pub fn actuator_forces<T: Real>(
     form: &SpecialForm,
     y: &[T; SIMULATION_DIM],
     inputs: &[T; LEG_COUNT],
 ) -> [T; LEG_COUNT] {
+    if let Some(h) = form.hydraulics() {
+        let (area_a, area_b) = h.legs.areas();
+        return std::array::from_fn(|k| y[hydraulic::PA + k] * area_a - y[hydraulic::PB + k] * area_b);
+    }
     drive_rates(form, y, inputs).map_or(*inputs, |d| d.map(|k| k.force))
 }
 
-/// The rate of a simulation state `y` for the inputs `inputs` (the leg forces `F`, N, or with
-/// drives the voltages `U`, V), in any number type: the definition the steps, Model Exchange
-/// and the exact derivatives share. With drives, `work.F` stays 0: the drives' forces are
-/// internal, their energy comes in as `work.electric`.
+/// `Qsupply`, m³/s: the flow the six valves draw from the supply at the simulation state `y`
+/// (0 without hydraulic legs).
+pub fn supply_flow(form: &SpecialForm, y: &SimulationState) -> f64 {
+    let Some(h) = form.hydraulics() else { return 0.0 };
+    let state = BodyState::from_vector(body(y));
+    let legs = LegGeometry::new(&form.stand, &state);
+    let l_dot = legs.length_rates(&form.stand, &state);
+    let flows: [f64; LEG_COUNT] = std::array::from_fn(|k| {
+        let chambers = Chambers {
+            pa: y[hydraulic::PA + k],
+            pb: y[hydraulic::PB + k],
+            spool: y[hydraulic::SPOOL + k],
+            spool_rate: y[hydraulic::SPOOL_RATE + k],
+        };
+        h.legs.rate(&chambers, &h.piston(k, legs.length[k], l_dot[k]), 0.0, h.supply).supply_flow
+    });
+    sum_over_legs(&flows)
+}
+
+/// The hydraulic legs' rates at the simulation state `y` (legs of lengths `l`, rates `l_dot`)
+/// for the valve commands `valves` and the supply pressure `supply`, written into `dy`; returns
+/// the forces `u_k` and the sums of the supply power, the compression power and the losses.
+#[inline(always)]
+fn hydraulic_rates<T: Real>(
+    h: &HydraulicActuators,
+    y: &[T; SIMULATION_DIM],
+    l: &[T; LEG_COUNT],
+    l_dot: &[T; LEG_COUNT],
+    valves: &[T; LEG_COUNT],
+    supply: T,
+    dy: &mut [T; SIMULATION_DIM],
+) -> ([T; LEG_COUNT], [T; 3]) {
+    let mut u = [T::zero(); LEG_COUNT];
+    let mut powers = [[T::zero(); LEG_COUNT]; 3];
+    for k in 0..LEG_COUNT {
+        let chambers = Chambers {
+            pa: y[hydraulic::PA + k],
+            pb: y[hydraulic::PB + k],
+            spool: y[hydraulic::SPOOL + k],
+            spool_rate: y[hydraulic::SPOOL_RATE + k],
+        };
+        let command = valves[k].clamp_to(T::constant(-1.0), T::constant(1.0));
+        let r = h.legs.rate(&chambers, &h.piston(k, l[k], l_dot[k]), command, supply);
+        dy[hydraulic::PA + k] = r.pa_rate;
+        dy[hydraulic::PB + k] = r.pb_rate;
+        dy[hydraulic::SPOOL + k] = r.spool_rate;
+        dy[hydraulic::SPOOL_RATE + k] = r.spool_acceleration;
+        u[k] = r.force;
+        powers[0][k] = r.supply_power;
+        powers[1][k] = r.compression_power;
+        powers[2][k] = r.dissipation;
+    }
+    (u, powers.map(|p| sum_over_legs(&p)))
+}
+
+/// The rate of a simulation state `y` for the inputs `inputs` (the leg forces `F`, N, with
+/// drives the voltages `U`, V, with hydraulic legs the valve commands), in any number type:
+/// the definition the steps, Model Exchange and the exact derivatives share. With drives or
+/// hydraulics, `work.F` stays 0: their forces are internal, their energy comes in as
+/// `work.electric` or `work.hydraulic`.
 pub fn state_rate<T: Real>(
     form: &SpecialForm,
     y: &[T; SIMULATION_DIM],
     inputs: &[T; LEG_COUNT],
 ) -> [T; SIMULATION_DIM] {
+    let supply = T::constant(form.hydraulics().map_or(0.0, |h| h.supply));
+    state_rate_supplied(form, y, inputs, supply)
+}
+
+/// [`state_rate`] with the hydraulic supply pressure `supply` (Pa) in the number type (for
+/// derivatives with respect to `pS`); without hydraulics it is not used.
+pub fn state_rate_supplied<T: Real>(
+    form: &SpecialForm,
+    y: &[T; SIMULATION_DIM],
+    inputs: &[T; LEG_COUNT],
+    supply: T,
+) -> [T; SIMULATION_DIM] {
     let zero = [T::zero(); STATE_DIM];
     let b = y.first_chunk::<STATE_DIM>().unwrap_or(&zero);
     let mut dy = [T::zero(); SIMULATION_DIM];
+    if let Some(h) = form.hydraulics() {
+        let state = BodyState::from_vector(b);
+        let legs = LegGeometry::new(&form.stand, &state);
+        let l_dot = legs.length_rates(&form.stand, &state);
+        let (u, [supplied, compression, losses]) = hydraulic_rates(h, y, &legs.length, &l_dot, inputs, supply, &mut dy);
+        let (rate, power) = form.rate(b, &u);
+        if let Some(head) = dy.first_chunk_mut::<STATE_DIM>() {
+            *head = rate;
+        }
+        dy[quadrature::WORK_DISSIPATED] = power.dissipation + losses;
+        dy[quadrature::WORK_HYDRAULIC] = supplied;
+        dy[quadrature::WORK_COMPRESSION] = compression;
+        return dy;
+    }
     if form.drives().is_none() {
         let (rate, power) = form.rate(b, inputs);
         if let Some(head) = dy.first_chunk_mut::<STATE_DIM>() {
@@ -110,6 +224,17 @@ pub fn state_rate<T: Real>(
     dy
 }
 
+/// [`state_rate`] of the leading `N` components of a simulation state (the others 0): the
+/// definition for the integrators' shorter arrays ([`MECHANICAL_DIM`]) too.
+fn definition_rate<const N: usize>(form: &SpecialForm, y: &[f64; N], inputs: &[f64; LEG_COUNT]) -> [f64; N] {
+    let mut full = [0.0; SIMULATION_DIM];
+    for (f, &x) in full.iter_mut().zip(y) {
+        *f = x;
+    }
+    let rate = state_rate(form, &full, inputs);
+    std::array::from_fn(|i| rate.get(i).copied().unwrap_or(0.0))
+}
+
 /// The switching functions of a platform: where the motion is not smooth or is worth
 /// reporting.
 pub mod switching {
@@ -130,7 +255,7 @@ pub mod switching {
 
 /// The special-form body coordinates of a simulation state.
 #[inline(always)]
-pub fn body(y: &SimulationState) -> &StateVector {
+pub fn body<const N: usize>(y: &[f64; N]) -> &StateVector {
     y.first_chunk::<STATE_DIM>().unwrap_or(&[0.0; STATE_DIM])
 }
 
@@ -184,8 +309,15 @@ pub struct PlatformDynamics<'a, L: ?Sized, V: Lanes = Narrow> {
     /// integration, those of its end state (the check is the last thing a step does), so that
     /// the outputs `l` and `ldot` cost no second computation of the legs.
     pub checked_legs: Cell<Option<LegOutputs>>,
+    /// The lowest chamber pressure (Pa) of the states [`OdeSystem::check`] accepted (hydraulic
+    /// legs; `+inf` before any).
+    pub lowest_pressure: Cell<f64>,
     lanes: PhantomData<V>,
 }
+
+/// The fraction of RK4's real stability interval (2.785) a hydraulic step may use: the fast
+/// rates grow within a step as a land's drop shrinks.
+const STABLE_STEP_FACTOR: f64 = 2.0;
 
 impl<'a, L: ?Sized> PlatformDynamics<'a, L> {
     /// Dynamics that evaluate every switching function (singular arrangements tracked).
@@ -204,6 +336,7 @@ impl<'a, L: ?Sized> PlatformDynamics<'a, L> {
             stop_at_singularity,
             track_singularities: true,
             checked_legs: Cell::new(None),
+            lowest_pressure: Cell::new(f64::INFINITY),
             lanes: PhantomData,
         }
     }
@@ -221,8 +354,26 @@ impl<'a, L: ?Sized, V: Lanes> PlatformDynamics<'a, L, V> {
             stop_at_singularity: self.stop_at_singularity,
             track_singularities: self.track_singularities,
             checked_legs: Cell::new(None),
+            lowest_pressure: Cell::new(f64::INFINITY),
             lanes: PhantomData,
         }
+    }
+
+    /// The hydraulic legs' chambers at an accepted state: each volume must stay positive (a
+    /// leg far beyond its stroke, through its stop); the lowest pressure is recorded.
+    #[inline(never)]
+    fn check_chambers(&self, h: &HydraulicActuators, y: &[f64], l: &[f64; LEG_COUNT]) -> Result<(), PhysicsFault> {
+        let mut lowest = self.lowest_pressure.get();
+        for k in 0..LEG_COUNT {
+            let (va, vb) = h.legs.volumes(&h.piston(k, l[k], 0.0));
+            if !(va > 0.0 && vb > 0.0) {
+                return Err(PhysicsFault::ChamberEmptied { leg: k + 1, length: l[k] });
+            }
+            let pressure = |i: usize| y.get(i).copied().unwrap_or(f64::NAN);
+            lowest = lowest.min(pressure(hydraulic::PA + k)).min(pressure(hydraulic::PB + k));
+        }
+        self.lowest_pressure.set(lowest);
+        Ok(())
     }
 
     fn tracks_singularities(&self) -> bool {
@@ -266,12 +417,42 @@ impl<L: LegForceLaw + ?Sized, V: Lanes> PlatformDynamics<'_, L, V> {
         }
     }
 
+    /// The rate with hydraulic legs: the valve commands from the law, the legs' lengths and
+    /// rates, the hydraulic law leg by leg, and the body under the resulting forces (the force
+    /// inputs' fast path where it applies). Inlined into the caller, which is compiled for the
+    /// lanes' registers (the intrinsics would otherwise be calls); `cold_path` there keeps it out
+    /// of the force inputs' way.
+    #[inline(always)]
+    fn hydraulic_derivative(&self, h: &HydraulicActuators, t: f64, y: &SimulationState, dy: &mut SimulationState) {
+        let state = BodyState::from_vector(body(y));
+        let valves = if self.law.depends_on_state() {
+            self.law.leg_forces(t, &state, &LegGeometry::new(&self.form.stand, &state))
+        } else {
+            self.law.leg_forces_at(t)
+        };
+        let legs = self.form.joints.kinematics_in::<V>(&state);
+        let l_dot = self.form.joints.length_rates_in::<V>(&state, &legs);
+        let (u, [supplied, compression, losses]) =
+            hydraulic_rates(h, y, &legs.lengths(), &l_dot, &valves, h.supply, dy);
+        let forces = HeldForces::constant(u);
+        if let Some(body_rate) = dy.first_chunk_mut::<STATE_DIM>() {
+            let power = self.form.derivative_in::<HeldForces, V>(t, body(y), &forces, body_rate);
+            dy[quadrature::WORK_DISSIPATED] = power.dissipation + losses;
+        }
+        dy[quadrature::WORK_F] = 0.0;
+        for x in &mut dy[CURRENTS..hydraulic::PA] {
+            *x = 0.0;
+        }
+        dy[quadrature::WORK_HYDRAULIC] = supplied;
+        dy[quadrature::WORK_COMPRESSION] = compression;
+    }
+
     /// The guard, the switching functions and the leg outputs from one computation of the
     /// legs (in lanes `V`: see `JointArrays::kinematics_in`).
     #[inline(always)]
-    fn check_and_switching_in(
+    fn check_and_switching_in<const N: usize>(
         &self,
-        y: &SimulationState,
+        y: &[f64; N],
         g: Option<&mut [f64; MAX_SWITCHING]>,
     ) -> Result<(), PhysicsFault> {
         if !all_finite(body(y)) {
@@ -281,6 +462,10 @@ impl<L: LegForceLaw + ?Sized, V: Lanes> PlatformDynamics<'_, L, V> {
         let legs = self.form.joints.kinematics_in::<V>(&state);
         self.guard.check_legs(&state, &legs)?;
         let ldot = self.form.joints.length_rates_in::<V>(&state, &legs);
+        if let Some(h) = self.form.hydraulics() {
+            std::hint::cold_path();
+            self.check_chambers(h, y, &legs.lengths())?;
+        }
         self.checked_legs.set(Some(LegOutputs { l: legs.lengths(), ldot }));
         if let Some(g) = g {
             self.switching_of(&state, &legs, g, self.tracks_singularities());
@@ -289,11 +474,24 @@ impl<L: LegForceLaw + ?Sized, V: Lanes> PlatformDynamics<'_, L, V> {
     }
 }
 
-impl<L: LegForceLaw + ?Sized, V: Lanes> OdeSystem<SIMULATION_DIM> for PlatformDynamics<'_, L, V> {
+/// The platform's ODE system over the whole [`SimulationState`] (`N = SIMULATION_DIM`), or
+/// over its leading [`MECHANICAL_DIM`] components when the hydraulic legs are off (the
+/// integrators' arrays are then shorter; [`PlatformSimulation::advance`] chooses).
+impl<L: LegForceLaw + ?Sized, V: Lanes, const N: usize> OdeSystem<N> for PlatformDynamics<'_, L, V> {
     type Fault = PhysicsFault;
 
     #[inline(always)]
-    fn derivative(&self, t: f64, y: &SimulationState, dy: &mut SimulationState) {
+    fn derivative(&self, t: f64, y: &[f64; N], dy: &mut [f64; N]) {
+        if let Some(h) = self.form.hydraulics() {
+            std::hint::cold_path();
+            // Only ever stepped over the whole state.
+            if let (Ok(y), Ok(dy)) =
+                (<&SimulationState>::try_from(&y[..]), <&mut SimulationState>::try_from(&mut dy[..]))
+            {
+                self.hydraulic_derivative(h, t, y, dy);
+            }
+            return;
+        }
         if self.form.drives().is_some() {
             // Out of the force-input path's way (its code and registers stay as without drives).
             std::hint::cold_path();
@@ -305,13 +503,13 @@ impl<L: LegForceLaw + ?Sized, V: Lanes> OdeSystem<SIMULATION_DIM> for PlatformDy
                 self.law.leg_forces_at(t)
             };
             if !self.form.has_driven_fast_path() {
-                *dy = state_rate(self.form, y, &inputs);
+                *dy = definition_rate(self.form, y, &inputs);
                 return;
             }
             let currents: [f64; LEG_COUNT] = std::array::from_fn(|k| y[CURRENTS + k]);
             if let Some((body_rate, rest)) = dy.split_first_chunk_mut::<STATE_DIM>() {
                 let rates = self.form.derivative_driven_in::<V>(body(y), &currents, &inputs, body_rate);
-                if let [work, dissipated, currents @ .., electric] = rest {
+                if let Some([work, dissipated, currents @ .., electric]) = rest.first_chunk_mut::<9>() {
                     *work = 0.0;
                     *dissipated = rates.dissipation;
                     currents.copy_from_slice(&rates.current_rate);
@@ -334,7 +532,38 @@ impl<L: LegForceLaw + ?Sized, V: Lanes> OdeSystem<SIMULATION_DIM> for PlatformDy
     }
 
     fn active_dimension(&self) -> usize {
-        if self.form.drives().is_some() { SIMULATION_DIM } else { WITHOUT_DRIVES }
+        let n = if self.form.hydraulics().is_some() {
+            SIMULATION_DIM
+        } else if self.form.drives().is_some() {
+            WITH_DRIVES
+        } else {
+            WITHOUT_DRIVES
+        };
+        n.min(N)
+    }
+
+    /// With hydraulic legs, the step the explicit fixed-step method stays stable for at `y`:
+    /// the legs' fast modes ([`crate::physics::actuators::hydraulics::HydraulicLegs::stiffness`])
+    /// against RK4's stability interval (2.78 on the negative real axis), with a margin for
+    /// the rate's growth within the step.
+    fn stable_step(&self, _t: f64, y: &[f64; N]) -> f64 {
+        let Some(h) = self.form.hydraulics() else { return f64::INFINITY };
+        let state = BodyState::from_vector(body(y));
+        // SSE2 pairs, the baseline of x86-64: inlined wherever this is called from.
+        let legs = self.form.joints.kinematics_in::<Narrow>(&state);
+        let l = legs.lengths();
+        let mut fastest = 0.0_f64;
+        for k in 0..LEG_COUNT {
+            let at = |i: usize| y.get(i).copied().unwrap_or(0.0);
+            let chambers = Chambers {
+                pa: at(hydraulic::PA + k),
+                pb: at(hydraulic::PB + k),
+                spool: at(hydraulic::SPOOL + k),
+                spool_rate: at(hydraulic::SPOOL_RATE + k),
+            };
+            fastest = fastest.max(h.legs.stiffness(&chambers, &h.piston(k, l[k], 0.0), h.supply));
+        }
+        STABLE_STEP_FACTOR / fastest
     }
 
     fn linear_decay(&self) -> Option<LinearDecay> {
@@ -342,7 +571,7 @@ impl<L: LegForceLaw + ?Sized, V: Lanes> OdeSystem<SIMULATION_DIM> for PlatformDy
     }
 
     #[inline(always)]
-    fn after_step(&self, y: &mut SimulationState) {
+    fn after_step(&self, y: &mut [f64; N]) {
         if self.stabilisation == Stabilisation::Projection
             && let Some(b) = y.first_chunk_mut::<STATE_DIM>()
         {
@@ -355,7 +584,7 @@ impl<L: LegForceLaw + ?Sized, V: Lanes> OdeSystem<SIMULATION_DIM> for PlatformDy
     }
 
     #[inline(always)]
-    fn check(&self, t: f64, y: &SimulationState) -> Result<(), PhysicsFault> {
+    fn check(&self, t: f64, y: &[f64; N]) -> Result<(), PhysicsFault> {
         self.check_and_switching(t, y, None)
     }
 
@@ -365,7 +594,7 @@ impl<L: LegForceLaw + ?Sized, V: Lanes> OdeSystem<SIMULATION_DIM> for PlatformDy
     fn check_and_switching(
         &self,
         _t: f64,
-        y: &SimulationState,
+        y: &[f64; N],
         g: Option<&mut [f64; MAX_SWITCHING]>,
     ) -> Result<(), PhysicsFault> {
         self.check_and_switching_in(y, g)
@@ -382,7 +611,7 @@ impl<L: LegForceLaw + ?Sized, V: Lanes> OdeSystem<SIMULATION_DIM> for PlatformDy
     }
 
     #[inline(always)]
-    fn switching(&self, _t: f64, y: &SimulationState, g: &mut [f64; MAX_SWITCHING]) {
+    fn switching(&self, _t: f64, y: &[f64; N], g: &mut [f64; MAX_SWITCHING]) {
         let state = BodyState::from_vector(body(y));
         let legs = self.form.joints.kinematics(&state);
         self.switching_of(&state, &legs, g, self.tracks_singularities());
@@ -396,12 +625,30 @@ impl<L: LegForceLaw + ?Sized, V: Lanes> OdeSystem<SIMULATION_DIM> for PlatformDy
         }
     }
 
-    fn switching_fault(&self, index: usize, _t: f64, y: &SimulationState) -> Option<PhysicsFault> {
+    fn switching_fault(&self, index: usize, _t: f64, y: &[f64; N]) -> Option<PhysicsFault> {
         (index == switching::DETERMINANT).then(|| {
             let legs = LegGeometry::new(&self.form.stand, &BodyState::from_vector(body(y)));
             PhysicsFault::PassedSingularConfiguration { legs: singular_legs(&self.form.stand, &legs) }
         })
     }
+}
+
+/// The crossings of a step over the shorter arrays (`mechanical`) into `log`, as whole
+/// simulation states (the rest of `state`).
+#[inline(never)]
+fn record_mechanical_crossings(
+    log: &mut CrossingLog<SIMULATION_DIM>,
+    mechanical: &CrossingLog<MECHANICAL_DIM>,
+    state: &SimulationState,
+) {
+    for c in mechanical.as_slice() {
+        let mut y = *state;
+        if let Some(head) = y.first_chunk_mut::<MECHANICAL_DIM>() {
+            *head = c.y;
+        }
+        log.push(Crossing { index: c.index, t: c.t, rising: c.rising, y });
+    }
+    log.dropped += mechanical.dropped;
 }
 
 /// Where [`PlatformSimulation::advance_until_event`] ended.
@@ -460,6 +707,12 @@ pub struct PlatformSimulation {
     /// Sign changes of the switching functions during the last [`PlatformSimulation::advance`]
     /// (contacts, singular arrangements passed), in time order.
     pub crossings: CrossingLog<SIMULATION_DIM>,
+    /// The same, as the integrators' shorter arrays without hydraulic legs record them (copied
+    /// into `crossings` after the step).
+    mechanical_crossings: CrossingLog<MECHANICAL_DIM>,
+    /// The lowest chamber pressure of the hydraulic legs since the start, Pa (`pmin`; `+inf`
+    /// without them).
+    pub lowest_pressure: f64,
     /// The registers the steps compute in (the same numbers in each).
     vector_path: VectorPath,
 }
@@ -490,6 +743,8 @@ impl PlatformSimulation {
             time: t0,
             state,
             crossings: CrossingLog::default(),
+            mechanical_crossings: CrossingLog::default(),
+            lowest_pressure: f64::INFINITY,
             vector_path: VectorPath::fastest(),
         })
     }
@@ -553,6 +808,57 @@ impl PlatformSimulation {
             self.state[CURRENTS + k] = if drives.is_some() { initial_currents[k] } else { 0.0 };
         }
         Ok(self)
+    }
+
+    /// The same simulation with hydraulic servo legs (validated) and their initial chamber
+    /// pressures `p_A0`, `p_B0` (Pa; the spools start centred and at rest), or `None`.
+    pub fn with_hydraulics(
+        mut self,
+        hydraulics: Option<HydraulicActuators>,
+        initial_pa: [f64; LEG_COUNT],
+        initial_pb: [f64; LEG_COUNT],
+    ) -> Result<Self, ParameterError> {
+        if let Some(h) = &hydraulics {
+            h.validate()?;
+            let legs = LegGeometry::new(self.stand(), &self.body_state());
+            for k in 0..LEG_COUNT {
+                crate::physics::stand::check_finite(&format!("pA0[{}]", k + 1), initial_pa[k])?;
+                crate::physics::stand::check_finite(&format!("pB0[{}]", k + 1), initial_pb[k])?;
+                let (va, vb) = h.legs.volumes(&h.piston(k, legs.length[k], 0.0));
+                if !(va > 0.0 && vb > 0.0) {
+                    return Err(ParameterError::new(
+                        format!("lmin[{}]", k + 1),
+                        format!(
+                            "leg {} starts at {:e} m, where a hydraulic chamber has no volume (V_A = {va:e} m3, V_B = \
+                             {vb:e} m3): the initial pose must put every piston within its stroke's dead volumes",
+                            k + 1,
+                            legs.length[k]
+                        ),
+                    ));
+                }
+            }
+        }
+        self.form = self.form.clone().with_hydraulics(hydraulics);
+        let on = hydraulics.is_some();
+        for k in 0..LEG_COUNT {
+            self.state[hydraulic::PA + k] = if on { initial_pa[k] } else { 0.0 };
+            self.state[hydraulic::PB + k] = if on { initial_pb[k] } else { 0.0 };
+            self.state[hydraulic::SPOOL + k] = 0.0;
+            self.state[hydraulic::SPOOL_RATE + k] = 0.0;
+        }
+        self.lowest_pressure =
+            if on { self.pressures().iter().flatten().fold(f64::INFINITY, |a, &b| a.min(b)) } else { f64::INFINITY };
+        Ok(self)
+    }
+
+    /// The chamber pressures `[p_A, p_B]`, Pa (0 without hydraulic legs).
+    pub fn pressures(&self) -> [[f64; LEG_COUNT]; 2] {
+        [std::array::from_fn(|k| self.state[hydraulic::PA + k]), std::array::from_fn(|k| self.state[hydraulic::PB + k])]
+    }
+
+    /// The spools' positions `s_k` (0 without hydraulic legs).
+    pub fn spools(&self) -> [f64; LEG_COUNT] {
+        std::array::from_fn(|k| self.state[hydraulic::SPOOL + k])
     }
 
     pub fn stand(&self) -> &Stand {
@@ -626,32 +932,55 @@ impl PlatformSimulation {
         t1: f64,
         stop_at_contact: bool,
     ) -> Result<Reached, StepFailure> {
-        let saved_state = self.state;
         let saved_integrator = self.integrator;
         self.crossings.clear();
         let dynamics = PlatformDynamics {
             track_singularities: self.track_singularities,
             ..PlatformDynamics::new(&self.form, law, self.stabilisation, &self.guard, self.stop_at_singularity)
         };
-        let call = super::vector::Call {
-            t0: self.time,
-            y: &mut self.state,
-            t1,
-            log: &mut self.crossings,
-            stop_at_restart: stop_at_contact,
-        };
-        // The drives step in SSE2 pairs: in the AVX2 build of their steps LLVM emits an
-        // instruction (a VEX `vmovq` between registers) that valgrind 3.19, this project's
-        // instruction counter and leak checker, cannot decode.
         let path = self.vector_path;
-        let result = super::vector::integrate(path, &mut self.integrator, &dynamics, call);
+        let result = if self.form.hydraulics().is_some() {
+            let saved = self.state;
+            let call = super::vector::Call {
+                t0: self.time,
+                y: &mut self.state,
+                t1,
+                log: &mut self.crossings,
+                stop_at_restart: stop_at_contact,
+            };
+            super::vector::integrate(path, &mut self.integrator, &dynamics, call).inspect_err(|_| self.state = saved)
+        } else {
+            // Without hydraulic legs their components stay 0: the integrators step the shorter
+            // leading part, in place.
+            // Always there (the assertion beside MECHANICAL_DIM).
+            let Some(head) = self.state.first_chunk_mut::<MECHANICAL_DIM>() else { unreachable!() };
+            let saved = *head;
+            self.mechanical_crossings.clear();
+            let call = super::vector::Call {
+                t0: self.time,
+                y: head,
+                t1,
+                log: &mut self.mechanical_crossings,
+                stop_at_restart: stop_at_contact,
+            };
+            let result = super::vector::integrate(path, &mut self.integrator, &dynamics, call);
+            if result.is_err() {
+                *head = saved;
+            }
+            if !self.mechanical_crossings.is_empty() {
+                std::hint::cold_path();
+                record_mechanical_crossings(&mut self.crossings, &self.mechanical_crossings, &self.state);
+            }
+            result
+        };
         match result {
             Ok(reached) => {
                 self.time = reached;
+                self.lowest_pressure = self.lowest_pressure.min(dynamics.lowest_pressure.get());
                 Ok(Reached { t: reached, legs: dynamics.checked_legs.get() })
             }
             Err(e) => {
-                self.state = saved_state;
+                // The state is back as it was (above); the integrator's memory too.
                 self.integrator = saved_integrator;
                 Err(match e {
                     IntegrationError::Fault { t, fault } => StepFailure::Physics { t, fault },

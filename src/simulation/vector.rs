@@ -12,7 +12,7 @@ use crate::physics::actuators::LegForceLaw;
 use crate::physics::error::PhysicsFault;
 use crate::physics::legs::per_leg::Narrow;
 
-use super::platform::{PlatformDynamics, SIMULATION_DIM, SimulationState};
+use super::platform::PlatformDynamics;
 
 /// Which registers a step computes in.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -38,21 +38,21 @@ impl VectorPath {
 
 /// One call of the integrator: from `t0` to `t1` (or the first non-smooth point, with
 /// `stop_at_restart`), the crossings met into `log`.
-pub(super) struct Call<'a> {
+pub(super) struct Call<'a, const N: usize> {
     pub t0: f64,
-    pub y: &'a mut SimulationState,
+    pub y: &'a mut [f64; N],
     pub t1: f64,
-    pub log: &'a mut CrossingLog<SIMULATION_DIM>,
+    pub log: &'a mut CrossingLog<N>,
     pub stop_at_restart: bool,
 }
 
 /// Integrates the platform's dynamics in the registers of `path`.
 #[inline]
-pub(super) fn integrate<L: LegForceLaw + ?Sized>(
+pub(super) fn integrate<L: LegForceLaw + ?Sized, const N: usize>(
     path: VectorPath,
     integrator: &mut Integrator,
     dynamics: &PlatformDynamics<'_, L, Narrow>,
-    call: Call<'_>,
+    call: Call<'_, N>,
 ) -> Result<f64, IntegrationError<PhysicsFault>> {
     #[cfg(all(target_arch = "x86_64", feature = "avx2"))]
     if path == VectorPath::Avx2 {
@@ -71,13 +71,14 @@ pub(super) fn integrate<L: LegForceLaw + ?Sized>(
 /// The processor must have AVX2 and FMA.
 #[cfg(all(target_arch = "x86_64", feature = "avx2"))]
 #[target_feature(enable = "avx,avx2,fma")]
-unsafe fn integrate_avx2<L: LegForceLaw + ?Sized>(
+unsafe fn integrate_avx2<L: LegForceLaw + ?Sized, const N: usize>(
     integrator: &mut Integrator,
     dynamics: &PlatformDynamics<'_, L, Narrow>,
-    call: Call<'_>,
+    call: Call<'_, N>,
 ) -> Result<f64, IntegrationError<PhysicsFault>> {
     let wide = dynamics.in_lanes::<crate::simd::Wide>();
     let result = integrator.integrate_until_event(&wide, call.t0, call.y, call.t1, call.log, call.stop_at_restart);
     dynamics.checked_legs.set(wide.checked_legs.get());
+    dynamics.lowest_pressure.set(wide.lowest_pressure.get());
     result
 }

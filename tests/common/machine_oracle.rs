@@ -1,6 +1,7 @@
-//! An independent reference formulation ("oracle") of the whole machine of SPEC §1, §6, §8
-//! and §9: the loaded platform on six legs that are two bodies each (cylinder and rod), with
-//! end stops, joint limits, cylinder friction and optional DC drives.
+//! An independent reference formulation ("oracle") of the whole machine of SPEC §1, §6, §8,
+//! §9 and §10: the loaded platform on six legs that are two bodies each (cylinder and rod),
+//! with end stops, joint limits, cylinder friction and optional DC drives or hydraulic servo
+//! legs.
 //!
 //! Formulation: Kane's equations (d'Alembert's principle in generalised speeds) with the
 //! generalised speeds `nu = (v, w)`: `v` the centre-of-mass velocity (inertial components),
@@ -47,6 +48,31 @@
 //!   moments on the leg transverse, the axial balance makes its constraint torque vanish);
 //! - drives: the rotor's inertia reaction passes through the screw, so the axial force the
 //!   rod receives is `u + f + stop - J_m N^2 l''`; no gyroscopic rotor terms (SPEC §9).
+//!
+//! Hydraulic servo legs (SPEC §10, `hydraulics`, inputs `Valves`): the chamber pressures and
+//! the spools (position and rate) are states integrated with the rest by the same RK4; the
+//! actuator force `u_k = p_A A_A - p_B A_B` takes the place of the input force (friction, end
+//! stops, joint limits and the legs' masses act as before; `work.forces` stays 0). The
+//! spools' zero crossings are located like the contacts (the flow law's kink at `s = 0`).
+//! Readings of SPEC §10 where it leaves room:
+//! - the valve as four metering lands P->A, A->T, P->B, B->T, each a flow from its upstream
+//!   to its downstream port: for `s >= 0` (so also at `s = 0`, where both are zero)
+//!   `K s phi(p_S - p_A)` through P->A and `K s phi(p_B - p_T)` through B->T, for `s < 0`
+//!   `K |s| phi(p_A - p_T)` through A->T and `K |s| phi(p_S - p_B)` through P->B, the other two
+//!   closed (critical centre); every land also leaks `C_v dp` with its own drop. This is
+//!   SPEC's `Q_A`, `Q_B` term by term. `Q_S` is the sum of the P->A and P->B paths, `Q_T` of
+//!   the A->T and B->T paths (orifice and leakage; either may be negative);
+//! - the losses are `sum over the four lands of (orifice flow + leakage) * its drop` (so
+//!   `K |s| phi(dp) dp + C_v dp^2 >= 0` per land; a reversed orifice flow still loses), plus
+//!   `C_i (p_A - p_B)^2`; all go to `work.dissipated`;
+//! - `x_k = l_k - lmin_k` with the hydraulics' own `lmin`, `lmax`; neither `x` nor the
+//!   volumes are clamped (beyond the stroke, into an end stop, `V` goes on linearly);
+//! - no saturation of the spool position itself (only the command is clamped): the second-
+//!   order spool may overshoot 1 a little and the flows scale linearly with it;
+//! - `p_S` and the commands are inputs held over each communication step; `p_S = 0` makes the
+//!   supply port a second tank at 0 gauge (the formulas unchanged);
+//! - `work.compression` integrates `sum (p_A V_A p_A' + p_B V_B p_B') / beta` with the
+//!   current volumes; `energy` holds no hydraulic energy.
 
 use nalgebra::{Matrix3, Matrix6, Rotation3, UnitQuaternion, Vector3, Vector6};
 use std::ops::{Add, Mul, Neg, Sub};
@@ -106,6 +132,121 @@ impl OracleDrives {
     }
 }
 
+/// SPEC §10: hydraulic servo legs (all six legs share the scalars). The stroke position is
+/// `x_k = l_k - lmin_k`, the stroke `L_s = lmax_k - lmin_k` (from these `lmin`, `lmax`,
+/// whether or not end stops are on).
+#[derive(Clone, Copy, Debug)]
+pub struct OracleHydraulics {
+    /// `D`, m.
+    pub bore: f64,
+    /// `d`, m.
+    pub rod: f64,
+    /// `V_A0`, `V_B0`, m3.
+    pub dead_volume_a: f64,
+    pub dead_volume_b: f64,
+    /// `beta`, Pa.
+    pub bulk_modulus: f64,
+    /// `p_T`, Pa (gauge).
+    pub tank_pressure: f64,
+    /// `Q_N`, m3/s.
+    pub rated_flow: f64,
+    /// `dp_N`, Pa (over the valve, half of it per land).
+    pub rated_pressure_drop: f64,
+    /// `w_v`, rad/s.
+    pub omega: f64,
+    /// `zeta_v`.
+    pub damping: f64,
+    /// `p_cr`, Pa.
+    pub pcr: f64,
+    /// `C_v`, m3/(s.Pa): null leakage of each land.
+    pub valve_leakage: f64,
+    /// `C_i`, m3/(s.Pa): leakage across the piston.
+    pub internal_leakage: f64,
+    pub lmin: [f64; 6],
+    pub lmax: [f64; 6],
+}
+
+impl OracleHydraulics {
+    /// Cap side area `A_A = pi D^2 / 4`.
+    pub fn area_a(&self) -> f64 {
+        std::f64::consts::PI * self.bore * self.bore / 4.0
+    }
+    /// Rod side (annulus) area `A_B = pi (D^2 - d^2) / 4`.
+    pub fn area_b(&self) -> f64 {
+        std::f64::consts::PI * (self.bore * self.bore - self.rod * self.rod) / 4.0
+    }
+    /// Flow gain `K = Q_N / sqrt(dp_N / 2)`.
+    pub fn gain(&self) -> f64 {
+        self.rated_flow / (0.5 * self.rated_pressure_drop).sqrt()
+    }
+    /// The regularised square root `phi(dp) = dp / (dp^2 + p_cr^2)^(1/4)`.
+    pub fn phi(&self, dp: f64) -> f64 {
+        dp / (dp * dp + self.pcr * self.pcr).sqrt().sqrt()
+    }
+    /// Chamber volumes of leg k at length `l`: `V_A = V_A0 + A_A x`, `V_B = V_B0 + A_B (L_s - x)`.
+    pub fn volumes(&self, k: usize, l: f64) -> (f64, f64) {
+        let x = l - self.lmin[k];
+        let stroke = self.lmax[k] - self.lmin[k];
+        (self.dead_volume_a + self.area_a() * x, self.dead_volume_b + self.area_b() * (stroke - x))
+    }
+
+    /// One servo valve: the land flows of SPEC §10 at spool position `s`, chamber pressures
+    /// `pa`, `pb` and supply pressure `ps`.
+    pub fn valve(&self, s: f64, pa: f64, pb: f64, ps: f64) -> OracleValve {
+        let (pt, k, cv) = (self.tank_pressure, self.gain(), self.valve_leakage);
+        // The four metering lands, each as a flow from its upstream port to its downstream
+        // port (the regularised law may reverse it): P->A, A->T, P->B, B->T. A critically
+        // centred spool opens P->A and B->T for s >= 0, P->B and A->T for s < 0.
+        let (pa_flow, at_flow, pb_flow, bt_flow) = if s >= 0.0 {
+            (k * s * self.phi(ps - pa), 0.0, 0.0, k * s * self.phi(pb - pt))
+        } else {
+            (0.0, k * (-s) * self.phi(pa - pt), k * (-s) * self.phi(ps - pb), 0.0)
+        };
+        // Null leakage of every land (the same four paths).
+        let (pa_leak, at_leak, pb_leak, bt_leak) = (cv * (ps - pa), cv * (pa - pt), cv * (ps - pb), cv * (pb - pt));
+        let q_pa = pa_flow + pa_leak;
+        let q_at = at_flow + at_leak;
+        let q_pb = pb_flow + pb_leak;
+        let q_bt = bt_flow + bt_leak;
+        OracleValve {
+            q_a: q_pa - q_at,
+            q_b: q_pb - q_bt,
+            q_supply: q_pa + q_pb,
+            q_tank: q_at + q_bt,
+            throttling: pa_flow * (ps - pa) + at_flow * (pa - pt) + pb_flow * (ps - pb) + bt_flow * (pb - pt),
+            leakage: pa_leak * (ps - pa) + at_leak * (pa - pt) + pb_leak * (ps - pb) + bt_leak * (pb - pt),
+        }
+    }
+}
+
+/// One servo valve's flows (m3/s) and losses (W).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct OracleValve {
+    /// Net flows into chamber A and chamber B (`Q_A`, `Q_B` of SPEC §10, leakage included).
+    pub q_a: f64,
+    pub q_b: f64,
+    /// Flow out of the supply line `Q_S` and into the tank line `Q_T` (leakage included).
+    pub q_supply: f64,
+    pub q_tank: f64,
+    /// Throttling loss of the metering lands, `sum Q dp` (>= 0).
+    pub throttling: f64,
+    /// Null leakage loss of the lands, `sum C_v dp^2` (>= 0).
+    pub leakage: f64,
+}
+
+/// Per-leg hydraulic powers (W) at an instant.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct OracleHydraulicPowers {
+    /// `P_S = p_S Q_S - p_T Q_T`.
+    pub supply: [f64; 6],
+    /// `u_k ldot_k`.
+    pub leg: [f64; 6],
+    /// Valve throttling and leakage plus internal leakage `C_i (p_A - p_B)^2`.
+    pub losses: [f64; 6],
+    /// `p_A V_A p_A' / beta + p_B V_B p_B' / beta`.
+    pub compression: [f64; 6],
+}
+
 #[derive(Clone, Debug)]
 pub struct OracleMachine {
     pub mass: f64,
@@ -123,6 +264,8 @@ pub struct OracleMachine {
     pub joints: Option<OracleJoints>,
     pub friction: OracleFriction,
     pub drives: Option<OracleDrives>,
+    /// SPEC §10 hydraulic servo legs (inputs `Valves`); exclusive with `drives`.
+    pub hydraulics: Option<OracleHydraulics>,
     /// Largest RK4 substep (s); each communication step is cut into equal substeps.
     pub max_step: f64,
 }
@@ -136,11 +279,43 @@ pub struct OracleState {
     /// Angular velocity, body components.
     pub w: [f64; 3],
     pub currents: [f64; 6],
+    /// Chamber gauge pressures (Pa), hydraulics only.
+    pub pa: [f64; 6],
+    pub pb: [f64; 6],
+    /// Spool positions (normalised) and their rates (1/s), hydraulics only.
+    pub spool: [f64; 6],
+    pub spool_rate: [f64; 6],
 }
 
 impl OracleState {
     pub fn at_rest(r: [f64; 3], rotation: [[f64; 3]; 3]) -> Self {
-        OracleState { r, rotation, v: [0.0; 3], w: [0.0; 3], currents: [0.0; 6] }
+        OracleState {
+            r,
+            rotation,
+            v: [0.0; 3],
+            w: [0.0; 3],
+            currents: [0.0; 6],
+            pa: [0.0; 6],
+            pb: [0.0; 6],
+            spool: [0.0; 6],
+            spool_rate: [0.0; 6],
+        }
+    }
+}
+
+/// The states besides the platform's: currents, chamber pressures, spools.
+#[derive(Clone, Copy, Debug, Default)]
+struct Internal {
+    currents: [f64; 6],
+    pa: [f64; 6],
+    pb: [f64; 6],
+    spool: [f64; 6],
+    spool_rate: [f64; 6],
+}
+
+impl Internal {
+    fn of(s: &OracleState) -> Internal {
+        Internal { currents: s.currents, pa: s.pa, pb: s.pb, spool: s.spool, spool_rate: s.spool_rate }
     }
 }
 
@@ -153,6 +328,9 @@ pub enum OracleInputs {
     /// Linear springs `u_k = -stiffness (l_k - rest_k)` evaluated inside the right-hand side
     /// (a conservative leg law for the energy checks), no drives.
     Springs { stiffness: f64, rest: [f64; 6] },
+    /// Servo valve commands (saturated to [-1, 1] inside) and the supply pressure `p_S` (Pa),
+    /// hydraulics required.
+    Valves { valve: [f64; 6], supply_pressure: f64 },
 }
 
 /// Work accumulated since the start of a run (J).
@@ -163,14 +341,19 @@ pub struct OracleWork {
     /// Electric energy supplied, `integral sum U_k I_k`.
     pub electric: f64,
     /// Dissipated: friction, end-stop and joint-limit damping, `R I^2`, `D omega^2` and the
-    /// conversion mismatch `(k_e - k_t) omega I`.
+    /// conversion mismatch `(k_e - k_t) omega I`, the valves' throttling and leakage losses
+    /// and the internal leakage loss.
     pub dissipated: f64,
+    /// Hydraulic energy drawn from the supply, `integral sum_k (p_S Q_S - p_T Q_T)`.
+    pub hydraulic: f64,
+    /// The oil's compression energy, `integral sum_k (p_A V_A p_A' + p_B V_B p_B') / beta`.
+    pub compression: f64,
 }
 
 /// The axial forces and joint-limit moments of one evaluation (diagnostics).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct OracleLegForces {
-    /// `u_k` (from the input, the spring law or the drive).
+    /// `u_k` (from the input, the spring law, the drive or the chamber pressures).
     pub actuator: [f64; 6],
     pub friction: [f64; 6],
     /// End-stop force along the leg (sign as `u_k`): elastic and damping parts.
@@ -406,26 +589,40 @@ fn quat_to_mat(q: &[f64]) -> Matrix3<f64> {
 }
 
 /// Layout of the integrated vector.
-const NX: usize = 22;
+const NX: usize = 48;
 const IR: usize = 0; // r: 3
 const IQ: usize = 3; // quaternion: 4
 const IV: usize = 7; // v: 3
 const IW: usize = 10; // w: 3
 const II: usize = 13; // currents: 6
-const IWF: usize = 19; // work of the forces
-const IWE: usize = 20; // electric work
-const IWD: usize = 21; // dissipated
+const IPA: usize = 19; // p_A: 6
+const IPB: usize = 25; // p_B: 6
+const IS: usize = 31; // spool: 6
+const ISD: usize = 37; // spool rate: 6
+const IWF: usize = 43; // work of the forces
+const IWE: usize = 44; // electric work
+const IWD: usize = 45; // dissipated
+const IWH: usize = 46; // hydraulic work
+const IWC: usize = 47; // compression work
+/// Number of switching functions: 10 per leg (stops, joint limits), then one per spool.
+const NSW: usize = 66;
 
-type Unpacked = (Vector3<f64>, Matrix3<f64>, Vector3<f64>, Vector3<f64>, [f64; 6]);
+type Unpacked = (Vector3<f64>, Matrix3<f64>, Vector3<f64>, Vector3<f64>, Internal);
 
 /// Everything one evaluation of the dynamics gives.
 struct Dynamics {
     nu_dot: Vector6<f64>,
     current_dot: [f64; 6],
+    pa_dot: [f64; 6],
+    pb_dot: [f64; 6],
+    spool_acc: [f64; 6],
     forces: OracleLegForces,
+    hydraulic: OracleHydraulicPowers,
     power_forces: f64,
     power_electric: f64,
     power_dissipated: f64,
+    power_hydraulic: f64,
+    power_compression: f64,
 }
 
 // ------------------------------------------------------------------------------------------
@@ -461,6 +658,7 @@ impl OracleMachine {
             joints: None,
             friction: OracleFriction::default(),
             drives: None,
+            hydraulics: None,
             max_step: 1e-5,
         }
     }
@@ -551,9 +749,10 @@ impl OracleMachine {
         rot: &Matrix3<f64>,
         v: &Vector3<f64>,
         w: &Vector3<f64>,
-        currents: &[f64; 6],
+        ex: &Internal,
         inputs: &OracleInputs,
     ) -> Dynamics {
+        let currents = &ex.currents;
         let refs = self.refs();
         let z = Vector3::zeros();
         let legs0 = self.legs(&platform_jet(r, rot, v, w, &z, &z), &refs);
@@ -578,22 +777,47 @@ impl OracleMachine {
         let mut f = OracleLegForces::default();
         let (mut p_forces, mut p_electric, mut p_diss) = (0.0, 0.0, 0.0);
         let mut current_dot = [0.0; 6];
+        let (mut pa_dot, mut pb_dot, mut spool_acc) = ([0.0; 6], [0.0; 6], [0.0; 6]);
+        let mut hyd = OracleHydraulicPowers::default();
+        let (mut p_hydraulic, mut p_compression) = (0.0, 0.0);
         let ld: [f64; 6] = std::array::from_fn(|k| legs0[k].l.d);
         let l: [f64; 6] = std::array::from_fn(|k| legs0[k].l.v);
 
         // Actuator forces.
-        match (inputs, &self.drives) {
-            (OracleInputs::Forces(u), None) => {
+        match (inputs, &self.drives, &self.hydraulics) {
+            (OracleInputs::Forces(u), None, None) => {
                 f.actuator = *u;
                 p_forces = (0..6).map(|k| u[k] * ld[k]).sum();
             }
-            (OracleInputs::Springs { stiffness, rest }, None) => {
+            (OracleInputs::Springs { stiffness, rest }, None, None) => {
                 for k in 0..6 {
                     f.actuator[k] = -stiffness * (l[k] - rest[k]);
                     p_forces += f.actuator[k] * ld[k];
                 }
             }
-            (OracleInputs::Voltages(u), Some(d)) => {
+            (OracleInputs::Valves { valve, supply_pressure }, None, Some(h)) => {
+                let (aa, ab, beta) = (h.area_a(), h.area_b(), h.bulk_modulus);
+                let (ps, pt) = (*supply_pressure, h.tank_pressure);
+                for k in 0..6 {
+                    let (pa, pb, sp) = (ex.pa[k], ex.pb[k], ex.spool[k]);
+                    let c = clamp(valve[k], -1.0, 1.0);
+                    spool_acc[k] = h.omega * h.omega * (c - sp) - 2.0 * h.damping * h.omega * ex.spool_rate[k];
+                    let q = h.valve(sp, pa, pb, ps);
+                    let (va, vb) = h.volumes(k, l[k]);
+                    let qi = h.internal_leakage * (pa - pb);
+                    pa_dot[k] = beta / va * (q.q_a - aa * ld[k] - qi);
+                    pb_dot[k] = beta / vb * (q.q_b + ab * ld[k] + qi);
+                    f.actuator[k] = pa * aa - pb * ab;
+                    hyd.supply[k] = ps * q.q_supply - pt * q.q_tank;
+                    hyd.leg[k] = f.actuator[k] * ld[k];
+                    hyd.losses[k] = q.throttling + q.leakage + qi * (pa - pb);
+                    hyd.compression[k] = (pa * va * pa_dot[k] + pb * vb * pb_dot[k]) / beta;
+                    p_hydraulic += hyd.supply[k];
+                    p_compression += hyd.compression[k];
+                    p_diss += hyd.losses[k];
+                }
+            }
+            (OracleInputs::Voltages(u), Some(d), None) => {
                 let nn = d.n();
                 for k in 0..6 {
                     let om = nn * ld[k];
@@ -604,9 +828,10 @@ impl OracleMachine {
                     p_diss += d.resistance * i * i + d.damping * om * om + (d.ke - d.kt) * om * i;
                 }
             }
-            (inp, d) => {
-                panic!("inputs {inp:?} do not fit the drives {d:?}: forces and springs without drives, voltages with")
-            }
+            (inp, d, h) => panic!(
+                "inputs {inp:?} do not fit the drives {d:?} and hydraulics {h:?}: forces and springs without \
+                 either, voltages with drives, valves with hydraulics"
+            ),
         }
 
         // Friction.
@@ -704,21 +929,33 @@ impl OracleMachine {
         Dynamics {
             nu_dot,
             current_dot,
+            pa_dot,
+            pb_dot,
+            spool_acc,
             forces: f,
+            hydraulic: hyd,
             power_forces: p_forces,
             power_electric: p_electric,
             power_dissipated: p_diss,
+            power_hydraulic: p_hydraulic,
+            power_compression: p_compression,
         }
     }
 
-    /// `(r, R, v, w, currents)`.
+    /// `(r, R, v, w, currents and hydraulic states)`.
     fn unpack(x: &[f64; NX]) -> Unpacked {
         (
             Vector3::new(x[IR], x[IR + 1], x[IR + 2]),
             quat_to_mat(&x[IQ..IQ + 4]),
             Vector3::new(x[IV], x[IV + 1], x[IV + 2]),
             Vector3::new(x[IW], x[IW + 1], x[IW + 2]),
-            std::array::from_fn(|k| x[II + k]),
+            Internal {
+                currents: std::array::from_fn(|k| x[II + k]),
+                pa: std::array::from_fn(|k| x[IPA + k]),
+                pb: std::array::from_fn(|k| x[IPB + k]),
+                spool: std::array::from_fn(|k| x[IS + k]),
+                spool_rate: std::array::from_fn(|k| x[ISD + k]),
+            },
         )
     }
 
@@ -731,17 +968,31 @@ impl OracleMachine {
         x[IV..IV + 3].copy_from_slice(&s.v);
         x[IW..IW + 3].copy_from_slice(&s.w);
         x[II..II + 6].copy_from_slice(&s.currents);
+        x[IPA..IPA + 6].copy_from_slice(&s.pa);
+        x[IPB..IPB + 6].copy_from_slice(&s.pb);
+        x[IS..IS + 6].copy_from_slice(&s.spool);
+        x[ISD..ISD + 6].copy_from_slice(&s.spool_rate);
         x
     }
 
     fn state_of(x: &[f64; NX]) -> OracleState {
-        let (r, rot, v, w, currents) = Self::unpack(x);
-        OracleState { r: r.into(), rotation: to_arr(&rot), v: v.into(), w: w.into(), currents }
+        let (r, rot, v, w, ex) = Self::unpack(x);
+        OracleState {
+            r: r.into(),
+            rotation: to_arr(&rot),
+            v: v.into(),
+            w: w.into(),
+            currents: ex.currents,
+            pa: ex.pa,
+            pb: ex.pb,
+            spool: ex.spool,
+            spool_rate: ex.spool_rate,
+        }
     }
 
     fn derivative(&self, x: &[f64; NX], inputs: &OracleInputs) -> [f64; NX] {
-        let (r, rot, v, w, currents) = Self::unpack(x);
-        let dy = self.dynamics(&r, &rot, &v, &w, &currents, inputs);
+        let (r, rot, v, w, ex) = Self::unpack(x);
+        let dy = self.dynamics(&r, &rot, &v, &w, &ex, inputs);
         let mut dx = [0.0; NX];
         dx[IR..IR + 3].copy_from_slice(v.as_slice());
         // q' = q (0, w) / 2.
@@ -754,9 +1005,15 @@ impl OracleMachine {
             dx[IW + i] = dy.nu_dot[3 + i];
         }
         dx[II..II + 6].copy_from_slice(&dy.current_dot);
+        dx[IPA..IPA + 6].copy_from_slice(&dy.pa_dot);
+        dx[IPB..IPB + 6].copy_from_slice(&dy.pb_dot);
+        dx[IS..IS + 6].copy_from_slice(&ex.spool_rate);
+        dx[ISD..ISD + 6].copy_from_slice(&dy.spool_acc);
         dx[IWF] = dy.power_forces;
         dx[IWE] = dy.power_electric;
         dx[IWD] = dy.power_dissipated;
+        dx[IWH] = dy.power_hydraulic;
+        dx[IWC] = dy.power_compression;
         dx
     }
 
@@ -778,10 +1035,14 @@ impl OracleMachine {
     /// The switching functions of the non-smooth terms (positive where a term is on): per leg
     /// the lower and upper end-stop contact, the saturation of the stop damping's clamp at
     /// its upper and lower bound, and the same three for the base and the platform joint
-    /// limit. The right-hand side is smooth (and the forces continuous) between sign changes.
-    fn switches(&self, x: &[f64; NX]) -> [f64; 60] {
-        let (r, rot, v, w, _) = Self::unpack(x);
-        let mut out = [-1.0; 60];
+    /// limit; then, with hydraulics, the spool positions (the flow law's kink at `s = 0`).
+    /// The right-hand side is smooth (and the forces continuous) between sign changes.
+    fn switches(&self, x: &[f64; NX]) -> [f64; NSW] {
+        let (r, rot, v, w, ex) = Self::unpack(x);
+        let mut out = [-1.0; NSW];
+        if self.hydraulics.is_some() {
+            out[60..66].copy_from_slice(&ex.spool);
+        }
         // The clamp's switches: `c pen' - k pen` and `-c pen' - k pen` while in contact.
         let clamp_switches = |pen: f64, rate: f64, k: f64, c: f64| -> (f64, f64) {
             if pen > 0.0 && c != 0.0 { (c * rate - k * pen, -c * rate - k * pen) } else { (-1.0, -1.0) }
@@ -829,7 +1090,7 @@ impl OracleMachine {
             let mut x1 = *x;
             self.rk4(&mut x1, rem, inputs);
             let g1 = self.switches(&x1);
-            let changed: Vec<usize> = (0..60).filter(|&i| (g0[i] > 0.0) != (g1[i] > 0.0)).collect();
+            let changed: Vec<usize> = (0..NSW).filter(|&i| (g0[i] > 0.0) != (g1[i] > 0.0)).collect();
             guard += 1;
             if changed.is_empty() || guard > 50 {
                 *x = x1;
@@ -918,7 +1179,13 @@ impl OracleMachine {
         inputs: &dyn Fn(f64) -> OracleInputs,
     ) -> Vec<(OracleState, OracleWork)> {
         let mut x = Self::pack(start);
-        let work = |x: &[f64; NX]| OracleWork { forces: x[IWF], electric: x[IWE], dissipated: x[IWD] };
+        let work = |x: &[f64; NX]| OracleWork {
+            forces: x[IWF],
+            electric: x[IWE],
+            dissipated: x[IWD],
+            hydraulic: x[IWH],
+            compression: x[IWC],
+        };
         // The start as given (not through the quaternion), so that out[0] == start.
         let mut out = vec![(*start, work(&x))];
         let sub = ((h / self.max_step) * (1.0 - 1e-12)).ceil().max(1.0) as usize;
@@ -935,18 +1202,76 @@ impl OracleMachine {
 
     /// The accelerations `(v', w')` (inertial, body) at a state under the inputs.
     pub fn accelerations(&self, s: &OracleState, inputs: &OracleInputs) -> ([f64; 3], [f64; 3]) {
-        let dy = self.dynamics(&v3(s.r), &to_mat(&s.rotation), &v3(s.v), &v3(s.w), &s.currents, inputs);
+        let dy = self.dynamics(&v3(s.r), &to_mat(&s.rotation), &v3(s.v), &v3(s.w), &Internal::of(s), inputs);
         ([dy.nu_dot[0], dy.nu_dot[1], dy.nu_dot[2]], [dy.nu_dot[3], dy.nu_dot[4], dy.nu_dot[5]])
     }
 
     /// The currents' rates `I'` (zero without drives).
     pub fn current_rates(&self, s: &OracleState, inputs: &OracleInputs) -> [f64; 6] {
-        self.dynamics(&v3(s.r), &to_mat(&s.rotation), &v3(s.v), &v3(s.w), &s.currents, inputs).current_dot
+        self.dynamics(&v3(s.r), &to_mat(&s.rotation), &v3(s.v), &v3(s.w), &Internal::of(s), inputs).current_dot
     }
 
     /// The axial forces and joint-limit moments at a state under the inputs.
     pub fn leg_forces(&self, s: &OracleState, inputs: &OracleInputs) -> OracleLegForces {
-        self.dynamics(&v3(s.r), &to_mat(&s.rotation), &v3(s.v), &v3(s.w), &s.currents, inputs).forces
+        self.dynamics(&v3(s.r), &to_mat(&s.rotation), &v3(s.v), &v3(s.w), &Internal::of(s), inputs).forces
+    }
+
+    // --- hydraulics (SPEC §10) -------------------------------------------------------------
+
+    fn hydraulics(&self) -> &OracleHydraulics {
+        self.hydraulics.as_ref().expect("hydraulic servo legs required")
+    }
+
+    /// Chamber volumes `(V_A, V_B)` of the six legs at the state's leg lengths.
+    pub fn chamber_volumes(&self, s: &OracleState) -> ([f64; 6], [f64; 6]) {
+        let h = self.hydraulics();
+        let l = self.leg_lengths(s);
+        let mut va = [0.0; 6];
+        let mut vb = [0.0; 6];
+        for k in 0..6 {
+            (va[k], vb[k]) = h.volumes(k, l[k]);
+        }
+        (va, vb)
+    }
+
+    /// Total flow drawn from the supply (m3/s), all six valves, leakage included (`Qsupply`).
+    pub fn supply_flow(&self, s: &OracleState, inputs: &OracleInputs) -> f64 {
+        let h = self.hydraulics();
+        let OracleInputs::Valves { supply_pressure, .. } = inputs else { panic!("valve inputs required") };
+        (0..6).map(|k| h.valve(s.spool[k], s.pa[k], s.pb[k], *supply_pressure).q_supply).sum()
+    }
+
+    /// The chamber pressures' rates `(p_A', p_B')` (Pa/s).
+    pub fn hydraulic_rates(&self, s: &OracleState, inputs: &OracleInputs) -> ([f64; 6], [f64; 6]) {
+        let dy = self.dynamics(&v3(s.r), &to_mat(&s.rotation), &v3(s.v), &v3(s.w), &Internal::of(s), inputs);
+        (dy.pa_dot, dy.pb_dot)
+    }
+
+    /// The spools' accelerations `s''` (1/s^2).
+    pub fn spool_accelerations(&self, s: &OracleState, inputs: &OracleInputs) -> [f64; 6] {
+        self.dynamics(&v3(s.r), &to_mat(&s.rotation), &v3(s.v), &v3(s.w), &Internal::of(s), inputs).spool_acc
+    }
+
+    /// The per-leg powers that the work accumulators integrate (supply, losses, compression)
+    /// and the leg's power `u_k ldot_k`.
+    pub fn hydraulic_powers(&self, s: &OracleState, inputs: &OracleInputs) -> OracleHydraulicPowers {
+        self.dynamics(&v3(s.r), &to_mat(&s.rotation), &v3(s.v), &v3(s.w), &Internal::of(s), inputs).hydraulic
+    }
+
+    /// The chamber pressures `(p_A, p_B)` that hold the stand (legs' masses included) at rest
+    /// in the pose with `p_B = p_S / 2`: `p_A = (u_k + p_B A_B) / A_A`, `u_k` from
+    /// `static_leg_forces`.
+    pub fn holding_pressures(
+        &self,
+        r: [f64; 3],
+        rotation: [[f64; 3]; 3],
+        supply_pressure: f64,
+    ) -> ([f64; 6], [f64; 6]) {
+        let h = self.hydraulics();
+        let u = self.static_leg_forces(r, rotation);
+        let pb = [0.5 * supply_pressure; 6];
+        let pa = std::array::from_fn(|k| (u[k] + pb[k] * h.area_b()) / h.area_a());
+        (pa, pb)
     }
 
     // --- plain (jet-free) kinematics and energies ---------------------------------------
@@ -1042,7 +1367,8 @@ impl OracleMachine {
     }
 
     /// Total energy: kinetic (platform, legs, rotors) + gravity + stops + joint limits +
-    /// magnetic `1/2 L I^2`.
+    /// magnetic `1/2 L I^2`. No hydraulic stored energy (SPEC §10: the oil's is
+    /// `work.compression`).
     pub fn energy(&self, s: &OracleState) -> f64 {
         let magnetic = self.drives.map_or(0.0, |d| 0.5 * d.inductance * s.currents.iter().map(|i| i * i).sum::<f64>());
         self.kinetic_energy(s.r, s.rotation, s.v, s.w) + self.potential_energy(s.r, s.rotation) + magnetic
@@ -1058,7 +1384,7 @@ impl OracleMachine {
     /// `H_B = m_c (c - B) x c' + m_r (p - B) x p' + (J_c + J_r) n x n'`.
     pub fn joint_forces(&self, s: &OracleState, inputs: &OracleInputs) -> [[f64; 3]; 6] {
         let (r, rot, v, w) = (v3(s.r), to_mat(&s.rotation), v3(s.v), v3(s.w));
-        let dy = self.dynamics(&r, &rot, &v, &w, &s.currents, inputs);
+        let dy = self.dynamics(&r, &rot, &v, &w, &Internal::of(s), inputs);
         let vd = Vector3::new(dy.nu_dot[0], dy.nu_dot[1], dy.nu_dot[2]);
         let wd = Vector3::new(dy.nu_dot[3], dy.nu_dot[4], dy.nu_dot[5]);
         let refs = self.refs();
@@ -1117,7 +1443,7 @@ impl OracleMachine {
     /// The moment (inertial) of each platform-joint limit on the platform.
     pub fn platform_joint_moments(&self, s: &OracleState, inputs: &OracleInputs) -> [[f64; 3]; 6] {
         let (r, rot, v, w) = (v3(s.r), to_mat(&s.rotation), v3(s.v), v3(s.w));
-        let dy = self.dynamics(&r, &rot, &v, &w, &s.currents, inputs);
+        let dy = self.dynamics(&r, &rot, &v, &w, &Internal::of(s), inputs);
         let refs = self.refs();
         let z = Vector3::zeros();
         let legs = self.legs(&platform_jet(&r, &rot, &v, &w, &z, &z), &refs);

@@ -113,7 +113,7 @@ def test_fmi3_fmus_validate_clean():
     assert shapes["F"] == (6,) and shapes["R"] == (3, 3) and shapes["B"] == (6, 3) and shapes["l"] == (6,)
     # 24 special-form states, work.F, work.dissipated, six drive currents, work.electric; 12
     # stroke margins, the determinant, 12 joint-limit margins
-    assert md.numberOfContinuousStates == 33 and md.numberOfEventIndicators == 25
+    assert md.numberOfContinuousStates == 59 and md.numberOfEventIndicators == 25
     assert md.coSimulation.hasEventMode and md.coSimulation.canReturnEarlyAfterIntermediateUpdate
 
 

@@ -26,11 +26,12 @@ def test_model_description_declares_the_capabilities(platform_fmu):
     assert {v.name: v.displayUnit for v in md.modelVariables}["angles[2]"] == "deg"
     # Pose and leg lengths have no direct feed-through from the forces: they depend on states
     # only (declared for Model Exchange), never on an input; only the joints' forces (the force
-    # a leg passes on includes its actuator's) and the actuators' forces do.
+    # a leg passes on includes its actuator's) and the actuators' forces do, and the hydraulic
+    # supply flow, through the supply pressure pS.
     inputs = {v.name for v in md.modelVariables if v.causality == "input"}
     through = {o.variable.name for o in md.outputs if any(d.name in inputs for d in o.dependencies)}
     assert through == ({f"jointForce[{k},{c}]" for k in range(1, 7) for c in range(1, 4)}
-                       | {f"actuatorForce[{k}]" for k in range(1, 7)}), sorted(through)
+                       | {f"actuatorForce[{k}]" for k in range(1, 7)} | {"Qsupply"}), sorted(through)
     assert any(o.dependencies for o in md.outputs)  # derived outputs list their states
 
 

@@ -225,3 +225,43 @@ def test_the_viewers_default_stand_is_the_fmus():
     assert len(drawn["B"]) == len(drawn["A"]) == 6
     assert worst < 1e-12
     assert drawn["lmin"] == fmu["lmin"] and drawn["lmax"] == fmu["lmax"]
+
+
+def test_a_hydraulic_result_colours_the_cylinders_by_load_pressure(tmp_path):
+    """Hydraulic legs on the heave programme (drive = 2): the page colours the cylinders by the
+    load pressure pA - (A_B/A_A) pB, its scale the 98th percentile of |p_L| in MPa as numpy
+    computes it from the CSV and the stand's bore and rod; the pressure and spool plots span the
+    CSV's values."""
+    from stewart_fmu.viewer import HYDRAULIC_VIEW_OUTPUTS
+    record = tuple(VIEW_OUTPUTS + HYDRAULIC_VIEW_OUTPUTS)
+    t, rows, _, status = closed_loop(3.0, 1e-3, platform_reals={"drive": 2}, controller_integers={"drive": 2},
+                                     record=record)
+    assert status == "ok"
+    result = dict(time=t, **{n: rows[:, j] for j, n in enumerate(record)})
+    folder = tmp_path / "hydraulic"
+    address = view(result, stand({"drive": 2}), folder, "hydraulic", "hydraulic legs")
+    handler = functools.partial(QuietHandler, directory=str(folder))
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    try:
+        report = browse(f"http://127.0.0.1:{server.server_address[1]}/{address}", tmp_path / "hydraulic.png", [1.0, 2.9])
+    finally:
+        server.shutdown()
+    s = json.loads((folder / "data" / "hydraulic.stand.json").read_text())
+    ratio = (s["bore"] ** 2 - s["rod"] ** 2) / s["bore"] ** 2
+    load = np.array([(result[f"pA[{k}]"] - ratio * result[f"pB[{k}]"]) / 1e6 for k in range(1, 7)])
+    spools = np.array([result[f"spool[{k}]"] for k in range(1, 7)])
+    # The plots draw every stride-th row (about 600 points).
+    stride = max(1, len(t) // 600)
+    load_drawn, spools_drawn = load[:, ::stride], spools[:, ::stride]
+    scale, plots, legend = report["shown"]["forceScale"], report["shown"]["plots"], report["shown"]["legend"]
+    print(f"viewer, hydraulic legs: colour scale {scale['limit']:.4f} MPa (numpy {np.percentile(np.abs(load), 98):.4f}); "
+          f"pressure plot [{plots['plot-pressures']['lo']:.3f}, {plots['plot-pressures']['hi']:.3f}] MPa, spools "
+          f"[{plots['plot-valves']['lo']:.3f}, {plots['plot-valves']['hi']:.3f}]; legend {legend['scale']!r}")
+    assert s["bore"] == 0.063 and s["rod"] == 0.036
+    assert scale["limit"] == pytest.approx(np.percentile(np.abs(load), 98), rel=1e-9)
+    assert plots["plot-pressures"]["lo"] == pytest.approx(load_drawn.min(), abs=1e-12)
+    assert plots["plot-pressures"]["hi"] == pytest.approx(load_drawn.max(), abs=1e-12)
+    assert plots["plot-valves"]["lo"] == pytest.approx(spools_drawn.min(), abs=1e-12)
+    assert plots["plot-valves"]["hi"] == pytest.approx(spools_drawn.max(), abs=1e-12)
+    assert plots["plot-valves"]["key"] == ["1", "2", "3", "4", "5", "6"]

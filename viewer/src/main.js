@@ -109,10 +109,11 @@ function build(result) {
 
 function legend(result) {
   const el = $("legend");
-  if (!result.forces) {
+  if (!result.colour) {
     el.textContent = "leg forces: not in the file (legs grey)";
     return;
   }
+  const { what, unit, low, high } = result.colour;
   const { limit, peak, clipped } = result.forceScale;
   const c = document.createElement("canvas");
   c.width = 160;
@@ -125,14 +126,14 @@ function legend(result) {
   const scale = document.createElement("div");
   scale.id = "force-scale";
   scale.textContent = clipped
-    ? `pull \u2264 ${(-limit).toPrecision(3)} .. 0 .. \u2265 ${limit.toPrecision(3)} push`
-    : `pull ${(-limit).toPrecision(3)} .. 0 .. ${limit.toPrecision(3)} push`;
+    ? `${low} \u2264 ${(-limit).toPrecision(3)} .. 0 .. \u2265 ${limit.toPrecision(3)} ${high}`
+    : `${low} ${(-limit).toPrecision(3)} .. 0 .. ${limit.toPrecision(3)} ${high}`;
   const note = document.createElement("div");
   note.id = "force-clipped";
   note.textContent = clipped
-    ? `clipped at the 98th percentile of |F|: peaks up to ${peak.toPrecision(3)} N take the end colours (legs beyond it named below the plots)`
-    : "the scale spans every force in the file";
-  el.replaceChildren("cylinder colour: leg force F (N)", c, scale, note, "a glowing cylinder is at an end stop, a red joint at its angle limit");
+    ? `clipped at the 98th percentile of its magnitude: peaks up to ${peak.toPrecision(3)} ${unit} take the end colours (legs beyond it named below the plots)`
+    : `the scale spans every value in the file`;
+  el.replaceChildren(`cylinder colour: ${what} (${unit})`, c, scale, note, "a glowing cylinder is at an end stop, a red joint at its angle limit");
 }
 
 const yUp = new THREE.Vector3(0, 1, 0);
@@ -165,7 +166,7 @@ function place(i) {
     stretch(cylinder, ...bodies[k].cylinder);
     stretch(parts.rods[k], ...bodies[k].rod);
     const atStop = result.stopForce(k, i) !== 0;
-    cylinder.material.color = forceColour(result.force(k, i), result.forceScale && result.forceScale.limit);
+    cylinder.material.color = forceColour(result.colourValue(k, i), result.forceScale && result.forceScale.limit);
     cylinder.material.emissive = new THREE.Color(atStop ? 0x8a6d00 : 0x000000);
     parts.joints[k].position.set(...a);
     highlight(parts.baseJoints[k], limits.base[k]);
@@ -189,8 +190,8 @@ function place(i) {
   const s = result.stand;
   const legs = s.cylinderMass || s.rodMass ? `legs of ${s.cylinderMass || 0} kg + ${s.rodMass || 0} kg` : "massless legs";
   const limit = result.forceScale ? result.forceScale.limit : Infinity;
-  const beyond = ends.map((_, k) => (Math.abs(result.force(k, i)) > limit ? `${k + 1}` : null)).filter(Boolean);
-  const clippedText = beyond.length ? `; legs beyond the force colour scale: ${beyond.join(", ")}` : "";
+  const beyond = ends.map((_, k) => (Math.abs(result.colourValue(k, i)) > limit ? `${k + 1}` : null)).filter(Boolean);
+  const clippedText = beyond.length ? `; legs beyond the colour scale: ${beyond.join(", ")}` : "";
   $("info").textContent = `row ${i + 1} of ${result.rows}; legs at an end stop: ${stops}; joints at their angle limit: ${joints.length ? joints.join(", ") : "none"}${clippedText}; ${legs}; stand: ${s.source || "from file"}`;
   drawPlots(i);
 }
@@ -205,6 +206,8 @@ const PLOTS = {
   "plot-angles": { key: ["roll", "pitch", "yaw"], minSpan: 1e-3 },
   "plot-legs": { key: ["1", "2", "3", "4", "5", "6"], minSpan: 1e-3 },
   "plot-joints": { key: ["thetaB (largest)", "thetaA (largest)", "base limit", "platform limit"], minSpan: 0.1 },
+  "plot-pressures": { key: ["1", "2", "3", "4", "5", "6"], minSpan: 1e-3 },
+  "plot-valves": { key: ["1", "2", "3", "4", "5", "6"], minSpan: 1e-3 },
 };
 let plotSeries = null;
 const plotLayout = {};
@@ -226,7 +229,10 @@ function preparePlots(result) {
   const s = result.stand;
   const limit = (value) => (s.joints !== false && Number.isFinite(value) ? [idx.map(() => deg * value)] : []);
   const joints = result.jointAngles(0) ? [largest("base"), largest("platform"), ...limit(s.baseMaxAngle), ...limit(s.platformMaxAngle)] : null;
-  plotSeries = { times, "plot-heave": heave, "plot-angles": angles, "plot-legs": legs, "plot-joints": joints };
+  const pressures = result.loadPressures ? result.loadPressures.map((s) => idx.map((i) => s[i])) : null;
+  const valves = result.spools ? result.spools.map((s) => idx.map((i) => s[i])) : null;
+  plotSeries = { times, "plot-heave": heave, "plot-angles": angles, "plot-legs": legs, "plot-joints": joints,
+    "plot-pressures": pressures, "plot-valves": valves };
   for (const [id, plot] of Object.entries(PLOTS)) {
     const series = plotSeries[id];
     const key = $(`key-${id}`);

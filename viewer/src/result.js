@@ -34,7 +34,7 @@ export function checkStand(stand) {
   };
   matrix(stand.B, "B");
   matrix(stand.A, "A");
-  for (const name of ["cylinderCoM", "rodCoM", "cylinderMass", "rodMass", "baseMaxAngle", "platformMaxAngle"]) {
+  for (const name of ["cylinderCoM", "rodCoM", "cylinderMass", "rodMass", "baseMaxAngle", "platformMaxAngle", "bore", "rod"]) {
     if (name in stand && !(Number.isFinite(stand[name]) && stand[name] >= 0)) {
       throw new Error(`the stand file's ${name} must be a number >= 0 (got ${JSON.stringify(stand[name])})`);
     }
@@ -155,6 +155,20 @@ export class Result {
     this.stopForces = LEGS.every((k) => `Fstop[${k}]` in csv.columns) ? LEGS.map((k) => col(`Fstop[${k}]`)) : null;
     this.thetaB = LEGS.every((k) => `thetaB[${k}]` in csv.columns) ? LEGS.map((k) => col(`thetaB[${k}]`)) : null;
     this.thetaA = LEGS.every((k) => `thetaA[${k}]` in csv.columns) ? LEGS.map((k) => col(`thetaA[${k}]`)) : null;
+    // Hydraulic legs (docs/model.md §10): the chamber pressures give each leg's load pressure
+    // p_L = pA - (A_B/A_A) pB (MPa), which colours the cylinders; the spools feed a plot.
+    const all = (name) => LEGS.every((k) => `${name}[${k}]` in csv.columns);
+    const bore = stand.bore ?? 0.063;
+    const rod = stand.rod ?? 0.036;
+    this.areaRatio = (bore * bore - rod * rod) / (bore * bore);
+    this.loadPressures = all("pA") && all("pB")
+      ? LEGS.map((k) => Float64Array.from(col(`pA[${k}]`), (pa, i) => (pa - this.areaRatio * col(`pB[${k}]`)[i]) / 1e6))
+      : null;
+    this.spools = all("spool") ? LEGS.map((k) => col(`spool[${k}]`)) : null;
+    // What colours the cylinders: the load pressure with hydraulic legs, else the leg force.
+    this.colour = this.loadPressures
+      ? { what: "load pressure pA - (A_B/A_A) pB", unit: "MPa", low: "pull", high: "push", series: this.loadPressures }
+      : this.forces ? { what: "leg force F", unit: "N", low: "pull", high: "push", series: this.forces } : null;
     this.bodyLengths = legBodyLengths(this.stand);
     // Rows from the first whose pose is not a number (a failed run) are left out, with a message.
     this.notice = null;
@@ -169,7 +183,7 @@ export class Result {
         break;
       }
     }
-    this.forceScale = this.forces ? forceScale(this.forces, this.rows) : null;
+    this.forceScale = this.colour ? forceScale(this.colour.series, this.rows) : null;
   }
 
   /** Index of the last row at or before time t (rows are not interpolated). */
@@ -240,6 +254,11 @@ export class Result {
 
   force(k, i) {
     return this.forces ? this.forces[k][i] : NaN;
+  }
+
+  /** The value that colours leg k's cylinder at row i (`colour`: load pressure or force). */
+  colourValue(k, i) {
+    return this.colour ? this.colour.series[k][i] : NaN;
   }
 
   stopForce(k, i) {

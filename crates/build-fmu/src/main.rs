@@ -111,8 +111,9 @@ fn run() -> Result<(), String> {
 
     interface_tables(&root.join("docs").join("model.md"), update)?;
 
-    // The closed loop with force commands, and with electric drives (voltage commands).
-    for system in ["StewartSystem", "StewartSystemDrives"] {
+    // The closed loop with force commands, with electric drives (voltage commands) and with
+    // hydraulic servo legs (valve commands).
+    for system in ["StewartSystem", "StewartSystemDrives", "StewartSystemHydraulic"] {
         let ssd_path = root.join("modelDescription").join(format!("{system}.ssd"));
         let ssd = std::fs::read_to_string(&ssd_path).map_err(|e| format!("cannot read {}: {e}", ssd_path.display()))?;
         let sources = ssd_check::check(&ssd).map_err(|e| format!("{}: {e}", ssd_path.display()))?;

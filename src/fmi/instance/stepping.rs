@@ -41,7 +41,10 @@ impl Instance {
         loop {
             let result = self.model_mut().do_step(t, t_end - t, early);
             match result {
-                Ok(StepReport { reached, event }) => {
+                Ok(StepReport { reached, event, warning }) => {
+                    if let Some(w) = warning {
+                        self.logger.log(Status::Warning, LogCategory::Warning, &w);
+                    }
                     self.time = reached;
                     self.last_successful_time = reached;
                     outcome.last_successful_time = reached;

@@ -24,6 +24,18 @@ const FORCE_DEPENDENCIES: &[crate::models::variables::Dependency] = &[
     All("pose.angleRates"),
     All("pose.angleAccelerations"),
 ];
+const HYDRAULIC_DEPENDENCIES: &[crate::models::variables::Dependency] = &[
+    SameIndex("l"),
+    SameIndex("ldot"),
+    SameIndex("pA"),
+    SameIndex("pB"),
+    All("pose.r"),
+    All("pose.v"),
+    All("pose.a"),
+    All("pose.angles"),
+    All("pose.angleRates"),
+    All("pose.angleAccelerations"),
+];
 const LENGTH_DEPENDENCIES: &[crate::models::variables::Dependency] =
     &[All("pose.r"), All("pose.v"), All("pose.angles"), All("pose.angleRates")];
 /// In Initialization Mode the outputs depend on (almost) every known; listing them all is
@@ -213,9 +225,11 @@ declare_variables! {
             "drive", &[], 200, None,
             "0 = force commands F only (U = 0); 1 = the platform's legs are electric drives: also the voltage commands \
              U = R F / (N k_t) + k_e N ldot^p, the force command through the drive's static model (same motor.*, \
-             gear.ratio, screw.lead as the platform), and the programme forces carry the rotors' inertia",
+             gear.ratio, screw.lead as the platform), and the programme forces carry the rotors' inertia; 2 = the \
+             platform's legs are hydraulic: also the valve commands, an inner loop on the measured actuator force \
+             pA A_A - pB A_B towards F with a flow feed-forward from the programme's leg rates",
         )
-        .integer(0, 1); integer(parameters.drives_enabled),
+        .integer(0, 2); integer(parameters.drive),
         MOTOR_R => machine::motor_resistance(201); real(parameters.drives.resistance),
         MOTOR_L => machine::motor_inductance(202); real(parameters.drives.inductance),
         MOTOR_KE => machine::motor_ke(203); real(parameters.drives.ke),
@@ -234,5 +248,40 @@ declare_variables! {
             ALL_KNOWNS,
         )
         .depends_on(FORCE_DEPENDENCIES); cached(commands.u),
+        PA => V::input(
+            "pA", &[6], 220, Some("Pa"), "Measured cap-side pressure of leg k (from the platform's output pA; drive = 2)",
+        ); real(pa),
+        PB => V::input(
+            "pB", &[6], 226, Some("Pa"), "Measured rod-side pressure of leg k (from the platform's output pB; drive = 2)",
+        ); real(pb),
+        BORE => machine::hydraulic_bore(232); real(parameters.hydraulic.bore),
+        ROD => machine::hydraulic_rod(233); real(parameters.hydraulic.rod),
+        RATED_FLOW => machine::valve_rated_flow(234); real(parameters.hydraulic.rated_flow),
+        RATED_DROP => machine::valve_rated_pressure_drop(235); real(parameters.hydraulic.rated_pressure_drop),
+        PS => V::parameter(
+            "pS", &[], 236, Some("Pa"), "Supply pressure p_S the flow feed-forward assumes (the platform's pS input)",
+        ); real(parameters.hydraulic.supply),
+        FORCE_GAIN => V::parameter(
+            "hydraulic.forceGain", &[], 237, Some("1/N"),
+            "Gain kF of the inner force loop: valve = kF (F - (pA A_A - pB A_B)) + feed-forward (tunable)",
+        )
+        .tunable(); real(parameters.hydraulic.force_gain),
+        FLOW_FEEDFORWARD => V::parameter(
+            "hydraulic.flowFeedforward", &[], 238, Some("1"),
+            "Share of the programme's flow A ldot^p / (K sqrt(dp)) fed forward to the valve (0 = none, 1 = all; tunable)",
+        )
+        .tunable(); real(parameters.hydraulic.flow_feedforward),
+        POSITION_GAIN => V::parameter(
+            "hydraulic.positionGain", &[], 239, Some("1/s"),
+            "Gain of the leg-length error in the flow feed-forward: the valve is fed the rate ldot^p + Kl (l^p - l) \
+             (tunable)",
+        )
+        .tunable(); real(parameters.hydraulic.position_gain),
+        VALVE => V::output(
+            "valve", &[6], 240, Some("1"),
+            "Servo valve command of leg k (to the platform's valve; 0 unless drive = 2), saturated to [-1, 1]",
+            ALL_KNOWNS,
+        )
+        .depends_on(HYDRAULIC_DEPENDENCIES); cached(commands.valve),
     }
 }

@@ -8,6 +8,7 @@ use super::{INFO, PlatformModel};
 use crate::integration::{Crossing, switching_sides};
 use crate::models::EventUpdate;
 use crate::models::declare::Binding;
+use crate::models::machine::Drive;
 use crate::models::variables::VariableRef;
 use crate::physics::actuators::HeldForces;
 use crate::physics::configuration::ConfigurationGuard;
@@ -15,7 +16,7 @@ use crate::physics::number::{Dual, Number};
 use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::LEG_COUNT;
 use crate::simulation::outputs::condition_number_tangent;
-use crate::simulation::platform::{SIMULATION_DIM, SimulationState, body, state_rate, switching};
+use crate::simulation::platform::{SIMULATION_DIM, SimulationState, body, state_rate, state_rate_supplied, switching};
 use crate::simulation::{PlatformDynamics, PlatformOutputs, Stabilisation};
 
 impl PlatformModel {
@@ -89,19 +90,29 @@ impl PlatformModel {
     ) -> Result<(), String> {
         let mut dy = [0.0; SIMULATION_DIM];
         let mut du = [0.0; LEG_COUNT];
+        let mut d_supply = 0.0;
         for (k, &seed) in knowns.iter().zip(seeds) {
-            let input = if self.parameters.drives_enabled { group::U } else { group::F };
+            if k.group == group::PS {
+                d_supply += seed;
+                continue;
+            }
+            let input = match self.parameters.drive {
+                Drive::Forces => group::F,
+                Drive::Electric => group::U,
+                Drive::Hydraulic => group::VALVE,
+            };
             let slot = match INFO.state_index(*k) {
                 Some(i) => dy.get_mut(i),
                 None if k.group == input => du.get_mut(k.index),
                 // The input not in use: nothing depends on it.
-                None if k.group == group::F || k.group == group::U => continue,
+                None if k.group == group::F || k.group == group::U || k.group == group::VALVE => continue,
                 None => None,
             };
             let Some(slot) = slot else {
                 return Err(format!(
                     "known {} is neither a state nor an input (derivatives are with respect to r, v, R, der(R), \
-                     work.F, work.dissipated, I, work.electric and the inputs F or U)",
+                     work.F, work.dissipated, I, work.electric, pA, pB, spool, der(spool), work.hydraulic, \
+                     work.compression and the inputs F, U or valve and pS)",
                     element_name(*k)
                 ));
             };
@@ -111,9 +122,10 @@ impl PlatformModel {
         let needs_kappa = unknowns.iter().any(|u| u.group == group::KAPPA);
         let (rate, outputs, dkappa) = self.with_current(|form, y| {
             let (yd, ud) = (Dual::seeded(y, &dy), Dual::seeded(&inputs, &du));
-            let rate = state_rate(form, &yd, &ud);
+            let supply = Dual::new(form.hydraulics().map_or(0.0, |h| h.supply), d_supply);
+            let rate = state_rate_supplied(form, &yd, &ud, supply);
             let dkappa = if needs_kappa { condition_number_tangent(&form.stand, y, &dy) } else { 0.0 };
-            (rate, PlatformOutputs::<Dual>::compute(form, &yd, Some(&ud)), dkappa)
+            (rate, PlatformOutputs::<Dual>::compute_supplied(form, &yd, Some(&ud), supply), dkappa)
         });
         for (value, u) in out.iter_mut().zip(unknowns) {
             let derivative = match BINDINGS.get(u.group) {

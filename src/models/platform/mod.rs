@@ -20,7 +20,9 @@ use super::variables::VariableRef;
 use super::{DefaultExperiment, FmuModel, ModelInfo, StepError, StepReport};
 use crate::integration::dopri5::Dopri5Memory;
 use crate::integration::{Crossing, IntegratorStats, SwitchingSides};
+use crate::models::machine::Drive;
 use crate::physics::actuators::HeldForces;
+use crate::physics::actuators::hydraulics::{CAVITATION_PRESSURE, DEFAULT_SUPPLY_PRESSURE};
 use crate::physics::body::state::BodyState;
 use crate::physics::direct_problem::singular_legs;
 use crate::physics::error::leg_list;
@@ -28,9 +30,11 @@ use crate::physics::legs::geometry::LegGeometry;
 use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::LEG_COUNT;
 use crate::simulation::outputs::condition_number;
-use crate::simulation::platform::{Reached, SIMULATION_DIM, actuator_forces, body, state_rate, switching};
+use crate::simulation::platform::{
+    Reached, SIMULATION_DIM, actuator_forces, body, hydraulic, state_rate, supply_flow, switching,
+};
 use crate::simulation::{LegOutputs, PlatformOutputs, PlatformSimulation, SimulationState};
-pub use parameters::{Experiment, PlatformParameters, default_leg_force};
+pub use parameters::{Experiment, PlatformParameters, default_leg_force, holding_pressures};
 use variables::{BINDINGS, group};
 
 pub static INFO: ModelInfo = ModelInfo {
@@ -66,6 +70,14 @@ pub struct PlatformModel {
     pub voltages: [f64; LEG_COUNT],
     /// Their time derivatives for the next step, V/s (cleared after each step).
     pub voltage_rates: [f64; LEG_COUNT],
+    /// The servo valves' commands `valve[k]` (the inputs when `drive = 2`).
+    pub valves: [f64; LEG_COUNT],
+    /// Their time derivatives for the next step, 1/s (cleared after each step).
+    pub valve_rates: [f64; LEG_COUNT],
+    /// The hydraulic supply pressure `pS`, Pa (held over each step).
+    pub supply_pressure: f64,
+    /// Whether this run logged its warning of a chamber below the cavitation pressure.
+    cavitation_reported: bool,
     /// Present after Initialization Mode, with the experiment it was built for.
     pub simulation: Option<(PlatformSimulation, Experiment)>,
     /// Outputs of the current state, computed on the first read after a change.
@@ -75,6 +87,9 @@ pub struct PlatformModel {
     legs: Option<LegOutputs>,
     /// `kappa` of the current state, computed on its first read after a change.
     kappa: Option<Condition>,
+    /// The hydraulic legs' pressures and spools of the current state (a hydraulic controller
+    /// reads them every step: a copy of states, apart from the other outputs).
+    chambers: Option<ChamberOutputs>,
     /// The actuators' and the joints' forces of the current state and inputs, computed on the
     /// first read after a change.
     input_dependent: Option<InputDependentOutputs>,
@@ -95,10 +110,15 @@ impl Default for PlatformModel {
             force_rates: [0.0; LEG_COUNT],
             voltages: [0.0; LEG_COUNT],
             voltage_rates: [0.0; LEG_COUNT],
+            valves: [0.0; LEG_COUNT],
+            valve_rates: [0.0; LEG_COUNT],
+            supply_pressure: DEFAULT_SUPPLY_PRESSURE,
+            cavitation_reported: false,
             simulation: None,
             outputs: None,
             legs: None,
             kappa: None,
+            chambers: None,
             input_dependent: None,
             events_reported: true,
             last_completed_step: 0.0,
@@ -113,12 +133,33 @@ pub struct Condition {
     pub kappa: f64,
 }
 
+/// The hydraulic legs' chamber pressures and spools (the fields of [`PlatformOutputs`] of the
+/// same names): states, read every step by a hydraulic controller, so a block of their own.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ChamberOutputs {
+    pub pa: [f64; LEG_COUNT],
+    pub pb: [f64; LEG_COUNT],
+    pub spool: [f64; LEG_COUNT],
+}
+
+impl ChamberOutputs {
+    fn of(y: &SimulationState) -> Self {
+        ChamberOutputs {
+            pa: std::array::from_fn(|k| y[hydraulic::PA + k]),
+            pb: std::array::from_fn(|k| y[hydraulic::PB + k]),
+            spool: std::array::from_fn(|k| y[hydraulic::SPOOL + k]),
+        }
+    }
+}
+
 /// The actuators' and the joints' forces alone (the fields of [`PlatformOutputs`] of the same
 /// names): they depend on the inputs, so they are a cache block of their own.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct InputDependentOutputs {
     pub joint_force: [nalgebra::Vector3<f64>; LEG_COUNT],
     pub actuator_force: [f64; LEG_COUNT],
+    /// `Qsupply` (it depends on the input `pS`).
+    pub supply_flow: f64,
 }
 
 impl PlatformModel {
@@ -148,7 +189,11 @@ impl PlatformModel {
         self.input_dependent.get_or_insert_with(|| {
             let forces = |form: &SpecialForm, y: &SimulationState| {
                 let actuator_force = actuator_forces(form, y, &inputs);
-                InputDependentOutputs { joint_force: form.joint_forces(body(y), &actuator_force), actuator_force }
+                InputDependentOutputs {
+                    joint_force: form.joint_forces(body(y), &actuator_force),
+                    actuator_force,
+                    supply_flow: supply_flow(form, y),
+                }
             };
             match simulation {
                 Some((sim, _)) => forces(&sim.form, &sim.state),
@@ -157,9 +202,14 @@ impl PlatformModel {
         })
     }
 
-    /// The inputs in use: the leg forces `F`, or with drives the voltages `U`.
+    /// The inputs in use: the leg forces `F`, with drives the voltages `U`, with hydraulic legs
+    /// the valve commands.
     pub fn inputs(&self) -> [f64; LEG_COUNT] {
-        if self.parameters.drives_enabled { self.voltages } else { self.forces }
+        match self.parameters.drive {
+            Drive::Forces => self.forces,
+            Drive::Electric => self.voltages,
+            Drive::Hydraulic => self.valves,
+        }
     }
 
     /// The legs' lengths and rates of the current state, computed on the first read after a
@@ -170,6 +220,15 @@ impl PlatformModel {
             (Some(o), _) => LegOutputs { l: o.l, ldot: o.ldot },
             (None, Some((sim, _))) => LegOutputs::compute(&sim.form, &sim.state),
             (None, None) => LegOutputs::compute(&parameters.special_form(), &parameters.initial_simulation_state()),
+        })
+    }
+
+    /// The chambers of the current state, copied on the first read after a change.
+    fn chamber_outputs(&mut self) -> &ChamberOutputs {
+        let (simulation, parameters) = (&self.simulation, &self.parameters);
+        self.chambers.get_or_insert_with(|| match simulation {
+            Some((sim, _)) => ChamberOutputs::of(&sim.state),
+            None => ChamberOutputs::of(&parameters.initial_simulation_state()),
         })
     }
 
@@ -198,16 +257,17 @@ impl PlatformModel {
         self.outputs = None;
         self.legs = None;
         self.kappa = None;
+        self.chambers = None;
         self.input_dependent = None;
     }
 
     /// The inputs over the next step: the leg forces, or with drives the voltages, with
     /// their rates.
     fn held_inputs(&self, t0: f64) -> HeldForces {
-        if self.parameters.drives_enabled {
-            HeldForces { value: self.voltages, slope: self.voltage_rates, t0 }
-        } else {
-            HeldForces { value: self.forces, slope: self.force_rates, t0 }
+        match self.parameters.drive {
+            Drive::Forces => HeldForces { value: self.forces, slope: self.force_rates, t0 },
+            Drive::Electric => HeldForces { value: self.voltages, slope: self.voltage_rates, t0 },
+            Drive::Hydraulic => HeldForces { value: self.valves, slope: self.valve_rates, t0 },
         }
     }
 
@@ -302,6 +362,10 @@ impl PlatformModel {
     /// the switching functions' sides at its start.
     fn start(&self, experiment: &Experiment) -> Result<PlatformSimulation, String> {
         let mut sim = self.parameters.simulation(experiment)?;
+        if self.parameters.drive == Drive::Hydraulic {
+            crate::physics::stand::check_finite("pS", self.supply_pressure).map_err(|e| e.to_string())?;
+        }
+        sim.form.set_supply_pressure(self.supply_pressure);
         sim.set_track_singularities(self.events_reported);
         sim.integrator.sides = crate::integration::switching_sides(
             &sim.dynamics(&HeldForces::constant(self.inputs())),
@@ -324,6 +388,17 @@ impl FmuModel for PlatformModel {
             Some(Binding::Derivative) => self.derivative_value(var),
             Some(Binding::Computed) => Some(match var.group {
                 group::TIME => self.sim().map_or(0.0, |s| s.time),
+                // Without hydraulic legs there are no chambers: 0, as pA and pB.
+                group::PMIN if self.parameters.drive != Drive::Hydraulic => 0.0,
+                group::PMIN => match self.sim() {
+                    Some(s) => s.lowest_pressure,
+                    None => self
+                        .parameters
+                        .initial_pa
+                        .iter()
+                        .chain(&self.parameters.initial_pb)
+                        .fold(f64::INFINITY, |a, &b| a.min(b)),
+                },
                 _ => {
                     let mut z = [0.0; switching::COUNT];
                     self.event_indicators(&mut z);
@@ -354,6 +429,12 @@ impl FmuModel for PlatformModel {
     fn set_real(&mut self, var: VariableRef, value: f64) -> Result<(), String> {
         let slot = self.real_slot(var).ok_or("not a settable Real variable")?;
         *slot = value;
+        if var.group == group::PS
+            && let Some(sim) = self.sim_mut()
+        {
+            // The supply pressure is the hydraulic legs' input held over the next step.
+            sim.form.set_supply_pressure(value);
+        }
         self.values_set();
         Ok(())
     }
@@ -364,6 +445,7 @@ impl FmuModel for PlatformModel {
         let inputs = match first.group {
             group::F => Some(&mut self.forces),
             group::U => Some(&mut self.voltages),
+            group::VALVE => Some(&mut self.valves),
             _ => None,
         };
         if let Some(inputs) = inputs.and_then(|v| v.get_mut(first.index..first.index + values.len())) {
@@ -416,6 +498,7 @@ impl FmuModel for PlatformModel {
             )
         });
         self.simulation = Some((sim, experiment));
+        self.cavitation_reported = false;
         self.last_completed_step = start_time;
         self.invalidate_outputs();
         Ok(Initialised { summary, warning })
@@ -423,7 +506,11 @@ impl FmuModel for PlatformModel {
 
     fn do_step(&mut self, t: f64, h: f64, stop_at_event: bool) -> Result<StepReport, StepError> {
         let law = self.held_inputs(t);
-        let (inputs, unit) = if self.parameters.drives_enabled { ("voltages", "V") } else { ("leg forces", "N") };
+        let (inputs, unit) = match self.parameters.drive {
+            Drive::Forces => ("leg forces", "N"),
+            Drive::Electric => ("voltages", "V"),
+            Drive::Hydraulic => ("valve commands", "1"),
+        };
         let values = self.inputs();
         let Some(sim) = self.sim_mut() else {
             return Err(StepError { message: "the model is not initialised".into(), retry_shorter: false });
@@ -437,14 +524,25 @@ impl FmuModel for PlatformModel {
         };
         let event =
             sim.crossings.as_slice().iter().any(|c| c.index != switching::DETERMINANT) || sim.crossings.dropped > 0;
+        let lowest = sim.lowest_pressure;
         self.force_rates = [0.0; LEG_COUNT];
         self.voltage_rates = [0.0; LEG_COUNT];
+        self.valve_rates = [0.0; LEG_COUNT];
         match result {
             Ok(reached) => {
                 self.invalidate_outputs();
                 // The step computed the legs of its end state already.
                 self.legs = reached.legs;
-                Ok(StepReport { reached: reached.t, event })
+                let warning = (lowest < CAVITATION_PRESSURE && !self.cavitation_reported).then(|| {
+                    self.cavitation_reported = true;
+                    format!(
+                        "by t = {:?} a hydraulic chamber fell to {lowest:e} Pa, below -1 bar gauge: real oil would \
+                         cavitate there and the model (no pressure floor) is no longer valid; pmin reports the lowest \
+                         pressure (logged once per run)",
+                        reached.t
+                    )
+                });
+                Ok(StepReport { reached: reached.t, event, warning })
             }
             Err(failure) => Err(StepError {
                 message: if failure.is_step_limit() {
@@ -478,6 +576,7 @@ impl FmuModel for PlatformModel {
         let rates = match var.group {
             group::F => &mut self.force_rates,
             group::U => &mut self.voltage_rates,
+            group::VALVE => &mut self.valve_rates,
             _ => return,
         };
         if let Some(slot) = rates.get_mut(var.index) {
@@ -566,6 +665,8 @@ impl FmuModel for PlatformModel {
         self.save_variables(w);
         w.f64s(&self.force_rates);
         w.f64s(&self.voltage_rates);
+        w.f64s(&self.valve_rates);
+        w.bool(self.cavitation_reported);
         match &self.simulation {
             None => w.bool(false),
             Some((sim, experiment)) => {
@@ -576,6 +677,7 @@ impl FmuModel for PlatformModel {
                 w.bool(experiment.model_exchange);
                 w.f64(sim.time);
                 w.f64s(&sim.state);
+                w.f64(sim.lowest_pressure);
                 w.f64s(&[sim.integrator.dopri5.h_next, sim.integrator.dopri5.err_old]);
                 let st = &sim.integrator.stats;
                 for n in [st.accepted_steps, st.rejected_steps, st.rhs_evaluations, st.event_landings] {
@@ -592,6 +694,8 @@ impl FmuModel for PlatformModel {
         model.restore_variables(r)?;
         model.force_rates = r.finite_array::<LEG_COUNT>("der(F)")?;
         model.voltage_rates = r.finite_array::<LEG_COUNT>("der(U)")?;
+        model.valve_rates = r.finite_array::<LEG_COUNT>("der(valve)")?;
+        model.cavitation_reported = r.bool()?;
         if r.bool()? {
             let start_time = r.finite("start time")?;
             let has_tolerance = r.bool()?;
@@ -604,6 +708,8 @@ impl FmuModel for PlatformModel {
                 .map_err(|e| SnapshotError(format!("the stored parameters are refused: {e}")))?;
             sim.time = r.finite("time")?;
             sim.state = r.finite_array::<SIMULATION_DIM>("state")?;
+            sim.lowest_pressure = r.f64()?;
+            sim.form.set_supply_pressure(model.supply_pressure);
             let [h_next, err_old] = r.finite_array::<2>("integrator memory")?;
             sim.integrator.dopri5 = Dopri5Memory { h_next, err_old };
             sim.integrator.stats = IntegratorStats {

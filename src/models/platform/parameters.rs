@@ -5,7 +5,9 @@ use nalgebra::Vector3;
 
 use crate::integration::{Method, SolverSettings};
 use crate::models::declare::IntegerStorage;
+use crate::models::machine::Drive;
 use crate::physics::actuators::drives::ElectricDrives;
+use crate::physics::actuators::hydraulics::{DEFAULT_SUPPLY_PRESSURE, HydraulicActuators, HydraulicLegs};
 use crate::physics::body::kinematics::rotation_from_angles;
 use crate::physics::body::state::{BodyState, STATE_DIM};
 use crate::physics::direct_problem::SINGULAR_CONDITION_NUMBER;
@@ -16,7 +18,7 @@ use crate::physics::legs::joint_limits::{self, JointLimits};
 use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::{LEG_COUNT, PAPER_EQUILIBRIUM_LEG_FORCE, Stand};
 use crate::simulation::outputs::condition_number;
-use crate::simulation::platform::CURRENTS;
+use crate::simulation::platform::{CURRENTS, hydraulic};
 use crate::simulation::{PlatformSimulation, SIMULATION_DIM, SimulationState, Stabilisation};
 
 /// Everything set through parameters.
@@ -45,12 +47,17 @@ pub struct PlatformParameters {
     pub joints_enabled: bool,
     /// `joints.*`.
     pub joints: JointParameters,
-    /// `drive`: the legs driven by electric drives (voltages in) instead of forces.
-    pub drives_enabled: bool,
+    /// `drive`: what moves the legs (forces, electric drives, hydraulic servo legs).
+    pub drive: Drive,
     /// `motor.*`, `gear.ratio`, `screw.lead`.
     pub drives: ElectricDrives,
     /// `I0`: the drives' initial armature currents, A.
     pub initial_currents: [f64; LEG_COUNT],
+    /// `hydraulic.*`, `valve.*`.
+    pub hydraulics: HydraulicLegs,
+    /// `pA0`, `pB0`: the hydraulic legs' initial chamber pressures, Pa.
+    pub initial_pa: [f64; LEG_COUNT],
+    pub initial_pb: [f64; LEG_COUNT],
 }
 
 /// The joint-limit parameters (`joints.*`).
@@ -103,9 +110,12 @@ impl Default for PlatformParameters {
             friction: Friction::default(),
             joints_enabled: true,
             joints: JointParameters::default(),
-            drives_enabled: false,
+            drive: Drive::Forces,
             drives: ElectricDrives::default(),
             initial_currents: [0.0; LEG_COUNT],
+            hydraulics: HydraulicLegs::default(),
+            initial_pa: [holding_pressures().0; LEG_COUNT],
+            initial_pb: [holding_pressures().1; LEG_COUNT],
         }
     }
 }
@@ -126,6 +136,14 @@ pub const DEFAULT_BAUMGARTE_RATE: f64 = 10.0;
 pub fn default_leg_force() -> f64 {
     let s = Stand::truck_cabin();
     PAPER_EQUILIBRIUM_LEG_FORCE * s.mass * s.gravity
+}
+
+/// The default stand's holding pressures `(p_A, p_B)`, Pa: the rod side at half the default
+/// supply, the cap side pushing the paper's equilibrium force `0.2005 M g` with it (the legs are
+/// massless by default). The start values of `pA0`, `pB0`.
+pub fn holding_pressures() -> (f64, f64) {
+    let pb = 0.5 * DEFAULT_SUPPLY_PRESSURE;
+    (HydraulicLegs::default().cap_pressure(default_leg_force(), pb), pb)
 }
 
 /// How the model left Initialization Mode: with the parameters, all a simulation is built
@@ -166,7 +184,13 @@ impl PlatformParameters {
 
     /// The drives if they are on.
     pub fn electric_drives(&self) -> Option<ElectricDrives> {
-        self.drives_enabled.then_some(self.drives)
+        (self.drive == Drive::Electric).then_some(self.drives)
+    }
+
+    /// The hydraulic legs if on (with the strokes `lmin`, `lmax`).
+    pub fn hydraulic_actuators(&self) -> Option<HydraulicActuators> {
+        (self.drive == Drive::Hydraulic)
+            .then(|| HydraulicActuators::new(self.hydraulics, self.stops.lower, self.stops.upper))
     }
 
     /// The special form these parameters describe (before initialisation).
@@ -175,6 +199,7 @@ impl PlatformParameters {
             .with_end_stops(self.end_stops())
             .with_machine(self.legs, self.friction, self.joint_limits())
             .with_drives(self.electric_drives())
+            .with_hydraulics(self.hydraulic_actuators())
     }
 
     /// The simulation state these parameters describe (before initialisation).
@@ -183,8 +208,12 @@ impl PlatformParameters {
         if let Some(b) = y.first_chunk_mut::<STATE_DIM>() {
             *b = self.initial_state().to_vector();
         }
-        if self.drives_enabled {
+        if self.drive == Drive::Electric {
             y[CURRENTS..CURRENTS + LEG_COUNT].copy_from_slice(&self.initial_currents);
+        }
+        if self.drive == Drive::Hydraulic {
+            y[hydraulic::PA..hydraulic::PA + LEG_COUNT].copy_from_slice(&self.initial_pa);
+            y[hydraulic::PB..hydraulic::PB + LEG_COUNT].copy_from_slice(&self.initial_pb);
         }
         y
     }
@@ -217,6 +246,7 @@ impl PlatformParameters {
         let mut sim = sim
             .with_machine(self.legs, self.friction, joint_limits)
             .and_then(|sim| sim.with_drives(self.electric_drives(), self.initial_currents))
+            .and_then(|sim| sim.with_hydraulics(self.hydraulic_actuators(), self.initial_pa, self.initial_pb))
             .map_err(|e| e.to_string())?;
         if let Some(limits) = &joint_limits {
             check_initial_joint_angles(limits, &sim)?;
@@ -302,6 +332,20 @@ impl PlatformParameters {
                 self.initial_currents
             ),
             None => String::new(),
+        };
+        let drives = match self.hydraulic_actuators() {
+            Some(h) => {
+                let (area_a, area_b) = h.legs.areas();
+                format!(
+                    "{drives}, hydraulic servo legs (valve inputs; A_A = {area_a:.4e} m2, A_B = {area_b:.4e} m2, K = \
+                     {:.4e} m3/(s.Pa^0.5), beta = {:e} Pa, initial pA {:?} Pa, pB {:?} Pa)",
+                    h.legs.flow_coefficient(),
+                    h.legs.bulk_modulus,
+                    self.initial_pa,
+                    self.initial_pb
+                )
+            }
+            None => drives,
         };
         let p = self;
         format!(

@@ -46,6 +46,32 @@ pub static STATES: &[(&str, usize)] = &[
     ("I", 4),
     ("I", 5),
     ("work.electric", 0),
+    ("pA", 0),
+    ("pA", 1),
+    ("pA", 2),
+    ("pA", 3),
+    ("pA", 4),
+    ("pA", 5),
+    ("pB", 0),
+    ("pB", 1),
+    ("pB", 2),
+    ("pB", 3),
+    ("pB", 4),
+    ("pB", 5),
+    ("spool", 0),
+    ("spool", 1),
+    ("spool", 2),
+    ("spool", 3),
+    ("spool", 4),
+    ("spool", 5),
+    ("der(spool)", 0),
+    ("der(spool)", 1),
+    ("der(spool)", 2),
+    ("der(spool)", 3),
+    ("der(spool)", 4),
+    ("der(spool)", 5),
+    ("work.hydraulic", 0),
+    ("work.compression", 0),
 ];
 
 const POSE_STATES: &[crate::models::variables::Dependency] = &[All("r"), All("R")];
@@ -54,11 +80,38 @@ const ALL_STATES: &[crate::models::variables::Dependency] = &[All("r"), All("v")
 /// so with stops every acceleration depends on the whole body state, and on the leg forces
 /// (or with drives on the currents).
 const MOTION_KNOWNS: &[crate::models::variables::Dependency] =
-    &[All("r"), All("v"), All("R"), All("der(R)"), All("F"), All("I")];
+    &[All("r"), All("v"), All("R"), All("der(R)"), All("F"), All("I"), All("pA"), All("pB")];
+/// The knowns of the hydraulic legs' rates and powers: the body state (the legs' lengths and
+/// rates), the pressures, the spools and the supply pressure.
+const HYDRAULIC_KNOWNS: &[crate::models::variables::Dependency] =
+    &[All("r"), All("v"), All("R"), All("der(R)"), All("pA"), All("pB"), All("spool"), All("pS")];
+/// The hydraulic legs' parameters.
+const HYDRAULIC_PARAMETERS: &[crate::models::variables::Dependency] = &[
+    All("drive"),
+    All("lmin"),
+    All("lmax"),
+    All("hydraulic.bore"),
+    All("hydraulic.rod"),
+    All("hydraulic.deadVolumeA"),
+    All("hydraulic.deadVolumeB"),
+    All("hydraulic.bulkModulus"),
+    All("hydraulic.tankPressure"),
+    All("valve.ratedFlow"),
+    All("valve.ratedPressureDrop"),
+    All("valve.pcr"),
+    All("valve.leakage"),
+    All("hydraulic.internalLeakage"),
+    All("pA0"),
+    All("pB0"),
+    All("pS"),
+];
 /// The knowns of the drives' currents' rates and losses: the leg rates, the currents, the
 /// voltages.
 const DRIVE_KNOWNS: &[crate::models::variables::Dependency] =
     &[All("r"), All("v"), All("R"), All("der(R)"), All("I"), All("U")];
+/// The knowns of the dissipated power: those of the drives' and of the hydraulic legs'.
+const DISSIPATION_KNOWNS: &[crate::models::variables::Dependency] =
+    &[All("r"), All("v"), All("R"), All("der(R)"), All("I"), All("U"), All("pA"), All("pB"), All("spool"), All("pS")];
 /// The knowns of the energy: the body state and the currents (magnetic energy).
 const ENERGY_KNOWNS: &[crate::models::variables::Dependency] = &[All("r"), All("v"), All("R"), All("der(R)"), All("I")];
 /// The drives' parameters.
@@ -133,6 +186,21 @@ const ALL_PARAMETERS: &[crate::models::variables::Dependency] = &[
     All("screw.lead"),
     All("I0"),
     All("U"),
+    All("hydraulic.bore"),
+    All("hydraulic.rod"),
+    All("hydraulic.deadVolumeA"),
+    All("hydraulic.deadVolumeB"),
+    All("hydraulic.bulkModulus"),
+    All("hydraulic.tankPressure"),
+    All("valve.ratedFlow"),
+    All("valve.ratedPressureDrop"),
+    All("valve.pcr"),
+    All("valve.leakage"),
+    All("hydraulic.internalLeakage"),
+    All("pA0"),
+    All("pB0"),
+    All("pS"),
+    All("valve"),
 ];
 /// What the energy depends on in Initialization Mode: the stand, the initial state, the
 /// potentials' parameters and the legs' masses.
@@ -203,6 +271,21 @@ const DISSIPATION_PARAMETERS: &[crate::models::variables::Dependency] = &[
     All("screw.lead"),
     All("I0"),
     All("U"),
+    All("hydraulic.bore"),
+    All("hydraulic.rod"),
+    All("hydraulic.deadVolumeA"),
+    All("hydraulic.deadVolumeB"),
+    All("hydraulic.bulkModulus"),
+    All("hydraulic.tankPressure"),
+    All("valve.ratedFlow"),
+    All("valve.ratedPressureDrop"),
+    All("valve.pcr"),
+    All("valve.leakage"),
+    All("hydraulic.internalLeakage"),
+    All("pA0"),
+    All("pB0"),
+    All("pS"),
+    All("valve"),
 ];
 const JOINT_ANGLE_PARAMETERS: &[crate::models::variables::Dependency] =
     &[All("A"), All("B"), All("r0"), All("angles0"), All("joints"), All("joints.r0"), All("joints.angles0")];
@@ -221,6 +304,9 @@ declare_variables! {
         // The condition number `kappa` (an eigenvalue problem): read by studies every step,
         // by most hosts never.
         condition,
+        // The hydraulic legs' pressures and spools: what a hydraulic controller reads every
+        // step besides the legs, copied from the state.
+        chamber_outputs,
     ],
     variables: {
         TIME => V::time(0); computed,
@@ -487,7 +573,7 @@ declare_variables! {
              Exchange derivative of work.dissipated)",
             DISSIPATION_PARAMETERS,
         )
-        .derivative("work.dissipated", "work.dissipated", 1, DRIVE_KNOWNS); derivative,
+        .derivative("work.dissipated", "work.dissipated", 1, DISSIPATION_KNOWNS); derivative,
         EVENT_INDICATORS => V::local(
             "eventIndicators",
             &[25],
@@ -589,9 +675,11 @@ declare_variables! {
         DRIVE => V::parameter(
             "drive", &[], 400, None,
             "Actuators: 0 = the leg forces F are the inputs (ideal force actuators); 1 = each leg is an electric drive \
-             (a DC motor turning a ball screw) with the armature voltage U as its input, F ignored",
+             (a DC motor turning a ball screw) with the armature voltage U as its input, F ignored; 2 = each leg is a \
+             hydraulic differential cylinder fed by a servo valve, the valve commands valve and the supply pressure pS \
+             its inputs",
         )
-        .integer(0, 1); integer(parameters.drives_enabled),
+        .integer(0, 2); integer(parameters.drive),
         MOTOR_R => machine::motor_resistance(401); real(parameters.drives.resistance),
         MOTOR_L => machine::motor_inductance(402); real(parameters.drives.inductance),
         MOTOR_KE => machine::motor_ke(403); real(parameters.drives.ke),
@@ -639,5 +727,133 @@ declare_variables! {
             ALL_PARAMETERS,
         )
         .depends_on(MOTION_KNOWNS); cached(input_dependent_outputs.actuator_force),
+        VALVE => V::input(
+            "valve", &[6], 460, Some("1"),
+            "Servo valve command c_k of leg k (used when drive = 2), saturated to [-1, 1]: 1 opens the valve fully \
+             towards extension (supply to the cap side), 0 centres the spool (the legs lock on their oil), -1 towards \
+             retraction. Held over each communication step, or interpolated to first order when \
+             fmi2SetRealInputDerivatives gave its derivative",
+        ); real(valves),
+        PS => V::input(
+            "pS", &[], 466, Some("Pa"),
+            "Hydraulic supply pressure p_S (gauge; drive = 2). Drop it to 0 to model a pump failure: the supply port \
+             then acts as a second tank (no check valve)",
+        ); real(supply_pressure),
+        TANK_PRESSURE => V::parameter(
+            "hydraulic.tankPressure", &[], 470, Some("Pa"), "Tank (return line) pressure p_T, gauge",
+        ); real(parameters.hydraulics.tank_pressure),
+        BORE => machine::hydraulic_bore(471); real(parameters.hydraulics.bore),
+        ROD => machine::hydraulic_rod(472); real(parameters.hydraulics.rod),
+        DEAD_VOLUME_A => V::parameter(
+            "hydraulic.deadVolumeA", &[], 473, Some("m3"),
+            "Dead volume V_A0 of each cap-side chamber at lmin (ports, hoses, the cap's end): V_A = V_A0 + A_A (l - lmin)",
+        ); real(parameters.hydraulics.dead_volume_a),
+        DEAD_VOLUME_B => V::parameter(
+            "hydraulic.deadVolumeB", &[], 474, Some("m3"),
+            "Dead volume V_B0 of each rod-side chamber at lmax: V_B = V_B0 + A_B (lmax - l)",
+        ); real(parameters.hydraulics.dead_volume_b),
+        BULK_MODULUS => V::parameter(
+            "hydraulic.bulkModulus", &[], 475, Some("Pa"),
+            "Effective bulk modulus beta of the oil with its hoses and seals",
+        ); real(parameters.hydraulics.bulk_modulus),
+        RATED_FLOW => machine::valve_rated_flow(476); real(parameters.hydraulics.rated_flow),
+        RATED_DROP => machine::valve_rated_pressure_drop(477); real(parameters.hydraulics.rated_pressure_drop),
+        VALVE_OMEGA => V::parameter(
+            "valve.omega", &[], 478, Some("rad/s"), "Natural frequency w_v of each valve's spool (second order)",
+        ); real(parameters.hydraulics.valve_omega),
+        VALVE_DAMPING => V::parameter(
+            "valve.damping", &[], 479, Some("1"), "Damping ratio zeta_v of each valve's spool",
+        ); real(parameters.hydraulics.valve_damping),
+        VALVE_PCR => V::parameter(
+            "valve.pcr", &[], 480, Some("Pa"),
+            "Regularisation pressure p_cr of the orifice law phi(dp) = dp / (dp^2 + p_cr^2)^(1/4): the flow is \
+             linear in dp below about p_cr, the square root above",
+        ); real(parameters.hydraulics.pcr),
+        VALVE_LEAKAGE => V::parameter(
+            "valve.leakage", &[], 481, Some("m3/(s.Pa)"),
+            "Null leakage coefficient C_v of each land: each chamber leaks C_v dp to supply and to tank",
+        ); real(parameters.hydraulics.valve_leakage),
+        INTERNAL_LEAKAGE => V::parameter(
+            "hydraulic.internalLeakage", &[], 482, Some("m3/(s.Pa)"),
+            "Internal leakage coefficient C_i across each piston: Q_i = C_i (p_A - p_B)",
+        ); real(parameters.hydraulics.internal_leakage),
+        PA0 => V::parameter(
+            "pA0", &[6], 490, Some("Pa"),
+            "Initial cap-side pressure of leg k (default: what holds the default stand at rest in its neutral pose \
+             with pB0 = pS/2)",
+        ); real(parameters.initial_pa),
+        PB0 => V::parameter(
+            "pB0", &[6], 496, Some("Pa"), "Initial rod-side pressure of leg k (default pS/2 at the default supply)",
+        ); real(parameters.initial_pb),
+        PA => V::output(
+            "pA", &[6], 510, Some("Pa"), "Cap-side chamber pressure p_A of leg k, gauge (Model Exchange state; 0 \
+             unless drive = 2)", &[All("drive"), SameIndex("pA0")],
+        ); cached(chamber_outputs.pa),
+        PB => V::output(
+            "pB", &[6], 516, Some("Pa"), "Rod-side chamber pressure p_B of leg k, gauge (Model Exchange state; 0 \
+             unless drive = 2)", &[All("drive"), SameIndex("pB0")],
+        ); cached(chamber_outputs.pb),
+        SPOOL => V::output(
+            "spool", &[6], 522, Some("1"), "Spool position s_k of leg k's valve, normalised (Model Exchange state; \
+             starts centred)", &[],
+        ); cached(chamber_outputs.spool),
+        QSUPPLY => V::output(
+            "Qsupply", &[], 528, Some("m3/s"),
+            "Total flow drawn from the supply by the six valves, null leakage included (negative when the supply \
+             pressure is below the chambers', e.g. after a pump failure)",
+            HYDRAULIC_PARAMETERS,
+        )
+        .depends_on(HYDRAULIC_KNOWNS); cached(input_dependent_outputs.supply_flow),
+        PMIN => V::output(
+            "pmin", &[], 529, Some("Pa"),
+            "Lowest chamber pressure of the hydraulic legs since the start (below -1 bar gauge the oil would \
+             cavitate and the model is no longer valid: the FMU logs a warning once per run); 0 unless drive = 2",
+            &[All("drive"), All("pA0"), All("pB0")],
+        ); computed,
+        WORK_HYDRAULIC => V::output(
+            "work.hydraulic", &[], 530, Some("J"),
+            "Energy drawn from the hydraulic supply since the start, the integral of sum_k (p_S Q_S - p_T Q_T) \
+             (Model Exchange state; E(t) - E(0) = work.F + work.electric + work.hydraulic - work.compression - \
+             work.dissipated)",
+            &[],
+        ); cached(outputs.hydraulic_work),
+        WORK_COMPRESSION => V::output(
+            "work.compression", &[], 531, Some("J"),
+            "Energy stored by compressing the oil since the start, the integral of sum_k (p_A V_A p_A' + p_B V_B \
+             p_B') / beta (Model Exchange state)",
+            &[],
+        ); cached(outputs.compression_work),
+        DER_PA => V::local(
+            "der(pA)", &[6], 540, Some("Pa/s"), "Rate of the cap-side pressures (Model Exchange derivative of pA)",
+            HYDRAULIC_PARAMETERS,
+        )
+        .derivative("pA", "pA", 1, HYDRAULIC_KNOWNS); derivative,
+        DER_PB => V::local(
+            "der(pB)", &[6], 546, Some("Pa/s"), "Rate of the rod-side pressures (Model Exchange derivative of pB)",
+            HYDRAULIC_PARAMETERS,
+        )
+        .derivative("pB", "pB", 1, HYDRAULIC_KNOWNS); derivative,
+        DER_SPOOL => V::local(
+            "der(spool)", &[6], 552, Some("1/s"), "Spool rate s_k' (Model Exchange state; starts at rest)", &[],
+        )
+        .derivative("spool", "spool", 1, &[SameIndex("der(spool)")]); derivative,
+        DER2_SPOOL => V::local(
+            "der2(spool)", &[6], 558, Some("1/s2"),
+            "Spool acceleration w_v^2 (c_k - s_k) - 2 zeta_v w_v s_k' (Model Exchange derivative of der(spool))",
+            &[All("drive"), All("valve.omega"), All("valve.damping"), All("valve")],
+        )
+        .derivative("der(spool)", "spool", 2, &[SameIndex("spool"), SameIndex("der(spool)"), SameIndex("valve")]); derivative,
+        DER_WORK_HYDRAULIC => V::local(
+            "der(work.hydraulic)", &[], 564, Some("W"),
+            "Power drawn from the hydraulic supply (Model Exchange derivative of work.hydraulic)",
+            HYDRAULIC_PARAMETERS,
+        )
+        .derivative("work.hydraulic", "work.hydraulic", 1, HYDRAULIC_KNOWNS); derivative,
+        DER_WORK_COMPRESSION => V::local(
+            "der(work.compression)", &[], 565, Some("W"),
+            "Compression power of the oil (Model Exchange derivative of work.compression)",
+            HYDRAULIC_PARAMETERS,
+        )
+        .derivative("work.compression", "work.compression", 1, HYDRAULIC_KNOWNS); derivative,
     }
 }

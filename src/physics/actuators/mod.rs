@@ -5,6 +5,7 @@
 //! `u_k > 0` pushes the platform away from the base (extension), N.
 
 pub mod drives;
+pub mod hydraulics;
 
 use crate::physics::body::state::BodyState;
 use crate::physics::legs::geometry::LegGeometry;

@@ -30,6 +30,7 @@ use nalgebra::Vector3;
 
 use super::actuators::LegForceLaw;
 use super::actuators::drives::{DriveRate, ElectricDrives};
+use super::actuators::hydraulics::HydraulicActuators;
 use super::body::accelerations::RigidBody;
 use super::body::per_axis::AxisRows;
 use super::body::state::{BodyState, STATE_DIM, StateVector, axes_rates};
@@ -65,6 +66,9 @@ pub struct SpecialForm {
     joint_limits: Option<JointLimits>,
     /// Electric drives in the legs, or `None`: the actuator forces are given (the paper's).
     drives: Option<ElectricDrives>,
+    /// Hydraulic servo legs, or `None`. Their force comes from the chamber pressures (states
+    /// of the simulation, `crate::simulation::platform`): to the body they are given forces.
+    hydraulics: Option<HydraulicActuators>,
     /// For the fast path's check and the switching functions of the joint limits: `n0_k` and
     /// `m0_k` as `[component][leg]`, and the reference pose's axes `e0_a`.
     base_reference: [[f64; LEG_COUNT]; 3],
@@ -105,6 +109,7 @@ impl SpecialForm {
             friction: Friction::default(),
             joint_limits: None,
             drives: None,
+            hydraulics: None,
             base_reference: [[0.0; LEG_COUNT]; 3],
             platform_reference: [[0.0; LEG_COUNT]; 3],
             reference_axes: [Vector3::x(), Vector3::y(), Vector3::z()],
@@ -146,6 +151,25 @@ impl SpecialForm {
     /// The electric drives, if on.
     pub fn drives(&self) -> Option<&ElectricDrives> {
         self.drives.as_ref()
+    }
+
+    /// The same form with hydraulic servo legs (`None`: without).
+    pub fn with_hydraulics(mut self, hydraulics: Option<HydraulicActuators>) -> Self {
+        self.hydraulics = hydraulics;
+        self
+    }
+
+    /// The hydraulic legs, if on.
+    pub fn hydraulics(&self) -> Option<&HydraulicActuators> {
+        self.hydraulics.as_ref()
+    }
+
+    /// Sets the supply pressure `p_S` (Pa) of the hydraulic legs, if on: an input held over a
+    /// step.
+    pub fn set_supply_pressure(&mut self, supply: f64) {
+        if let Some(h) = &mut self.hydraulics {
+            h.supply = supply;
+        }
     }
 
     /// Whether the step's fast path applies: massless legs without friction, forces given.

@@ -1,0 +1,48 @@
+"""Two builds of the platform FMU, output by output and bit by bit: every Real output both
+declare, over 3000 steps of 1 ms through FMPy, with forces (legs with mass and friction; RK4;
+the paper's legs) and with electric drives (adaptive and RK4) under a leg feedback with a
+ripple. How a change that should not touch these modes is checked (benches/results/hydraulics.txt).
+
+    .venv/bin/python benches/same_bits.py OLD/StewartPlatform.fmu NEW/StewartPlatform.fmu
+"""
+import numpy as np, math
+from fmpy import read_model_description, extract
+from fmpy.fmi2 import FMU2Slave
+def run(fmu, params, inputs_name, law, steps=3000, h=1e-3):
+    md = read_model_description(fmu)
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    d = extract(fmu)
+    s = FMU2Slave(guid=md.guid, unzipDirectory=d, modelIdentifier=md.coSimulation.modelIdentifier, instanceName="x")
+    s.instantiate(); s.setupExperiment(startTime=0.0); s.enterInitializationMode()
+    for k, v in params.items():
+        if isinstance(v, int) and k in ("drive", "solver.method"): s.setInteger([vr[k]], [v])
+        elif isinstance(v, bool): s.setBoolean([vr[k]], [v])
+        else: s.setReal([vr[k]], [v])
+    s.exitInitializationMode()
+    names = [v.name for v in md.modelVariables if v.type == "Real" and v.causality == "output" and v.name in OLD_NAMES]
+    rows=[]; t=0.0
+    for i in range(steps):
+        l = np.array(s.getReal([vr[f"l[{k}]"] for k in range(1,7)])); ld = np.array(s.getReal([vr[f"ldot[{k}]"] for k in range(1,7)]))
+        s.setReal([vr[f"{inputs_name}[{k}]"] for k in range(1,7)], list(law(t, l, ld)))
+        s.doStep(currentCommunicationPoint=t, communicationStepSize=h); t += h
+        rows.append(s.getReal([vr[n] for n in names]))
+    s.terminate(); s.freeInstance()
+    return np.array(rows), names
+import sys
+old, new = sys.argv[1], sys.argv[2]
+OLD_NAMES = {v.name for v in read_model_description(old).modelVariables}
+l0 = 1.7550860729486566
+hold = 0.2005*3000*9.81
+force = lambda t,l,ld: hold + 2e5*(l0-l) - 2e4*ld + 800*np.sin(3*t + np.arange(6))
+N = 2*math.pi/0.02; ihold = hold/N
+volts = lambda t,l,ld: ihold*0.4*(1+0.3*np.sin(3*t+np.arange(6))) + 0.4/N*(2e5*(l0-l) - 2e4*ld)
+cases = [("forces, machine", {"leg.cylinderMass": 40.0, "leg.rodMass": 15.0, "friction.coulomb": 150.0}, "F", force),
+         ("forces, RK4", {"solver.method": 2}, "F", force),
+         ("forces, paper legs", {}, "F", force),
+         ("drives", {"drive": 1, **{f"I0[{k}]": ihold for k in range(1,7)}}, "U", volts),
+         ("drives, RK4", {"drive": 1, "solver.method": 2, **{f"I0[{k}]": ihold for k in range(1,7)}}, "U", volts)]
+for name, params, inp, law in cases:
+    a, names = run(old, {k: (int(v) if k in ("drive","solver.method") else v) for k,v in params.items()}, inp, law)
+    b, _ = run(new, {k: (int(v) if k in ("drive","solver.method") else v) for k,v in params.items()}, inp, law)
+    diff = np.argwhere(a.view(np.uint64) != b.view(np.uint64))
+    print(f"{name}: {a.shape[1]} outputs x {a.shape[0]} steps; differing bits: {len(diff)}", [names[j] for j in sorted(set(diff[:,1]))][:5])

@@ -1,0 +1,412 @@
+//! Hydraulic servo legs (docs/model.md §10; the paper's stand is driven by hydraulic
+//! cylinders): each leg is a double-acting differential cylinder fed by a critically centred
+//! four-way servo valve. Per leg, with the piston's stroke position `x = l - lmin` and the
+//! stroke `L_s = lmax - lmin`:
+//!
+//! ```text
+//! A_A = pi D^2 / 4,  A_B = pi (D^2 - d^2) / 4          cap and rod side areas
+//! V_A = V_A0 + A_A x,  V_B = V_B0 + A_B (L_s - x)      chamber volumes
+//! u   = p_A A_A - p_B A_B                              axial force on the leg (replaces F)
+//! s'' = w_v^2 (c - s) - 2 zeta_v w_v s'                spool, c = clamp(valve, -1, 1)
+//! s >= 0: Q_A = K s phi(p_S - p_A),  Q_B = -K s phi(p_B - p_T)
+//! s <  0: Q_A = K s phi(p_A - p_T),  Q_B = -K s phi(p_S - p_B)
+//!         + null leakage C_v of both lands of each chamber, to supply and to tank
+//! p_A' = beta / V_A (Q_A - A_A l' - Q_i),  p_B' = beta / V_B (Q_B + A_B l' + Q_i)
+//! ```
+//!
+//! with `phi(dp) = dp / (dp^2 + p_cr^2)^(1/4)` (the Modelica library's `regRoot`: `K phi(dp)`
+//! tends to `K sgn(dp) sqrt|dp|`), `K = Q_N / sqrt(dp_N / 2)` and `Q_i = C_i (p_A - p_B)`.
+//!
+//! Energy: the power drawn from the supply `P_S = p_S Q_S - p_T Q_T` splits exactly into the
+//! leg's power `u l'`, the lands' and leakages' losses (each `Q dp >= 0`) and the compression
+//! power `(p_A V_A p_A' + p_B V_B p_B') / beta` ([`HydraulicRate`]).
+//!
+//! The law is written once over [`Number`]: one leg in `f64` or [`crate::physics::number::Dual`]
+//! (values and exact derivatives), six side by side in vector registers.
+
+use crate::physics::error::ParameterError;
+use crate::physics::number::Number;
+use crate::physics::stand::{LEG_COUNT, check_finite};
+
+/// Default bore `D`, m: an ISO 63 mm cylinder. At the 16 MPa supply it pushes 50 kN, six and a
+/// half times the 7.7 kN the default heave programme's most loaded leg needs; so large because
+/// the oil column's stiffness grows with the area squared: with this bore the default stand's
+/// oil-column modes lie at 60-135 rad/s, above the motion's band.
+pub const DEFAULT_BORE: f64 = 0.063;
+/// Default rod `d`, m: the ISO 36 mm rod of a 63 mm bore (area ratio 0.67).
+pub const DEFAULT_ROD: f64 = 0.036;
+/// Default dead volume of the cap side, m³ (0.2 L): a valve mounted on the cylinder, its
+/// ports and the cap's end volume. It sets the stiffness near the lower end of the stroke.
+pub const DEFAULT_DEAD_VOLUME_A: f64 = 0.2e-3;
+/// Default dead volume of the rod side, m³ (0.2 L): as the cap side's.
+pub const DEFAULT_DEAD_VOLUME_B: f64 = 0.2e-3;
+/// Default effective bulk modulus `beta`, Pa: mineral oil (1.4-1.8 GPa) softened by hoses,
+/// seals and a little entrained air.
+pub const DEFAULT_BULK_MODULUS: f64 = 1.0e9;
+/// Default supply pressure `p_S` (the input `pS`'s start), Pa: 16 MPa, a common industrial
+/// supply.
+pub const DEFAULT_SUPPLY_PRESSURE: f64 = 16.0e6;
+/// Default tank pressure `p_T`, Pa (gauge): 0.
+pub const DEFAULT_TANK_PRESSURE: f64 = 0.0;
+/// Default rated flow `Q_N`, m³/s: 100 L/min at the rated drop, a size 2-3 servo valve. The
+/// default heave programme's fastest leg (0.64 m/s, 120 L/min into the cap side) needs a
+/// spool opening of about 0.7 at the supply, which leaves the loop a margin.
+pub const DEFAULT_RATED_FLOW: f64 = 100.0e-3 / 60.0;
+/// Default rated pressure drop `dp_N`, Pa: 7 MPa over the valve (3.5 MPa per land), the usual
+/// rating point of servo valves.
+pub const DEFAULT_RATED_PRESSURE_DROP: f64 = 7.0e6;
+/// Default spool natural frequency `w_v`, rad/s: 100 Hz, a servo valve's 90 degree phase
+/// frequency (80-150 Hz), five times the oil columns' highest mode.
+pub const DEFAULT_VALVE_OMEGA: f64 = 2.0 * std::f64::consts::PI * 100.0;
+/// Default spool damping ratio `zeta_v`: 0.7, a well damped spool.
+pub const DEFAULT_VALVE_DAMPING: f64 = 0.7;
+/// Default regularisation pressure `p_cr` of the square-root law, Pa: 1 bar. Above a few bar
+/// the flow is within 1 % of the square root; below, the law is linear with a finite slope
+/// (the pole it adds, `beta K / (V sqrt(p_cr))`, is 2.2e3 /s at mid-stroke).
+pub const DEFAULT_PCR: f64 = 1.0e5;
+/// Default null leakage `C_v` of each land, m³/(s.Pa): 0.5 L/min of supply flow at null with
+/// the chambers at `p_S / 2`, the leakage of a new servo valve of this size.
+pub const DEFAULT_VALVE_LEAKAGE: f64 = 5.0e-13;
+/// Default internal leakage `C_i` across the piston, m³/(s.Pa): 6 mL/min per MPa, a tight
+/// piston seal.
+pub const DEFAULT_INTERNAL_LEAKAGE: f64 = 1.0e-13;
+/// Chamber pressure below which the oil would cavitate and the model stops being valid, Pa
+/// (gauge): -1 bar.
+pub const CAVITATION_PRESSURE: f64 = -1.0e5;
+
+/// The hydraulic legs' parameters (`hydraulic.*`, `valve.*`), the same for all six legs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HydraulicLegs {
+    /// `D`, m.
+    pub bore: f64,
+    /// `d`, m.
+    pub rod: f64,
+    /// `V_A0`, m³.
+    pub dead_volume_a: f64,
+    /// `V_B0`, m³.
+    pub dead_volume_b: f64,
+    /// `beta`, Pa.
+    pub bulk_modulus: f64,
+    /// `p_T`, Pa.
+    pub tank_pressure: f64,
+    /// `Q_N`, m³/s.
+    pub rated_flow: f64,
+    /// `dp_N`, Pa.
+    pub rated_pressure_drop: f64,
+    /// `w_v`, rad/s.
+    pub valve_omega: f64,
+    /// `zeta_v`.
+    pub valve_damping: f64,
+    /// `p_cr`, Pa.
+    pub pcr: f64,
+    /// `C_v`, m³/(s.Pa).
+    pub valve_leakage: f64,
+    /// `C_i`, m³/(s.Pa).
+    pub internal_leakage: f64,
+}
+
+impl Default for HydraulicLegs {
+    fn default() -> Self {
+        HydraulicLegs {
+            bore: DEFAULT_BORE,
+            rod: DEFAULT_ROD,
+            dead_volume_a: DEFAULT_DEAD_VOLUME_A,
+            dead_volume_b: DEFAULT_DEAD_VOLUME_B,
+            bulk_modulus: DEFAULT_BULK_MODULUS,
+            tank_pressure: DEFAULT_TANK_PRESSURE,
+            rated_flow: DEFAULT_RATED_FLOW,
+            rated_pressure_drop: DEFAULT_RATED_PRESSURE_DROP,
+            valve_omega: DEFAULT_VALVE_OMEGA,
+            valve_damping: DEFAULT_VALVE_DAMPING,
+            pcr: DEFAULT_PCR,
+            valve_leakage: DEFAULT_VALVE_LEAKAGE,
+            internal_leakage: DEFAULT_INTERNAL_LEAKAGE,
+        }
+    }
+}
+
+/// The hydraulic legs of a stand: the law's parameters, each leg's stroke (from the end
+/// stops' `lmin`, `lmax`, whether the stops are on or not) and the supply pressure, an input
+/// held over each step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HydraulicActuators {
+    pub legs: HydraulicLegs,
+    /// `lmin_k`, m: where the piston's position `x_k = l_k - lmin_k` is 0.
+    pub lower: [f64; LEG_COUNT],
+    /// `L_s = lmax_k - lmin_k`, m.
+    pub stroke: [f64; LEG_COUNT],
+    /// `p_S`, Pa.
+    pub supply: f64,
+}
+
+impl HydraulicActuators {
+    /// The legs' law with the strokes `[lmin, lmax]` at the default supply pressure.
+    pub fn new(legs: HydraulicLegs, lower: [f64; LEG_COUNT], upper: [f64; LEG_COUNT]) -> Self {
+        HydraulicActuators {
+            legs,
+            lower,
+            stroke: std::array::from_fn(|k| upper[k] - lower[k]),
+            supply: DEFAULT_SUPPLY_PRESSURE,
+        }
+    }
+
+    /// The piston of leg `k` at length `l` and rate `l_dot`.
+    #[inline(always)]
+    pub fn piston<T: Number>(&self, k: usize, l: T, l_dot: T) -> Piston<T> {
+        Piston { position: l - self.lower[k], stroke: T::constant(self.stroke[k]), rate: l_dot }
+    }
+
+    /// Checks the law's parameters and the strokes.
+    pub fn validate(&self) -> Result<(), ParameterError> {
+        self.legs.validate()?;
+        check_finite("pS", self.supply)?;
+        for k in 0..LEG_COUNT {
+            if !(self.stroke[k] > 0.0) {
+                return Err(ParameterError::new(
+                    format!("lmax[{}]", k + 1),
+                    format!("the hydraulic leg's stroke lmax - lmin = {:e} m must be > 0", self.stroke[k]),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One leg's hydraulic state.
+#[derive(Clone, Copy, Debug)]
+pub struct Chambers<T> {
+    /// `p_A`, `p_B`, Pa (gauge).
+    pub pa: T,
+    pub pb: T,
+    /// `s`, normalised spool position, and `s'`, 1/s.
+    pub spool: T,
+    pub spool_rate: T,
+}
+
+/// Where one leg's piston is: `x = l - lmin` (m), the stroke `L_s` (m) and `l'` (m/s).
+#[derive(Clone, Copy, Debug)]
+pub struct Piston<T> {
+    pub position: T,
+    pub stroke: T,
+    pub rate: T,
+}
+
+/// One leg's contribution to a right-hand side.
+#[derive(Clone, Copy, Debug)]
+pub struct HydraulicRate<T> {
+    /// `u = p_A A_A - p_B A_B`, N.
+    pub force: T,
+    /// `p_A'`, `p_B'`, Pa/s.
+    pub pa_rate: T,
+    pub pb_rate: T,
+    /// `s'` (1/s) and `s''` (1/s²).
+    pub spool_rate: T,
+    pub spool_acceleration: T,
+    /// `Q_S`, m³/s: drawn from the supply (leakage included).
+    pub supply_flow: T,
+    /// `P_S = p_S Q_S - p_T Q_T`, W.
+    pub supply_power: T,
+    /// `(p_A V_A p_A' + p_B V_B p_B') / beta`, W.
+    pub compression_power: T,
+    /// The lands' throttling, the null leakage and the internal leakage, W (>= 0).
+    pub dissipation: T,
+}
+
+impl HydraulicLegs {
+    /// `(A_A, A_B)`, m².
+    pub fn areas(&self) -> (f64, f64) {
+        let quarter_pi = 0.25 * std::f64::consts::PI;
+        (quarter_pi * self.bore * self.bore, quarter_pi * (self.bore * self.bore - self.rod * self.rod))
+    }
+
+    /// `K = Q_N / sqrt(dp_N / 2)`, m³/(s.Pa^1/2).
+    pub fn flow_coefficient(&self) -> f64 {
+        self.rated_flow / (0.5 * self.rated_pressure_drop).sqrt()
+    }
+
+    /// `(V_A, V_B)`, m³, at the piston position `x` in a stroke `L_s`.
+    #[inline(always)]
+    pub fn volumes<T: Number>(&self, piston: &Piston<T>) -> (T, T) {
+        let (area_a, area_b) = self.areas();
+        (piston.position * area_a + self.dead_volume_a, (piston.stroke - piston.position) * area_b + self.dead_volume_b)
+    }
+
+    /// The rates, the force, the flows and the powers of one leg (or six side by side) at its
+    /// state `chambers`, piston `piston`, saturated valve command `command` (in [-1, 1]) and
+    /// supply pressure `supply`: the law.
+    #[inline(always)]
+    pub fn rate<T: Number>(
+        &self,
+        chambers: &Chambers<T>,
+        piston: &Piston<T>,
+        command: T,
+        supply: T,
+    ) -> HydraulicRate<T> {
+        let (area_a, area_b) = self.areas();
+        let k = self.flow_coefficient();
+        let tank = self.tank_pressure;
+        let pcr2 = self.pcr * self.pcr;
+        let Chambers { pa, pb, spool, spool_rate } = *chambers;
+        // phi(dp) = dp / (dp^2 + p_cr^2)^(1/4).
+        let phi = |dp: T| dp / (dp * dp + pcr2).sqrt().sqrt();
+        let zero = T::constant(0.0);
+        let opening = spool * k;
+        // The four lands' flows (each >= 0 in the direction written), by the spool's side.
+        let extend = spool.greater(zero);
+        let retract = zero.greater(spool);
+        let supply_a = T::select(extend, opening * phi(supply - pa), zero);
+        let b_tank = T::select(extend, opening * phi(pb - tank), zero);
+        let closing = zero - opening;
+        let a_tank = T::select(retract, closing * phi(pa - tank), zero);
+        let supply_b = T::select(retract, closing * phi(supply - pb), zero);
+        // The null leakage, each chamber to supply and to tank.
+        let (drop_sa, drop_at, drop_sb, drop_bt) = (supply - pa, pa - tank, supply - pb, pb - tank);
+        let (leak_sa, leak_at) = (drop_sa * self.valve_leakage, drop_at * self.valve_leakage);
+        let (leak_sb, leak_bt) = (drop_sb * self.valve_leakage, drop_bt * self.valve_leakage);
+        let internal = (pa - pb) * self.internal_leakage;
+        let flow_a = (supply_a - a_tank) + (leak_sa - leak_at);
+        let flow_b = (supply_b - b_tank) + (leak_sb - leak_bt);
+        let (volume_a, volume_b) = self.volumes(piston);
+        let beta = self.bulk_modulus;
+        let pa_rate = (flow_a - piston.rate * area_a - internal) * beta / volume_a;
+        let pb_rate = (flow_b + piston.rate * area_b + internal) * beta / volume_b;
+        let supply_flow = (supply_a + supply_b) + (leak_sa + leak_sb);
+        let tank_flow = (a_tank + b_tank) + (leak_at + leak_bt);
+        let w = self.valve_omega;
+        HydraulicRate {
+            force: pa * area_a - pb * area_b,
+            pa_rate,
+            pb_rate,
+            spool_rate,
+            spool_acceleration: (command - spool) * (w * w) - spool_rate * (2.0 * self.valve_damping * w),
+            supply_flow,
+            supply_power: supply * supply_flow - tank_flow * tank,
+            compression_power: (pa * volume_a * pa_rate + pb * volume_b * pb_rate) / beta,
+            dissipation: ((supply_a * drop_sa + a_tank * drop_at) + (supply_b * drop_sb + b_tank * drop_bt))
+                + ((leak_sa * drop_sa + leak_at * drop_at) + (leak_sb * drop_sb + leak_bt * drop_bt))
+                + internal * (pa - pb),
+        }
+    }
+
+    /// The largest rate (1/s) of the leg's fast linear modes at a state: each chamber's own
+    /// `beta / V (K |s| phi'(dp) + 2 C_v + C_i)` (the orifice pole, up to `beta K / (V
+    /// sqrt(p_cr))` for an open land with little drop) and the spool's `|lambda| <= w_v max(1,
+    /// 2 zeta_v)`. An explicit method of stability interval `r` is stable for steps up to
+    /// about `r / rate`.
+    pub fn stiffness(&self, chambers: &Chambers<f64>, piston: &Piston<f64>, supply: f64) -> f64 {
+        let k = self.flow_coefficient();
+        let pcr2 = self.pcr * self.pcr;
+        // phi'(dp) = (dp^2 / 2 + p_cr^2) / (dp^2 + p_cr^2)^(5/4).
+        let slope = |dp: f64| {
+            let q = dp * dp + pcr2;
+            (0.5 * dp * dp + pcr2) / (q * q.sqrt().sqrt())
+        };
+        let s = chambers.spool.abs();
+        let (a_in, a_out, b_in, b_out) = if chambers.spool >= 0.0 {
+            (slope(supply - chambers.pa), 0.0, 0.0, slope(chambers.pb - self.tank_pressure))
+        } else {
+            (0.0, slope(chambers.pa - self.tank_pressure), slope(supply - chambers.pb), 0.0)
+        };
+        let leak = 2.0 * self.valve_leakage + self.internal_leakage;
+        let (va, vb) = self.volumes(piston);
+        let chamber_a = self.bulk_modulus / va * (k * s * (a_in + a_out) + leak);
+        let chamber_b = self.bulk_modulus / vb * (k * s * (b_in + b_out) + leak);
+        chamber_a.max(chamber_b).max(self.valve_omega * (2.0 * self.valve_damping).max(1.0))
+    }
+
+    /// The cap-side pressure `p_A` (Pa) at which the leg pushes with `force` (N) for the rod-side
+    /// pressure `p_B`.
+    pub fn cap_pressure(&self, force: f64, pb: f64) -> f64 {
+        let (area_a, area_b) = self.areas();
+        (force + pb * area_b) / area_a
+    }
+
+    /// Checks the parameters (FMI names in the errors).
+    pub fn validate(&self) -> Result<(), ParameterError> {
+        for (name, value, positive) in [
+            ("hydraulic.bore", self.bore, true),
+            ("hydraulic.rod", self.rod, false),
+            ("hydraulic.deadVolumeA", self.dead_volume_a, true),
+            ("hydraulic.deadVolumeB", self.dead_volume_b, true),
+            ("hydraulic.bulkModulus", self.bulk_modulus, true),
+            ("hydraulic.tankPressure", self.tank_pressure, false),
+            ("valve.ratedFlow", self.rated_flow, true),
+            ("valve.ratedPressureDrop", self.rated_pressure_drop, true),
+            ("valve.omega", self.valve_omega, true),
+            ("valve.damping", self.valve_damping, true),
+            ("valve.pcr", self.pcr, true),
+            ("valve.leakage", self.valve_leakage, false),
+            ("hydraulic.internalLeakage", self.internal_leakage, false),
+        ] {
+            check_finite(name, value)?;
+            if positive && !(value > 0.0) {
+                return Err(ParameterError::new(name, format!("must be > 0, got {value:e}")));
+            }
+            if !positive && value < 0.0 && name != "hydraulic.tankPressure" {
+                return Err(ParameterError::new(name, format!("must be >= 0, got {value:e}")));
+            }
+        }
+        if !(self.rod < self.bore) {
+            return Err(ParameterError::new(
+                "hydraulic.rod",
+                format!("must be smaller than hydraulic.bore = {:e} m, got {:e} m", self.bore, self.rod),
+            ));
+        }
+        if !(self.flow_coefficient().is_finite()) {
+            return Err(ParameterError::new(
+                "valve.ratedFlow",
+                format!(
+                    "the flow coefficient valve.ratedFlow / sqrt(valve.ratedPressureDrop / 2) = {:e} is not finite",
+                    self.flow_coefficient()
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The valve command `c = clamp(valve, -1, 1)` (NaN stays NaN, and is refused at the input).
+pub fn saturated(valve: f64) -> f64 {
+    valve.clamp(-1.0, 1.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn leg() -> (Chambers<f64>, Piston<f64>) {
+        (
+            Chambers { pa: 7.3e6, pb: 8.1e6, spool: 0.3, spool_rate: -2.0 },
+            Piston { position: 0.3, stroke: 0.7, rate: 0.4 },
+        )
+    }
+
+    /// `P_S = u l' + losses + compression power` to round-off, for either spool side, written
+    /// from the flows independently of the law's bookkeeping.
+    #[test]
+    fn the_power_balance_closes() {
+        let h = HydraulicLegs::default();
+        for spool in [0.3, -0.4, 0.0] {
+            let (mut c, p) = leg();
+            c.spool = spool;
+            let r = h.rate(&c, &p, 0.5, 16e6);
+            let residual = r.supply_power - (r.force * p.rate + r.dissipation + r.compression_power);
+            assert!(residual.abs() < 1e-9 * r.supply_power.abs().max(1.0), "spool {spool}: {residual:e} W");
+            assert!(r.dissipation >= 0.0);
+        }
+    }
+
+    /// At a large drop the regularised law is the square root: `Q = K s sqrt(dp)`, and the
+    /// rated flow passes at the rated drop over both lands.
+    #[test]
+    fn the_rated_flow_passes_at_the_rated_drop() {
+        let h = HydraulicLegs { valve_leakage: 0.0, internal_leakage: 0.0, ..HydraulicLegs::default() };
+        // Both lands see dp_N / 2: supply 7 MPa, p_A = 3.5 MPa, p_B = 3.5 MPa, tank 0, blocked piston.
+        let c = Chambers { pa: 3.5e6, pb: 3.5e6, spool: 1.0, spool_rate: 0.0 };
+        let p = Piston { position: 0.35, stroke: 0.7, rate: 0.0 };
+        let r = h.rate(&c, &p, 1.0, 7.0e6);
+        // The regularisation's deficit at dp = 3.5 MPa: (1 + (p_cr/dp)^2)^(-1/4) = 1 - 2.0e-4.
+        let deficit = (1.0 + (h.pcr / 3.5e6_f64).powi(2)).powf(-0.25);
+        assert!((r.supply_flow / (h.rated_flow * deficit) - 1.0).abs() < 1e-14, "{}", r.supply_flow / h.rated_flow);
+    }
+}
