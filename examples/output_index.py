@@ -71,7 +71,7 @@ SECTIONS = [
         ("hydraulic5_stuck_valve.csv", "leg 1's valve stuck at +0.2 from 1 s under feedback"),
         ("hydraulic_heave.png", "hydraulic mode: leg error, chamber pressures, spools, pump flow and power"),
         ("hydraulic_failures.png", "creep after the loss of control power, pump failure, stuck valve"),
-        ("hydraulic_work_precision.png", "error against wall time of RK4 and the adaptive method, stiff regime"),
+        ("hydraulic_work_precision.png", "pressure error against doStep wall time, RK4 and the adaptive method, stiff regime"),
         ("hydraulic_work_precision.md", "the same as a table"),
     ]),
     ("Linearisation (`examples/linearise.py`; [docs/control.md](../docs/control.md))", [
