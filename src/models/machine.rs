@@ -42,6 +42,28 @@ pub const fn platform_joints(vr: u32) -> V {
     )
 }
 
+/// `lmin`, m.
+pub const fn stroke_lower(vr: u32) -> V {
+    V::parameter(
+        "lmin",
+        &[6],
+        vr,
+        Some("m"),
+        "Shortest leg length (lower end stop) of leg k: below it the stop pushes the platform away from the base",
+    )
+}
+
+/// `lmax`, m.
+pub const fn stroke_upper(vr: u32) -> V {
+    V::parameter(
+        "lmax",
+        &[6],
+        vr,
+        Some("m"),
+        "Longest leg length (upper end stop) of leg k: above it the stop pulls the platform towards the base",
+    )
+}
+
 /// `leg.rodMass`, kg.
 pub const fn rod_mass(vr: u32) -> V {
     V::parameter("leg.rodMass", &[], vr, Some("kg"), "Mass m_r of each leg's rod (piston), hinged at A_k")

@@ -11,6 +11,7 @@
 //! | [`snapshot`] | the byte format of serialized FMU states |
 //! | [`platform`] | the `StewartPlatform` model |
 //! | [`controller`] | the `StewartController` model (programme, direct problem, feedback) |
+//! | [`cueing`] | the `StewartCueing` model (washout and workspace limiter) |
 //! | [`trivial`] | `TrivialPlatform`, the benchmarks' no-physics floor |
 //!
 //! One binary serves every model: `fmi2Instantiate`/`fmi3Instantiate*` pick the model by the
@@ -18,6 +19,7 @@
 //! its own; see [`crate::fmi::description`]).
 
 pub mod controller;
+pub mod cueing;
 pub mod declare;
 pub mod machine;
 pub mod platform;
@@ -286,6 +288,7 @@ pub const CACHE_BLOCKS: u8 = 31;
 pub enum AnyModel {
     Platform(Box<platform::PlatformModel>),
     Controller(Box<controller::ControllerModel>),
+    Cueing(Box<cueing::CueingModel>),
     Trivial(Box<trivial::TrivialModel>),
 }
 
@@ -294,11 +297,12 @@ pub enum AnyModel {
 pub enum ModelKind {
     Platform,
     Controller,
+    Cueing,
     Trivial,
 }
 
 impl ModelKind {
-    pub const ALL: [ModelKind; 3] = [ModelKind::Platform, ModelKind::Controller, ModelKind::Trivial];
+    pub const ALL: [ModelKind; 4] = [ModelKind::Platform, ModelKind::Controller, ModelKind::Cueing, ModelKind::Trivial];
 
     /// Packaged for the benchmarks only (`target/fmu/bench/`), not a product FMU.
     pub fn is_benchmark_floor(self) -> bool {
@@ -309,6 +313,7 @@ impl ModelKind {
         match self {
             ModelKind::Platform => &platform::INFO,
             ModelKind::Controller => &controller::INFO,
+            ModelKind::Cueing => &cueing::INFO,
             ModelKind::Trivial => &trivial::INFO,
         }
     }
@@ -318,6 +323,7 @@ impl ModelKind {
             ModelKind::Platform => 1,
             ModelKind::Controller => 2,
             ModelKind::Trivial => 3,
+            ModelKind::Cueing => 4,
         }
     }
 
@@ -326,6 +332,7 @@ impl ModelKind {
         match self {
             ModelKind::Platform => AnyModel::Platform(Box::default()),
             ModelKind::Controller => AnyModel::Controller(Box::default()),
+            ModelKind::Cueing => AnyModel::Cueing(Box::default()),
             ModelKind::Trivial => AnyModel::Trivial(Box::default()),
         }
     }
@@ -336,6 +343,7 @@ macro_rules! dispatch {
         match $self {
             AnyModel::Platform($m) => $e,
             AnyModel::Controller($m) => $e,
+            AnyModel::Cueing($m) => $e,
             AnyModel::Trivial($m) => $e,
         }
     };
@@ -346,6 +354,7 @@ impl AnyModel {
         match self {
             AnyModel::Platform(_) => ModelKind::Platform,
             AnyModel::Controller(_) => ModelKind::Controller,
+            AnyModel::Cueing(_) => ModelKind::Cueing,
             AnyModel::Trivial(_) => ModelKind::Trivial,
         }
     }
@@ -354,6 +363,7 @@ impl AnyModel {
         Ok(match kind {
             ModelKind::Platform => AnyModel::Platform(Box::new(platform::PlatformModel::restore(r)?)),
             ModelKind::Controller => AnyModel::Controller(Box::new(controller::ControllerModel::restore(r)?)),
+            ModelKind::Cueing => AnyModel::Cueing(Box::new(cueing::CueingModel::restore(r)?)),
             ModelKind::Trivial => AnyModel::Trivial(Box::new(trivial::TrivialModel::restore(r)?)),
         })
     }

@@ -13,6 +13,9 @@ pub static UNITS: &[UnitDefinition] = &[
     UnitDefinition { name: "m", base: [0, 1, 0, 0, 0, 0, 0, 0], display_units: &[("mm", 1000.0)] },
     UnitDefinition { name: "m/s", base: [0, 1, -1, 0, 0, 0, 0, 0], display_units: &[] },
     UnitDefinition { name: "m/s2", base: [0, 1, -2, 0, 0, 0, 0, 0], display_units: &[] },
+    UnitDefinition { name: "m/s3", base: [0, 1, -3, 0, 0, 0, 0, 0], display_units: &[] },
+    UnitDefinition { name: "m/s4", base: [0, 1, -4, 0, 0, 0, 0, 0], display_units: &[] },
+    UnitDefinition { name: "m.s", base: [0, 1, 1, 0, 0, 0, 0, 0], display_units: &[] },
     UnitDefinition { name: "kg", base: [1, 0, 0, 0, 0, 0, 0, 0], display_units: &[] },
     UnitDefinition { name: "kg.m2", base: [1, 2, 0, 0, 0, 0, 0, 0], display_units: &[] },
     UnitDefinition { name: "N", base: [1, 1, -2, 0, 0, 0, 0, 0], display_units: &[("kN", 1e-3)] },
@@ -36,6 +39,7 @@ pub static UNITS: &[UnitDefinition] = &[
     UnitDefinition { name: "m3/(s.Pa)", base: [-1, 4, 1, 0, 0, 0, 0, 0], display_units: &[] },
     UnitDefinition { name: "1/N", base: [-1, -1, 2, 0, 0, 0, 0, 0], display_units: &[] },
     UnitDefinition { name: "rad", base: [0, 0, 0, 0, 0, 0, 0, 1], display_units: &[("deg", DEG_PER_RAD)] },
+    UnitDefinition { name: "rad.s", base: [0, 0, 1, 0, 0, 0, 0, 1], display_units: &[] },
     UnitDefinition { name: "rad/s", base: [0, 0, -1, 0, 0, 0, 0, 1], display_units: &[("deg/s", DEG_PER_RAD)] },
     UnitDefinition { name: "rad/s2", base: [0, 0, -2, 0, 0, 0, 0, 1], display_units: &[("deg/s2", DEG_PER_RAD)] },
 ];

@@ -384,6 +384,11 @@ impl VariableGroup {
         VariableGroup { var_type: VariableType::Boolean, unit: None, ..self }
     }
 
+    /// A value that changes only at communication points and events (a Boolean output).
+    pub const fn discrete(self) -> Self {
+        VariableGroup { variability: Variability::Discrete, ..self }
+    }
+
     /// A parameter that may be changed between steps.
     pub const fn tunable(self) -> Self {
         VariableGroup { variability: Variability::Tunable, ..self }

@@ -20,6 +20,7 @@
 pub mod actuators;
 pub mod body;
 pub mod configuration;
+pub mod cueing;
 pub mod direct_problem;
 pub mod error;
 pub mod full_pivot_lu;

@@ -479,20 +479,8 @@ declare_variables! {
              with contact damping (Fstop). false = the paper's idealised legs of unlimited stroke",
         )
         .boolean(); boolean(parameters.stops_enabled),
-        LMIN => V::parameter(
-            "lmin",
-            &[6],
-            171,
-            Some("m"),
-            "Shortest leg length (lower end stop) of leg k: below it the stop pushes the platform away from the base",
-        ); real(parameters.stops.lower),
-        LMAX => V::parameter(
-            "lmax",
-            &[6],
-            177,
-            Some("m"),
-            "Longest leg length (upper end stop) of leg k: above it the stop pulls the platform towards the base",
-        ); real(parameters.stops.upper),
+        LMIN => machine::stroke_lower(171); real(parameters.stops.lower),
+        LMAX => machine::stroke_upper(177); real(parameters.stops.upper),
         STOP_STIFFNESS => V::parameter(
             "stops.stiffness",
             &[],
