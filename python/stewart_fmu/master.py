@@ -78,13 +78,17 @@ def from_ssp(path):
     return _module().System.from_ssp(str(path))
 
 
-def run(system, stop_time, step, scheme="gauss-seidel", values=None, record=(), interval=None, overrides=()):
+def run(system, stop_time, step, scheme="gauss-seidel", values=None, record=(), interval=None, overrides=(),
+        inputs=None):
     """Runs `system` from 0 to `stop_time` at the communication step `step` (Gauss-Seidel or
     Jacobi; the communication points are summed, t += h, as stewart_fmu.cosim and FMPy's SSP
     master count them). `values`: {"component.variable": value} set in initialisation mode;
     `record`: "component.variable" names recorded every `interval` (a multiple of `step`;
     default every step); `overrides`: (name, value, from_time) inputs held at a value (a
-    failed actuator). Returns (times, rows, status, message): `rows` one row of the recorded
+    failed actuator); `inputs`: {component: {"time": times, variable: values, ...}} inputs no
+    connection drives, interpolated linearly to each communication point (numpy.interp's bits)
+    and held after the last time (a vehicle's motion). Returns (times, rows, status, message):
+    `rows` one row of the recorded
     values per recorded point, status "ok" or the failed call as FMPy words it."""
     check_times(stop_time, step, "stop_time", "step")
     every = 1
@@ -92,8 +96,12 @@ def run(system, stop_time, step, scheme="gauss-seidel", values=None, record=(), 
         every = int(round(interval / step))
         if every < 1 or abs(every * step - interval) > 1e-9 * interval:
             raise ValueError(f"interval = {interval}: a whole multiple of step = {step} is expected")
+    tables = [(component, [float(x) for x in columns["time"]],
+               [(name, [float(x) for x in column]) for name, column in columns.items() if name != "time"])
+              for component, columns in (inputs or {}).items()]
     out = system.run(int(round(stop_time / step)), float(step), scheme=scheme, values=list((values or {}).items()),
-                     overrides=[(n, float(v), float(t)) for n, v, t in overrides], record=list(record), every=every)
+                     overrides=[(n, float(v), float(t)) for n, v, t in overrides], record=list(record), every=every,
+                     inputs=tables)
     times = np.frombuffer(out["times"], dtype="<f8")
     rows = np.frombuffer(out["values"], dtype="<f8").reshape(len(times), len(record))
     status = "ok" if out["status"] == "ok" else out["call"]

@@ -56,6 +56,9 @@ struct PySystem {
     names: Vec<String>,
 }
 
+/// An input table from Python: (component, times, [(input name, values)]).
+type InputTableArgs = (String, Vec<f64>, Vec<(String, Vec<f64>)>);
+
 /// A study point from Python: (steps, step, values by qualified name, overrides as (qualified
 /// name, value, from time)).
 type Point<'py> = (usize, f64, Vec<(String, Bound<'py, PyAny>)>, Vec<(String, f64, f64)>);
@@ -157,7 +160,7 @@ impl PySystem {
     /// (the FMU's last problem), `call` (the FMI call that failed, e.g. "fmi2DoStep failed
     /// with status 2 (discard).") and `component` (its component).
     #[pyo3(signature = (steps, step, *, scheme = "gauss-seidel", start_time = 0.0,
-                        values = vec![], overrides = vec![], record = vec![], every = 1))]
+                        values = vec![], overrides = vec![], record = vec![], every = 1, inputs = vec![]))]
     #[allow(clippy::too_many_arguments)]
     fn run<'py>(
         &self,
@@ -170,6 +173,7 @@ impl PySystem {
         overrides: Vec<(String, f64, f64)>,
         record: Vec<String>,
         every: usize,
+        inputs: Vec<InputTableArgs>,
     ) -> PyResult<Bound<'py, PyDict>> {
         // Written so that NaN fails too.
         let good = step.is_finite() && step > 0.0 && start_time.is_finite();
@@ -181,8 +185,13 @@ impl PySystem {
             self.inner.lock().map_err(|_| PyRuntimeError::new_err("the system is unusable after a panic"))?;
         let system = guard.as_mut().ok_or_else(|| PyRuntimeError::new_err("the system is closed"))?;
         let (values, overrides) = PySystem::spec(system, values, overrides)?;
+        let tables = inputs
+            .into_iter()
+            .map(|(component, times, columns)| system.input_table(&component, times, columns))
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(PyValueError::new_err)?;
         let mut recorder = Recorder::new(system, &record, every).map_err(PyValueError::new_err)?;
-        let spec = RunSpec { start_time, step, steps, scheme, values, overrides };
+        let spec = RunSpec { start_time, step, steps, scheme, values, overrides, tables };
         let outcome = py.detach(|| catch_unwind(AssertUnwindSafe(|| system.run(&spec, &mut recorder))));
         let outcome = match outcome {
             Ok(outcome) => outcome,
@@ -242,6 +251,7 @@ impl PySystem {
                 scheme: Scheme::GaussSeidel,
                 values,
                 overrides,
+                tables: vec![],
             });
             specs.push(spec.map_err(|e| format!("ValueError: {}", e.value(py))));
         }

@@ -11,7 +11,8 @@ use crate::system::{Given, Override, RunSpec, Scheme, convert};
 pub const USAGE: &str = "\
 usage: stewart-master run SYSTEM.ssp --stop-time T --step H [--scheme gauss-seidel|jacobi]
                           [--set COMPONENT.VARIABLE=VALUE ...] [--record COMPONENT.VARIABLE ...]
-                          [--interval DT] [--fail COMPONENT.VARIABLE=VALUE@TIME ...] [--out FILE.csv]
+                          [--interval DT] [--fail COMPONENT.VARIABLE=VALUE@TIME ...]
+                          [--input COMPONENT=TABLE.csv ...] [--out FILE.csv]
        stewart-master describe SYSTEM.ssp
 
 run:      steps the system of the SSP file (FMI 2 Co-Simulation FMUs, connected as its
@@ -20,7 +21,10 @@ run:      steps the system of the SSP file (FMI 2 Co-Simulation FMUs, connected 
           schemes). --set sets a parameter or input in initialisation mode (after the SSP's
           bindings); --record writes those outputs as CSV (to --out, or standard output) every
           DT (a multiple of H; default every step); --fail holds an input at VALUE from TIME on
-          (a failed actuator). A summary line (steps, time per step, status) goes to standard
+          (a failed actuator); --input sets inputs of COMPONENT that no connection drives from a
+          CSV table (a header row `time` and the inputs' names, then one row per time, s), linearly
+          interpolated to each communication point and held after the last row (a vehicle's
+          motion for StewartMotionSystem.ssp). A summary line (steps, time per step, status) goes to standard
           error. Exit status: 0 the run completed, 1 an FMU ended it early (discard or error;
           the FMU's message is printed), 2 the command was wrong.
 describe: the components, their FMUs, parameter bindings and the connections.";
@@ -34,6 +38,47 @@ pub fn main(args: &[String]) -> i32 {
             2
         }
     }
+}
+
+/// A table's times and its named columns.
+type Table = (Vec<f64>, Vec<(String, Vec<f64>)>);
+
+/// A CSV table: a header row (`time`, then names), one row of numbers per time.
+fn read_table(path: &Path) -> Result<Table, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let mut lines = text.lines().filter(|l| !l.trim().is_empty());
+    let header: Vec<String> = lines
+        .next()
+        .ok_or_else(|| format!("{}: empty", path.display()))?
+        .split(',')
+        .map(|h| h.trim().to_string())
+        .collect();
+    if header.first().map(String::as_str) != Some("time") {
+        return Err(format!("{}: the first column must be `time` (s), got {:?}", path.display(), header.first()));
+    }
+    let mut columns: Vec<Vec<f64>> = vec![vec![]; header.len()];
+    for (row, line) in lines.enumerate() {
+        let cells: Vec<&str> = line.split(',').collect();
+        if cells.len() != header.len() {
+            return Err(format!(
+                "{}: row {} has {} cells for {} columns",
+                path.display(),
+                row + 2,
+                cells.len(),
+                header.len()
+            ));
+        }
+        for (column, cell) in columns.iter_mut().zip(cells) {
+            let x = cell
+                .trim()
+                .parse::<f64>()
+                .map_err(|_| format!("{}: row {}: {cell:?} is not a number", path.display(), row + 2))?;
+            column.push(x);
+        }
+    }
+    let mut columns = columns.into_iter();
+    let times = columns.next().unwrap_or_default();
+    Ok((times, header.into_iter().skip(1).zip(columns).collect()))
 }
 
 fn parse_given(text: &str) -> Given {
@@ -92,7 +137,7 @@ fn command(args: &[String]) -> Result<i32, String> {
     }
     let (mut stop, mut step, mut scheme, mut interval, mut out) = (None, None, Scheme::GaussSeidel, None, None);
     let mut values = vec![vec![]; system.component_count()];
-    let (mut record, mut overrides) = (vec![], vec![]);
+    let (mut record, mut overrides, mut tables) = (vec![], vec![], vec![]);
     let mut i = 2;
     while i < args.len() {
         let option = args[i].as_str();
@@ -112,6 +157,13 @@ fn command(args: &[String]) -> Result<i32, String> {
                 let value = convert(kind, parse_given(given))
                     .map_err(|expected| format!("--set {text}: {expected} is expected for {name}"))?;
                 values[c].push((vr, value));
+            }
+            "--input" => {
+                let text = value.ok_or("--input needs COMPONENT=TABLE.csv")?;
+                let (component, file) =
+                    text.split_once('=').ok_or_else(|| format!("--input {text}: write COMPONENT=TABLE.csv"))?;
+                let (times, columns) = read_table(Path::new(file))?;
+                tables.push(system.input_table(component, times, columns).map_err(|e| format!("--input {text}: {e}"))?);
             }
             "--fail" => {
                 let text = value.ok_or("--fail needs COMPONENT.VARIABLE=VALUE@TIME")?;
@@ -152,7 +204,7 @@ fn command(args: &[String]) -> Result<i32, String> {
         }
     };
     let mut recorder = Recorder::new(&system, &record, every)?;
-    let spec = RunSpec { start_time: 0.0, step, steps: steps as usize, scheme, values, overrides };
+    let spec = RunSpec { start_time: 0.0, step, steps: steps as usize, scheme, values, overrides, tables };
     let started = Instant::now();
     let outcome = system.run(&spec, &mut recorder);
     let seconds = started.elapsed().as_secs_f64();

@@ -24,4 +24,4 @@ pub mod system;
 mod xml;
 
 pub use fmu::Fmu;
-pub use system::{Given, Observer, Override, Readings, RunSpec, Scheme, System};
+pub use system::{Given, InputTable, Observer, Override, Readings, RunSpec, Scheme, System};

@@ -118,6 +118,74 @@ pub struct Override {
     pub from: f64,
 }
 
+/// Inputs no connection drives, from a table (a vehicle's motion from a file): at each
+/// communication point the values interpolated linearly between the table's times, as
+/// `numpy.interp` does it (the same bits), the first row before the first time, the last after
+/// the last.
+#[derive(Clone, Debug)]
+pub struct InputTable {
+    pub component: usize,
+    pub value_references: Vec<u32>,
+    /// Increasing times, s.
+    pub times: Vec<f64>,
+    /// One column per value reference, one value per time.
+    pub columns: Vec<Vec<f64>>,
+}
+
+impl InputTable {
+    /// The values at `t` into `out`; `cursor` remembers where the last call found `t` (the
+    /// communication points increase, so the search is a step or two).
+    pub fn at(&self, t: f64, cursor: &mut usize, out: &mut Vec<f64>) {
+        let n = self.times.len();
+        out.clear();
+        if t <= self.times[0] || n == 1 {
+            out.extend(self.columns.iter().map(|c| c[0]));
+            return;
+        }
+        if t >= self.times[n - 1] {
+            out.extend(self.columns.iter().map(|c| c[n - 1]));
+            return;
+        }
+        if *cursor >= n - 1 || self.times[*cursor] > t {
+            *cursor = 0;
+        }
+        while self.times[*cursor + 1] <= t {
+            *cursor += 1;
+        }
+        let j = *cursor;
+        let (x0, x1) = (self.times[j], self.times[j + 1]);
+        out.extend(self.columns.iter().map(|c| {
+            let slope = (c[j + 1] - c[j]) / (x1 - x0);
+            slope * (t - x0) + c[j]
+        }));
+    }
+
+    /// Why the table cannot be used: no rows, times that do not increase, a value that is not
+    /// finite.
+    pub fn check(&self) -> Result<(), String> {
+        if self.times.is_empty() {
+            return Err("the table has no rows".into());
+        }
+        if self.times.iter().any(|t| !t.is_finite()) {
+            return Err("a time is not a finite number".into());
+        }
+        if let Some(i) = self.times.windows(2).position(|w| w[1] <= w[0]) {
+            return Err(format!(
+                "the times must increase: row {} has {} after {}",
+                i + 2,
+                self.times[i + 1],
+                self.times[i]
+            ));
+        }
+        for column in &self.columns {
+            if let Some(i) = column.iter().position(|x| !x.is_finite()) {
+                return Err(format!("row {} holds a value that is not a finite number", i + 1));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// What a run reads after every step and does with it.
 pub trait Observer {
     /// Per component, the Real value references to read after each step.
@@ -175,6 +243,8 @@ pub struct RunSpec {
     pub scheme: Scheme,
     pub values: Vec<Vec<(u32, Value)>>,
     pub overrides: Vec<Override>,
+    /// Inputs from tables (none: an empty list).
+    pub tables: Vec<InputTable>,
 }
 
 pub struct System {
@@ -301,6 +371,40 @@ impl System {
         Ok((c, vr, kind))
     }
 
+    /// An input table of `component` for the variables `columns` (names and values, one
+    /// value per time): each must be a Real input that no connection drives.
+    pub fn input_table(
+        &self,
+        component: &str,
+        times: Vec<f64>,
+        columns: Vec<(String, Vec<f64>)>,
+    ) -> Result<InputTable, String> {
+        let c = self.component_index(component)?;
+        let connected = self.connected_inputs(c);
+        let mut value_references = vec![];
+        let mut values = vec![];
+        for (name, column) in columns {
+            let (vr, kind) = self.variable(c, &name)?;
+            let causality = &self.fmu(c).description.find(&name)?.causality;
+            if causality != "input" || kind != Type::Real {
+                return Err(format!("{component}.{name} is not a Real input ({causality}): a table sets inputs only"));
+            }
+            if connected.contains(&vr) {
+                return Err(format!(
+                    "{component}.{name} is driven by a connection of the system: a table cannot set it"
+                ));
+            }
+            if column.len() != times.len() {
+                return Err(format!("{component}.{name}: {} values for {} times", column.len(), times.len()));
+            }
+            value_references.push(vr);
+            values.push(column);
+        }
+        let table = InputTable { component: c, value_references, times, columns: values };
+        table.check().map_err(|e| format!("the input table of {component}: {e}"))?;
+        Ok(table)
+    }
+
     /// Per component, the input value references connections drive.
     pub fn connected_inputs(&self, component: usize) -> Vec<u32> {
         self.components[component].inputs.iter().map(|&(vr, _, _)| vr).collect()
@@ -406,7 +510,13 @@ impl System {
         }
         let mut scratch_vrs: Vec<u32> = vec![];
         let mut scratch_values: Vec<f64> = vec![];
+        let mut cursors = vec![0usize; spec.tables.len()];
+        let mut table_values: Vec<f64> = vec![];
 
+        // The tables' inputs at the start, so that the first readings see them.
+        if let Err((k, e)) = self.set_tables(spec, spec.start_time, &mut cursors, &mut table_values) {
+            return Outcome { steps: 0, time: spec.start_time, failure: Some(self.failure(k, e, true)) };
+        }
         // After initialisation: the sources (Gauss-Seidel reads them at each point) and the
         // observer's values.
         for k in 0..n {
@@ -423,6 +533,11 @@ impl System {
 
         let mut time = spec.start_time;
         for i in 0..spec.steps {
+            // Inputs from tables first: no connection drives them, and a component with direct
+            // feed-through is read after its inputs are set.
+            if let Err((k, error)) = self.set_tables(spec, time, &mut cursors, &mut table_values) {
+                return Outcome { steps: i, time, failure: Some(self.failure(k, error, false)) };
+            }
             let result = if jacobi {
                 self.jacobi_step(
                     time,
@@ -461,6 +576,22 @@ impl System {
             observer.step(i, time, &readings);
         }
         Outcome { steps: spec.steps, time, failure: None }
+    }
+
+    /// Sets the inputs of the tables at `time`.
+    fn set_tables(
+        &mut self,
+        spec: &RunSpec,
+        time: f64,
+        cursors: &mut [usize],
+        values: &mut Vec<f64>,
+    ) -> Result<(), (usize, CallError)> {
+        for (table, cursor) in spec.tables.iter().zip(cursors.iter_mut()) {
+            table.at(time, cursor, values);
+            let instance = self.components[table.component].instance.as_mut().expect("initialised");
+            instance.set_real(&table.value_references, values).map_err(|e| (table.component, e))?;
+        }
+        Ok(())
     }
 
     /// Sets component `k`'s connected inputs from `sources` (with the overrides active at
