@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The main job: build and package the FMUs (Linux x86-64 and aarch64, Windows x64), then run the paper's experiments, the workspace
 # scenarios (end stops, singular arrangements) and the machine's (heavy legs, joint limits,
-# friction, electric drives) through it with FMPy, and the design studies on
+# friction, electric drives, hydraulic legs) and motion cueing through it with FMPy, and the design studies on
 # Dask, writing CSV and Parquet data and PNG plots to output/ (or the folder given as the first
 # argument).
 set -euo pipefail
@@ -26,17 +26,19 @@ step "the drive scenarios: holding, dynamic braking, voltage commands, a failed 
 .venv/bin/python examples/drive_scenarios.py "$OUT"
 step "the hydraulic scenarios: holding, heave, loss of control power, pump failure, a stuck valve"
 .venv/bin/python examples/hydraulic_scenarios.py "$OUT"
+step "motion cueing: the truck's manoeuvres, the motion system, the harsh manoeuvres, the OMCT (about a minute)"
+.venv/bin/python examples/cueing_scenarios.py "$OUT"
 step "the linearisation about the neutral pose"
 .venv/bin/python examples/linearise.py --output "$OUT"
 # Design studies on a local Dask cluster (one worker per core) with the compiled co-simulation
 # master (stewart-sweep's default): results.parquet, summary, plots.
-for study in stability payload power_loss workspace; do
+for study in stability payload power_loss workspace washout; do
     step "design study $study on a local Dask cluster (seconds to half a minute; a progress bar)"
     .venv/bin/stewart-sweep "studies/$study.toml" --out "$OUT/$study"
 done
 step "the payload Monte Carlo: 10,000 runs of 1,500 closed-loop steps on a local Dask cluster (under a minute on 2 cores; a progress bar)"
 .venv/bin/stewart-sweep studies/payload_monte_carlo.toml --out "$OUT/payload_monte_carlo"
-# The viewer with seven results (heave, power loss, actuator failure, start-up, heavy legs, hydraulic legs, the ripple on its joint limits).
+# The viewer with eight results (heave, power loss, actuator failure, start-up, heavy legs, hydraulic legs, motion cueing, the ripple on its joint limits).
 step "the viewer's results"
 .venv/bin/python examples/viewer_data.py "$OUT/viewer"
 # What each file in the output folder is.

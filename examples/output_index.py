@@ -74,6 +74,20 @@ SECTIONS = [
         ("hydraulic_work_precision.png", "pressure error against doStep wall time, RK4 and the adaptive method, stiff regime"),
         ("hydraulic_work_precision.md", "the same as a table"),
     ]),
+    ("Motion cueing: the truck's manoeuvres, the motion system, the harsh manoeuvres, the OMCT "
+     "(`examples/cueing_scenarios.py`; SI; [docs/cueing.md](../docs/cueing.md))", [
+        ("cueing_summary.txt", "the runs' results as printed by the main job"),
+        ("manoeuvres/*.csv", "the vehicle's motion at the driver's head: time (s), f[1..3] (m/s2, cabin axes, "
+                             "(0, 0, 9.81) at rest), omega[1..3] (rad/s); the cueing FMU's inputs"),
+        ("cueing_manoeuvres.png", "each default manoeuvre through StewartCueing: the vehicle's and the simulator's "
+                                  "specific force and angular velocity side by side"),
+        ("cueing_brake.csv", "the braking through StewartMotionSystem.ssp: vehicle, pose command, fsim, legs"),
+        ("cueing_brake.png", "the braking: specific force, pitch and washout, leg lengths"),
+        ("cueing_harsh.csv", "the harsh manoeuvres in the closed loop: legs' range, the limiter's least scale, "
+                             "the cue's error"),
+        ("cueing_omct.csv", "the Objective Motion Cueing Test of the defaults: gain and phase per test"),
+        ("cueing_omct.png", "the same as Bode diagrams, with the filters' transfer functions dashed"),
+    ]),
     ("Linearisation (`examples/linearise.py`; [docs/control.md](../docs/control.md))", [
         ("linearisation.json", "A, B, C, D about the neutral pose, the modes, the critical gain"),
         ("root_locus.png", "closed-loop eigenvalues against the feedback gain"),

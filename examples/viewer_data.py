@@ -1,4 +1,4 @@
-"""The main job's 3-D viewer: writes the built page and seven results into output/viewer/ (or the
+"""The main job's 3-D viewer: writes the built page and eight results into output/viewer/ (or the
 folder given), listed in its dataset menu, and prints how to serve it.
 
 - the default controller driving the heave programme (SI, 10 s at 1 ms);
@@ -8,7 +8,9 @@ folder given), listed in its dataset menu, and prints how to serve it.
 - heavy legs (40 kg cylinders, 15 kg rods) on the heave programme;
 - the open-loop 5 % ripple per leg tips the platform onto its joint limits (red joints);
 - hydraulic servo legs on the heave programme: the cylinders coloured by their load pressure,
-  the pressures and spools plotted.
+  the pressures and spools plotted;
+- motion cueing: the truck's braking through the whole motion system (cueing -> controller ->
+  platform), the vehicle's and the simulator's specific force and angular velocity plotted.
 """
 
 import sys
@@ -16,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from stewart_fmu import Platform
+from stewart_fmu import Platform, cueing, vehicle
 from stewart_fmu.cosim import closed_loop
 from stewart_fmu.machine import HEAVY, ripple_run
 from stewart_fmu.viewer import HYDRAULIC_VIEW_OUTPUTS, VIEW_OUTPUTS, stand, view
@@ -66,6 +68,11 @@ def main():
     loop("hydraulic_heave", "hydraulic servo legs, heave programme: cylinders coloured by load pressure (SI)",
          record=RECORD + HYDRAULIC_VIEW_OUTPUTS, t_end=10.0, h=1e-3, platform_reals={"drive": 2},
          controller_integers={"drive": 2})
+    braking = cueing.motion_system(vehicle.brake(), record=tuple(RECORD))
+    # Every tenth row (100 per second) keeps the file small.
+    url = view({n: c[::10] for n, c in braking.items()}, stand(), OUT, "cueing_braking",
+               "motion cueing: a truck brakes 3 m/s2 to a stop; vehicle and simulator cues (SI)")
+    print(f"viewer: cueing braking: {len(braking['time'][::10])} rows -> {url}")
     columns, events, status = ripple_run(10.0, 0.01)
     url = view(columns, stand(), OUT, "ripple_joint_limits", "open-loop 5 % ripple per leg: resting on the joint limits (SI)")
     print(f"viewer: ripple: {len(columns['time'])} rows ({status}, {len(events)} joint-limit events) -> {url}")

@@ -16,9 +16,10 @@ PYTHON="${PYTHON:-.venv/bin/python}"
 STAGE=target/wheel/stage
 DATA="$STAGE/stewart_fmu/data"
 
-FMUS=(target/fmu/StewartPlatform.fmu target/fmu/StewartController.fmu target/fmu/StewartSystem.ssp
-      target/fmu/StewartSystemDrives.ssp
-      target/fmu/fmi3/StewartPlatform.fmu target/fmu/fmi3/StewartController.fmu)
+FMUS=(target/fmu/StewartPlatform.fmu target/fmu/StewartController.fmu target/fmu/StewartCueing.fmu
+      target/fmu/StewartSystem.ssp target/fmu/StewartSystemDrives.ssp target/fmu/StewartSystemHydraulic.ssp
+      target/fmu/StewartMotionSystem.ssp
+      target/fmu/fmi3/StewartPlatform.fmu target/fmu/fmi3/StewartController.fmu target/fmu/fmi3/StewartCueing.fmu)
 MASTER=target/release/libstewart_master_py.so
 for f in "${FMUS[@]}" viewer/dist/index.html "$MASTER"; do
     if [ ! -f "$f" ]; then

@@ -25,6 +25,7 @@ DATA = PACKAGE / "data"  # in a wheel: fmu/ (as target/fmu/) and viewer/ (the bu
 FMU_DIR = ROOT / "target" / "fmu" if IN_REPOSITORY else DATA / "fmu"
 PLATFORM_FMU = Path(os.environ.get("STEWART_PLATFORM_FMU") or FMU_DIR / "StewartPlatform.fmu")
 CONTROLLER_FMU = Path(os.environ.get("STEWART_CONTROLLER_FMU") or PLATFORM_FMU.parent / "StewartController.fmu")
+CUEING_FMU = Path(os.environ.get("STEWART_CUEING_FMU") or PLATFORM_FMU.parent / "StewartCueing.fmu")
 
 
 def fmu_file(path, option="--fmu"):
@@ -40,7 +41,7 @@ def fmu_file(path, option="--fmu"):
                  "builds, which does), or point at them")
     else:
         where = "point at the FMUs"
-    for variable in ("STEWART_PLATFORM_FMU", "STEWART_CONTROLLER_FMU"):
+    for variable in ("STEWART_PLATFORM_FMU", "STEWART_CONTROLLER_FMU", "STEWART_CUEING_FMU"):
         if os.environ.get(variable) and Path(os.environ[variable]) == path:
             where = f"the environment variable {variable} names it; correct it or " + where
     raise FileNotFoundError(f"{path.name} not found at {path}: {where}: set the environment variables "

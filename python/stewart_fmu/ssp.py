@@ -1,6 +1,7 @@
 """The SSP systems the package ships (StewartSystem.ssp: the closed loop on leg forces;
 StewartSystemDrives.ssp: on the drives' voltages, `drive = 1`; StewartSystemHydraulic.ssp: on
-the servo valves' commands with the chamber pressures measured, `drive = 2`) and the reading of their
+the servo valves' commands with the chamber pressures measured, `drive = 2`;
+StewartMotionSystem.ssp: motion cueing ahead of the closed loop) and the reading of their
 system structure, for the Python master (`stewart_fmu.cosim`), the compiled one
 (`stewart_fmu.master`) and the studies (`stewart_fmu.study`)."""
 
@@ -15,6 +16,9 @@ SYSTEM_SSP = Path(PLATFORM_FMU).parent / "StewartSystem.ssp"
 SYSTEM_DRIVES_SSP = Path(PLATFORM_FMU).parent / "StewartSystemDrives.ssp"
 # The closed loop with hydraulic servo legs (docs/model.md §10): parameter bindings set drive = 2.
 SYSTEM_HYDRAULIC_SSP = Path(PLATFORM_FMU).parent / "StewartSystemHydraulic.ssp"
+# The whole motion system (docs/cueing.md): vehicle -> StewartCueing -> StewartController
+# (programme = 3, a parameter binding) -> StewartPlatform.
+MOTION_SYSTEM_SSP = Path(PLATFORM_FMU).parent / "StewartMotionSystem.ssp"
 #: The shipped system of each `drive`.
 SYSTEMS = {0: SYSTEM_SSP, 1: SYSTEM_DRIVES_SSP, 2: SYSTEM_HYDRAULIC_SSP}
 
@@ -33,3 +37,23 @@ def couplings():
     StewartSystem.ssd (forces), StewartSystemDrives.ssd (voltages) and StewartSystemHydraulic.ssd
     (valve commands), without bindings."""
     return {drive: system_description(fmu_file(ssp), drive == 0) for drive, ssp in SYSTEMS.items()}
+
+
+def connections(ssd):
+    """The connections of an SSD text: (start element, start connector, end element, end
+    connector) in the file's order."""
+    pattern = (r'<ssd:Connection startElement="([^"]+)" startConnector="([^"]+)" endElement="([^"]+)" '
+               r'endConnector="([^"]+)"/>')
+    return re.findall(pattern, ssd)
+
+
+def bindings(ssd):
+    """The inline parameter bindings of an SSD text: {component: {parameter: value}} (Real
+    values as floats, Integer ones as ints, Boolean ones as bools)."""
+    out = {}
+    for name, body in re.findall(r'<ssd:Component name="([^"]+)".*?>(.*?)</ssd:Component>', ssd, flags=re.S):
+        for parameter, kind, value in re.findall(
+                r'<ssv:Parameter name="([^"]+)"><ssv:(Real|Integer|Boolean) value="([^"]+)"/>', body):
+            convert = {"Real": float, "Integer": int, "Boolean": lambda v: v == "true"}[kind]
+            out.setdefault(name, {})[parameter] = convert(value)
+    return out

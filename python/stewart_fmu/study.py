@@ -52,7 +52,7 @@ from .study_schema import DEFAULT_MAX_RUNS, StudyError
 
 MASTERS = ("compiled", "fmpy")
 METRICS = ["max_leg_error", "max_pose_error", "stable", "discard_time", "min_kappa", "max_stop_force",
-           "energy_residual", "peak_deceleration", "final_z"]
+           "energy_residual", "peak_deceleration", "final_z", "cue_error", "max_usage", "least_scale", "max_tilt"]
 
 
 def plan(path, max_runs=DEFAULT_MAX_RUNS, fmus=None):
@@ -163,9 +163,12 @@ def fmus_for(spec, paths=None):
     """The FMUs a study needs, as bytes (they travel to the workers; no shared file system).
     `paths`: `study_schema.fmu_paths()`, the package's FMUs by default."""
     paths = paths or study_schema.fmu_paths()
-    roles = ("platform", "controller") if spec["study"]["system"] == "closed-loop" else ("platform",)
-    fmus = {role: Path(fmu_file(paths[role], "--fmu" if role == "platform" else "--controller-fmu")).read_bytes()
-            for role in roles}
+    roles = study_schema.ROLES[spec["study"]["system"]]
+    options = {"platform": "--fmu", "controller": "--controller-fmu", "cueing": "--cueing-fmu"}
+    fmus = {role: Path(fmu_file(paths[role], options[role])).read_bytes() for role in roles}
+    if spec["study"]["system"] == "cueing":
+        # The vehicle's motion travels with the FMUs (a worker may not see the study's files).
+        fmus["manoeuvre"] = study_schema.manoeuvre_columns(spec["study"])
     if "controller" in fmus:
         try:
             fmus["couplings"] = couplings()  # the compiled master's: they travel with the FMUs
@@ -232,7 +235,10 @@ def execute(spec, run, fmus, master="fmpy"):
     row = {m: math.nan for m in METRICS}
     row.update(status="ok", message="")
     try:
-        _execute(spec, run, fmus, row)
+        if spec["study"]["system"] == "cueing":
+            _execute_cueing(spec, run, fmus, row)
+        else:
+            _execute(spec, run, fmus, row)
     except Exception as e:  # noqa: BLE001 - a failed run is data, never the study's crash
         _drop_components()
         row.update(status="error", message=f"{type(e).__name__}: {e}", stable=False)
@@ -429,6 +435,48 @@ def _execute(spec, run, fmus, row):
     if closed:
         row.update(max_leg_error=leg_error, max_pose_error=pose_error)
     _finish(study, row, closed)
+
+
+def _execute_cueing(spec, run, fmus, row):
+    """One run of a cueing study: the cueing FMU alone on the study's manoeuvre (interpolated to
+    the communication points, held over each step). Metrics: `cue_error`, the root mean square
+    of |f - fsim| (m/s2: the cue the driver misses); `max_usage`, the washout's largest
+    workspace usage (1: a leg at its margin); `least_scale`, the limiter's least share of the
+    washout's command; `max_tilt`, the largest |roll| or |pitch| commanded (rad)."""
+    from . import cueing, vehicle
+    study = spec["study"]
+    cue = _component("cueing", fmus["cueing"])
+    problems = study_schema.check_run(spec, run, {"cueing": cue.variables})
+    if problems:
+        row.update(status="error", message="; ".join(problems), stable=False)
+        return
+    h = float(run.get("step", study["step"]))
+    stop = float(run.get("stop_time", study["stop_time"]))
+    manoeuvre = fmus["manoeuvre"]
+    try:
+        cue.start({k.partition(".")[2]: v for k, v in run.items() if k.startswith("cueing.")})
+    except FMICallException as e:
+        row.update(status="error", message=cue.last_problem() or str(e), stable=False)
+        return
+    inputs = cueing.F + cueing.OMEGA
+    outputs = cueing.FSIM + ["workspace.usage", "workspace.scale", "pose.angles[1]", "pose.angles[2]"]
+    squares, count, usage, scale, tilt, t = 0.0, 0, 0.0, 1.0, 0.0, 0.0
+    try:
+        for i in range(int(round(stop / h)) + 1):
+            f, w = vehicle.at(manoeuvre, t)
+            cue.set_values(inputs, np.concatenate([f, w]))
+            o = cue.values(outputs)
+            squares += float(np.sum((o[:3] - f) ** 2))
+            count += 1
+            usage, scale = max(usage, float(o[3])), min(scale, float(o[4]))
+            tilt = max(tilt, abs(float(o[5])), abs(float(o[6])))
+            if i < round(stop / h):
+                cue.slave.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+                t += h
+    except FMICallException as e:
+        row.update(status="discard" if e.status == 2 else "error", discard_time=t, message=cue.last_problem() or str(e))
+    row.update(cue_error=math.sqrt(squares / max(count, 1)), max_usage=usage, least_scale=scale, max_tilt=tilt)
+    row["stable"] = row["status"] == "ok"
 
 
 def _steps(platform, controller, n, h, commands, held):

@@ -15,7 +15,7 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path, PurePosixPath
 
-from .core import CONTROLLER_FMU, PLATFORM_FMU, fmu_file, nearest
+from .core import CONTROLLER_FMU, CUEING_FMU, PLATFORM_FMU, fmu_file, nearest
 
 # Each run is a Python loop of about 50 us a communication step (two FMUs); 10^7 steps is
 # about 10 min of one worker: beyond that a run is almost surely a unit mistake (ms for s).
@@ -28,12 +28,19 @@ MAX_STEPS_PER_RUN = 10_000_000
 DEFAULT_MAX_RUNS = 100_000
 
 SECTIONS = ("study", "fixed", "grid", "random", "plot")
-SYSTEMS = ("platform", "closed-loop")
+SYSTEMS = ("platform", "closed-loop", "cueing")
+#: The FMUs of each system, by role.
+ROLES = {"platform": ("platform",), "closed-loop": ("platform", "controller"), "cueing": ("cueing",)}
+MODELS = {"platform": "StewartPlatform", "controller": "StewartController", "cueing": "StewartCueing"}
 UNITS = ("si", "nondimensional")
 STUDY_KEYS = {
     "name": "the study's name (default: the file's name)",
     "description": "free text",
-    "system": "'platform' (the platform alone, open-loop forces) or 'closed-loop' (platform + controller)",
+    "system": "'platform' (the platform alone, open-loop forces), 'closed-loop' (platform + controller) or "
+              "'cueing' (the motion cueing FMU alone on a vehicle's manoeuvre)",
+    "manoeuvre": "system = 'cueing': the vehicle's motion, a manoeuvre of stewart_fmu.vehicle (accelerate, brake, "
+                 "lane_change, curve, bumps, emergency_stop, lane_change_05g, pothole) or a CSV file of its columns "
+                 "(time, f[1..3], omega[1..3]; relative to the study file)",
     "units": "'si' or 'nondimensional' (the paper's units: R_b, M, sqrt(R_b/g))",
     "stop_time": "the end of each run (s, or time units)",
     "step": "the communication step (s, or time units)",
@@ -43,7 +50,7 @@ STUDY_KEYS = {
 REQUIRED_STUDY_KEYS = ("stop_time", "step")
 # Metrics a plot can show (`stable` is a yes/no, shown by the map's blanks instead).
 PLOT_VALUES = ("max_leg_error", "max_pose_error", "discard_time", "min_kappa", "max_stop_force", "energy_residual",
-               "peak_deceleration", "final_z", "wall_time")
+               "peak_deceleration", "final_z", "wall_time", "cue_error", "max_usage", "least_scale", "max_tilt")
 PLOT_KEYS = {
     "map": ("kind", "value", "x", "y", "facet", "log", "file", "title", "unstable_blank"),
     "scatter": ("kind", "value", "x", "file", "title"),
@@ -108,17 +115,18 @@ def variables_of(md):
 _FMU_VARIABLES = {}
 
 
-def fmu_paths(platform=None, controller=None):
-    """{'platform': path, 'controller': path}: the given FMUs, or the package's defaults
-    (`stewart_fmu.core`: the repository's build, the wheel's copies, or the environment's
-    STEWART_PLATFORM_FMU and STEWART_CONTROLLER_FMU). A platform given without a controller
-    takes the StewartController.fmu beside it."""
+def fmu_paths(platform=None, controller=None, cueing=None):
+    """{'platform': path, 'controller': path, 'cueing': path}: the given FMUs, or the package's
+    defaults (`stewart_fmu.core`: the repository's build, the wheel's copies, or the
+    environment's STEWART_PLATFORM_FMU, STEWART_CONTROLLER_FMU and STEWART_CUEING_FMU). A
+    platform given without the others takes the StewartController.fmu and StewartCueing.fmu
+    beside it."""
     platform = Path(platform) if platform else PLATFORM_FMU
-    if controller:
-        controller = Path(controller)
-    else:
-        controller = platform.parent / "StewartController.fmu" if platform != PLATFORM_FMU else CONTROLLER_FMU
-    return {"platform": platform, "controller": controller}
+    beside = platform != PLATFORM_FMU
+    controller = Path(controller) if controller else (
+        platform.parent / "StewartController.fmu" if beside else CONTROLLER_FMU)
+    cueing = Path(cueing) if cueing else (platform.parent / "StewartCueing.fmu" if beside else CUEING_FMU)
+    return {"platform": platform, "controller": controller, "cueing": cueing}
 
 
 def fmu_variables(paths=None):
@@ -130,6 +138,8 @@ def fmu_variables(paths=None):
         try:
             key = (str(path), path.stat().st_mtime_ns)
         except OSError:
+            if role == "cueing":
+                continue  # only a cueing study needs it (its check says so)
             option = "--fmu" if role == "platform" else "--controller-fmu"
             try:
                 fmu_file(path, option)
@@ -180,13 +190,17 @@ def describe(name, system, units, variables):
         return f"{name}: the centre-of-mass offset has 3 components, platform.com_offset[1] .. [3]"
     if role == "controller" and system == "platform":
         return f"{name}: a system = 'platform' study has no controller (use system = 'closed-loop')"
-    if role not in ("platform", "controller"):
+    if role not in MODELS:
         return f"{name!r} is not a run parameter{nearest(name, _candidates(system, variables))}"
+    if isinstance(system, str) and system in ROLES and role not in ROLES[system]:
+        return (f"{name}: a system = '{system}' study runs {', '.join(ROLES[system])} only"
+                f"{nearest(name, _candidates(system, variables))}")
     table = variables.get(role, {})
     v = table.get(variable)
     if v is None:
-        fmu = "StewartPlatform" if role == "platform" else "StewartController"
-        return f"{name}: {fmu} has no variable {variable!r}{nearest(name, _candidates(system, variables))}"
+        return f"{name}: {MODELS[role]} has no variable {variable!r}{nearest(name, _candidates(system, variables))}"
+    if role == "cueing" and v.causality == "input":
+        return f"{name} is an input that the study's manoeuvre drives: it cannot be set"
     if v.causality not in ("parameter", "input"):
         return f"{name} is {'an' if v.causality[0] in 'aeiou' else 'a'} {v.causality}, not a parameter or input"
     if system == "closed-loop" and v.causality == "input":
@@ -204,9 +218,11 @@ def describe(name, system, units, variables):
 
 
 def _candidates(system, variables):
-    names = ["step", "stop_time", "platform.com_offset[1]", "platform.com_offset[2]", "platform.com_offset[3]"]
-    names += ["scenario.power_loss_at"] if system == "platform" else ["scenario.failed_leg", "scenario.failure_time"]
-    for role in ("platform",) if system == "platform" else ("platform", "controller"):
+    names = ["step", "stop_time"]
+    if system != "cueing":
+        names += ["platform.com_offset[1]", "platform.com_offset[2]", "platform.com_offset[3]"]
+        names += ["scenario.power_loss_at"] if system == "platform" else ["scenario.failed_leg", "scenario.failure_time"]
+    for role in ROLES.get(system, ("platform", "controller")) if isinstance(system, str) else ("platform", "controller"):
         names += [f"{role}.{n}" for n, v in variables.get(role, {}).items() if v.causality in ("parameter", "input")]
     return names
 
@@ -349,8 +365,13 @@ def check(spec, path="", max_runs=DEFAULT_MAX_RUNS, variables=None, fmus=None):
     study.setdefault("units", "si")
     system, units = study["system"], study["units"]
     problems += _check_study(study)
+    if system == "cueing":
+        problems += _check_cueing(study, path)
     if variables is None:
         variables = fmu_variables(fmus)
+    if system == "cueing" and "cueing" not in variables:
+        problems.append(f"system = 'cueing' needs StewartCueing.fmu: {(fmus or fmu_paths())['cueing']} is missing "
+                        f"(build the FMUs with `cargo run --release --bin build-fmu`, or set STEWART_CUEING_FMU)")
 
     fixed, grid, random = spec.get("fixed", {}), spec.get("grid", {}), dict(spec.get("random", {}))
     samples, seed = random.pop("samples", None), random.pop("seed", 0)
@@ -413,7 +434,10 @@ def _check_study(study):
         elif key in ("name", "description") and not isinstance(value, str):
             problems.append(f"study.{key} = {number(value)}: text in quotes is expected")
         elif key == "system" and value not in SYSTEMS:
-            problems.append(f"study.system = {number(value)}: 'platform' or 'closed-loop'{nearest(value, SYSTEMS)}")
+            problems.append(f"study.system = {number(value)}: 'platform', 'closed-loop' or 'cueing'"
+                            f"{nearest(value, SYSTEMS)}")
+        elif key == "manoeuvre" and study.get("system") != "cueing":
+            problems.append("study.manoeuvre applies to system = 'cueing' studies")
         elif key == "units" and value not in UNITS:
             problems.append(f"study.units = {number(value)}: 'si' or 'nondimensional'{nearest(value, UNITS)}")
         elif key == "stop_contact_unstable" and not isinstance(value, bool):
@@ -429,6 +453,40 @@ def _check_study(study):
             what = "communication step" if key == "step" else "end of the run"
             problems += filter(None, [check_value(Param("time", 0.0, lo_open=True, unit=unit, what=what), study[key],
                                                   f"study.{key}")])
+    return problems
+
+
+def manoeuvre_columns(study, path=""):
+    """The columns of a cueing study's manoeuvre (a name of `stewart_fmu.vehicle` or a CSV file,
+    relative to the study file), or ValueError saying why not."""
+    from . import vehicle
+    name = study.get("manoeuvre")
+    known = {**vehicle.MANOEUVRES, **vehicle.HARSH}
+    if not isinstance(name, str):
+        raise ValueError(f"study.manoeuvre is missing: {STUDY_KEYS['manoeuvre']}")
+    if name in known:
+        return known[name]()
+    file = Path(path).parent / name if path else Path(name)
+    if file.suffix.lower() != ".csv":
+        raise ValueError(f"study.manoeuvre = {name!r}: one of {', '.join(known)}{nearest(name, known)}, or a .csv file")
+    if not file.is_file():
+        raise ValueError(f"study.manoeuvre = {name!r}: no such file {file}")
+    return vehicle.read_csv(file)
+
+
+def _check_cueing(study, path):
+    problems = []
+    if study.get("units") != "si":
+        problems.append("a system = 'cueing' study runs in SI units: remove study.units or write 'si'")
+    try:
+        manoeuvre_columns(study, path)
+    except ValueError as e:
+        problems.append(str(e))
+        return problems
+    name = study["manoeuvre"]
+    if name.lower().endswith(".csv") and path:
+        # Where the workers' runs read it from, whatever their directory.
+        study["manoeuvre"] = str((Path(path).parent / name).resolve())
     return problems
 
 

@@ -48,6 +48,10 @@ def choose_master(requested, spec, fmus):
     cannot run."""
     if requested == "fmpy":
         return "fmpy", None
+    if spec["study"]["system"] == "cueing":
+        if requested == "compiled":
+            raise SweepError("--master compiled: a system = 'cueing' study runs with the FMPy master")
+        return "fmpy", None
     from . import master
     ok, reason = master.available()
     if ok and spec["study"]["system"] == "closed-loop" and "couplings" not in fmus:
@@ -92,6 +96,9 @@ def parser():
     p.add_argument("--controller-fmu", metavar="PATH",
                    help="the StewartController.fmu (default: the one beside --fmu, or the package's; or "
                         "STEWART_CONTROLLER_FMU)")
+    p.add_argument("--cueing-fmu", metavar="PATH",
+                   help="the StewartCueing.fmu of a system = 'cueing' study (default: the one beside --fmu, or the "
+                        "package's; or STEWART_CUEING_FMU)")
     p.add_argument("--scheduler", help="address of a running Dask scheduler (tcp://host:port)")
     p.add_argument("--connect-timeout", type=_positive_float, default=CONNECT_TIMEOUT,
                    help=f"seconds to wait for --scheduler to answer (default {CONNECT_TIMEOUT:g})")
@@ -125,7 +132,7 @@ def main(argv=None):
 
 
 def sweep(args):
-    paths = study_schema.fmu_paths(args.fmu, args.controller_fmu)
+    paths = study_schema.fmu_paths(args.fmu, args.controller_fmu, args.cueing_fmu)
     plan = st.plan(args.study, args.max_runs, fmus=paths)
     spec = plan.spec
     if args.check:

@@ -13,7 +13,7 @@ import sys
 
 import numpy as np
 
-KEPT = ("result", "tilted", "t", "rows", "errors", "status", "roll", "commanded", "address")
+KEPT = ("result", "tilted", "t", "rows", "errors", "status", "pitch", "commanded", "address")
 
 
 def plain(value):

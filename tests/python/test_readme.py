@@ -33,7 +33,7 @@ def run_tour(python, work, env=None):
 
 def check_tour(kept):
     """What each block of the tour shows."""
-    fmpy, loop, pose, viewer = kept
+    fmpy, loop, cue, viewer = kept
     z = np.array(fmpy["result"]["r[3]"])
     assert np.max(np.abs(z - NEUTRAL_Z)) < 1e-12, "the equilibrium holds"
     roll = np.array(fmpy["tilted"]["angles[1]"])
@@ -42,7 +42,8 @@ def check_tour(kept):
     heave = np.array(loop["rows"])[:, 0]
     assert loop["status"] == "ok" and max(loop["errors"]) < 2e-5, "the legs track the programme within 0.02 mm"
     assert 0.55 < np.ptp(heave) < 0.65, "the default heave programme: amplitude 0.3 m"
-    assert abs(pose["roll"] - pose["commanded"]) < 1e-4 and pose["roll"] > 0.09, "the pose command is followed"
+    # The braking's tilt coordination: a nose-down pitch near asin(0.6 3.2 / 9.81), followed within 0.1 mrad.
+    assert abs(cue["pitch"] - cue["commanded"]) < 1e-4 and cue["pitch"] > 0.15, "the cueing's pitch is followed"
     assert viewer["address"] == "index.html?data=data/tilted.csv&stand=data/tilted.stand.json"
 
 
@@ -84,7 +85,7 @@ def test_the_tour_runs_as_written_outside_the_repository(tmp_path):
     rows, out = run_study(Path(sys.executable).parent, tmp_path, env)
     by_mass = check_study(rows, out)
     print(f"README tour: equilibrium z = {kept[0]['result']['r[3]'][-1]!r} m; closed loop: largest leg error "
-          f"{max(kept[1]['errors']) * 1e3:.4f} mm; pose command: roll {kept[2]['roll']:.6f} rad against "
+          f"{max(kept[1]['errors']) * 1e3:.4f} mm; motion cueing: pitch {kept[2]['pitch']:.6f} rad against "
           f"{kept[2]['commanded']:.6f} commanded; study: largest leg error by mass (kg -> mm) "
           f"{ {m: round(e * 1e3, 3) for m, e in by_mass.items()} }")
     assert (tmp_path / "my_viewer" / "data" / "tilted.csv").exists()

@@ -265,3 +265,38 @@ def test_a_hydraulic_result_colours_the_cylinders_by_load_pressure(tmp_path):
     assert plots["plot-valves"]["lo"] == pytest.approx(spools_drawn.min(), abs=1e-12)
     assert plots["plot-valves"]["hi"] == pytest.approx(spools_drawn.max(), abs=1e-12)
     assert plots["plot-valves"]["key"] == ["1", "2", "3", "4", "5", "6"]
+
+
+def test_a_cueing_result_plots_the_vehicles_and_the_simulators_cues(tmp_path):
+    """The braking through the motion system (cueing -> controller -> platform): the page plays
+    the cabin's motion and plots the vehicle's and the simulator's specific force (g off the
+    vertical) and angular velocity in pairs, their ranges those of the CSV's values."""
+    from stewart_fmu import cueing, vehicle
+    run = cueing.motion_system(vehicle.brake(duration=8.0), h=2e-3, record=tuple(VIEW_OUTPUTS))
+    result = {n: c[::5] for n, c in run.items()}
+    folder = tmp_path / "cueing"
+    address = view(result, stand(), folder, "cueing", "motion cueing")
+    handler = functools.partial(QuietHandler, directory=str(folder))
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    try:
+        report = browse(f"http://127.0.0.1:{server.server_address[1]}/{address}", tmp_path / "cueing.png", [1.0, 6.0])
+    finally:
+        server.shutdown()
+    plots = report["shown"]["plots"]
+    stride = max(1, len(result["time"]) // 600)
+    force = np.array([result[f"{n}[{k}]"] - (9.81 if k == 3 else 0.0) for k in (1, 2, 3) for n in ("f", "fsim")])
+    rate = np.array([result[f"{n}[{k}]"] for k in (1, 2, 3) for n in ("omega", "omegasim")])
+    assert plots["plot-force-cues"]["lo"] == pytest.approx(force[:, ::stride].min(), abs=1e-12)
+    assert plots["plot-force-cues"]["hi"] == pytest.approx(force[:, ::stride].max(), abs=1e-12)
+    assert plots["plot-rate-cues"]["hi"] == pytest.approx(max(rate[:, ::stride].max(), rate[:, ::stride].min() + 1e-4),
+                                                          abs=1e-12)
+    assert plots["plot-force-cues"]["key"][:2] == ["vehicle x", "simulator x"]
+    assert plots["plot-pressures"]["key"] == [], "no hydraulic series in a cueing result"
+    # The cabin pitches nose down as the braking's cue: the page's pose at 6 s has the CSV's pitch.
+    t_row, ends, r, rot = expected(folder, 6.0, "cueing")
+    sample = report["samples"][-1]
+    assert sample["time"] == t_row and np.max(np.abs(np.array(sample["pose"]["R"]) - rot)) < 1e-12
+    assert rot[0, 2] > 0.1, "the braking's tilt: sin(pitch) > 0.1"
+    print(f"viewer, motion cueing: force plot [{plots['plot-force-cues']['lo']:.3f}, {plots['plot-force-cues']['hi']:.3f}] "
+          f"m/s2, rate plot [{plots['plot-rate-cues']['lo']:.4f}, {plots['plot-rate-cues']['hi']:.4f}] rad/s")

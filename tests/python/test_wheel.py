@@ -47,8 +47,9 @@ stable_error = 0.01
 "controller.G" = [1e5, 2e5]
 """
 
-PACKAGED = ["StewartPlatform.fmu", "StewartController.fmu", "StewartSystem.ssp", "StewartSystemDrives.ssp",
-            "fmi3/StewartPlatform.fmu", "fmi3/StewartController.fmu"]
+PACKAGED = ["StewartPlatform.fmu", "StewartController.fmu", "StewartCueing.fmu", "StewartSystem.ssp",
+            "StewartSystemDrives.ssp", "StewartSystemHydraulic.ssp", "StewartMotionSystem.ssp",
+            "fmi3/StewartPlatform.fmu", "fmi3/StewartController.fmu", "fmi3/StewartCueing.fmu"]
 
 
 def sha(path):
@@ -180,8 +181,8 @@ def test_the_readme_tour_runs_from_the_installed_package_as_in_the_repository(in
         return frame.drop(columns=["wall_time", "worker"]).sort_values("run_id").reset_index(drop=True)
 
     print(f"installed package, the README's tour outside the repository: equilibrium z = "
-          f"{kept[0]['result']['r[3]'][-1]!r} m; closed loop {max(kept[1]['errors']) * 1e3:.4f} mm; pose command roll "
-          f"{kept[2]['roll']:.6f} rad; study on 2 local Dask workers: largest leg error by mass (kg -> mm) "
+          f"{kept[0]['result']['r[3]'][-1]!r} m; closed loop {max(kept[1]['errors']) * 1e3:.4f} mm; motion cueing pitch "
+          f"{kept[2]['pitch']:.6f} rad; study on 2 local Dask workers: largest leg error by mass (kg -> mm) "
           f"{ {m: round(e * 1e3, 3) for m, e in by_mass.items()} }; equal to the repository's run: "
           f"{kept == here}")
     assert kept == here, "the installed package computes the repository's numbers"

@@ -208,7 +208,12 @@ const PLOTS = {
   "plot-joints": { key: ["thetaB (largest)", "thetaA (largest)", "base limit", "platform limit"], minSpan: 0.1 },
   "plot-pressures": { key: ["1", "2", "3", "4", "5", "6"], minSpan: 1e-3 },
   "plot-valves": { key: ["1", "2", "3", "4", "5", "6"], minSpan: 1e-3 },
+  // Pairs: the vehicle solid, the simulator dashed, in one colour per axis.
+  "plot-force-cues": { key: ["vehicle x", "simulator x", "vehicle y", "simulator y", "vehicle z - g", "simulator z - g"], minSpan: 1e-3, pairs: true },
+  "plot-rate-cues": { key: ["vehicle x", "simulator x", "vehicle y", "simulator y", "vehicle z", "simulator z"], minSpan: 1e-4, pairs: true },
 };
+// The colour of series j of a plot (pairs share the colour of their axis).
+const seriesColour = (plot, j) => PLOT_COLOURS[(plot.pairs ? j >> 1 : j) % PLOT_COLOURS.length];
 let plotSeries = null;
 const plotLayout = {};
 
@@ -231,17 +236,22 @@ function preparePlots(result) {
   const joints = result.jointAngles(0) ? [largest("base"), largest("platform"), ...limit(s.baseMaxAngle), ...limit(s.platformMaxAngle)] : null;
   const pressures = result.loadPressures ? result.loadPressures.map((s) => idx.map((i) => s[i])) : null;
   const valves = result.spools ? result.spools.map((s) => idx.map((i) => s[i])) : null;
+  const sampled = (all) => (all ? all.map((s) => idx.map((i) => s[i])) : null);
   plotSeries = { times, "plot-heave": heave, "plot-angles": angles, "plot-legs": legs, "plot-joints": joints,
-    "plot-pressures": pressures, "plot-valves": valves };
+    "plot-pressures": pressures, "plot-valves": valves, "plot-force-cues": sampled(result.forceCues),
+    "plot-rate-cues": sampled(result.rateCues) };
   for (const [id, plot] of Object.entries(PLOTS)) {
     const series = plotSeries[id];
+    // The plots of what not every result has (hydraulics, motion cueing) show only when it does.
+    const box = document.getElementById(`box-${id}`);
+    if (box) box.hidden = !series;
     const key = $(`key-${id}`);
     key.replaceChildren();
     (series ? plot.key.slice(0, series.length) : []).forEach((name, j) => {
       const item = document.createElement("span");
       item.className = "key-item";
-      item.style.color = PLOT_COLOURS[j % PLOT_COLOURS.length];
-      item.textContent = `\u2014 ${name}`;
+      item.style.color = seriesColour(plot, j);
+      item.textContent = `${plot.pairs && j % 2 ? "\u2504" : "\u2014"} ${name}`;
       key.append(item);
     });
     const [lo, hi] = series ? plotRange(series, plot.minSpan) : [0, 1];
@@ -291,11 +301,13 @@ function drawPlot(id, t) {
   g.rect(MARGIN.left, MARGIN.top, w, h);
   g.clip();
   series.forEach((s, j) => {
-    g.strokeStyle = PLOT_COLOURS[j % PLOT_COLOURS.length];
+    g.strokeStyle = seriesColour(PLOTS[id], j);
+    g.setLineDash(PLOTS[id].pairs && j % 2 ? [4, 3] : []);
     g.beginPath();
     s.forEach((v, i) => (i ? g.lineTo(x(times[i]), y(v)) : g.moveTo(x(times[i]), y(v))));
     g.stroke();
   });
+  g.setLineDash([]);
   g.strokeStyle = "#000";
   g.beginPath();
   g.moveTo(x(t), MARGIN.top);

@@ -165,6 +165,14 @@ export class Result {
       ? LEGS.map((k) => Float64Array.from(col(`pA[${k}]`), (pa, i) => (pa - this.areaRatio * col(`pB[${k}]`)[i]) / 1e6))
       : null;
     this.spools = all("spool") ? LEGS.map((k) => col(`spool[${k}]`)) : null;
+    // Motion cueing (docs/cueing.md): the vehicle's and the simulator's specific force (gravity's
+    // g taken off the vertical) and angular velocity, pair by pair (x, y, z).
+    const all3 = (name) => [1, 2, 3].every((k) => `${name}[${k}]` in csv.columns);
+    const g = stand.g ?? 9.81;
+    const pairs = (vehicle, simulator, offsets) => [0, 1, 2].flatMap((j) => [vehicle, simulator].map(
+      (name) => Float64Array.from(col(`${name}[${j + 1}]`), (v) => v - offsets[j])));
+    this.forceCues = all3("f") && all3("fsim") ? pairs("f", "fsim", [0, 0, g]) : null;
+    this.rateCues = all3("omega") && all3("omegasim") ? pairs("omega", "omegasim", [0, 0, 0]) : null;
     // What colours the cylinders: the load pressure with hydraulic legs, else the leg force.
     this.colour = this.loadPressures
       ? { what: "load pressure pA - (A_B/A_A) pB", unit: "MPa", low: "pull", high: "push", series: this.loadPressures }
