@@ -73,6 +73,17 @@ def browse(url, shot, times):
     return report
 
 
+def browse_served(folder, address, shot, times):
+    """`browse` of the page at `address` in `folder`, served on loopback for the call."""
+    handler = functools.partial(QuietHandler, directory=str(folder))
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    try:
+        return browse(f"http://127.0.0.1:{server.server_address[1]}/{address}", shot, times)
+    finally:
+        server.shutdown()
+
+
 def row(folder, name, t):
     """The columns of the CSV the page read and the last row at or before t."""
     with open(folder / "data" / f"{name}.csv") as f:
@@ -240,13 +251,7 @@ def test_a_hydraulic_result_colours_the_cylinders_by_load_pressure(tmp_path):
     result = dict(time=t, **{n: rows[:, j] for j, n in enumerate(record)})
     folder = tmp_path / "hydraulic"
     address = view(result, stand({"drive": 2}), folder, "hydraulic", "hydraulic legs")
-    handler = functools.partial(QuietHandler, directory=str(folder))
-    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
-    threading.Thread(target=server.serve_forever, daemon=True).start()
-    try:
-        report = browse(f"http://127.0.0.1:{server.server_address[1]}/{address}", tmp_path / "hydraulic.png", [1.0, 2.9])
-    finally:
-        server.shutdown()
+    report = browse_served(folder, address, tmp_path / "hydraulic.png", [1.0, 2.9])
     s = json.loads((folder / "data" / "hydraulic.stand.json").read_text())
     ratio = (s["bore"] ** 2 - s["rod"] ** 2) / s["bore"] ** 2
     load = np.array([(result[f"pA[{k}]"] - ratio * result[f"pB[{k}]"]) / 1e6 for k in range(1, 7)])
@@ -276,13 +281,7 @@ def test_a_cueing_result_plots_the_vehicles_and_the_simulators_cues(tmp_path):
     result = {n: c[::5] for n, c in run.items()}
     folder = tmp_path / "cueing"
     address = view(result, stand(), folder, "cueing", "motion cueing")
-    handler = functools.partial(QuietHandler, directory=str(folder))
-    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
-    threading.Thread(target=server.serve_forever, daemon=True).start()
-    try:
-        report = browse(f"http://127.0.0.1:{server.server_address[1]}/{address}", tmp_path / "cueing.png", [1.0, 6.0])
-    finally:
-        server.shutdown()
+    report = browse_served(folder, address, tmp_path / "cueing.png", [1.0, 6.0])
     plots = report["shown"]["plots"]
     stride = max(1, len(result["time"]) // 600)
     force = np.array([result[f"{n}[{k}]"] - (9.81 if k == 3 else 0.0) for k in (1, 2, 3) for n in ("f", "fsim")])
