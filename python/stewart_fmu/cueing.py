@@ -158,12 +158,18 @@ def _motion_system_compiled(manoeuvre, t_end, h, start, cue_out, lp, record, nam
     return {"time": times, **{n: rows[:, j] for j, n in enumerate(names[1:])}}
 
 
-def _settling_time(parameters, fmu=CUEING_FMU):
-    """Twelve times the slowest time constant of the filters (the FMU's start values, or
-    `parameters`), s: what an OMCT run waits before it measures."""
+def _real_parameters(parameters, fmu):
+    """The FMU's Real parameters: its start values, `parameters` over them."""
     values = {v.name: float(v.start) for v in read_model_description(fmu_file(fmu)).modelVariables
               if v.causality == "parameter" and v.type == "Real"}
     values.update({k: float(v) for k, v in (parameters or {}).items()})
+    return values
+
+
+def _settling_time(parameters, fmu=CUEING_FMU):
+    """Twelve times the slowest time constant of the filters (the FMU's start values, or
+    `parameters`), s: what an OMCT run waits before it measures."""
+    values = _real_parameters(parameters, fmu)
     poles = [(values["tilt.omega"], values["tilt.damping"])]
     for k in (1, 2, 3):
         poles += [(values[f"hp.f.omega[{k}]"], values[f"hp.f.damping[{k}]"]),
@@ -282,9 +288,7 @@ def filter_responses(frequencies=OMCT_FREQUENCIES, parameters=None, fmu=CUEING_F
     `parameters`): {test: {"frequency", "gain", "phase"}}, what `omct` measures where no limit
     acts (the dashed reference of `bode_plot`). The tilt coordination feeds gravity into the
     translational channel, so surge and sway see `K (W_t (1 - W_l) + W_l)`."""
-    p = {v.name: float(v.start) for v in read_model_description(fmu_file(fmu)).modelVariables
-         if v.causality == "parameter" and v.type == "Real"}
-    p.update({k: float(v) for k, v in (parameters or {}).items()})
+    p = _real_parameters(parameters, fmu)
     s = 1j * np.asarray(frequencies, dtype=float)
 
     def high_pass(prefix, k, third):

@@ -14,6 +14,8 @@ pub const DEFAULT_BASE_RADIUS: f64 = 1.5;
 pub const DEFAULT_PLATFORM_RADIUS: f64 = 1.0;
 /// Depth `h_c` of the platform joint plane below the centre of mass, m.
 pub const DEFAULT_JOINT_DEPTH: f64 = 0.5;
+/// `g` of the default stand, m/s² (docs/model.md §3).
+pub const DEFAULT_GRAVITY: f64 = 9.81;
 /// Height `H0` of the platform joint plane in the neutral pose, m. Chosen so that every leg
 /// carries exactly `0.2005 M g` in static equilibrium (the paper's section 5 leg force).
 pub const DEFAULT_NEUTRAL_JOINT_HEIGHT: f64 = 1.4589244164161732;
@@ -73,7 +75,13 @@ impl Stand {
                 -DEFAULT_JOINT_DEPTH,
             )
         });
-        Stand { mass: 3000.0, inertia: [1500.0, 1500.0, 2200.0], gravity: 9.81, base_joints, platform_joints }
+        Stand {
+            mass: 3000.0,
+            inertia: [1500.0, 1500.0, 2200.0],
+            gravity: DEFAULT_GRAVITY,
+            base_joints,
+            platform_joints,
+        }
     }
 
     /// Centre of mass of the default stand's neutral pose, m.

@@ -224,6 +224,19 @@ impl CueingOutputs {
     }
 }
 
+/// Why the commanded pitch cannot go on (near the 1-2-3 angles' singularity), if it cannot.
+fn check_pitch(pitch: f64) -> Result<(), String> {
+    if pitch.abs() > MAX_PITCH {
+        return Err(format!(
+            "the commanded pitch would reach {:.1} deg, near the 90 deg where the 1-2-3 angles are singular (the \
+             rotational high-pass is too slow for the angular velocity: raise hp.w.omega[2] or lower omegamax, \
+             scale.omega[2])",
+            pitch.to_degrees()
+        ));
+    }
+    Ok(())
+}
+
 fn rotated(rot: &nalgebra::Matrix3<Jet>, v: &Vector3<f64>) -> [Jet; 3] {
     std::array::from_fn(|i| rot[(i, 0)] * v.x + rot[(i, 1)] * v.y + rot[(i, 2)] * v.z)
 }
@@ -367,18 +380,10 @@ impl FmuModel for CueingModel {
     fn do_step(&mut self, t: f64, h: f64, _stop_at_event: bool) -> Result<StepReport, StepError> {
         let x = self.integrate(h);
         let pitch = x[layout::ROTATION_ANGLES + 1] + x[layout::TILT_ANGLES + 1];
-        if pitch.abs() > MAX_PITCH {
-            return Err(StepError {
-                message: format!(
-                    "step from t = {t:?} to {:?} rolled back: the commanded pitch would reach {:.1} deg, near the \
-                     90 deg where the 1-2-3 angles are singular (the rotational high-pass is too slow for the \
-                     angular velocity: raise hp.w.omega[2] or lower omegamax, scale.omega[2])",
-                    t + h,
-                    pitch.to_degrees()
-                ),
-                retry_shorter: false,
-            });
-        }
+        check_pitch(pitch).map_err(|why| StepError {
+            message: format!("step from t = {t:?} to {:?} rolled back: {why}", t + h),
+            retry_shorter: false,
+        })?;
         if let Some(i) = x.iter().position(|v| !v.is_finite()) {
             return Err(StepError {
                 message: format!(
@@ -428,19 +433,8 @@ impl FmuModel for CueingModel {
     }
 
     fn completed_integrator_step(&mut self) -> Result<(), StepError> {
-        let pitch = self.state.angles[1] + self.state.tilt[1];
-        if pitch.abs() > MAX_PITCH {
-            return Err(StepError {
-                message: format!(
-                    "t = {:?}: the commanded pitch reached {:.1} deg, near the 90 deg where the 1-2-3 angles are \
-                     singular (raise hp.w.omega[2] or lower omegamax, scale.omega[2])",
-                    self.time,
-                    pitch.to_degrees()
-                ),
-                retry_shorter: false,
-            });
-        }
-        Ok(())
+        check_pitch(self.state.angles[1] + self.state.tilt[1])
+            .map_err(|why| StepError { message: format!("t = {:?}: {why}", self.time), retry_shorter: false })
     }
 
     fn derivatives(&mut self, dx: &mut [f64]) {

@@ -77,7 +77,7 @@ pub struct WashoutParameters {
 
 /// The default stand's washout (docs/cueing.md: where each value comes from).
 pub const DEFAULT_WASHOUT: WashoutParameters = WashoutParameters {
-    gravity: 9.81,
+    gravity: crate::physics::stand::DEFAULT_GRAVITY,
     scale_f: [0.6, 0.6, 0.6],
     scale_omega: [0.6, 0.6, 0.6],
     f_max: 6.0,
@@ -211,8 +211,8 @@ impl WashoutParameters {
         (attitude, tilt3, rotation_rate)
     }
 
-    /// The head's acceleration `W_t (R f_s + g_vec)` per inertial axis, the filter's input
-    /// `u` and the coefficients `c2, c1, c0` of its denominator.
+    /// The head's acceleration along inertial axis `i`: `W_t`'s output for its input `u`
+    /// (`R f_s + g_vec`), `u - c2 x'' - c1 x' - c0 x` with `c2, c1, c0` its denominator's.
     fn translation(&self, x: &[f64; STATE_DIM], i: usize, u: f64) -> f64 {
         let (w, z, b) = (self.hp_f_omega[i], self.hp_f_damping[i], self.hp_f_break[i]);
         let (c2, c1, c0) = (2.0 * z * w + b, w * w + 2.0 * z * w * b, w * w * b);
@@ -292,9 +292,4 @@ impl WashoutParameters {
         }
         Ok(())
     }
-}
-
-/// The angles of a jet pose as plain values.
-pub fn values<const N: usize>(x: &[Jet; N]) -> [f64; N] {
-    x.map(|j| j.value())
 }
