@@ -23,7 +23,7 @@ use crate::physics::legs::friction::Friction;
 use crate::physics::legs::geometry::{LegGeometry, LegKinematics};
 use crate::physics::legs::joint_limits::JointLimits;
 use crate::physics::legs::per_leg::{Lanes, Narrow};
-use crate::physics::special_form::{SpecialForm, sum_over_legs};
+use crate::physics::special_form::{Actuation, SpecialForm, sum_over_legs};
 use crate::physics::stand::{LEG_COUNT, Stand};
 use std::marker::PhantomData;
 
@@ -222,17 +222,6 @@ pub fn state_rate_supplied<T: Real>(
         dy[CURRENTS + k] = drives[k].current_rate;
     }
     dy
-}
-
-/// [`state_rate`] of the leading `N` components of a simulation state (the others 0): the
-/// definition for the integrators' shorter arrays ([`MECHANICAL_DIM`]) too.
-fn definition_rate<const N: usize>(form: &SpecialForm, y: &[f64; N], inputs: &[f64; LEG_COUNT]) -> [f64; N] {
-    let mut full = [0.0; SIMULATION_DIM];
-    for (f, &x) in full.iter_mut().zip(y) {
-        *f = x;
-    }
-    let rate = state_rate(form, &full, inputs);
-    std::array::from_fn(|i| rate.get(i).copied().unwrap_or(0.0))
 }
 
 /// The switching functions of a platform: where the motion is not smooth or is worth
@@ -502,16 +491,13 @@ impl<L: LegForceLaw + ?Sized, V: Lanes, const N: usize> OdeSystem<N> for Platfor
             } else {
                 self.law.leg_forces_at(t)
             };
-            if !self.form.has_driven_fast_path() {
-                *dy = definition_rate(self.form, y, &inputs);
-                return;
-            }
             let currents: [f64; LEG_COUNT] = std::array::from_fn(|k| y[CURRENTS + k]);
+            let actuation = Actuation::Drives { currents: &currents, voltages: &inputs };
             if let Some((body_rate, rest)) = dy.split_first_chunk_mut::<STATE_DIM>() {
-                let rates = self.form.derivative_driven_in::<V>(body(y), &currents, &inputs, body_rate);
+                let rates = self.form.derivative_machine_in::<V>(body(y), actuation, body_rate);
                 if let Some([work, dissipated, currents @ .., electric]) = rest.first_chunk_mut::<9>() {
                     *work = 0.0;
-                    *dissipated = rates.dissipation;
+                    *dissipated = rates.power.dissipation + rates.drive_dissipation;
                     currents.copy_from_slice(&rates.current_rate);
                     *electric = rates.electric_power;
                 }

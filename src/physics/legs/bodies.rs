@@ -30,7 +30,7 @@
 use nalgebra::Vector3;
 
 use crate::physics::error::ParameterError;
-use crate::physics::number::Real;
+use crate::physics::number::{Number, Real};
 
 /// Default distance of the cylinder's centre of mass from `B_k`, m: half the default stand's
 /// shortest leg (1.45 m), a barrel of about that length.
@@ -128,9 +128,18 @@ impl LegBodies {
             || self.axial_mass != 0.0
     }
 
+    /// Whether the legs resist turning (`I_t != 0`: a rod mass, or a cylinder's mass or
+    /// inertia, or a rod's inertia), as more than the mass along them.
+    #[inline(always)]
+    pub fn has_transverse_inertia(&self) -> bool {
+        self.rod_mass != 0.0
+            || self.cylinder_mass * self.cylinder_com * self.cylinder_com + self.cylinder_inertia + self.rod_inertia
+                != 0.0
+    }
+
     /// `I_t(l)`, kg m².
-    #[inline]
-    pub fn transverse_inertia<T: Real>(&self, l: T) -> T {
+    #[inline(always)]
+    pub fn transverse_inertia<T: Number>(&self, l: T) -> T {
         let rod = l - self.rod_com;
         rod * rod * self.rod_mass
             + (self.cylinder_mass * self.cylinder_com * self.cylinder_com + self.cylinder_inertia + self.rod_inertia)
@@ -141,20 +150,43 @@ impl LegBodies {
     #[inline]
     pub fn inertia<T: Real>(&self, leg: &LegMotion<T>, g: f64) -> LegInertia<T> {
         let LegMotion { l, n, l_dot, n_dot } = *leg;
+        let (across, bias) = self.inertia_terms(l, &[n.x, n.y, n.z], l_dot, &[n_dot.x, n_dot.y, n_dot.z], g);
+        LegInertia { along: T::constant(self.rod_mass + self.axial_mass), across, bias: Vector3::from(bias) }
+    }
+
+    /// The law of [`LegBodies::inertia`] for a leg of length `l`, direction `n` and their rates
+    /// in any number type (one leg in `f64` or `Dual`, or the six side by side): `across`
+    /// (`I_t / l^2`, kg) and the force `b` (N). `along` is the constant `m_r + m_a`.
+    #[inline(always)]
+    pub fn inertia_terms<T: Number>(&self, l: T, n: &[T; 3], l_dot: T, n_dot: &[T; 3], g: f64) -> (T, [T; 3]) {
         let (m_r, d_r) = (self.rod_mass, self.rod_com);
+        let axial = self.axial_force(l, n, n_dot, g);
         let fixed =
             self.cylinder_mass * self.cylinder_com * self.cylinder_com + self.cylinder_inertia + self.rod_inertia;
-        // The rod's centripetal term and weight, and the axial mass's `m_a l |n'|^2` (its
-        // coordinate is `l`, with `l'' = n . a'' + l |n'|^2`).
-        let axial = -(n_dot.dot(&n_dot) * (l * self.axial_mass + m_r * d_r) + n.z * (m_r * g));
-        let swing = (l_dot / (l * l)) * ((T::constant(fixed) - (l - d_r) * (m_r * d_r)) * 2.0);
-        let lever = ((l - d_r) * m_r + self.cylinder_mass * self.cylinder_com) * g / l;
-        let vertical = Vector3::new(T::zero(), T::zero(), T::one()) - n * n.z;
-        LegInertia {
-            along: T::constant(m_r + self.axial_mass),
-            across: self.transverse_inertia(l) / (l * l),
-            bias: n * axial + n_dot * swing - vertical * lever,
-        }
+        let inverse = T::constant(1.0) / l;
+        let inverse2 = inverse * inverse;
+        let swing = l_dot * inverse2 * ((T::constant(fixed) - (l - d_r) * (m_r * d_r)) * 2.0);
+        let lever = ((l - d_r) * m_r + self.cylinder_mass * self.cylinder_com) * g * inverse;
+        // `P ez = ez - n n_z`.
+        let vertical = [n[0] * n[2] * -1.0, n[1] * n[2] * -1.0, T::constant(1.0) - n[2] * n[2]];
+        // Written out, not `from_fn`: a closure over vector lanes is not inlined.
+        let bias = [
+            n[0] * axial + n_dot[0] * swing - vertical[0] * lever,
+            n[1] * axial + n_dot[1] * swing - vertical[1] * lever,
+            n[2] * axial + n_dot[2] * swing - vertical[2] * lever,
+        ];
+        (self.transverse_inertia(l) * inverse2, bias)
+    }
+
+    /// The part of `b` along the leg that its mass moving along it gives, N (the whole `b`
+    /// where the legs have no [transverse inertia](LegBodies::has_transverse_inertia): the
+    /// drives' rotors alone): the rod's centripetal term and weight, and the axial mass's
+    /// `m_a l |n'|^2` (its coordinate is `l`, with `l'' = n . a'' + l |n'|^2`).
+    #[inline(always)]
+    pub fn axial_force<T: Number>(&self, l: T, n: &[T; 3], n_dot: &[T; 3], g: f64) -> T {
+        let (m_r, d_r) = (self.rod_mass, self.rod_com);
+        let n_dot2 = n_dot[0] * n_dot[0] + n_dot[1] * n_dot[1] + n_dot[2] * n_dot[2];
+        (n_dot2 * (l * self.axial_mass + m_r * d_r) + n[2] * (m_r * g)) * -1.0
     }
 
     /// The leg's kinetic and gravitational potential energy, J (`base_z`: the height of

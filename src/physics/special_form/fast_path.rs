@@ -1,7 +1,8 @@
-//! The step's fast path: [`SpecialForm::rate`]'s numbers with the six legs side by side in
-//! vector registers, for massless, frictionless legs (pinned to the definition by a test).
+//! The step's fast paths: [`SpecialForm::rate`]'s numbers with the six legs side by side in
+//! vector registers; for the paper's massless, frictionless legs the definition's bits (pinned
+//! by a test), for the machine's (legs with mass, friction, drives) its numbers to round-off.
 
-use super::machine::{Loads, solve_spd6};
+use super::machine::{Loads, MachineLoad, solve_spd6};
 use super::*;
 
 /// The fast path's joint check counts a joint within this of its limit's cosine as touching.
@@ -38,9 +39,9 @@ impl SpecialForm {
             law.leg_forces_at(t)
         };
         if !self.fast {
-            let (rate, power) = self.rate(y, &u);
-            *dy = rate;
-            return power;
+            // The machine's legs: rarer, and out of the paper's legs' way.
+            std::hint::cold_path();
+            return self.derivative_machine_in::<V>(y, Actuation::Forces(&u), dy).power;
         }
         let w = self.wrench_in::<V>(&state, &u);
         let (e, e_dot) = (AxisRows::<V::Axes>::of(&state.e), AxisRows::of(&state.e_dot));
@@ -92,59 +93,56 @@ impl SpecialForm {
         }
     }
 
-    /// [`SpecialForm::rate_driven`]'s numbers for drives on otherwise massless, frictionless
-    /// legs (see [`SpecialForm::has_driven_fast_path`]), the six legs side by side: the leg's
-    /// axial force `f_k = s_k - m_a l_k''` with `s_k` the drive's and the end stop's force and
-    /// `l_k'' = S_k . (r'', omega') + c_k` (`S_k = (n_k, rho_k x n_k)`, `c_k = l_k |n_k'|^2 +
-    /// n_k . (omega x (omega x rho_k))`), so that the platform's accelerations solve
-    /// `[diag(M, J_w) + m_a sum S_k S_k^T] (r'', omega') = sum (s_k - m_a c_k) S_k + gravity,
-    /// gyroscopic and joint-limit terms`; the definition's arithmetic in another order (equal to
-    /// round-off, tested). Returns the currents' rates and the powers.
+    /// [`SpecialForm::rate`]'s and [`SpecialForm::rate_driven`]'s numbers for the machine (legs
+    /// with mass, friction, electric drives, each optional), the six legs side by side: the
+    /// definition's laws ([`LegBodies::inertia_terms`], [`ElectricDrives::rate`],
+    /// [`Friction::force`], the end stops' and joint limits' contact laws) with the sums in
+    /// another order (equal to round-off, tested). Each leg's force on the platform is
+    /// `f_k = s_k n_k + b_k - M_k a_k''` with `s_k` its axial force (actuator, end stop,
+    /// friction), `M_k = along n n^T + across_k P` and `a_k'' = r'' + omega' x rho_k + omega x
+    /// (omega x rho_k)`, so that the platform's accelerations solve
+    /// `[diag(M, J_w) + sum_k (along - across_k) S_k S_k^T + across_k [[I, -[rho]x], [[rho]x,
+    /// |rho|^2 I - rho rho^T]]] (r'', omega') = sum_k (f0_k, rho_k x f0_k) + gravity, gyroscopic
+    /// and joint-limit terms` (`S_k = (n_k, rho_k x n_k)`, `f0_k` the force without `r''` and
+    /// `omega'`).
     #[inline(always)]
-    pub(crate) fn derivative_driven_in<V: Lanes>(
+    pub(crate) fn derivative_machine_in<V: Lanes>(
         &self,
         y: &StateVector,
-        currents: &[f64; LEG_COUNT],
-        voltages: &[f64; LEG_COUNT],
+        actuation: Actuation<'_, f64>,
         dy: &mut StateVector,
-    ) -> DrivenRates {
-        let Some(drives) = &self.drives else {
-            let (rate, power, d) = self.rate_driven(y, currents, voltages);
-            *dy = rate;
-            return DrivenRates {
-                current_rate: d.map(|k| k.current_rate),
-                electric_power: sum_over_legs(&d.map(|k| k.electric_power)),
-                dissipation: power.dissipation + sum_over_legs(&d.map(|k| k.dissipation)),
-            };
-        };
+    ) -> MachineRates {
         let state = BodyState::from_vector(y);
         let LegLanes { arm, leg, length } = self.joints.legs::<V>(&state);
         let inverse_length = PerLeg::splat(1.0) / length;
-        // The joints' directions, length rates, velocities, and the centripetal part of their
-        // accelerations.
         let (n, l_dot, velocity) = self.joints.directions_rates_and_velocities(&state, &leg, length, inverse_length);
-        let omega = state.angular_velocity_inertial();
-        let w = components!(|c| PerLeg::<V>::splat(omega[c]));
-        let whirl = PerLeg::cross(&w, &PerLeg::cross(&w, &arm));
-        let speed2 = velocity[0] * velocity[0] + velocity[1] * velocity[1] + velocity[2] * velocity[2];
-        let c = length.where_positive((speed2 - l_dot * l_dot) * inverse_length)
-            + (n[0] * whirl[0] + n[1] * whirl[1] + n[2] * whirl[2]);
-        // The drives: the one drive law, six legs at once.
-        let drive = drives.rate(PerLeg::<V>::new(voltages), PerLeg::new(currents), l_dot);
-        let (drive_force, current_rate) = (drive.force, drive.current_rate);
-        let (electric, lost) = (drive.electric_power, drive.dissipation);
-        // The end stops (rare: cold) and the joint limits (only where one may touch).
-        let m_a = self.legs.axial_mass;
-        // The legs' axial forces without their inertia, `b = s - m_a c`.
-        let free = drive_force - c * PerLeg::splat(m_a);
-        let (free, stop_dissipation) = match &self.stops {
-            Some(stops) if length.any_outside(PerLeg::new(&self.stroke[0]), PerLeg::new(&self.stroke[1])) => {
-                std::hint::cold_path();
-                let (stop, dissipation) = self.stop_forces(stops, &length.to_array(), &l_dot.to_array());
-                (drive_force + PerLeg::new(&stop) - c * PerLeg::splat(m_a), dissipation)
+        // The actuators' axial forces: given, or the drive law's, six legs at once.
+        let (actuator, drive) = match (actuation, &self.drives) {
+            (Actuation::Forces(u), _) => (PerLeg::<V>::new(u), None),
+            (Actuation::Drives { currents, voltages }, Some(drives)) => {
+                let rate = drives.rate(PerLeg::<V>::new(voltages), PerLeg::new(currents), l_dot);
+                (rate.force, Some(rate))
             }
-            _ => (free, 0.0),
+            (Actuation::Drives { .. }, None) => (PerLeg::splat(0.0), None),
         };
+        // (A collapsed leg's direction is 0: it carries nothing.)
+        let mut axial = actuator;
+        let mut dissipation = 0.0;
+        // The end stops (rare: cold), friction, and the joint limits (only where one may touch).
+        if let Some(stops) = &self.stops
+            && length.any_outside(PerLeg::new(&self.stroke[0]), PerLeg::new(&self.stroke[1]))
+        {
+            std::hint::cold_path();
+            let (stop, stop_dissipation) = self.stop_forces(stops, &length.to_array(), &l_dot.to_array());
+            axial = axial + PerLeg::new(&stop);
+            dissipation += stop_dissipation;
+        }
+        if !self.friction.is_zero() {
+            let rates = l_dot.to_array();
+            let friction = PerLeg::<V>::new(&std::array::from_fn(|k| self.friction.force(rates[k])));
+            axial = axial + friction;
+            dissipation -= (friction * l_dot).sum();
+        }
         let machine = match &self.joint_limits {
             Some(_) if self.joints_may_touch(&state, &leg, length) => {
                 std::hint::cold_path();
@@ -152,58 +150,61 @@ impl SpecialForm {
             }
             _ => None,
         };
-        let b = length.where_positive(free);
-        let rn = PerLeg::cross(&arm, &n);
-        let s = [n[0], n[1], n[2], rn[0], rn[1], rn[2]];
-        // The system's lower triangle (`sum S_k S_k^T`, row by row) and `sum b_k S_k`, four
-        // sums at a time.
-        let [g00, g10, g11, g20] = PerLeg::sum4_times([s[0] * s[0], s[1] * s[0], s[1] * s[1], s[2] * s[0]], m_a);
-        let [g21, g22, g30, g31] = PerLeg::sum4_times([s[2] * s[1], s[2] * s[2], s[3] * s[0], s[3] * s[1]], m_a);
-        let [g32, g33, g40, g41] = PerLeg::sum4_times([s[3] * s[2], s[3] * s[3], s[4] * s[0], s[4] * s[1]], m_a);
-        let [g42, g43, g44, g50] = PerLeg::sum4_times([s[4] * s[2], s[4] * s[3], s[4] * s[4], s[5] * s[0]], m_a);
-        let [g51, g52, g53, g54] = PerLeg::sum4_times([s[5] * s[1], s[5] * s[2], s[5] * s[3], s[5] * s[4]], m_a);
+        // The legs' inertia: `across_k`, `along - across_k` and each leg's force without the
+        // platform's accelerations, `f0_k = s_k n_k + b_k - M_k (omega x (omega x rho_k))`.
+        let omega = state.angular_velocity_inertial();
+        let w = components!(|c| PerLeg::<V>::splat(omega[c]));
+        let whirl = PerLeg::cross(&w, &PerLeg::cross(&w, &arm));
+        let n_dot = components!(|c| (velocity[c] - n[c] * l_dot) * inverse_length);
+        let along = PerLeg::splat(self.legs.rod_mass + self.legs.axial_mass);
+        let n_whirl = n[0] * whirl[0] + n[1] * whirl[1] + n[2] * whirl[2];
+        let g = self.stand.gravity;
+        let (across, weight, f0) = if self.legs_turn {
+            let (across, bias) = self.legs.inertia_terms(length, &n, l_dot, &n_dot, g);
+            let across = length.where_positive(across);
+            let weight = along - across;
+            let along_force = axial - weight * n_whirl;
+            (across, weight, components!(|c| length.where_positive(n[c] * along_force + bias[c] - across * whirl[c])))
+        } else {
+            // `across` is 0 and `b` is along the leg: the inertia acts along the legs only.
+            let along_force =
+                length.where_positive(axial - along * n_whirl + self.legs.axial_force(length, &n, &n_dot, g));
+            (PerLeg::splat(0.0), along, components!(|c| n[c] * along_force))
+        };
         let sum4 = PerLeg::<V>::sum4;
-        let [g55, bs0, bs1, bs2] = sum4([s[5] * s[5], b * s[0], b * s[1], b * s[2]]);
-        let g55 = g55 * m_a;
-        let [bs3, bs4, bs5, _] = sum4([b * s[3], b * s[4], b * s[5], PerLeg::splat(0.0)]);
-        let (mass, j, e) = (self.stand.mass, &self.stand.inertia, &state.e);
-        // `J_w = sum_a J_a e_a e_a^T`, from `J_a e_a`.
-        let je = [e[0] * j[0], e[1] * j[1], e[2] * j[2]];
-        let j_w = |r: usize, col: usize| je[0][r] * e[0][col] + je[1][r] * e[1][col] + je[2][r] * e[2][col];
-        let matrix = [
-            [g00 + mass, 0.0, 0.0, 0.0, 0.0, 0.0],
-            [g10, g11 + mass, 0.0, 0.0, 0.0, 0.0],
-            [g20, g21, g22 + mass, 0.0, 0.0, 0.0],
-            [g30, g31, g32, g33 + j_w(0, 0), 0.0, 0.0],
-            [g40, g41, g42, g43 + j_w(1, 0), g44 + j_w(1, 1), 0.0],
-            [g50, g51, g52, g53 + j_w(2, 0), g54 + j_w(2, 1), g55 + j_w(2, 2)],
-        ];
-        let j_omega = je[0] * e[0].dot(&omega) + je[1] * e[1].dot(&omega) + je[2] * e[2].dot(&omega);
-        let mut force = Vector3::new(bs0, bs1, bs2 - mass * self.stand.gravity);
-        let mut moment = Vector3::new(bs3, bs4, bs5) - omega.cross(&j_omega);
+        let (force, moment) = if self.legs_mass {
+            // The legs' wrench with their inertia is what moves the platform as the 6x6 system
+            // says: `(M (r'' + g ez), J_w omega' + omega x J_w omega)` (the system's rows).
+            self.platform_accelerations(&state, &arm, &n, across, weight, &f0, machine.as_ref())
+        } else {
+            let moment = PerLeg::cross(&arm, &f0);
+            let [f1, f2, f3, m1] = sum4([f0[0], f0[1], f0[2], moment[0]]);
+            let [m2, m3, _, _] = sum4([moment[1], moment[2], PerLeg::splat(0.0), PerLeg::splat(0.0)]);
+            let (mut force, mut moment) = (Vector3::new(f1, f2, f3), Vector3::new(m1, m2, m3));
+            if let Some(m) = &machine {
+                force += m.force;
+                moment += m.moment;
+            }
+            (force, moment)
+        };
         if let Some(m) = &machine {
-            force += m.force;
-            moment += m.moment;
-        }
-        let q = solve_spd6(matrix, [force.x, force.y, force.z, moment.x, moment.y, moment.z]);
-        let along = s[0] * PerLeg::splat(q[0])
-            + s[1] * PerLeg::splat(q[1])
-            + s[2] * PerLeg::splat(q[2])
-            + s[3] * PerLeg::splat(q[3])
-            + s[4] * PerLeg::splat(q[4])
-            + s[5] * PerLeg::splat(q[5]);
-        let f = b - along * PerLeg::splat(m_a);
-        let [f0, f1, f2, f3] = sum4([f * s[0], f * s[1], f * s[2], f * s[3]]);
-        let [f4, f5, electric_power, lost_power] = sum4([f * s[4], f * s[5], electric, lost]);
-        // The legs' wrench and the machine's (the end stops act through `b`).
-        let (mut force, mut moment, mut dissipation) =
-            (Vector3::new(f0, f1, f2), Vector3::new(f3, f4, f5), stop_dissipation);
-        if let Some(m) = &machine {
-            force += m.force;
-            moment += m.moment;
             dissipation += m.dissipation;
         }
         let (e_rows, e_dot) = (AxisRows::<V::Axes>::of(&state.e), AxisRows::of(&state.e_dot));
+        // The given forces' power as the definition takes it, from their wrench (`F.v + L.omega`,
+        // which off the constraint manifold is not quite `sum u_k l_k'`); the drives' work is
+        // electric.
+        let actuator_power = match actuation {
+            Actuation::Forces(_) => {
+                let u = components!(|c| n[c] * actuator);
+                let u_moment = PerLeg::cross(&arm, &u);
+                let [u1, u2, u3, um1] = sum4([u[0], u[1], u[2], u_moment[0]]);
+                let [um2, um3, _, _] = sum4([u_moment[1], u_moment[2], PerLeg::splat(0.0), PerLeg::splat(0.0)]);
+                Vector3::new(u1, u2, u3).dot(&state.v)
+                    + e_rows.cross_sum_dot(&e_dot, &Vector3::new(um1, um2, um3)) * 0.5
+            }
+            Actuation::Drives { .. } => 0.0,
+        };
         let (acceleration, e_dd) = self.body.accelerations_in(&state, &e_rows, &e_dot, &force, &moment);
         let [e1, e2, e3] = e_dd;
         let [r1, r2, r3, r4, r5, r6, r7, r8, r9] = *axes_rates(y);
@@ -233,7 +234,90 @@ impl SpecialForm {
             e3.y,
             e3.z,
         ];
-        DrivenRates { current_rate: current_rate.to_array(), electric_power, dissipation: dissipation + lost_power }
+        let power = LegPower { actuator: actuator_power, dissipation };
+        match drive {
+            Some(d) => {
+                let [electric_power, drive_dissipation, _, _] =
+                    sum4([d.electric_power, d.dissipation, PerLeg::splat(0.0), PerLeg::splat(0.0)]);
+                MachineRates { power, current_rate: d.current_rate.to_array(), electric_power, drive_dissipation }
+            }
+            None => MachineRates { power, ..MachineRates::default() },
+        }
+    }
+
+    /// The legs' wrench on the platform with their inertia (see
+    /// [`SpecialForm::derivative_machine_in`]), from the platform's accelerations `(r'',
+    /// omega')`: the 6x6 system's lower triangle from sums over the legs, four at a time, and
+    /// its Cholesky solve.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn platform_accelerations<V: Lanes>(
+        &self,
+        state: &BodyState,
+        arm: &[PerLeg<V>; 3],
+        n: &[PerLeg<V>; 3],
+        across: PerLeg<V>,
+        weight: PerLeg<V>,
+        f0: &[PerLeg<V>; 3],
+        machine: Option<&MachineWrench>,
+    ) -> (Vector3<f64>, Vector3<f64>) {
+        let sum4 = PerLeg::<V>::sum4;
+        let rn = PerLeg::cross(arm, n);
+        let s = [n[0], n[1], n[2], rn[0], rn[1], rn[2]];
+        let ws = [s[0] * weight, s[1] * weight, s[2] * weight, s[3] * weight, s[4] * weight, s[5] * weight];
+        // `sum (along - across_k) S_k S_k^T`, row by row.
+        let [g00, g10, g11, g20] = sum4([ws[0] * s[0], ws[1] * s[0], ws[1] * s[1], ws[2] * s[0]]);
+        let [g21, g22, g30, g31] = sum4([ws[2] * s[1], ws[2] * s[2], ws[3] * s[0], ws[3] * s[1]]);
+        let [g32, g33, g40, g41] = sum4([ws[3] * s[2], ws[3] * s[3], ws[4] * s[0], ws[4] * s[1]]);
+        let [g42, g43, g44, g50] = sum4([ws[4] * s[2], ws[4] * s[3], ws[4] * s[4], ws[5] * s[0]]);
+        let [g51, g52, g53, g54] = sum4([ws[5] * s[1], ws[5] * s[2], ws[5] * s[3], ws[5] * s[4]]);
+        // The point masses `across_k` at the joints (`sum a`, `sum a rho`, `sum a |rho|^2` and
+        // `sum a rho rho^T`; none where `across` vanishes, the drives' rotors alone), and the
+        // legs' wrench without the accelerations, `sum (f0_k, rho_k x f0_k)`.
+        let moment = PerLeg::cross(arm, f0);
+        let zero = PerLeg::splat(0.0);
+        let ([g55, a, ax, ay, az, a_rho2, p00, p10, p11, p20, p21, p22], [b0, b1, b2, b3, b4, b5]) = if self.legs_turn {
+            let a_rho = components!(|c| across * arm[c]);
+            let rho2 = arm[0] * arm[0] + arm[1] * arm[1] + arm[2] * arm[2];
+            let [g55, a, ax, ay] = sum4([ws[5] * s[5], across, a_rho[0], a_rho[1]]);
+            let [az, a_rho2, p00, p10] = sum4([a_rho[2], across * rho2, a_rho[0] * arm[0], a_rho[1] * arm[0]]);
+            let [p11, p20, p21, p22] =
+                sum4([a_rho[1] * arm[1], a_rho[2] * arm[0], a_rho[2] * arm[1], a_rho[2] * arm[2]]);
+            let [b0, b1, b2, b3] = sum4([f0[0], f0[1], f0[2], moment[0]]);
+            let [b4, b5, _, _] = sum4([moment[1], moment[2], zero, zero]);
+            ([g55, a, ax, ay, az, a_rho2, p00, p10, p11, p20, p21, p22], [b0, b1, b2, b3, b4, b5])
+        } else {
+            let [g55, b0, b1, b2] = sum4([ws[5] * s[5], f0[0], f0[1], f0[2]]);
+            let [b3, b4, b5, _] = sum4([moment[0], moment[1], moment[2], zero]);
+            let mut point_masses = [0.0; 12];
+            point_masses[0] = g55;
+            (point_masses, [b0, b1, b2, b3, b4, b5])
+        };
+        let (mass, j, e) = (self.stand.mass, &self.stand.inertia, &state.e);
+        // `J_w = sum_a J_a e_a e_a^T`, from `J_a e_a`.
+        let je = [e[0] * j[0], e[1] * j[1], e[2] * j[2]];
+        let j_w = |r: usize, col: usize| je[0][r] * e[0][col] + je[1][r] * e[1][col] + je[2][r] * e[2][col];
+        let linear = mass + a;
+        let matrix = [
+            [g00 + linear, 0.0, 0.0, 0.0, 0.0, 0.0],
+            [g10, g11 + linear, 0.0, 0.0, 0.0, 0.0],
+            [g20, g21, g22 + linear, 0.0, 0.0, 0.0],
+            [g30, g31 - az, g32 + ay, g33 + j_w(0, 0) + (a_rho2 - p00), 0.0, 0.0],
+            [g40 + az, g41, g42 - ax, g43 + j_w(1, 0) - p10, g44 + j_w(1, 1) + (a_rho2 - p11), 0.0],
+            [g50 - ay, g51 + ax, g52, g53 + j_w(2, 0) - p20, g54 + j_w(2, 1) - p21, g55 + j_w(2, 2) + (a_rho2 - p22)],
+        ];
+        let omega = state.angular_velocity_inertial();
+        let j_omega = je[0] * e[0].dot(&omega) + je[1] * e[1].dot(&omega) + je[2] * e[2].dot(&omega);
+        let mut force = Vector3::new(b0, b1, b2 - mass * self.stand.gravity);
+        let mut moment = Vector3::new(b3, b4, b5) - omega.cross(&j_omega);
+        if let Some(m) = machine {
+            force += m.force;
+            moment += m.moment;
+        }
+        let q = solve_spd6(matrix, [force.x, force.y, force.z, moment.x, moment.y, moment.z]);
+        let beta = Vector3::new(q[3], q[4], q[5]);
+        let j_beta = je[0] * e[0].dot(&beta) + je[1] * e[1].dot(&beta) + je[2] * e[2].dot(&beta);
+        (Vector3::new(q[0] * mass, q[1] * mass, (q[2] + self.stand.gravity) * mass), j_beta + omega.cross(&j_omega))
     }
 
     /// The end stops' forces along the legs ([`EndStops::contact`], leg by leg: 0 inside the
@@ -296,8 +380,8 @@ impl SpecialForm {
         dot.any_outside(PerLeg::splat(threshold) * length, PerLeg::splat(f64::INFINITY))
     }
 
-    /// The machine's loads (the joint limits here) leg by leg, as [`SpecialForm::loads`]
-    /// computes them, summed as [`Loads::wrench`] does; `None` if none acts.
+    /// The joint limits' loads leg by leg, as [`SpecialForm::loads`] computes them, summed as
+    /// [`Loads::wrench`] does; `None` if none acts.
     #[inline(never)]
     fn machine_wrench(&self, state: &BodyState) -> Option<MachineWrench> {
         let legs = LegGeometry::new(&self.stand, state);
@@ -306,7 +390,10 @@ impl SpecialForm {
             let (leg, l) = (legs.leg[k], legs.length[k]);
             if l > 0.0 {
                 let a_dot = state.v + state.body_vector_rate(&self.stand.platform_joints[k]);
-                loads.add_machine(k, &self.machine_load(k, state, &LegMotion::new(&leg, l, &a_dot), None));
+                let mut load =
+                    MachineLoad { force: Vector3::zeros(), moment: Vector3::zeros(), dissipation: 0.0, acts: false };
+                self.add_joint_limits(k, state, &LegMotion::new(&leg, l, &a_dot), &mut load);
+                loads.add_machine(k, &load);
             }
         }
         loads.machine_wrench()

@@ -70,26 +70,36 @@ impl SpecialForm {
             load.dissipation -= f * leg.l_dot;
             load.acts = true;
         }
-        if let Some(limits) = &self.joint_limits {
-            if let Some(c) = limits.base(k, &leg.n, &leg.n_dot) {
-                load.force += c.on_leg / leg.l;
-                load.dissipation += c.dissipation;
-                load.acts = true;
-            }
-            let m0 = &limits.platform_reference[k];
-            if let Some(c) = limits.platform(&leg.n, &leg.n_dot, &state.body_vector(m0), || state.body_vector_rate(m0))
-            {
-                load.force += c.on_leg / leg.l;
-                load.moment += c.on_platform;
-                load.dissipation += c.dissipation;
-                load.acts = true;
-            }
-        }
+        self.add_joint_limits(k, state, leg, &mut load);
         if let Some(inertia) = inertia {
             load.force += inertia.bias;
             load.acts = true;
         }
         load
+    }
+
+    /// The joint limits' loads on the platform for leg `k` in motion `leg`, added to `load`.
+    #[inline]
+    pub(super) fn add_joint_limits<T: Real>(
+        &self,
+        k: usize,
+        state: &BodyState<T>,
+        leg: &LegMotion<T>,
+        load: &mut MachineLoad<T>,
+    ) {
+        let Some(limits) = &self.joint_limits else { return };
+        if let Some(c) = limits.base(k, &leg.n, &leg.n_dot) {
+            load.force += c.on_leg / leg.l;
+            load.dissipation += c.dissipation;
+            load.acts = true;
+        }
+        let m0 = &limits.platform_reference[k];
+        if let Some(c) = limits.platform(&leg.n, &leg.n_dot, &state.body_vector(m0), || state.body_vector_rate(m0)) {
+            load.force += c.on_leg / leg.l;
+            load.moment += c.on_platform;
+            load.dissipation += c.dissipation;
+            load.acts = true;
+        }
     }
 
     /// The legs' inertia: the platform's accelerations `(r'', omega')` from its Newton-Euler

@@ -13,13 +13,14 @@
 //! [`SpecialForm::rate`] is the definition, written once and generic over the number type:
 //! in `f64` it is the right-hand side, in [`Dual`] its exact directional derivative
 //! ([`SpecialForm::derivative_tangent`]). [`SpecialForm::derivative`] is the step's fast
-//! path for massless legs without friction: the same operations in the same order with the six
+//! path: for massless legs without friction the same operations in the same order with the six
 //! legs side by side in vector registers ([`PerLeg`]) and the three axes likewise
-//! ([`AxisRows`]), pinned to the definition bit for bit by a test; other machines take the
-//! definition itself.
+//! ([`AxisRows`]), pinned to the definition bit for bit by a test; for the machine (legs with
+//! mass, friction, drives) the same laws in lanes with the sums over the legs in another order
+//! (`derivative_machine_in`), pinned to the definition to round-off.
 //!
 //! Files: this one holds the definition and the types; `machine.rs` the machine's loads leg
-//! by leg and the heavy legs' 6x6 solve; `fast_path.rs` the lanes form.
+//! by leg and the heavy legs' 6x6 solve; `fast_path.rs` the lanes forms.
 
 mod fast_path;
 mod machine;
@@ -76,11 +77,13 @@ pub struct SpecialForm {
     reference_axes: [Vector3<f64>; 3],
     /// `cos thetaMax` of the base joints, `cos` and `sin thetaMax` of the platform joints.
     joint_cosines: [f64; 3],
-    /// Whether the fast path applies: massless legs without friction, forces given.
+    /// Whether the legs have mass or inertia ([`LegBodies::has_mass`]) and whether they resist
+    /// turning ([`LegBodies::has_transverse_inertia`]), kept beside `legs` for the fast path.
+    legs_mass: bool,
+    legs_turn: bool,
+    /// Whether the paper's legs' fast path applies (massless legs without friction, forces
+    /// given); otherwise the machine's takes the step.
     fast: bool,
-    /// Whether the drives' fast path applies: drives on legs otherwise massless, without
-    /// friction (the rotors' inertia along the legs is the only inertia they add).
-    fast_driven: bool,
 }
 
 /// The sum over the six legs in the fixed order `((x1 + x3) + x5) + ((x2 + x4) + x6)`, that of
@@ -115,7 +118,8 @@ impl SpecialForm {
             reference_axes: [Vector3::x(), Vector3::y(), Vector3::z()],
             joint_cosines: [-1.0, -1.0, 0.0],
             fast: true,
-            fast_driven: false,
+            legs_mass: false,
+            legs_turn: false,
             stand,
         }
     }
@@ -134,7 +138,7 @@ impl SpecialForm {
         }
         self.joint_limits = joint_limits;
         self.fast = self.takes_fast_path();
-        self.fast_driven = self.takes_driven_fast_path();
+        (self.legs_mass, self.legs_turn) = (self.legs.has_mass(), self.legs.has_transverse_inertia());
         self
     }
 
@@ -144,7 +148,7 @@ impl SpecialForm {
         self.legs.axial_mass = drives.map_or(0.0, |d| d.reflected_mass());
         self.drives = drives;
         self.fast = self.takes_fast_path();
-        self.fast_driven = self.takes_driven_fast_path();
+        (self.legs_mass, self.legs_turn) = (self.legs.has_mass(), self.legs.has_transverse_inertia());
         self
     }
 
@@ -175,17 +179,6 @@ impl SpecialForm {
     /// Whether the step's fast path applies: massless legs without friction, forces given.
     fn takes_fast_path(&self) -> bool {
         !self.legs.has_mass() && self.friction.is_zero() && self.drives.is_none()
-    }
-
-    /// Whether the drives' fast path applies ([`SpecialForm::derivative_driven_in`]).
-    fn takes_driven_fast_path(&self) -> bool {
-        let bodies = LegBodies { axial_mass: 0.0, ..self.legs };
-        self.drives.is_some() && !bodies.has_mass() && self.friction.is_zero()
-    }
-
-    /// Whether [`SpecialForm::derivative_driven_in`] applies to this form.
-    pub fn has_driven_fast_path(&self) -> bool {
-        self.fast_driven
     }
 
     /// The drives' axial forces and rates at a body state: each leg's rate `l'_k` from the
@@ -340,20 +333,23 @@ impl SpecialForm {
     }
 }
 
-/// What [`SpecialForm::derivative_driven_in`] gives besides the body's rates.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct DrivenRates {
-    /// `I_k'`, A/s.
+/// What [`SpecialForm::derivative_machine_in`] gives besides the body's rates.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct MachineRates {
+    /// The legs' powers: of the given forces (0 with the drives, whose work is electric), and
+    /// the dissipation without the drives' losses.
+    pub power: LegPower,
+    /// `I_k'`, A/s (0 without drives).
     pub current_rate: [f64; LEG_COUNT],
     /// `sum U_k I_k`, W.
     pub electric_power: f64,
-    /// The stops', joint limits' and drives' losses, W.
-    pub dissipation: f64,
+    /// The drives' losses, W.
+    pub drive_dissipation: f64,
 }
 
 /// What moves the legs: given forces, or the electric drives' currents and voltages.
 #[derive(Clone, Copy)]
-enum Actuation<'a, T> {
+pub(crate) enum Actuation<'a, T> {
     Forces(&'a [T; LEG_COUNT]),
     Drives { currents: &'a [T; LEG_COUNT], voltages: &'a [T; LEG_COUNT] },
 }

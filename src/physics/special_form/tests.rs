@@ -2,6 +2,7 @@ use nalgebra::Vector3;
 
 use super::*;
 use crate::physics::actuators::HeldForces;
+use crate::physics::actuators::drives::DriveRate;
 use crate::physics::body::kinematics::rotation_from_angles;
 use crate::physics::legs::end_stops::EndStops;
 use crate::physics::legs::{bodies::LegBodies, friction::Friction, joint_limits::JointLimits};
@@ -86,70 +87,104 @@ fn the_fast_path_gives_the_bits_of_the_definition() {
     assert!(joint_contacts >= 2, "the joint-limit branch was exercised ({joint_contacts} states)");
 }
 
-/// The drives' fast path is the definition (`rate_driven`) to round-off: massless legs with
-/// the rotors' axial mass, on and off the end stops and the joint limits, with Baumgarte
-/// terms, in SSE2 and AVX2.
+/// The machine's fast path is the definition (`rate`, `rate_driven`) to round-off: massless
+/// legs with the drives' rotors, heavy legs under given forces, heavy legs with friction and
+/// drives, each on and off the end stops and the joint limits, with Baumgarte terms, in SSE2
+/// and AVX2.
 #[test]
-fn the_drives_fast_path_is_the_definition_to_round_off() {
+fn the_machines_fast_path_is_the_definition_to_round_off() {
     use crate::physics::actuators::drives::ElectricDrives;
     let stand = Stand::truck_cabin();
     let stops = EndStops::default();
     let r0 = Stand::truck_cabin_neutral_position();
     let n0 = std::array::from_fn(|k| (r0 + stand.platform_joints[k] - stand.base_joints[k]).normalize());
     let limits = JointLimits::new(0.1, 0.15, 1e6, 5e4, n0, &nalgebra::Matrix3::identity());
+    let heavy = LegBodies {
+        cylinder_mass: 40.0,
+        rod_mass: 15.0,
+        cylinder_inertia: 2.5,
+        rod_inertia: 0.6,
+        ..LegBodies::default()
+    };
+    let friction = Friction { coulomb: 300.0, static_: 450.0, viscous: 2000.0, ..Friction::default() };
+    let forces = [5900.0, -1200.0, 8000.0, 0.0, 3.5e4, 6100.0];
     let currents = [18.0, -4.0, 25.0, 30.0, 11.0, 19.5];
     let voltages = [7.5, 120.0, -80.0, 0.0, 250.0, 40.0];
-    let (mut worst, mut contacts, mut joint_contacts): (f64, usize, usize) = (0.0, 0, 0);
-    for (rate, joints) in [(0.0, None), (10.0, Some(limits))] {
-        let form = SpecialForm::new(stand.clone())
-            .with_end_stops(Some(stops))
-            .with_baumgarte_rate(rate)
-            .with_machine(LegBodies::default(), Friction::default(), joints)
-            .with_drives(Some(ElectricDrives::default()));
-        assert!(form.has_driven_fast_path());
-        for y in test_states() {
-            let legs = LegGeometry::new(&stand, &BodyState::from_vector(&y));
-            contacts += (0..LEG_COUNT).filter(|&k| stops.is_outside(k, legs.length[k])).count();
-            joint_contacts +=
-                usize::from(form.loads(&BodyState::from_vector(&y), Actuation::Forces(&[0.0; LEG_COUNT])).machine_acts);
-            let (reference, power, drives) = form.rate_driven(&y, &currents, &voltages);
-            let mut fast = [0.0; 24];
-            let rates = form.derivative_driven_in::<Narrow>(&y, &currents, &voltages, &mut fast);
-            let scale = reference.iter().fold(1.0f64, |m, x| m.max(x.abs()));
-            let mut error = (0..24).map(|i| (fast[i] - reference[i]).abs()).fold(0.0, f64::max) / scale;
-            let lost = power.dissipation + sum_over_legs(&drives.map(|d| d.dissipation));
-            let electric = sum_over_legs(&drives.map(|d| d.electric_power));
-            error = error.max((rates.dissipation - lost).abs() / lost.abs().max(1.0));
-            error = error.max((rates.electric_power - electric).abs() / electric.abs().max(1.0));
-            for k in 0..LEG_COUNT {
-                let r = drives[k].current_rate;
-                error = error.max((rates.current_rate[k] - r).abs() / r.abs().max(1.0));
+    let machines = [
+        ("drives, massless legs", LegBodies::default(), Friction::default(), true),
+        ("heavy legs, forces", heavy, Friction::default(), false),
+        ("friction, forces", LegBodies::default(), friction, false),
+        ("heavy legs, friction, drives", heavy, friction, true),
+    ];
+    for (name, legs, friction, driven) in machines {
+        let (mut worst, mut contacts, mut joint_contacts): (f64, usize, usize) = (0.0, 0, 0);
+        for (rate, joints) in [(0.0, None), (10.0, Some(limits))] {
+            let form = SpecialForm::new(stand.clone())
+                .with_end_stops(Some(stops))
+                .with_baumgarte_rate(rate)
+                .with_machine(legs, friction, joints)
+                .with_drives(driven.then(ElectricDrives::default));
+            for y in test_states() {
+                let legs = LegGeometry::new(&stand, &BodyState::from_vector(&y));
+                contacts += (0..LEG_COUNT).filter(|&k| stops.is_outside(k, legs.length[k])).count();
+                joint_contacts += usize::from(
+                    form.loads(&BodyState::from_vector(&y), Actuation::Forces(&[0.0; LEG_COUNT])).machine_acts,
+                );
+                let (reference, power, drives) = if driven {
+                    form.rate_driven(&y, &currents, &voltages)
+                } else {
+                    let (rate, power) = form.rate(&y, &forces);
+                    (rate, power, [DriveRate::zero(); LEG_COUNT])
+                };
+                let actuation = if driven {
+                    Actuation::Drives { currents: &currents, voltages: &voltages }
+                } else {
+                    Actuation::Forces(&forces)
+                };
+                let mut fast = [0.0; 24];
+                let rates = form.derivative_machine_in::<Narrow>(&y, actuation, &mut fast);
+                let scale = reference.iter().fold(1.0f64, |m, x| m.max(x.abs()));
+                let relative = |a: f64, b: f64| (a - b).abs() / b.abs().max(1.0);
+                let rates_error =
+                    |dy: &StateVector| (0..24).map(|i| (dy[i] - reference[i]).abs()).fold(0.0, f64::max) / scale;
+                let mut errors = vec![
+                    ("rates", rates_error(&fast)),
+                    ("dissipation", relative(rates.power.dissipation, power.dissipation)),
+                    ("actuator power", if driven { 0.0 } else { relative(rates.power.actuator, power.actuator) }),
+                    ("drive losses", relative(rates.drive_dissipation, sum_over_legs(&drives.map(|d| d.dissipation)))),
+                    (
+                        "electric power",
+                        relative(rates.electric_power, sum_over_legs(&drives.map(|d| d.electric_power))),
+                    ),
+                ];
+                for k in 0..LEG_COUNT {
+                    errors.push(("current rate", relative(rates.current_rate[k], drives[k].current_rate)));
+                }
+                if crate::simd::wide_testable() {
+                    let mut wide = [0.0; 24];
+                    // SAFETY: AVX2 and FMA checked just now.
+                    unsafe { wide_machine(&form, &y, actuation, &mut wide) };
+                    errors.push(("rates in AVX2", rates_error(&wide)));
+                }
+                for (what, error) in errors {
+                    assert!(error < 1e-12, "{name}, {what}: {error:e} at z = {}, Baumgarte {rate}", y[2]);
+                    worst = worst.max(error);
+                }
             }
-            if crate::simd::wide_testable() {
-                let mut wide = [0.0; 24];
-                // SAFETY: AVX2 and FMA checked just now.
-                unsafe { wide_driven(&form, &y, &currents, &voltages, &mut wide) };
-                error = error.max((0..24).map(|i| (wide[i] - reference[i]).abs()).fold(0.0, f64::max) / scale);
-            }
-            worst = worst.max(error);
         }
+        println!("{name}: the machine's fast path against the definition, largest relative difference {worst:.1e}");
+        assert!(
+            contacts >= 6 && joint_contacts >= 1,
+            "{name}: contacts exercised: stops {contacts}, joints {joint_contacts}"
+        );
     }
-    println!("drives' fast path against the definition: largest relative difference {worst:.1e}");
-    assert!(worst < 1e-12, "{worst:e}");
-    assert!(contacts >= 6 && joint_contacts >= 1, "contacts exercised: stops {contacts}, joints {joint_contacts}");
 }
 
 /// # Safety
 /// AVX2 and FMA must be available ([`crate::simd::wide_available`]).
 #[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx,avx2,fma"))]
-unsafe fn wide_driven(
-    form: &SpecialForm,
-    y: &StateVector,
-    currents: &[f64; LEG_COUNT],
-    voltages: &[f64; LEG_COUNT],
-    dy: &mut StateVector,
-) {
-    form.derivative_driven_in::<Wide>(y, currents, voltages, dy);
+unsafe fn wide_machine(form: &SpecialForm, y: &StateVector, actuation: Actuation<'_, f64>, dy: &mut StateVector) {
+    form.derivative_machine_in::<Wide>(y, actuation, dy);
 }
 
 /// # Safety
