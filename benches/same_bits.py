@@ -1,7 +1,8 @@
 """Two builds of the platform FMU, output by output and bit by bit: every Real output both
 declare, over 3000 steps of 1 ms through FMPy, with forces (legs with mass and friction; RK4;
 the paper's legs) and with electric drives (adaptive and RK4) under a leg feedback with a
-ripple. How a change that should not touch these modes is checked (benches/results/hydraulics.txt).
+ripple. How a change that should not touch these modes is checked (benches/results/hydraulics.txt),
+and how far apart a change that moves them at round-off leaves them (benches/results/machine_lanes.txt).
 
     .venv/bin/python benches/same_bits.py OLD/StewartPlatform.fmu NEW/StewartPlatform.fmu
 """
@@ -46,3 +47,13 @@ for name, params, inp, law in cases:
     b, _ = run(new, {k: (int(v) if k in ("drive","solver.method") else v) for k,v in params.items()}, inp, law)
     diff = np.argwhere(a.view(np.uint64) != b.view(np.uint64))
     print(f"{name}: {a.shape[1]} outputs x {a.shape[0]} steps; differing bits: {len(diff)}", [names[j] for j in sorted(set(diff[:,1]))][:5])
+    if len(diff):
+        # How far apart: each output's largest difference over its largest value (constraintError,
+        # round-off itself, apart), the three largest.
+        scale = np.abs(a).max(axis=0)
+        keep = [j for j, n in enumerate(names) if n != "constraintError" and scale[j] > 0]
+        rel = np.abs(a - b).max(axis=0)[keep] / scale[keep]
+        c = names.index("constraintError")
+        print("   largest differences relative to the output's largest value:",
+              ", ".join(f"{names[keep[o]]} {rel[o]:.1e}" for o in np.argsort(rel)[::-1][:3]),
+              f"; constraintError at most {np.abs(a[:, c]).max():.1e} (old), {np.abs(b[:, c]).max():.1e} (new)")

@@ -24,6 +24,7 @@ impl Narrow {
 impl super::Lanes for Narrow {
     type Axes = super::Pair;
     const FOR_CHECKS: bool = false;
+    const AVX: bool = false;
     #[inline(always)]
     fn new(x: &[f64; 6]) -> Self {
         // SAFETY (here and below): SSE2 is part of the x86-64 baseline.
@@ -178,6 +179,7 @@ impl Wide {
 impl super::Lanes for Wide {
     type Axes = super::Quad;
     const FOR_CHECKS: bool = true;
+    const AVX: bool = true;
     #[inline(always)]
     fn new(x: &[f64; 6]) -> Self {
         unsafe { Wide(_mm256_set_pd(x[3], x[2], x[1], x[0]), _mm256_set_pd(0.0, 0.0, x[5], x[4])) }

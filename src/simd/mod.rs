@@ -93,6 +93,9 @@ pub trait Lanes: Copy {
     /// Whether the checks at the end of a step compute the legs in these lanes too (see
     /// [`crate::physics::legs::geometry::JointArrays::kinematics_in`]).
     const FOR_CHECKS: bool;
+    /// Whether these are AVX registers (code in them runs only where [`wide_available`] said
+    /// so).
+    const AVX: bool;
     fn new(x: &[f64; LANES]) -> Self;
     fn splat(x: f64) -> Self;
     fn add(self, other: Self) -> Self;

@@ -165,7 +165,8 @@ fn hydraulic_rates<T: Real>(
 
 /// The rate of a simulation state `y` for the inputs `inputs` (the leg forces `F`, N, with
 /// drives the voltages `U`, V, with hydraulic legs the valve commands), in any number type:
-/// the definition the steps, Model Exchange and the exact derivatives share. With drives or
+/// the definition Model Exchange and the exact derivatives use, and the steps' fast paths
+/// follow (bit for bit or to round-off: `crate::physics::special_form`). With drives or
 /// hydraulics, `work.F` stays 0: their forces are internal, their energy comes in as
 /// `work.electric` or `work.hydraulic`.
 pub fn state_rate<T: Real>(
@@ -494,7 +495,7 @@ impl<L: LegForceLaw + ?Sized, V: Lanes, const N: usize> OdeSystem<N> for Platfor
             let currents: [f64; LEG_COUNT] = std::array::from_fn(|k| y[CURRENTS + k]);
             let actuation = Actuation::Drives { currents: &currents, voltages: &inputs };
             if let Some((body_rate, rest)) = dy.split_first_chunk_mut::<STATE_DIM>() {
-                let rates = self.form.derivative_machine_in::<V>(body(y), actuation, body_rate);
+                let rates = self.form.derivative_machine_of::<V>(body(y), actuation, body_rate);
                 if let Some([work, dissipated, currents @ .., electric]) = rest.first_chunk_mut::<9>() {
                     *work = 0.0;
                     *dissipated = rates.power.dissipation + rates.drive_dissipation;

@@ -128,8 +128,8 @@ impl LegBodies {
             || self.axial_mass != 0.0
     }
 
-    /// Whether the legs resist turning (`I_t != 0`: a rod mass, or a cylinder's mass or
-    /// inertia, or a rod's inertia), as more than the mass along them.
+    /// Whether the legs resist turning (`I_t != 0`: a rod mass, a cylinder's mass away from
+    /// `B_k`, or either body's inertia), as more than the mass along them.
     #[inline(always)]
     pub fn has_transverse_inertia(&self) -> bool {
         self.rod_mass != 0.0

@@ -10,8 +10,9 @@ const JOINT_CHECK_MARGIN: f64 = 1e-9;
 
 impl SpecialForm {
     /// The right-hand side `dy/dt` for leg forces given by `law` at time `t`, and the leg
-    /// powers: [`SpecialForm::rate`]'s numbers, computed in vector registers where the legs are
-    /// massless and frictionless (the step's fast path), by the definition otherwise.
+    /// powers: [`SpecialForm::rate`]'s numbers, computed in vector registers: its bits for
+    /// massless, frictionless legs, to round-off for the machine's legs
+    /// ([`SpecialForm::derivative_machine_in`]).
     #[inline(always)]
     pub fn derivative<L: LegForceLaw + ?Sized>(
         &self,
@@ -41,7 +42,7 @@ impl SpecialForm {
         if !self.fast {
             // The machine's legs: rarer, and out of the paper's legs' way.
             std::hint::cold_path();
-            return self.derivative_machine_in::<V>(y, Actuation::Forces(&u), dy).power;
+            return self.derivative_machine_of::<V>(y, Actuation::Forces(&u), dy).power;
         }
         let w = self.wrench_in::<V>(&state, &u);
         let (e, e_dot) = (AxisRows::<V::Axes>::of(&state.e), AxisRows::of(&state.e_dot));
@@ -91,6 +92,52 @@ impl SpecialForm {
             stop,
             machine,
         }
+    }
+
+    /// [`SpecialForm::derivative_machine_in`] in lanes `V`, compiled once per register width
+    /// and called: inlined into every force law's step (as the paper's legs' path is) it made
+    /// the test build several times slower. Every width gives the same bits (tested).
+    #[inline(always)]
+    pub(crate) fn derivative_machine_of<V: Lanes>(
+        &self,
+        y: &StateVector,
+        actuation: Actuation<'_, f64>,
+        dy: &mut StateVector,
+    ) -> MachineRates {
+        #[cfg(all(target_arch = "x86_64", feature = "avx2"))]
+        if V::AVX {
+            // SAFETY: lanes in AVX registers run only where `crate::simd::wide_available()`
+            // found AVX2 and FMA.
+            return unsafe { self.derivative_machine_avx(y, actuation, dy) };
+        }
+        self.derivative_machine(y, actuation, dy)
+    }
+
+    /// [`SpecialForm::derivative_machine_in`] in AVX registers.
+    ///
+    /// # Safety
+    /// AVX2 and FMA must be available ([`crate::simd::wide_available`]).
+    #[cfg(all(target_arch = "x86_64", feature = "avx2"))]
+    #[target_feature(enable = "avx,avx2,fma")]
+    #[inline(never)]
+    unsafe fn derivative_machine_avx(
+        &self,
+        y: &StateVector,
+        actuation: Actuation<'_, f64>,
+        dy: &mut StateVector,
+    ) -> MachineRates {
+        self.derivative_machine_in::<crate::simd::Wide>(y, actuation, dy)
+    }
+
+    /// [`SpecialForm::derivative_machine_in`] in [`Narrow`] lanes.
+    #[inline(never)]
+    pub(crate) fn derivative_machine(
+        &self,
+        y: &StateVector,
+        actuation: Actuation<'_, f64>,
+        dy: &mut StateVector,
+    ) -> MachineRates {
+        self.derivative_machine_in::<Narrow>(y, actuation, dy)
     }
 
     /// [`SpecialForm::rate`]'s and [`SpecialForm::rate_driven`]'s numbers for the machine (legs

@@ -124,11 +124,14 @@ fn the_machines_fast_path_is_the_definition_to_round_off() {
                 .with_baumgarte_rate(rate)
                 .with_machine(legs, friction, joints)
                 .with_drives(driven.then(ElectricDrives::default));
+            // The joint limits alone, to see where they act.
+            let joints_only =
+                SpecialForm::new(stand.clone()).with_machine(LegBodies::default(), Friction::default(), joints);
             for y in test_states() {
-                let legs = LegGeometry::new(&stand, &BodyState::from_vector(&y));
-                contacts += (0..LEG_COUNT).filter(|&k| stops.is_outside(k, legs.length[k])).count();
+                let geometry = LegGeometry::new(&stand, &BodyState::from_vector(&y));
+                contacts += (0..LEG_COUNT).filter(|&k| stops.is_outside(k, geometry.length[k])).count();
                 joint_contacts += usize::from(
-                    form.loads(&BodyState::from_vector(&y), Actuation::Forces(&[0.0; LEG_COUNT])).machine_acts,
+                    joints_only.loads(&BodyState::from_vector(&y), Actuation::Forces(&[0.0; LEG_COUNT])).machine_acts,
                 );
                 let (reference, power, drives) = if driven {
                     form.rate_driven(&y, &currents, &voltages)
@@ -160,11 +163,26 @@ fn the_machines_fast_path_is_the_definition_to_round_off() {
                 for k in 0..LEG_COUNT {
                     errors.push(("current rate", relative(rates.current_rate[k], drives[k].current_rate)));
                 }
+                // Every form of the lanes gives the same bits, and the step's entry takes this path.
+                let same = |dy: &StateVector, r: &MachineRates, form_name: &str| {
+                    let all = |dy: &StateVector, r: &MachineRates| {
+                        let mut v = dy.to_vec();
+                        v.extend([r.power.actuator, r.power.dissipation, r.electric_power, r.drive_dissipation]);
+                        v.extend(r.current_rate);
+                        v.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
+                    };
+                    assert_eq!(all(dy, r), all(&fast, &rates), "{name}: {form_name} against SSE2, z = {}", y[2]);
+                };
                 if crate::simd::wide_testable() {
                     let mut wide = [0.0; 24];
                     // SAFETY: AVX2 and FMA checked just now.
-                    unsafe { wide_machine(&form, &y, actuation, &mut wide) };
-                    errors.push(("rates in AVX2", rates_error(&wide)));
+                    let wide_rates = unsafe { wide_machine(&form, &y, actuation, &mut wide) };
+                    same(&wide, &wide_rates, "AVX2");
+                }
+                if !driven {
+                    let mut entry = [0.0; 24];
+                    let power = form.derivative(0.3, &y, &HeldForces::constant(forces), &mut entry);
+                    same(&entry, &MachineRates { power, ..rates }, "SpecialForm::derivative");
                 }
                 for (what, error) in errors {
                     assert!(error < 1e-12, "{name}, {what}: {error:e} at z = {}, Baumgarte {rate}", y[2]);
@@ -183,8 +201,13 @@ fn the_machines_fast_path_is_the_definition_to_round_off() {
 /// # Safety
 /// AVX2 and FMA must be available ([`crate::simd::wide_available`]).
 #[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx,avx2,fma"))]
-unsafe fn wide_machine(form: &SpecialForm, y: &StateVector, actuation: Actuation<'_, f64>, dy: &mut StateVector) {
-    form.derivative_machine_in::<Wide>(y, actuation, dy);
+unsafe fn wide_machine(
+    form: &SpecialForm,
+    y: &StateVector,
+    actuation: Actuation<'_, f64>,
+    dy: &mut StateVector,
+) -> MachineRates {
+    form.derivative_machine_in::<Wide>(y, actuation, dy)
 }
 
 /// # Safety
