@@ -21,7 +21,7 @@ use stewart_fmu::physics::legs::end_stops::EndStops;
 use stewart_fmu::physics::legs::friction::Friction;
 use stewart_fmu::physics::legs::joint_limits::JointLimits;
 use stewart_fmu::physics::stand::Stand;
-use stewart_fmu::simulation::platform::PlatformDynamics;
+use stewart_fmu::simulation::PlatformDynamics;
 use stewart_fmu::simulation::{LegOutputs, PlatformOutputs, PlatformSimulation, SIMULATION_DIM, Stabilisation};
 
 fn oracle_drives(d: &ElectricDrives) -> OracleDrives {

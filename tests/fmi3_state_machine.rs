@@ -157,7 +157,7 @@ const FUNCTIONS: [&str; 45] = [
 
 /// Continuous states of the platform and its event indicators (Model Exchange).
 const NX: usize = stewart_fmu::simulation::SIMULATION_DIM;
-const NZ: usize = stewart_fmu::simulation::platform::switching::COUNT;
+const NZ: usize = stewart_fmu::simulation::state::switching::COUNT;
 
 /// A fresh instance driven into `state` (Co-Simulation instances use Event Mode).
 fn instance_in(state: &str, kind: Kind) -> Host3 {

@@ -95,7 +95,7 @@ const FUNCTIONS: [&str; 43] = [
 /// Continuous states of the platform (24 special-form coordinates, work.F, work.dissipated).
 const NX: usize = stewart_fmu::simulation::SIMULATION_DIM;
 /// Event indicators: twelve stroke limits and the force/moment determinant.
-const NZ: usize = stewart_fmu::simulation::platform::switching::COUNT;
+const NZ: usize = stewart_fmu::simulation::state::switching::COUNT;
 
 /// A fresh instance driven into `state`.
 fn instance_in(state: &str) -> Host {

@@ -18,8 +18,8 @@ use stewart_fmu::physics::body::state::BodyState;
 use stewart_fmu::physics::error::PhysicsFault;
 use stewart_fmu::physics::legs::end_stops::EndStops;
 use stewart_fmu::physics::stand::Stand;
+use stewart_fmu::simulation::PlatformDynamics;
 use stewart_fmu::simulation::SIMULATION_DIM;
-use stewart_fmu::simulation::platform::PlatformDynamics;
 use stewart_fmu::simulation::{LegOutputs, PlatformOutputs, PlatformSimulation, Stabilisation};
 
 const L0: f64 = 1.7550860729486566;

@@ -17,7 +17,7 @@ use stewart_fmu::physics::legs::end_stops::EndStops;
 use stewart_fmu::physics::legs::friction::Friction;
 use stewart_fmu::physics::legs::joint_limits::JointLimits;
 use stewart_fmu::physics::stand::Stand;
-use stewart_fmu::simulation::platform::body;
+use stewart_fmu::simulation::state::body;
 use stewart_fmu::simulation::{PlatformOutputs, PlatformSimulation, Stabilisation};
 
 /// Legs of a 3-tonne simulator's electric actuators: 40 kg cylinders, 15 kg rods.

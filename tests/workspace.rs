@@ -13,7 +13,7 @@ use stewart_fmu::integration::{Method, SolverSettings};
 use stewart_fmu::physics::actuators::HeldForces;
 use stewart_fmu::physics::legs::end_stops::EndStops;
 use stewart_fmu::physics::stand::{PAPER_EQUILIBRIUM_LEG_FORCE, Stand};
-use stewart_fmu::simulation::platform::switching;
+use stewart_fmu::simulation::state::switching;
 use stewart_fmu::simulation::{PlatformOutputs, PlatformSimulation, Stabilisation};
 
 const MASS: f64 = 3000.0;
@@ -177,9 +177,8 @@ fn bounce(settings: SolverSettings, t_end: f64) -> (Vec<f64>, f64, usize, Vec<f6
         sim.advance(&HeldForces::constant([0.0; 6]), t + h).expect("step");
         t += h;
         for c in sim.crossings.as_slice().iter().filter(|c| c.index == switching::LOWER && !c.rising) {
-            let s = stewart_fmu::physics::body::state::BodyState::from_vector(stewart_fmu::simulation::platform::body(
-                &c.y,
-            ));
+            let s =
+                stewart_fmu::physics::body::state::BodyState::from_vector(stewart_fmu::simulation::state::body(&c.y));
             landings.push(s.angular_velocity_body().norm());
         }
         z.push(sim.body_state().r.z);

@@ -16,7 +16,7 @@ use crate::physics::number::{Dual, Number};
 use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::LEG_COUNT;
 use crate::simulation::outputs::condition_number_tangent;
-use crate::simulation::platform::{SIMULATION_DIM, SimulationState, body, state_rate, state_rate_supplied, switching};
+use crate::simulation::state::{SIMULATION_DIM, SimulationState, body, state_rate, state_rate_supplied, switching};
 use crate::simulation::{PlatformDynamics, PlatformOutputs, Stabilisation};
 
 impl PlatformModel {

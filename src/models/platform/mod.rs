@@ -30,9 +30,8 @@ use crate::physics::legs::geometry::LegGeometry;
 use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::LEG_COUNT;
 use crate::simulation::outputs::condition_number;
-use crate::simulation::platform::{
-    Reached, SIMULATION_DIM, actuator_forces, body, hydraulic, state_rate, supply_flow, switching,
-};
+use crate::simulation::platform::Reached;
+use crate::simulation::state::{SIMULATION_DIM, actuator_forces, body, hydraulic, state_rate, supply_flow, switching};
 use crate::simulation::{LegOutputs, PlatformOutputs, PlatformSimulation, SimulationState};
 pub use parameters::{Experiment, PlatformParameters, default_leg_force, holding_pressures};
 use variables::{BINDINGS, group};

@@ -18,7 +18,7 @@ use crate::physics::legs::joint_limits::{self, JointLimits};
 use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::{LEG_COUNT, PAPER_EQUILIBRIUM_LEG_FORCE, Stand};
 use crate::simulation::outputs::condition_number;
-use crate::simulation::platform::{CURRENTS, hydraulic};
+use crate::simulation::state::{CURRENTS, hydraulic};
 use crate::simulation::{PlatformSimulation, SIMULATION_DIM, SimulationState, Stabilisation};
 
 /// Everything set through parameters.

@@ -11,7 +11,7 @@ use crate::simulation::PlatformOutputs;
 /// `r, v, e1, e2, e3, e1', e2', e3'` (`e_b` is column `b` of `R`: elements `R[1,b], R[2,b],
 /// R[3,b]`, flat row-major indices `b-1, b+2, b+5`, and `e_b'` the same elements of
 /// `der(R)`), the work quadratures, the drives' currents and the electric work
-/// (`crate::simulation::platform`'s layout).
+/// (`crate::simulation::state`'s layout).
 pub static STATES: &[(&str, usize)] = &[
     ("r", 0),
     ("r", 1),

@@ -5,8 +5,7 @@ use nalgebra::Vector3;
 use super::error::ParameterError;
 use crate::maths;
 
-/// Number of legs (hydraulic cylinders) of a Stewart platform.
-pub const LEG_COUNT: usize = 6;
+pub use super::LEG_COUNT;
 
 /// Base joint circle radius `R_b` of the default stand, m.
 pub const DEFAULT_BASE_RADIUS: f64 = 1.5;
@@ -201,7 +200,8 @@ impl Stand {
 /// kilometres; beyond it lengths squared leave double precision.
 pub const MAX_COORDINATE: f64 = 1e6;
 
-pub(crate) fn check_finite(name: &str, value: f64) -> Result<(), ParameterError> {
+/// `Ok` if `value` is finite, else the error naming the parameter `name`.
+pub fn check_finite(name: &str, value: f64) -> Result<(), ParameterError> {
     if value.is_finite() { Ok(()) } else { Err(ParameterError::new(name, format!("must be finite, got {value:?}"))) }
 }
 

@@ -68,7 +68,7 @@ pub struct SpecialForm {
     /// Electric drives in the legs, or `None`: the actuator forces are given (the paper's).
     drives: Option<ElectricDrives>,
     /// Hydraulic servo legs, or `None`. Their force comes from the chamber pressures (states
-    /// of the simulation, `crate::simulation::platform`): to the body they are given forces.
+    /// of the simulation, `crate::simulation::state`): to the body they are given forces.
     hydraulics: Option<HydraulicActuators>,
     /// For the fast path's check and the switching functions of the joint limits: `n0_k` and
     /// `m0_k` as `[component][leg]`, and the reference pose's axes `e0_a`.

@@ -30,6 +30,7 @@ impl Jet {
         Jet::new(f, df * self.d1, ddf * self.d1 * self.d1 + df * self.d2)
     }
 
+    #[inline]
     pub fn cos(self) -> Jet {
         let (s, c) = maths::sin_cos(self.v);
         self.compose(c, -s, -c)
@@ -171,6 +172,7 @@ impl Real for Jet {
         let a = self.asin();
         Jet::new(maths::acos(self.v), -a.d1, -a.d2)
     }
+    #[inline]
     fn sin(self) -> Self {
         let (s, c) = maths::sin_cos(self.v);
         self.compose(s, c, -s)
@@ -203,12 +205,14 @@ pub trait Trig: Real {
 }
 
 impl Trig for f64 {
+    #[inline]
     fn cos(self) -> Self {
         maths::cos(self)
     }
 }
 
 impl Trig for Jet {
+    #[inline]
     fn cos(self) -> Self {
         Jet::cos(self)
     }

@@ -3,7 +3,7 @@
 
 use std::fmt;
 
-use super::stand::LEG_COUNT;
+use super::LEG_COUNT;
 
 /// "1, 3, 4": the 1-based numbers of the legs flagged in `legs`.
 pub fn leg_list(legs: &[bool; LEG_COUNT]) -> String {

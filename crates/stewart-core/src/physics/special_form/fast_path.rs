@@ -131,12 +131,7 @@ impl SpecialForm {
 
     /// [`SpecialForm::derivative_machine_in`] in [`Narrow`] lanes.
     #[inline(never)]
-    pub(crate) fn derivative_machine(
-        &self,
-        y: &StateVector,
-        actuation: Actuation<'_, f64>,
-        dy: &mut StateVector,
-    ) -> MachineRates {
+    fn derivative_machine(&self, y: &StateVector, actuation: Actuation<'_, f64>, dy: &mut StateVector) -> MachineRates {
         self.derivative_machine_in::<Narrow>(y, actuation, dy)
     }
 
@@ -222,7 +217,7 @@ impl SpecialForm {
         let (force, moment) = if self.legs_mass {
             // The legs' wrench with their inertia is what moves the platform as the 6x6 system
             // says: `(M (r'' + g ez), J_w omega' + omega x J_w omega)` (the system's rows).
-            self.platform_accelerations(&state, &arm, &n, across, weight, &f0, machine.as_ref())
+            self.legs_wrench_with_inertia(&state, &arm, &n, across, weight, &f0, machine.as_ref())
         } else {
             let moment = PerLeg::cross(&arm, &f0);
             let [f1, f2, f3, m1] = sum4([f0[0], f0[1], f0[2], moment[0]]);
@@ -293,12 +288,12 @@ impl SpecialForm {
     }
 
     /// The legs' wrench on the platform with their inertia (see
-    /// [`SpecialForm::derivative_machine_in`]), from the platform's accelerations `(r'',
-    /// omega')`: the 6x6 system's lower triangle from sums over the legs, four at a time, and
-    /// its Cholesky solve.
+    /// [`SpecialForm::derivative_machine_in`]), `(M (r'' + g ez), J_w omega' + omega x J_w
+    /// omega)` from the platform's accelerations `(r'', omega')`: the 6x6 system's lower
+    /// triangle from sums over the legs, four at a time, and its Cholesky solve.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    fn platform_accelerations<V: Lanes>(
+    fn legs_wrench_with_inertia<V: Lanes>(
         &self,
         state: &BodyState,
         arm: &[PerLeg<V>; 3],
@@ -437,8 +432,7 @@ impl SpecialForm {
             let (leg, l) = (legs.leg[k], legs.length[k]);
             if l > 0.0 {
                 let a_dot = state.v + state.body_vector_rate(&self.stand.platform_joints[k]);
-                let mut load =
-                    MachineLoad { force: Vector3::zeros(), moment: Vector3::zeros(), dissipation: 0.0, acts: false };
+                let mut load = MachineLoad::none();
                 self.add_joint_limits(k, state, &LegMotion::new(&leg, l, &a_dot), &mut load);
                 loads.add_machine(k, &load);
             }

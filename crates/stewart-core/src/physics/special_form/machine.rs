@@ -62,8 +62,7 @@ impl SpecialForm {
         leg: &LegMotion<T>,
         inertia: Option<&LegInertia<T>>,
     ) -> MachineLoad<T> {
-        let mut load =
-            MachineLoad { force: Vector3::zeros(), moment: Vector3::zeros(), dissipation: T::zero(), acts: false };
+        let mut load = MachineLoad::none();
         if !self.friction.is_zero() {
             let f = self.friction.force(leg.l_dot);
             load.force += leg.n * f;
@@ -256,6 +255,13 @@ pub(super) struct MachineLoad<T: nalgebra::Scalar> {
     pub(super) moment: Vector3<T>,
     pub(super) dissipation: T,
     pub(super) acts: bool,
+}
+
+impl<T: Real> MachineLoad<T> {
+    /// No load: what a leg without friction, joint limits or mass gives.
+    pub(super) fn none() -> Self {
+        MachineLoad { force: Vector3::zeros(), moment: Vector3::zeros(), dissipation: T::zero(), acts: false }
+    }
 }
 
 impl<T: Real> Loads<T> {

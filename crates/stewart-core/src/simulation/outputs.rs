@@ -4,7 +4,7 @@
 
 use nalgebra::{Matrix3, Matrix6, Scalar, Vector3};
 
-use super::platform::{CURRENTS, SIMULATION_DIM, SimulationState, actuator_forces, body, hydraulic, quadrature};
+use super::state::{CURRENTS, SIMULATION_DIM, SimulationState, actuator_forces, body, hydraulic, quadrature};
 use crate::physics::actuators::hydraulics::Chambers;
 use crate::physics::body::invariants::mechanical_energy;
 use crate::physics::body::kinematics::angles_from_rotation;
@@ -133,22 +133,6 @@ pub struct PlatformOutputs<T> {
     pub hydraulic_work: T,
     pub compression_work: T,
 }
-}
-
-/// Leg lengths and rates alone: what a controller reads every step, computed without the
-/// other outputs (the same numbers as [`PlatformOutputs`]' fields of the same names).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct LegOutputs {
-    pub l: [f64; LEG_COUNT],
-    pub ldot: [f64; LEG_COUNT],
-}
-
-impl LegOutputs {
-    pub fn compute(form: &SpecialForm, y: &SimulationState) -> Self {
-        let state = BodyState::from_vector(body(y));
-        let legs = LegGeometry::new(&form.stand, &state);
-        LegOutputs { ldot: legs.length_rates(&form.stand, &state), l: legs.length }
-    }
 }
 
 impl<T: Real> PlatformOutputs<T> {

@@ -17,6 +17,10 @@
 //! | [`error`] | parameter errors and physics faults |
 //! | [`symmetric6`] | the extreme eigenvalues of a symmetric 6x6 matrix (for `kappa`) |
 
+/// Number of legs (hydraulic cylinders) of a Stewart platform. Here, below every module,
+/// so that the errors can name legs without importing the stand that reports them.
+pub const LEG_COUNT: usize = 6;
+
 pub mod actuators;
 pub mod body;
 pub mod configuration;

@@ -7,7 +7,7 @@
 //!
 //! with programme forces `F^p` and programme leg lengths `l^p` from the direct problem and
 //! inverse kinematics ([`crate::physics::direct_problem`]), measured lengths `l` and rates
-//! `ldot`. Pure functions; the controller FMU ([`crate::models::controller`]) wraps them.
+//! `ldot`. Pure functions; the controller FMU (`stewart_fmu::models::controller`) wraps them.
 
 use crate::maths;
 use crate::physics::direct_problem::DirectProblemSolution;
@@ -62,6 +62,7 @@ pub struct Disturbance {
 }
 
 impl Disturbance {
+    #[inline]
     pub fn at(&self, t: f64) -> f64 {
         if self.amplitude == 0.0 {
             return 0.0;

@@ -12,7 +12,7 @@ use crate::physics::actuators::LegForceLaw;
 use crate::physics::error::PhysicsFault;
 use crate::physics::legs::per_leg::Narrow;
 
-use super::platform::PlatformDynamics;
+use super::dynamics::PlatformDynamics;
 
 /// Which registers a step computes in.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
