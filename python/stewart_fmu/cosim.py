@@ -81,11 +81,17 @@ def steps(platform, controller, n, h, scheme="gauss-seidel", commands=F, force_h
     h`, as the compiled master and FMPy's SSP master count it). `force_hook(t, commands)` may
     change the commands on their way to the platform (Gauss-Seidel). An FMU's failed step is
     raised from the loop (FMICallException) at the time of the last step yielded. `measured`: the
-    platform's outputs the controller reads (the legs; with hydraulics the pressures too)."""
+    platform's outputs the controller reads (the legs; with hydraulics the pressures too).
+    Without a controller (None) the platform runs alone: `force_hook` changes the inputs it
+    holds (`commands`), and the scheme does not matter."""
     time = 0.0
     connection_f, connection_measured = np.zeros(6), np.zeros(len(measured))
     for _ in range(n):
-        if scheme == "gauss-seidel":
+        if controller is None:
+            if force_hook:
+                platform.set_values(commands, force_hook(time, platform.values(commands)))
+            platform.slave.doStep(currentCommunicationPoint=time, communicationStepSize=h)
+        elif scheme == "gauss-seidel":
             controller.set_values(measured, platform.values(measured))
             forces = controller.values(commands)
             if force_hook:

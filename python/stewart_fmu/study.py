@@ -480,25 +480,16 @@ def _execute_cueing(spec, run, fmus, row):
 
 
 def _steps(platform, controller, n, h, commands, held):
-    """A run's communication steps, yielding the time after each: the closed loop through the
-    package's one master loop (`stewart_fmu.cosim.steps`, Gauss-Seidel), the platform alone
-    otherwise; `held`: inputs (index in `commands`, value, from time) held from a time on."""
+    """A run's communication steps through the package's one master loop
+    (`stewart_fmu.cosim.steps`: Gauss-Seidel, or the platform alone without a controller),
+    yielding the time after each; `held`: inputs (index in `commands`, value, from time) held
+    from a time on."""
     def hold(t, forces):
         for k, value, at in held:
             if t >= at:
                 forces[k] = value
         return forces
-    if controller is not None:
-        yield from cosim.steps(platform, controller, n, h, "gauss-seidel", commands, hold)
-        return
-    t = 0.0
-    for _ in range(n):
-        active = [(commands[k], value) for k, value, at in held if t >= at]
-        if active:
-            platform.set_values([name for name, _ in active], [value for _, value in active])
-        platform.slave.doStep(currentCommunicationPoint=t, communicationStepSize=h)
-        t += h  # as the master loop counts the time
-        yield t
+    yield from cosim.steps(platform, controller, n, h, "gauss-seidel", commands, hold if held else None)
 
 
 def _safe(f, default):
