@@ -243,7 +243,13 @@ macro_rules! declare_variables {
         }
 
         /// The variables, in declaration order.
-        pub static GROUPS: &[$crate::models::variables::VariableGroup] = &[$($def),*];
+        pub static GROUPS: &[$crate::models::variables::VariableGroup] = TABLE;
+        const TABLE: &[$crate::models::variables::VariableGroup] = &[$($def),*];
+
+        /// The continuous states in the order of the state vector, from the declarations (the
+        /// state groups in the order of their derivatives): `(group name, flat element index)`.
+        pub static STATES: &[(&str, usize)] =
+            &$crate::models::variables::states::<{ $crate::models::variables::state_count(TABLE) }>(TABLE);
 
         /// Where each variable's value comes from.
         pub static BINDINGS: &[$crate::models::declare::Binding] =

@@ -143,6 +143,9 @@ pub struct VariableGroup {
     /// Only in the FMI 3 model description (a variable FMI 2 expresses otherwise, such as
     /// the event indicators).
     pub fmi3_only: bool,
+    /// For a state group of two dimensions: its elements are states column by column (the
+    /// special form's `e_b` is column `b` of `R`), not in their row-major index order.
+    pub state_by_columns: bool,
 }
 
 impl VariableGroup {
@@ -322,6 +325,7 @@ impl VariableGroup {
             derivative_dependencies: &[],
             display_base: None,
             fmi3_only: false,
+            state_by_columns: false,
         }
     }
 
@@ -432,6 +436,11 @@ impl VariableGroup {
         VariableGroup { derivative_of: Some(of), derivative_dependencies: dependencies, ..self }
     }
 
+    /// A two-dimensional state group whose elements are states column by column.
+    pub const fn state_by_columns(self) -> Self {
+        VariableGroup { state_by_columns: true, ..self }
+    }
+
     /// Only in the FMI 3 model description.
     pub const fn fmi3_only(self) -> Self {
         VariableGroup { fmi3_only: true, ..self }
@@ -440,5 +449,167 @@ impl VariableGroup {
     /// Direct dependencies of an output on inputs (`<Outputs>`).
     pub const fn depends_on(self, output_dependencies: &'static [Dependency]) -> Self {
         VariableGroup { output_dependencies, ..self }
+    }
+}
+
+/// The number of continuous states a variable table declares: the elements of every group that
+/// a derivative group names (`derivative`, `derivative_named`).
+pub const fn state_count(groups: &[VariableGroup]) -> usize {
+    let mut count = 0;
+    let mut i = 0;
+    while i < groups.len() {
+        if let Some(state) = groups[i].derivative_of {
+            count += element_count(groups[named(groups, state)].shape);
+        }
+        i += 1;
+    }
+    count
+}
+
+/// The continuous states, `(group name, flat element index)` in the order of the state vector:
+/// the state groups in the order their derivatives are declared, each element by element
+/// (column by column where the group says so). One place for the order: the model's
+/// declarations; the simulation's layout follows it (tested through Model Exchange).
+pub const fn states<const N: usize>(groups: &[VariableGroup]) -> [(&'static str, usize); N] {
+    let mut states = [("", 0); N];
+    let mut n = 0;
+    let mut i = 0;
+    while i < groups.len() {
+        if let Some(name) = groups[i].derivative_of {
+            let state = &groups[named(groups, name)];
+            let count = element_count(state.shape);
+            let mut k = 0;
+            while k < count {
+                states[n] = (state.name, if state.state_by_columns { column_major(state.shape, k) } else { k });
+                n += 1;
+                k += 1;
+            }
+        }
+        i += 1;
+    }
+    assert!(n == N, "state_count and states disagree");
+    states
+}
+
+const fn element_count(shape: &[usize]) -> usize {
+    let mut count = 1;
+    let mut i = 0;
+    while i < shape.len() {
+        count *= shape[i];
+        i += 1;
+    }
+    count
+}
+
+/// The flat (row-major) index of element `k` of a matrix counted column by column.
+const fn column_major(shape: &[usize], k: usize) -> usize {
+    assert!(shape.len() == 2, "only a matrix is a state column by column");
+    let rows = shape[0];
+    (k % rows) * shape[1] + k / rows
+}
+
+/// The index of the group named `name` (a compile-time error if none is).
+// Evaluated when the tables are compiled (`STATES` is a static): the panic is a build error.
+#[allow(clippy::panic)]
+const fn named(groups: &[VariableGroup], name: &str) -> usize {
+    let mut i = 0;
+    while i < groups.len() {
+        if same(groups[i].name, name) {
+            return i;
+        }
+        i += 1;
+    }
+    panic!("a derivative names a state group that is not declared")
+}
+
+const fn same(a: &str, b: &str) -> bool {
+    let (a, b) = (a.as_bytes(), b.as_bytes());
+    if a.len() != b.len() {
+        return false;
+    }
+    let mut i = 0;
+    while i < a.len() {
+        if a[i] != b[i] {
+            return false;
+        }
+        i += 1;
+    }
+    true
+}
+
+#[cfg(test)]
+mod state_order_tests {
+    use super::{VariableGroup as V, column_major, state_count, states};
+    use crate::physics::body::state::STATE_DIM;
+    use crate::simulation::SIMULATION_DIM;
+    use crate::simulation::state::{CURRENTS, hydraulic, quadrature};
+
+    /// Where `(group, element)` sits in a model's derived state vector.
+    fn index(table: &[(&str, usize)], group: &str, element: usize) -> usize {
+        table.iter().position(|&s| s == (group, element)).unwrap_or_else(|| panic!("{group}[{element}] is no state"))
+    }
+
+    #[test]
+    fn a_matrix_column_by_column_counts_down_each_column_first() {
+        let order: Vec<usize> = (0..6).map(|k| column_major(&[2, 3], k)).collect();
+        assert_eq!(order, [0, 3, 1, 4, 2, 5]);
+        const TABLE: &[V] = &[
+            V::output("x", &[2, 2], 1, None, "", &[]).state_by_columns(),
+            V::output("y", &[1], 5, None, "", &[]),
+            // Declared in the other order: the derivatives' order is the states'.
+            V::output("dy", &[1], 6, None, "", &[]).derivative_named("y", &[]),
+            V::output("dx", &[2, 2], 7, None, "", &[]).derivative_named("x", &[]),
+        ];
+        const N: usize = state_count(TABLE);
+        assert_eq!(states::<N>(TABLE), [("y", 0), ("x", 0), ("x", 2), ("x", 1), ("x", 3)]);
+    }
+
+    #[test]
+    fn the_platforms_states_are_the_simulations_layout() {
+        let s = crate::models::platform::variables::STATES;
+        assert_eq!(s.len(), SIMULATION_DIM);
+        // The special form's r, v, e_b, e_b': e_b is column b of R.
+        for c in 0..3 {
+            assert_eq!(index(s, "r", c), c);
+            assert_eq!(index(s, "v", c), 3 + c);
+            for b in 0..3 {
+                assert_eq!(index(s, "R", 3 * c + b), 6 + 3 * b + c, "R[{},{}]", c + 1, b + 1);
+                assert_eq!(index(s, "der(R)", 3 * c + b), 15 + 3 * b + c);
+            }
+        }
+        assert_eq!(index(s, "work.F", 0), quadrature::WORK_F);
+        assert_eq!(index(s, "work.dissipated", 0), quadrature::WORK_DISSIPATED);
+        assert_eq!(index(s, "work.electric", 0), quadrature::WORK_ELECTRIC);
+        assert_eq!(index(s, "work.hydraulic", 0), quadrature::WORK_HYDRAULIC);
+        assert_eq!(index(s, "work.compression", 0), quadrature::WORK_COMPRESSION);
+        for k in 0..6 {
+            assert_eq!(index(s, "I", k), CURRENTS + k);
+            assert_eq!(index(s, "pA", k), hydraulic::PA + k);
+            assert_eq!(index(s, "pB", k), hydraulic::PB + k);
+            assert_eq!(index(s, "spool", k), hydraulic::SPOOL + k);
+            assert_eq!(index(s, "der(spool)", k), hydraulic::SPOOL_RATE + k);
+        }
+        assert_eq!(STATE_DIM, 24);
+    }
+
+    #[test]
+    fn the_cueing_states_are_the_washouts_layout() {
+        use crate::physics::cueing::washout::{STATE_DIM, layout::*};
+        let s = crate::models::cueing::variables::STATES;
+        assert_eq!(s.len(), STATE_DIM);
+        for (group, at, count) in [
+            ("washout.q", TRANSLATION_Q, 3),
+            ("washout.r", HEAD_R, 3),
+            ("washout.v", HEAD_V, 3),
+            ("washout.fl", TILT_F, 2),
+            ("der(washout.fl)", TILT_FDOT, 2),
+            ("washout.tilt", TILT_ANGLES, 2),
+            ("washout.z", ROTATION_Q, 3),
+            ("washout.angles", ROTATION_ANGLES, 3),
+        ] {
+            for k in 0..count {
+                assert_eq!(index(s, group, k), at + k, "{group}[{k}]");
+            }
+        }
     }
 }

@@ -7,31 +7,6 @@ use crate::models::machine;
 use crate::models::variables::Dependency::{self, All, SameIndex};
 use crate::models::variables::VariableGroup as V;
 
-/// The continuous states in the order of `crate::physics::cueing::washout::layout`.
-pub static STATES: &[(&str, usize)] = &[
-    ("washout.q", 0),
-    ("washout.q", 1),
-    ("washout.q", 2),
-    ("washout.r", 0),
-    ("washout.r", 1),
-    ("washout.r", 2),
-    ("washout.v", 0),
-    ("washout.v", 1),
-    ("washout.v", 2),
-    ("washout.fl", 0),
-    ("washout.fl", 1),
-    ("der(washout.fl)", 0),
-    ("der(washout.fl)", 1),
-    ("washout.tilt", 0),
-    ("washout.tilt", 1),
-    ("washout.z", 0),
-    ("washout.z", 1),
-    ("washout.z", 2),
-    ("washout.angles", 0),
-    ("washout.angles", 1),
-    ("washout.angles", 2),
-];
-
 const STATE_GROUPS: [Dependency; 8] = [
     All("washout.q"),
     All("washout.r"),
@@ -212,6 +187,8 @@ declare_variables! {
             .boolean()
             .discrete()
             .depends_on(POSE); computed,
+        // The continuous states (`STATES`) are the groups whose derivatives are declared, in
+        // that order: `crate::physics::cueing::washout::layout`.
         Q => V::local("washout.q", &[3], 200, Some("m.s"), "Translational filter's first state per inertial axis: its derivative is washout.r", KNOWNS); real(state.q),
         HEAD_R => V::local(
             "washout.r", &[3], 203, Some("m"), "The washout's head displacement from neutral, inertial axes", KNOWNS,

@@ -7,73 +7,6 @@ use crate::models::variables::Dependency::{All, SameIndex};
 use crate::models::variables::VariableGroup as V;
 use crate::simulation::PlatformOutputs;
 
-/// The continuous states in the order of the simulation state: the special form's 24
-/// `r, v, e1, e2, e3, e1', e2', e3'` (`e_b` is column `b` of `R`: elements `R[1,b], R[2,b],
-/// R[3,b]`, flat row-major indices `b-1, b+2, b+5`, and `e_b'` the same elements of
-/// `der(R)`), the work quadratures, the drives' currents and the electric work
-/// (`crate::simulation::state`'s layout).
-pub static STATES: &[(&str, usize)] = &[
-    ("r", 0),
-    ("r", 1),
-    ("r", 2),
-    ("v", 0),
-    ("v", 1),
-    ("v", 2),
-    ("R", 0),
-    ("R", 3),
-    ("R", 6),
-    ("R", 1),
-    ("R", 4),
-    ("R", 7),
-    ("R", 2),
-    ("R", 5),
-    ("R", 8),
-    ("der(R)", 0),
-    ("der(R)", 3),
-    ("der(R)", 6),
-    ("der(R)", 1),
-    ("der(R)", 4),
-    ("der(R)", 7),
-    ("der(R)", 2),
-    ("der(R)", 5),
-    ("der(R)", 8),
-    ("work.F", 0),
-    ("work.dissipated", 0),
-    ("I", 0),
-    ("I", 1),
-    ("I", 2),
-    ("I", 3),
-    ("I", 4),
-    ("I", 5),
-    ("work.electric", 0),
-    ("pA", 0),
-    ("pA", 1),
-    ("pA", 2),
-    ("pA", 3),
-    ("pA", 4),
-    ("pA", 5),
-    ("pB", 0),
-    ("pB", 1),
-    ("pB", 2),
-    ("pB", 3),
-    ("pB", 4),
-    ("pB", 5),
-    ("spool", 0),
-    ("spool", 1),
-    ("spool", 2),
-    ("spool", 3),
-    ("spool", 4),
-    ("spool", 5),
-    ("der(spool)", 0),
-    ("der(spool)", 1),
-    ("der(spool)", 2),
-    ("der(spool)", 3),
-    ("der(spool)", 4),
-    ("der(spool)", 5),
-    ("work.hydraulic", 0),
-    ("work.compression", 0),
-];
-
 const POSE_STATES: &[crate::models::variables::Dependency] = &[All("r"), All("R")];
 const ALL_STATES: &[crate::models::variables::Dependency] = &[All("r"), All("v"), All("R"), All("der(R)")];
 /// The knowns of the accelerations and powers: the end stops' forces depend on the leg rates,
@@ -384,6 +317,11 @@ declare_variables! {
         R => V::output("r", &[3], 100, Some("m"), "Centre of mass S, inertial frame", &[SameIndex("r0")]); cached(outputs.r),
         V => V::output("v", &[3], 103, Some("m/s"), "Velocity of the centre of mass", &[SameIndex("v0")])
             .derivative_named("r", &[SameIndex("v")]); cached(outputs.v),
+        // The continuous states (`STATES`) are the groups whose derivatives are declared, in
+        // that order, which is `crate::simulation::state`'s layout: the special form's 24
+        // `r, v, e1, e2, e3, e1', e2', e3'` (`e_b` is column `b` of `R`, hence column by
+        // column), the work quadratures, the drives' currents and electric work, the
+        // hydraulic states.
         ROT => V::output(
             "R",
             &[3, 3],
@@ -391,7 +329,8 @@ declare_variables! {
             Some("1"),
             "Rotation matrix body -> inertial: R[a,b] is component a of the body axis e_b",
             &[All("angles0")],
-        ); cached(outputs.rotation),
+        )
+        .state_by_columns(); cached(outputs.rotation),
         ANGLES => V::output("angles", &[3], 115, Some("rad"), "Roll, pitch, yaw (1-2-3 sequence, R = Rx Ry Rz)", &[All("angles0")])
             .display("deg")
             .depends_on(&[All("R")]); cached(outputs.angles),
@@ -460,6 +399,7 @@ declare_variables! {
             "Time derivative of the rotation matrix: column b is de_b/dt (Model Exchange state)",
             &[All("angles0"), All("w0")],
         )
+        .state_by_columns()
         .derivative("R", "R", 1, &[SameIndex("der(R)")]); derivative,
         DER2_R => V::local(
             "der2(R)",
