@@ -8,10 +8,13 @@ cost per communication step: wall time, and instructions (callgrind, the differe
 and 3 runs, so that loading and Python's start-up drop out) split into the two FMUs (inside
 their exported fmi2* functions), the master's loop (`System::run` without the FMUs) and the
 Python around each run (the study's checks and the row); and a worker's memory over repeated
-rounds. Prints one table and writes it to benches/results/sweep.txt.
+rounds. Prints one table and writes it to benches/results/sweep.txt. With --profile, only
+where the instructions of a step go (the platform's step, kappa, the controller's direct
+problem, the FMI calls, the master, Python), into benches/results/step_profile.txt.
 
     .venv/bin/python benches/sweep_bench.py             # after cargo run --release --bin build-fmu
                                                         # and cargo build --release -p stewart-master-py
+    .venv/bin/python benches/sweep_bench.py --profile
 """
 
 import os
@@ -134,7 +137,61 @@ def instructions_per_step():
     }
     per["master"] = per["loop"] - per["fmus"]
     per["python"] = per["total"] - per["loop"]
+    # Where the FMUs' share goes: inclusive counts of functions that do not call each other
+    # (the controller's step calls its direct problem, which calls its programme point).
+    part = {name: (summed(three, pattern) - summed(one, pattern)) / steps for name, pattern in PARTS.items()}
+    per["parts"] = {
+        "platform_step": part["platform_step"],
+        "kappa": part["kappa"],
+        "platform_outputs": part["platform_outputs"],
+        "direct_problem": part["direct_problem"] - part["programme_point"],
+        "programme_point": part["programme_point"],
+        "controller_rest": part["controller_step"] - part["direct_problem"],
+    }
+    per["parts"]["fmi"] = per["fmus"] - sum(per["parts"].values())
     return per
+
+
+# Function patterns (callgrind_annotate's "file:function [object]"), whatever crate holds them.
+PARTS = {
+    "platform_step": r"PlatformModel as [\w:]*FmuModel>::do_step \[",
+    "kappa": r"::simulation::outputs::condition_number \[",
+    "platform_outputs": r"::simulation::(outputs|dynamics)::(PlatformOutputs<T>|LegOutputs)::compute \[",
+    "controller_step": r"ControllerModel as [\w:]*FmuModel>::do_step \[",
+    "direct_problem": r"ControllerModel::direct_problem \[",
+    "programme_point": r"ControllerModel::programme_point \[",
+}
+PROFILE_OUT = ROOT / "benches" / "results" / "step_profile.txt"
+PART_NAMES = {
+    "platform_step": "the platform's step (its integration: special form, error norm, projection, checks)",
+    "kappa": "kappa, the condition number the study reads every step (eigenvalue problem)",
+    "platform_outputs": "the platform's other outputs the study reads (energy, stops, legs)",
+    "direct_problem": "the controller's direct problem at the programme point (6x6 LU, its norm)",
+    "programme_point": "the controller's programme point (one sin, one exp)",
+    "controller_rest": "the controller's step otherwise (the feedback)",
+    "fmi": "the FMI calls: entry checks, gets, sets, the value cache",
+}
+
+
+def profile():
+    """Where a closed-loop step of the compiled master goes (callgrind, 3 runs minus 1): the
+    table docs/studies.md quotes, written to benches/results/step_profile.txt."""
+    per = instructions_per_step()
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
+                            text=True).stdout.strip()
+    lines = [f"instructions per closed-loop step of the stability study's runs, compiled master (callgrind, 3 runs "
+             f"minus 1 run, 2 x {STEPS} steps), FMUs of target/fmu at {commit}, {time.strftime('%Y-%m-%d')}",
+             "    .venv/bin/python benches/sweep_bench.py --profile",
+             f"{'part':84} {'instructions':>12}"]
+    for key, name in PART_NAMES.items():
+        lines.append(f"{name:84} {per['parts'][key]:12,.0f}")
+    lines.append(f"{'the two FMUs in all':84} {per['fmus']:12,.0f}")
+    lines.append(f"{'the master loop without the FMUs':84} {per['master']:12,.0f}")
+    lines.append(f"{'Python around the runs':84} {per['python']:12,.0f}")
+    lines.append(f"{'the step in all':84} {per['total']:12,.0f}")
+    text = "\n".join(lines)
+    print(text)
+    PROFILE_OUT.write_text(text + "\n")
 
 
 def main():
@@ -171,4 +228,4 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    profile() if sys.argv[1:] == ["--profile"] else main()

@@ -14,6 +14,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 import pandas as pd
 
 from stewart_fmu import NEUTRAL_Z, ROOT
@@ -182,19 +183,36 @@ def test_the_links_between_the_pages_resolve():
     assert checked > 30 and not broken, broken
 
 
-def test_the_performance_page_quotes_only_figures_the_benches_record():
-    """docs/performance.md's measured figures (instruction counts with thousands separators,
-    decimals) are each in a file of benches/results/ (its counts are written there without the
-    separators); a ratio ("7.3 times") is read from the figures beside it."""
-    page = ROOT / "docs" / "performance.md"
-    text = prose(page.read_text())
+# The pages of docs/ that quote measurements, and the parts of each that do (None: all of it).
+MEASURED_PAGES = {
+    "performance.md": None,
+    "studies.md": [("Throughput (", "## Tested on a real cluster")],
+    "platforms.md": [("With the FMU's maths from the C library", "The Linux x86-64 binary is built"),
+                     ("What it costs on x86-64", "## Building the binaries")],
+}
+
+
+@pytest.mark.parametrize("page", sorted(MEASURED_PAGES))
+def test_the_docs_quote_only_figures_the_benches_record(page):
+    """The measured figures of docs/performance.md, and of the measured parts of docs/studies.md
+    and docs/platforms.md (instruction counts with thousands separators, decimals, numbers in
+    exponent form), are each in a file of benches/results/ (its counts are written there without
+    the separators); a ratio ("7.3 times") is read from the figures beside it."""
+    text = prose((ROOT / "docs" / page).read_text())
+    if MEASURED_PAGES[page]:
+        for start, end in MEASURED_PAGES[page]:
+            assert start in text and end in text, f"docs/{page}: the bounds of a measured part moved"
+        text = "\n".join(text[text.index(start):text.index(end)] for start, end in MEASURED_PAGES[page])
     recorded = "\n".join(p.read_text() for p in sorted((ROOT / "benches" / "results").glob("*.txt")))
-    figures = [m.group(1) for m in re.finditer(r"(?<![\w.,])(\d{1,3}(?:,\d{3})+|\d+\.\d+)(?![\d])(?! times)", text)]
+    figures = [m.group(1) for m in re.finditer(
+        r"(?<![\w.,])(\d+\.\d+e[-+]?\d+|\d{1,3}(?:,\d{3})+|\d+\.\d+)(?![\d])(?! times)", text)]
 
     def recorded_as(figure):
-        return any(re.search(rf"(?<![\d.]){re.escape(f)}(?![\d])", recorded) for f in (figure, figure.replace(",", "")))
+        # Counts are written without separators, exponents with two digits (1.3e-08).
+        forms = (figure, figure.replace(",", ""), re.sub(r"e([-+]?)(\d)$", r"e\g<1>0\2", figure))
+        return any(re.search(rf"(?<![\d.]){re.escape(f)}(?![\d])", recorded) for f in forms)
 
     missing = [f for f in figures if not recorded_as(f)]
-    print(f"docs/performance.md quotes {len(figures)} measured figures, each in benches/results/: {figures}")
-    assert len(figures) >= 10
-    assert not missing, f"figures of docs/performance.md that no file of benches/results/ records: {missing}"
+    print(f"docs/{page} quotes {len(figures)} measured figures, each in benches/results/: {figures}")
+    assert len(figures) >= 3
+    assert not missing, f"figures of docs/{page} that no file of benches/results/ records: {missing}"
