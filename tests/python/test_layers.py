@@ -29,9 +29,10 @@ def file_modules(src: Path) -> dict:
 
 
 def code(text: str) -> str:
-    """The text without comments and without the unit tests at a file's end."""
+    """The text without comments and without the unit tests at a file's end (a `#[cfg(test)]`
+    module)."""
     text = re.sub(r"/\*.*?\*/", "", re.sub(r"//[^\n]*", "", text), flags=re.S)
-    return re.split(r"#\[cfg\(test\)\]\s*mod tests", text)[0]
+    return re.split(r"#\[cfg\(test\)\]\s*mod \w+", text)[0]
 
 
 def imports(src: Path) -> dict:
