@@ -226,17 +226,20 @@ class NamedValues:
 
 class Component(NamedValues):
     """One FMU2Slave instance of a packaged FMU, initialised with its start values and ready to
-    step: the one FMPy driver of the package (the closed loop's platform and controller;
-    `Platform`). Reals by name: `get(names)` (an array), `set(names, values)`."""
+    step: the one FMPy driver of the package (the closed loop's platform and controller,
+    `Platform`, and a study's instances, which a worker keeps and `start`s again for each run).
+    Reals by name: `get(names)` (an array), `set(names, values)`."""
 
     _extracted = {}
 
     def __init__(self, fmu, name, reals=None, integers=None, start_time=0.0, events=None, what=None, stop_time=None,
-                 tolerance=None, logger=None):
+                 tolerance=None, logger=None, messages=None, start=True):
         """`reals`, `integers`: start values by name (booleans among them too); `events`: a list
         that receives the FMU's logEvents messages (contacts, singular arrangements passed) as
-        (status, category, message); `what`: the names the arguments `reals` and `integers`
-        came in, for messages."""
+        (status, category, message); `messages`: a list that receives its other messages
+        (warnings, discards, errors: `last_problem`) without switching logEvents on; `what`: the
+        names the arguments `reals` and `integers` came in, for messages; `start=False`: only
+        instantiated, for `start`."""
         fmu = fmu_file(fmu)
         self.md = read_model_description(fmu)
         if fmu not in Component._extracted:
@@ -244,22 +247,36 @@ class Component(NamedValues):
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=Component._extracted[fmu],
                                modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
-        if events is not None:
-            logger = recording_callbacks(events)
+        self.messages = events if events is not None else messages
+        if self.messages is not None:
+            logger = recording_callbacks(self.messages)
         self.slave.instantiate(loggingOn=False, callbacks=logger)
         if events is not None:
             self.slave.setDebugLogging(True, ["logEvents"])
+        self.fresh = True
+        if start:
+            try:
+                self.start(reals, integers, start_time, stop_time, tolerance, what)
+            except ValueError:
+                self.slave.freeInstance()
+                raise
+
+    def start(self, reals=None, integers=None, start_time=0.0, stop_time=None, tolerance=None, what=None):
+        """Initialises the instance with these start values, after a reset if it ran before."""
+        if not self.fresh:
+            self.slave.reset()
+        self.fresh = False
         self.slave.setupExperiment(tolerance=tolerance, startTime=start_time, stopTime=stop_time)
         self.slave.enterInitializationMode()
         reals_name, integers_name = what or ("reals", "integers")
-        try:
-            set_values(self.slave, self.md, dict(reals or {}), reals_name)
-            set_values(self.slave, self.md, dict(integers or {}), integers_name)
-        except ValueError:
-            self.slave.freeInstance()
-            raise
+        set_values(self.slave, self.md, dict(reals or {}), reals_name)
+        set_values(self.slave, self.md, dict(integers or {}), integers_name)
         self.slave.exitInitializationMode()
         self.time = start_time
+
+    def last_problem(self):
+        """The last discard or error message among those recorded (`messages`, `events`)."""
+        return next((m for status, _, m in reversed(self.messages or []) if status >= 2), "")
 
     def get(self, names):
         """The Reals `names` (a list) as an array; ValueError for a name the FMU does not have."""

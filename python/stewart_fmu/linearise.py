@@ -28,7 +28,7 @@ import numpy as np
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Model
 
-from .core import EQUILIBRIUM_FORCE, GRAVITY, MASS, PLATFORM_FMU, fmu_file, set_values, stand_parameters
+from .core import EQUILIBRIUM_FORCE, GRAVITY, LEGS, MASS, PLATFORM_FMU, fmu_file, set_values, stand_parameters
 
 DOF = ["surge x", "sway y", "heave z", "roll", "pitch", "yaw"]
 
@@ -49,7 +49,7 @@ class PlatformModel:
         self.fmu.exitInitializationMode()
         self.fmu.newDiscreteStates()
         self.fmu.enterContinuousTimeMode()
-        self.force_vrs = [self.vr[f"F[{k}]"] for k in range(1, 7)]
+        self.force_vrs = [self.vr[f"F[{k}]"] for k in LEGS]
         self.fmu.setReal(self.force_vrs, [float(f) for f in forces])
         # The 24 special-form states; the FMU's last two states, work.F and work.dissipated,
         # are quadratures that do not act back on the motion.
@@ -131,8 +131,8 @@ def linearise(nondimensional=True, fmu=PLATFORM_FMU):
     residual = np.max(np.abs(model.derivatives()[:24]))
     j = model.jacobian(model.derivative_vrs, model.state_vrs)
     b_full = model.jacobian(model.derivative_vrs, model.force_vrs)
-    leg_vrs = [model.vr[f"l[{k}]"] for k in range(1, 7)]
-    rate_vrs = [model.vr[f"ldot[{k}]"] for k in range(1, 7)]
+    leg_vrs = [model.vr[f"l[{k}]"] for k in LEGS]
+    rate_vrs = [model.vr[f"ldot[{k}]"] for k in LEGS]
     c_legs_full = model.jacobian(leg_vrs, model.state_vrs)
     c_rates_full = model.jacobian(rate_vrs, model.state_vrs)
     d_legs = model.jacobian(leg_vrs, model.force_vrs)

@@ -41,11 +41,11 @@ from pathlib import Path
 import numpy as np
 from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import FMU2Slave, fmi2Terminated
+from fmpy.fmi2 import fmi2Terminated
 
 from . import cosim, study_schema
 from .cosim import F, L, LP, U
-from .core import LEGS, NamedValues, fmu_file, recording_callbacks, set_values, stand_parameters
+from .core import LEGS, Component, fmu_file, stand_parameters
 from .ssp import couplings
 from .study_schema import DEFAULT_MAX_RUNS, StudyError
 
@@ -102,53 +102,23 @@ def run_id(run):
 
 # ----- execution -------------------------------------------------------------------------------
 
-class _Component(NamedValues):
-    """One FMU2Slave kept for the life of the worker process, reset between runs."""
-
-    def __init__(self, unzipped, md, name):
-        self.md = md
-        self.vr = {v.name: v.valueReference for v in md.modelVariables}
-        self.variables = study_schema.variables_of(md)
-        self.slave = FMU2Slave(guid=md.guid, unzipDirectory=unzipped,
-                               modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
-        # The FMU's messages are kept, not printed: a failed run's row carries its message.
-        self.messages = []
-        self.slave.instantiate(callbacks=recording_callbacks(self.messages))
-        self.fresh = True
-
-    def last_problem(self):
-        """The last discard or error message of the current run."""
-        return next((m for status, _, m in reversed(self.messages) if status >= 2), "")
-
-    def start(self, values):
-        self.messages.clear()
-        if not self.fresh:
-            self.slave.reset()
-        self.fresh = False
-        self.slave.setupExperiment(startTime=0.0)
-        self.slave.enterInitializationMode()
-        set_values(self.slave, self.md, values)
-        self.slave.exitInitializationMode()
-
-
 _PROCESS = {}  # per worker process: components by role and FMU content hash
-_FOLDERS = {}  # per worker process: where each FMU is unpacked (kept when a component is dropped)
+_FILES = {}  # per worker process: where each FMU is written (kept when a component is dropped)
 
 
 def _component(role, fmu):
-    """The worker process's instance of an FMU given as bytes or a path."""
+    """The worker process's instance of an FMU given as bytes or a path: instantiated once,
+    started again for each run (`Component.start`), its messages kept for the run's row."""
     data = fmu if isinstance(fmu, bytes) else Path(fmu).read_bytes()
     key = (role, hashlib.sha256(data).hexdigest())
     if key not in _PROCESS:
-        if key not in _FOLDERS:
-            folder = tempfile.mkdtemp(prefix=f"stewart-{role}-")
-            path = Path(folder) / f"{role}.fmu"
+        if key not in _FILES:
+            path = Path(tempfile.mkdtemp(prefix=f"stewart-{role}-")) / f"{role}.fmu"
             path.write_bytes(data)
-            with zipfile.ZipFile(path) as z:
-                z.extractall(folder)
-            _FOLDERS[key] = (folder, read_model_description(str(path)))
-        folder, md = _FOLDERS[key]
-        _PROCESS[key] = _Component(folder, md, role)
+            _FILES[key] = path
+        component = Component(_FILES[key], role, messages=[], start=False)
+        component.variables = study_schema.variables_of(component.md)
+        _PROCESS[key] = component
     return _PROCESS[key]
 
 
@@ -393,9 +363,9 @@ def _execute(spec, run, fmus, row):
             c.messages.clear()  # a problem of an earlier run is not this run's
     try:
         platform_values, controller_values = _parameters(spec, run, platform.md)
-        platform.start(platform_values)
+        platform.start(platform_values, what=("values", "values"))
         if closed:
-            controller.start(controller_values)
+            controller.start(controller_values, what=("values", "values"))
     except FMICallException as e:
         problems = [c.last_problem() for c in (platform, controller) if c is not None and c.last_problem()]
         row.update(status="error", message=problems[-1] if problems else str(e), stable=False)
@@ -454,7 +424,7 @@ def _execute_cueing(spec, run, fmus, row):
     stop = float(run.get("stop_time", study["stop_time"]))
     manoeuvre = fmus["manoeuvre"]
     try:
-        cue.start({k.partition(".")[2]: v for k, v in run.items() if k.startswith("cueing.")})
+        cue.start({k.partition(".")[2]: v for k, v in run.items() if k.startswith("cueing.")}, what=("values", "values"))
     except FMICallException as e:
         row.update(status="error", message=cue.last_problem() or str(e), stable=False)
         return
