@@ -1,9 +1,11 @@
 """The layers of ARCHITECTURE.md hold: the mechanics crate (`crates/stewart-core`) depends on no
 FMI, FFI or packaging crate of the workspace, the FMU crate does not link the build program or
 the master, and inside each crate no two modules import each other, directly or round a
-circle (a `use` or a path naming another module's item is an import; a `mod` line is not).
-A circle or a wrong dependency makes the test fail and names it."""
+circle (a `use` or a path naming another module's item is an import; a `mod` line is not);
+nor do the Python package's modules (an import inside a function counts too). A circle or a
+wrong dependency makes the test fail and names it."""
 
+import ast
 import json
 import re
 import subprocess
@@ -100,6 +102,24 @@ def test_no_module_imports_round_a_circle():
         graph = imports(src)
         assert len(graph) > 20 and sum(map(len, graph.values())) > 50, f"{name}: the import graph was not read"
         assert circles(graph) == [], f"{name}: modules importing each other round a circle"
+
+
+def python_imports(package: Path) -> dict:
+    """Module -> the package's modules it imports (`from . import x`, `from .x import y`),
+    wherever in the file the import stands."""
+    graph = {(f.stem,): set() for f in package.glob("*.py")}
+    for f in package.glob("*.py"):
+        for node in ast.walk(ast.parse(f.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.level == 1:
+                names = [node.module.split(".")[0]] if node.module else [a.name for a in node.names]
+                graph[(f.stem,)] |= {(n,) for n in names if (n,) in graph and n != f.stem}
+    return graph
+
+
+def test_no_python_module_imports_round_a_circle():
+    graph = python_imports(ROOT / "python" / "stewart_fmu")
+    assert len(graph) > 15 and sum(map(len, graph.values())) > 30, "the package's imports were not read"
+    assert circles(graph) == [], "modules of stewart_fmu importing each other round a circle"
 
 
 def test_the_circle_finder_finds_a_circle():
