@@ -339,6 +339,45 @@ class Plan:
 def check(spec, path="", max_runs=DEFAULT_MAX_RUNS, variables=None, fmus=None):
     """The Plan of a study file's dict (defaults filled in); raises StudyError with every problem.
     `variables`: the FMUs' variable tables (`fmu_variables`), or read from `fmus` (`fmu_paths`)."""
+    problems = _check_sections(spec, path)
+    plots = spec.get("plot", [])
+    study = spec.setdefault("study", {})
+    study.setdefault("name", PurePosixPath(str(path)).stem or "study")
+    study.setdefault("system", "closed-loop")
+    study.setdefault("units", "si")
+    system, units = study["system"], study["units"]
+    problems += _check_study(study)
+    if system == "cueing":
+        problems += _check_cueing(study, path)
+    if variables is None:
+        variables = fmu_variables(fmus)
+    if system == "cueing" and "cueing" not in variables:
+        problems.append(f"system = 'cueing' needs StewartCueing.fmu: {(fmus or fmu_paths())['cueing']} is missing "
+                        f"(build the FMUs with `cargo run --release --bin build-fmu`, or set STEWART_CUEING_FMU)")
+
+    fixed, grid, random = spec.get("fixed", {}), spec.get("grid", {}), dict(spec.get("random", {}))
+    samples, seed = random.pop("samples", None), random.pop("seed", 0)
+    seen = _check_tables(fixed, grid, random, system, units, variables, problems)
+    samples = _check_sampling(random, samples, seed, problems)
+    if "scenario.failure_time" in seen and "scenario.failed_leg" not in seen:
+        problems.append("scenario.failure_time is set but scenario.failed_leg is not: name the leg that fails")
+
+    steps = _check_steps(study, fixed, grid, random, units, problems)
+    count = math.prod(len(v) for v in grid.values() if isinstance(v, list)) * (samples or 1)
+    if count > max_runs:
+        factors = " x ".join([f"{len(v)} {n}" for n, v in sorted(grid.items()) if isinstance(v, list)]
+                             + ([f"{samples} samples"] if samples else []))
+        problems.append(f"the study has {number(count)} runs ({factors}), more than --max-runs {number(max_runs)}: "
+                        f"make the grid coarser or take fewer samples, or raise --max-runs for a bigger cluster")
+    problems += _check_plots(plots, grid, random)
+    if problems:
+        raise StudyError(path, problems)
+    return Plan(spec, str(path), count, {n: list(v) for n, v in grid.items()}, samples or 0, max_runs, steps)
+
+
+def _check_sections(spec, path):
+    """The problems of the file's sections; raises StudyError where their contents cannot be
+    read (a section that is not a table, plots that are not an array of tables)."""
     problems, structure = [], []
     if not isinstance(spec, dict):
         raise StudyError(path, ["the study file must be a TOML table"])
@@ -356,25 +395,14 @@ def check(spec, path="", max_runs=DEFAULT_MAX_RUNS, variables=None, fmus=None):
         structure.append("plots are an array of tables: write [[plot]], not [plot]")
     elif not isinstance(plots, list) or not all(isinstance(p, dict) for p in plots):
         structure.append("plots are an array of tables: write each as a [[plot]] section")
-    if structure:  # the sections' contents cannot be read
+    if structure:
         raise StudyError(path, problems + structure)
+    return problems
 
-    study = spec.setdefault("study", {})
-    study.setdefault("name", PurePosixPath(str(path)).stem or "study")
-    study.setdefault("system", "closed-loop")
-    study.setdefault("units", "si")
-    system, units = study["system"], study["units"]
-    problems += _check_study(study)
-    if system == "cueing":
-        problems += _check_cueing(study, path)
-    if variables is None:
-        variables = fmu_variables(fmus)
-    if system == "cueing" and "cueing" not in variables:
-        problems.append(f"system = 'cueing' needs StewartCueing.fmu: {(fmus or fmu_paths())['cueing']} is missing "
-                        f"(build the FMUs with `cargo run --release --bin build-fmu`, or set STEWART_CUEING_FMU)")
 
-    fixed, grid, random = spec.get("fixed", {}), spec.get("grid", {}), dict(spec.get("random", {}))
-    samples, seed = random.pop("samples", None), random.pop("seed", 0)
+def _check_tables(fixed, grid, random, system, units, variables, problems):
+    """Each parameter of [fixed], [grid] and [random] (its name, value, values or distribution)
+    into `problems`; returns the section each name is set in."""
     seen = {}
     for section, table in (("fixed", fixed), ("grid", grid), ("random", random)):
         for name, value in table.items():
@@ -398,7 +426,11 @@ def check(spec, path="", max_runs=DEFAULT_MAX_RUNS, variables=None, fmus=None):
                 problems += _check_grid(param, value, where)
             else:
                 problems += _check_distribution(name, param, value, where)
+    return seen
 
+
+def _check_sampling(random, samples, seed, problems):
+    """[random]'s samples and seed into `problems`; returns the samples (None if not valid)."""
     if random and samples is None:
         problems.append("[random] has distributions but no samples: add samples = N (N >= 1)")
     if samples is not None:
@@ -410,20 +442,7 @@ def check(spec, path="", max_runs=DEFAULT_MAX_RUNS, variables=None, fmus=None):
                             f"the same run; add one or remove samples")
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         problems.append(f"random.seed = {number(seed)}: a whole number >= 0 is expected")
-    if "scenario.failure_time" in seen and "scenario.failed_leg" not in seen:
-        problems.append("scenario.failure_time is set but scenario.failed_leg is not: name the leg that fails")
-
-    steps = _check_steps(study, fixed, grid, random, units, problems)
-    count = math.prod(len(v) for v in grid.values() if isinstance(v, list)) * (samples or 1)
-    if count > max_runs:
-        factors = " x ".join([f"{len(v)} {n}" for n, v in sorted(grid.items()) if isinstance(v, list)]
-                             + ([f"{samples} samples"] if samples else []))
-        problems.append(f"the study has {number(count)} runs ({factors}), more than --max-runs {number(max_runs)}: "
-                        f"make the grid coarser or take fewer samples, or raise --max-runs for a bigger cluster")
-    problems += _check_plots(plots, grid, random)
-    if problems:
-        raise StudyError(path, problems)
-    return Plan(spec, str(path), count, {n: list(v) for n, v in grid.items()}, samples or 0, max_runs, steps)
+    return samples
 
 
 def _check_study(study):
