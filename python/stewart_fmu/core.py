@@ -237,9 +237,11 @@ class Component(NamedValues):
         """`reals`, `integers`: start values by name (booleans among them too); `events`: a list
         that receives the FMU's logEvents messages (contacts, singular arrangements passed) as
         (status, category, message); `messages`: a list that receives its other messages
-        (warnings, discards, errors: `last_problem`) without switching logEvents on; `what`: the
-        names the arguments `reals` and `integers` came in, for messages; `start=False`: only
-        instantiated, for `start`."""
+        (warnings, discards, errors: `last_problem`) without switching logEvents on, emptied
+        by each `start`; `what`: the names the arguments `reals` and `integers` came in, for
+        messages; `start=False`: only instantiated, for `start`."""
+        if events is not None and messages is not None:
+            raise ValueError("Component: give events (logEvents on) or messages (off), not both")
         fmu = fmu_file(fmu)
         self.md = read_model_description(fmu)
         if fmu not in Component._extracted:
@@ -248,6 +250,9 @@ class Component(NamedValues):
         self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=Component._extracted[fmu],
                                modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
         self.messages = events if events is not None else messages
+        # The messages of a run: the component's own list starts empty with each run; a list of
+        # events belongs to the caller, who may gather several instances' in one.
+        self._messages_per_run = messages is not None
         if self.messages is not None:
             logger = recording_callbacks(self.messages)
         self.slave.instantiate(loggingOn=False, callbacks=logger)
@@ -263,6 +268,8 @@ class Component(NamedValues):
 
     def start(self, reals=None, integers=None, start_time=0.0, stop_time=None, tolerance=None, what=None):
         """Initialises the instance with these start values, after a reset if it ran before."""
+        if self._messages_per_run:
+            self.messages.clear()  # a problem of an earlier run is not this run's
         if not self.fresh:
             self.slave.reset()
         self.fresh = False
@@ -339,8 +346,9 @@ def open_loop(inputs_of_t, t_end, h, parameters=None, record=(), events=None, in
     leg forces, N; "U", the drives' voltages, V), set at each communication point and held over
     the step of `h` to `t_end`. Returns (columns: `time` and `record`, status: "ok" or the
     FMU's message of the step it discarded, where the run ends). `events`: a list that receives
-    the logEvents messages (None: not delivered, nor the singular passages tracked). The one
-    open-loop runner of the package (the workspace, machine and drives scenarios)."""
+    the logEvents messages (None: not delivered, nor the singular passages tracked). The
+    open-loop runner of the scenarios that record outputs (workspace, machine, drives); a study's
+    runs of the platform alone go through the master loop, `stewart_fmu.cosim.steps`."""
     check_times(t_end, h)
     record = list(record)
     pl = Platform(parameters=parameters, events=events, name=name)

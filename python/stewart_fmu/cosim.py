@@ -89,7 +89,13 @@ def steps(platform, controller, n, h, scheme="gauss-seidel", commands=F, force_h
     for _ in range(n):
         if controller is None:
             if force_hook:
-                platform.set_values(commands, force_hook(time, platform.values(commands)))
+                # Only the inputs the hook changes are set: a set makes the outputs that follow
+                # the inputs stale in the FMU's value cache.
+                held = platform.values(commands)
+                wanted = force_hook(time, held.copy())
+                changed = [i for i in range(len(commands)) if not wanted[i] == held[i]]
+                if changed:
+                    platform.set_values([commands[i] for i in changed], [wanted[i] for i in changed])
             platform.slave.doStep(currentCommunicationPoint=time, communicationStepSize=h)
         elif scheme == "gauss-seidel":
             controller.set_values(measured, platform.values(measured))

@@ -358,9 +358,6 @@ def _execute(spec, run, fmus, row):
         return
     h = float(run.get("step", study["step"]))
     stop = float(run.get("stop_time", study["stop_time"]))
-    for c in (platform, controller):
-        if c is not None:
-            c.messages.clear()  # a problem of an earlier run is not this run's
     try:
         platform_values, controller_values = _parameters(spec, run, platform.md)
         platform.start(platform_values, what=("values", "values"))

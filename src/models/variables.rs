@@ -468,8 +468,10 @@ pub const fn state_count(groups: &[VariableGroup]) -> usize {
 
 /// The continuous states, `(group name, flat element index)` in the order of the state vector:
 /// the state groups in the order their derivatives are declared, each element by element
-/// (column by column where the group says so). One place for the order: the model's
-/// declarations; the simulation's layout follows it (tested through Model Exchange).
+/// (column by column where the group says so). The declarations must follow the simulation's
+/// layout (`crate::simulation::state`); `state_order_tests` holds the two together. A
+/// derivative of another shape than its state, a state named by two derivatives, or a state
+/// column by column that is not a matrix is a build error.
 pub const fn states<const N: usize>(groups: &[VariableGroup]) -> [(&'static str, usize); N] {
     let mut states = [("", 0); N];
     let mut n = 0;
@@ -477,6 +479,15 @@ pub const fn states<const N: usize>(groups: &[VariableGroup]) -> [(&'static str,
     while i < groups.len() {
         if let Some(name) = groups[i].derivative_of {
             let state = &groups[named(groups, name)];
+            assert!(same_shape(state.shape, groups[i].shape), "a derivative has another shape than its state");
+            assert!(!state.state_by_columns || state.shape.len() == 2, "only a matrix is a state column by column");
+            let mut earlier = 0;
+            while earlier < i {
+                if let Some(other) = groups[earlier].derivative_of {
+                    assert!(!same(other, name), "two derivatives name one state group");
+                }
+                earlier += 1;
+            }
             let count = element_count(state.shape);
             let mut k = 0;
             while k < count {
@@ -489,6 +500,20 @@ pub const fn states<const N: usize>(groups: &[VariableGroup]) -> [(&'static str,
     }
     assert!(n == N, "state_count and states disagree");
     states
+}
+
+const fn same_shape(a: &[usize], b: &[usize]) -> bool {
+    if a.len() != b.len() {
+        return false;
+    }
+    let mut i = 0;
+    while i < a.len() {
+        if a[i] != b[i] {
+            return false;
+        }
+        i += 1;
+    }
+    true
 }
 
 const fn element_count(shape: &[usize]) -> usize {

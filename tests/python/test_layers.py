@@ -31,10 +31,10 @@ def file_modules(src: Path) -> dict:
 
 
 def code(text: str) -> str:
-    """The text without comments and without the unit tests at a file's end (a `#[cfg(test)]`
-    module)."""
+    """The text without comments and without the unit tests written at a file's end (an
+    inline `#[cfg(test)] mod name { ... }`; a `mod tests;` line only names a file, left out)."""
     text = re.sub(r"/\*.*?\*/", "", re.sub(r"//[^\n]*", "", text), flags=re.S)
-    return re.split(r"#\[cfg\(test\)\]\s*mod \w+", text)[0]
+    return re.split(r"#\[cfg\(test\)\]\s*mod \w+\s*\{", text)[0]
 
 
 def imports(src: Path) -> dict:

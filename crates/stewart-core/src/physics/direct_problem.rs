@@ -101,7 +101,7 @@ impl ForceMomentMatrix {
     }
 
     /// The matrix's SVD, `None` where the matrix is not all numbers (a pose of overflowed
-    /// coordinates: no leg arrangement) or the SVD does not converge in [`SVD_ITERATIONS`]
+    /// coordinates: no leg arrangement) or the SVD does not converge in `SVD_ITERATIONS`
     /// sweeps. Every SVD of this matrix goes through here, so none can hang.
     pub fn svd(&self, compute_u: bool, compute_v: bool) -> Option<SVD<f64, U6, U6>> {
         if !self.matrix.iter().all(|x| x.is_finite()) {
@@ -210,7 +210,7 @@ pub fn force_moment_determinant(legs: &LegKinematics, ell: f64) -> f64 {
 }
 
 /// Determinant of a 6x6 matrix (rows) by Gaussian elimination with partial pivoting. Each
-/// elimination stage is a separate instance of [`eliminate`] with its column as a constant,
+/// elimination stage is a separate instance of `eliminate` with its column as a constant,
 /// so every loop has constant bounds and unrolls without bounds checks.
 #[inline(always)]
 pub fn determinant6(mut a: [[f64; 6]; 6]) -> f64 {

@@ -18,7 +18,7 @@
 //! [`RigidBody::axis_accelerations`] is the law, written once over [`AxisValues`]: the three
 //! axes as a [`crate::physics::body::per_axis::Triple`] of any number type
 //! ([`RigidBody::accelerations`], values and derivatives) or side by side in vector registers
-//! ([`RigidBody::accelerations_in`], the step's fast path); the same operations in the same
+//! (`RigidBody::accelerations_in`, the step's fast path); the same operations in the same
 //! order, so the same bits (tested).
 
 use nalgebra::Vector3;

@@ -12,7 +12,7 @@ impl SpecialForm {
     /// The right-hand side `dy/dt` for leg forces given by `law` at time `t`, and the leg
     /// powers: [`SpecialForm::rate`]'s numbers, computed in vector registers: its bits for
     /// massless, frictionless legs, to round-off for the machine's legs
-    /// ([`SpecialForm::derivative_machine_in`]).
+    /// (`SpecialForm::derivative_machine_in`).
     #[inline(always)]
     pub fn derivative<L: LegForceLaw + ?Sized>(
         &self,
