@@ -152,7 +152,8 @@ def instructions_per_step():
     return per
 
 
-# Function patterns (callgrind_annotate's "file:function [object]"), whatever crate holds them.
+# The functions counted (callgrind_annotate's "file:function [object]", whatever crate holds
+# them): name -> pattern.
 PARTS = {
     "platform_step": r"PlatformModel as [\w:]*FmuModel>::do_step \[",
     "kappa": r"::simulation::outputs::condition_number \[",
@@ -162,6 +163,7 @@ PARTS = {
     "programme_point": r"ControllerModel::programme_point \[",
 }
 PROFILE_OUT = ROOT / "benches" / "results" / "step_profile.txt"
+# The table's rows: the disjoint parts instructions_per_step gives, and what each is.
 PART_NAMES = {
     "platform_step": "the platform's step (its integration: special form, error norm, projection, checks)",
     "kappa": "kappa, the condition number the study reads every step (eigenvalue problem)",

@@ -23,6 +23,7 @@ use super::state::{
     CURRENTS, SIMULATION_DIM, SimulationState, WITH_DRIVES, WITHOUT_DRIVES, body, hydraulic, hydraulic_rates,
     quadrature, switching,
 };
+
 /// How the constraints `e_a . e_b = delta_ab` are kept during integration.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Stabilisation {

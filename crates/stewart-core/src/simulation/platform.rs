@@ -22,6 +22,7 @@ use crate::physics::stand::{LEG_COUNT, Stand};
 use super::dynamics::{LegOutputs, PlatformDynamics, Stabilisation};
 use super::state::{CURRENTS, MECHANICAL_DIM, SIMULATION_DIM, SimulationState, body, hydraulic, quadrature, switching};
 use super::vector::VectorPath;
+
 /// The crossings of a step over the shorter arrays (`mechanical`) into `log`, as whole
 /// simulation states (the rest of `state`).
 #[inline(never)]
