@@ -36,6 +36,8 @@ if cargo clippy --version >/dev/null 2>&1; then
 else
     echo "run_all: clippy is not installed with this toolchain; lint step not run"
 fi
+step "the API documentation (cargo doc: every intra-doc link resolves)"
+RUSTDOCFLAGS="-D warnings" cargo doc --no-deps -p stewart-core -p stewart_fmu
 step "the Rust tests (cargo test --release: builds the tests first, about 3 minutes)"
 cargo test --release
 # Each test once (-v); the numbers the tests print (-rP: passes' output), failures and errors (-rfE).

@@ -1,9 +1,10 @@
 //! A model's variables declared once, each bound to where its value lives
-//! ([`declare_variables!`]). From the one list come: the variable table ([`VariableGroup`]:
-//! value references, causality, variability, units, start values, descriptions; both model
-//! descriptions and the documentation pages are rendered from it), the value-reference lookup,
-//! get and set of every stored variable, the FMU state's bytes of the parameters and inputs
-//! (in declaration order), the cache block of every output and the filling of the cache, and
+//! (`declare_variables!`). From the one list come: the variable table
+//! ([`VariableGroup`](crate::models::variables::VariableGroup): value references, causality,
+//! variability, units, start values, descriptions; both model descriptions and the
+//! documentation pages are rendered from it), the value-reference lookup, get and set of every
+//! stored variable, the FMU state's bytes of the parameters and inputs (in declaration order),
+//! the cache block of every output and the filling of the cache, and
 //! the reading of outputs in any number type (their derivatives through duals).
 //!
 //! ```text
@@ -419,7 +420,7 @@ macro_rules! declare_variables {
 
 pub(crate) use declare_variables;
 
-/// What [`declare_variables!`] derives for a model from its declarations.
+/// What `declare_variables!` derives for a model from its declarations.
 pub trait Variables {
     /// The storage of an element of a stored Real variable (parameter or input).
     fn real_slot(&mut self, var: super::variables::VariableRef) -> Option<&mut f64>;

@@ -1,6 +1,6 @@
 //! The exported FMI 2.0 functions: a thin layer that turns C arguments into Rust values and
-//! calls [`Instance`] methods through the boundary ([`boundary::call`]), which catches
-//! panics and enforces the state table. Signatures follow `fmi2FunctionTypes.h` exactly.
+//! calls [`Instance`] methods through the boundary ([`crate::fmi::boundary::call`]), which
+//! catches panics and enforces the state table. Signatures follow `fmi2FunctionTypes.h` exactly.
 //!
 //! # Safety (all functions)
 //! The importer must follow the FMI 2.0 calling conventions for arrays and strings: array

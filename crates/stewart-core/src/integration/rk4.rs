@@ -270,12 +270,17 @@ fn exponential_step<S: OdeSystem<N>, const N: usize>(
     let k4 = system.derivative_of(t_end, &c);
     nonstiff(&k4, &c, &mut n4);
     let [w1, w23, w4] = e.weights;
-    // The block's output from the old `y` first, then the classical one elsewhere.
-    let block: [f64; N] = std::array::from_fn(|j| e.full * y[j] + w1 * n1[j] + w23 * (n2[j] + n3[j]) + w4 * n4[j]);
+    // The block's output from the old `y` first (into `n1`, whose block it last reads), over
+    // the block alone; then the classical one elsewhere.
+    for ((((n1, &y0), &n2), &n3), &n4) in
+        n1[r.clone()].iter_mut().zip(&y[r.clone()]).zip(&n2[r.clone()]).zip(&n3[r.clone()]).zip(&n4[r.clone()])
+    {
+        *n1 = e.full * y0 + w1 * *n1 + w23 * (n2 + n3) + w4 * n4;
+    }
     for j in 0..N {
         y[j] += h / 6.0 * (k1[j] + 2.0 * (k2[j] + k3[j]) + k4[j]);
     }
-    y[r.clone()].copy_from_slice(&block[r]);
+    y[r.clone()].copy_from_slice(&n1[r]);
 }
 
 #[cfg(test)]

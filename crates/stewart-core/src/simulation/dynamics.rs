@@ -174,7 +174,7 @@ impl<L: LegForceLaw + ?Sized, V: Lanes> PlatformDynamics<'_, L, V> {
             && let Some(platform) = platform.first_chunk_mut::<LEG_COUNT>()
         {
             if self.form.joint_limits().is_some() {
-                self.form.joint_margins(state, legs, base, platform);
+                self.form.joint_margins::<V>(state, legs, base, platform);
             } else {
                 *base = [1.0; LEG_COUNT];
                 *platform = [1.0; LEG_COUNT];

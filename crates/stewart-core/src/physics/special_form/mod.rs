@@ -44,6 +44,7 @@ use super::legs::per_leg::{Lanes, Narrow, PerLeg, components};
 use super::number::{Dual, Number, Real};
 use super::stand::{LEG_COUNT, Stand};
 use crate::maths;
+use crate::simd::Plain;
 
 /// A stand with its legs' end stops, and the coefficients a right-hand side needs.
 #[derive(Clone, Debug, PartialEq)]
@@ -220,9 +221,25 @@ impl SpecialForm {
 
     /// The joint limits' switching functions `cos thetaB_k - cos thetaMax_B` into
     /// `base[k]` and `cos thetaA_k - cos thetaMax_A` into `platform[k]`, from the legs of a
-    /// state (the leg by leg loops run side by side in vector registers).
+    /// state, the six legs side by side in lanes `V` where they are cheaper for it
+    /// ([`Lanes::FOR_CHECKS`]), else in [`Plain`] lanes: the same bits either way.
     #[inline(always)]
-    pub fn joint_margins(
+    pub fn joint_margins<V: Lanes>(
+        &self,
+        state: &BodyState,
+        legs: &LegKinematics,
+        base: &mut [f64; LEG_COUNT],
+        platform: &mut [f64; LEG_COUNT],
+    ) {
+        if V::FOR_CHECKS {
+            self.joint_margins_in::<V>(state, legs, base, platform)
+        } else {
+            self.joint_margins_in::<Plain>(state, legs, base, platform)
+        }
+    }
+
+    #[inline(always)]
+    fn joint_margins_in<V: Lanes>(
         &self,
         state: &BodyState,
         legs: &LegKinematics,
@@ -230,16 +247,17 @@ impl SpecialForm {
         platform: &mut [f64; LEG_COUNT],
     ) {
         let [cos_base, cos_platform, _] = self.joint_cosines;
-        let (n0, m0) = (&self.base_reference, &self.platform_reference);
         let [e1, e2, e3] = &state.e;
-        for k in 0..LEG_COUNT {
-            let q = [legs.leg[0][k], legs.leg[1][k], legs.leg[2][k]];
-            let w: [f64; 3] = std::array::from_fn(|c| e1[c] * m0[0][k] + e2[c] * m0[1][k] + e3[c] * m0[2][k]);
-            let along_n0 = q[0] * n0[0][k] + q[1] * n0[1][k] + q[2] * n0[2][k];
-            let along_w = q[0] * w[0] + q[1] * w[1] + q[2] * w[2];
-            base[k] = along_n0 * legs.inverse_length[k] - cos_base;
-            platform[k] = along_w * legs.inverse_length[k] - cos_platform;
-        }
+        let q = components!(|c| PerLeg::<V>::new(&legs.leg[c]));
+        let n0 = components!(|c| PerLeg::<V>::new(&self.base_reference[c]));
+        let m0 = components!(|c| PerLeg::<V>::new(&self.platform_reference[c]));
+        // The platform joints' reference axes `R m0_k`, inertial components.
+        let w = components!(|c| m0[0] * e1[c] + m0[1] * e2[c] + m0[2] * e3[c]);
+        let along_n0 = q[0] * n0[0] + q[1] * n0[1] + q[2] * n0[2];
+        let along_w = q[0] * w[0] + q[1] * w[1] + q[2] * w[2];
+        let inverse_length = PerLeg::<V>::new(&legs.inverse_length);
+        *base = (along_n0 * inverse_length - cos_base).to_array();
+        *platform = (along_w * inverse_length - cos_platform).to_array();
     }
 
     /// The same form with end stops (`None`: without).

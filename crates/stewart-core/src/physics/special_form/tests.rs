@@ -216,3 +216,55 @@ unsafe fn wide_machine(
 unsafe fn wide_derivative(form: &SpecialForm, y: &StateVector, law: &HeldForces, dy: &mut StateVector) -> LegPower {
     form.derivative_in::<HeldForces, Wide>(0.3, y, law, dy)
 }
+
+/// The joint limits' switching functions are the cosines of the joints' angles less the
+/// limits' (each angle from the leg and the joint's reference axis, written out here), and
+/// every register width gives the same bits.
+#[test]
+fn the_joint_margins_are_the_joint_angles_in_every_width() {
+    let stand = Stand::truck_cabin();
+    let r0 = Stand::truck_cabin_neutral_position();
+    let n0: [Vector3<f64>; LEG_COUNT] =
+        std::array::from_fn(|k| (r0 + stand.platform_joints[k] - stand.base_joints[k]).normalize());
+    let rotation0 = rotation_from_angles(&Vector3::new(0.02, -0.01, 0.03));
+    let limits = JointLimits::new(0.1, 0.15, 1e6, 5e4, n0, &rotation0);
+    let form = SpecialForm::new(stand.clone()).with_machine(LegBodies::default(), Friction::default(), Some(limits));
+    for y in test_states() {
+        let state = BodyState::from_vector(&y);
+        let legs = form.joints.kinematics(&state);
+        let margins = |f: &dyn Fn(&mut [f64; LEG_COUNT], &mut [f64; LEG_COUNT])| {
+            let (mut base, mut platform) = ([0.0; LEG_COUNT], [0.0; LEG_COUNT]);
+            f(&mut base, &mut platform);
+            (base.map(f64::to_bits), platform.map(f64::to_bits))
+        };
+        let plain = margins(&|b, p| form.joint_margins::<Plain>(&state, &legs, b, p));
+        assert_eq!(margins(&|b, p| form.joint_margins::<Narrow>(&state, &legs, b, p)), plain);
+        if crate::simd::wide_testable() {
+            // SAFETY: AVX2 and FMA checked just now.
+            assert_eq!(margins(&|b, p| unsafe { wide_joint_margins(&form, &state, &legs, b, p) }), plain);
+        }
+        let rotation = nalgebra::Matrix3::from_columns(&state.e);
+        let geometry = LegGeometry::new(&stand, &state);
+        for k in 0..LEG_COUNT {
+            let direction = geometry.leg[k] / geometry.length[k];
+            let cos_base = direction.dot(&n0[k]);
+            // The platform joint's axis turns with the platform from its reference pose.
+            let cos_platform = direction.dot(&(rotation * rotation0.transpose() * n0[k]));
+            assert!((f64::from_bits(plain.0[k]) - (cos_base - maths::cos(0.1))).abs() < 1e-14, "base joint {k}");
+            assert!((f64::from_bits(plain.1[k]) - (cos_platform - maths::cos(0.15))).abs() < 1e-14, "platform {k}");
+        }
+    }
+}
+
+/// # Safety
+/// AVX2 and FMA must be available ([`crate::simd::wide_available`]).
+#[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx,avx2,fma"))]
+unsafe fn wide_joint_margins(
+    form: &SpecialForm,
+    state: &BodyState,
+    legs: &LegKinematics,
+    base: &mut [f64; LEG_COUNT],
+    platform: &mut [f64; LEG_COUNT],
+) {
+    form.joint_margins::<Wide>(state, legs, base, platform)
+}
