@@ -94,11 +94,7 @@ def motion_system(manoeuvre, h=1e-3, stand=None, cueing=None, controller=None, p
         raise ValueError(f"master = {master!r}: 'fmpy' or 'compiled'")
     ssd = system_description(fmu_file(MOTION_SYSTEM_SSP))
     fmus = {"cueing": CUEING_FMU, "controller": CONTROLLER_FMU, "platform": PLATFORM_FMU}
-    given = {"cueing": cueing, "controller": controller, "platform": platform}
-    start = {}
-    for name, fmu in fmus.items():
-        names = {v.name for v in read_model_description(fmu_file(fmu)).modelVariables}
-        start[name] = {**{k: v for k, v in (stand or {}).items() if k in names}, **(given[name] or {})}
+    start = _start_values(fmus, stand, {"cueing": cueing, "controller": controller, "platform": platform})
     cue_out = POSE + FSIM + OMEGASIM + ["workspace.scale"]
     lp = [f"lp[{k}]" for k in LEGS]
     names = ["time"] + F + OMEGA + cue_out + lp + list(record)
@@ -112,12 +108,7 @@ def motion_system(manoeuvre, h=1e-3, stand=None, cueing=None, controller=None, p
             for k, v in bound.get(name, {}).items():
                 (integers if isinstance(v, int) else reals)[k] = v
             parts[name] = Component(fmu, name, {**reals, **start[name]}, integers)
-        # Each component's inputs from the connections, grouped by the component they come from.
-        wiring = {name: {} for name in fmus}
-        for source, output, target, connector in connections(ssd):
-            outputs, connectors = wiring[target].setdefault(source, ([], []))
-            outputs.append(output)
-            connectors.append(connector)
+        wiring = _wiring(ssd, fmus)
         cue, ctl, pl = parts["cueing"], parts["controller"], parts["platform"]
         rows = []
         steps = int(round(t_end / h))
@@ -137,6 +128,26 @@ def motion_system(manoeuvre, h=1e-3, stand=None, cueing=None, controller=None, p
             part.free()
     rows = np.array(rows)
     return {n: rows[:, j] for j, n in enumerate(names)}
+
+
+def _start_values(fmus, stand, given):
+    """Each component's start values: the stand's parameters it has, then its own by name."""
+    start = {}
+    for name, fmu in fmus.items():
+        names = {v.name for v in read_model_description(fmu_file(fmu)).modelVariables}
+        start[name] = {**{k: v for k, v in (stand or {}).items() if k in names}, **(given[name] or {})}
+    return start
+
+
+def _wiring(ssd, fmus):
+    """Each component's inputs from the SSP's connections, grouped by the component they come
+    from: `{target: {source: ([outputs], [connectors])}}`."""
+    wiring = {name: {} for name in fmus}
+    for source, output, target, connector in connections(ssd):
+        outputs, connectors = wiring[target].setdefault(source, ([], []))
+        outputs.append(output)
+        connectors.append(connector)
+    return wiring
 
 
 def _motion_system_compiled(manoeuvre, t_end, h, start, cue_out, lp, record, names):

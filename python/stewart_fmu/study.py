@@ -358,14 +358,7 @@ def _execute(spec, run, fmus, row):
         return
     h = float(run.get("step", study["step"]))
     stop = float(run.get("stop_time", study["stop_time"]))
-    try:
-        platform_values, controller_values = _parameters(spec, run, platform.md)
-        platform.start(platform_values, what=("values", "values"))
-        if closed:
-            controller.start(controller_values, what=("values", "values"))
-    except FMICallException as e:
-        problems = [c.last_problem() for c in (platform, controller) if c is not None and c.last_problem()]
-        row.update(status="error", message=problems[-1] if problems else str(e), stable=False)
+    if not _start(spec, run, platform, controller, row):
         return
     # The scenario: inputs held at 0 from a time on (a failed leg, a power loss).
     held = [(commands.index(name), value, at) for name, value, at in _scenario(run, closed, commands)]
@@ -402,6 +395,21 @@ def _execute(spec, run, fmus, row):
     if closed:
         row.update(max_leg_error=leg_error, max_pose_error=pose_error)
     _finish(study, row, closed)
+
+
+def _start(spec, run, platform, controller, row):
+    """Starts the run's components with its parameters; False (the row an error) if one
+    refuses them."""
+    try:
+        platform_values, controller_values = _parameters(spec, run, platform.md)
+        platform.start(platform_values, what=("values", "values"))
+        if controller is not None:
+            controller.start(controller_values, what=("values", "values"))
+    except FMICallException as e:
+        problems = [c.last_problem() for c in (platform, controller) if c is not None and c.last_problem()]
+        row.update(status="error", message=problems[-1] if problems else str(e), stable=False)
+        return False
+    return True
 
 
 def _execute_cueing(spec, run, fmus, row):

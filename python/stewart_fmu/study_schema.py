@@ -576,7 +576,6 @@ def _check_steps(study, fixed, grid, random, units, problems):
 
 def _check_plots(plots, grid, random):
     problems, files = [], {}
-    varied = set(grid) | set(random)
     for i, p in enumerate(plots):
         where = f"plot {i + 1}"
         kind = p.get("kind", "histogram")
@@ -594,28 +593,7 @@ def _check_plots(plots, grid, random):
         if not isinstance(value, str) or value not in PLOT_VALUES:
             problems.append(f"{where}: value = {number(value)} is not a metric{nearest(value, PLOT_VALUES)} "
                             f"(metrics: {', '.join(PLOT_VALUES)})")
-        for axis in ("x", "y", "facet"):
-            if axis not in allowed:
-                continue
-            name = p.get(axis)
-            if name is not None and not isinstance(name, str):
-                problems.append(f"{where}: {axis} = {number(name)}: the name of a varied parameter in quotes is expected")
-                continue
-            if name is None:
-                if axis != "facet":
-                    problems.append(f"{where}: {axis} is missing: name a varied parameter "
-                                    f"({', '.join(sorted(varied)) or 'none varies'})")
-                continue
-            if kind == "map" and name not in grid:
-                if name in random:
-                    problems.append(f"{where}: {axis} = {name!r} is drawn at random, and a map needs [grid] values: "
-                                    f"use a scatter plot")
-                else:
-                    problems.append(f"{where}: {axis} = {number(name)} is not varied in [grid]"
-                                    f"{nearest(name, grid)} (grid: {', '.join(sorted(grid)) or 'empty'})")
-            elif name not in varied:
-                problems.append(f"{where}: {axis} = {number(name)} is not a varied parameter{nearest(name, varied)} "
-                                f"(varied: {', '.join(sorted(varied)) or 'none'})")
+        problems += _check_plot_axes(p, where, kind, grid, random)
         if kind == "map" and p.get("x") is not None and p.get("x") in (p.get("y"), p.get("facet")):
             problems.append(f"{where}: x, y and facet must name different parameters")
         for key in ("log", "unstable_blank"):
@@ -634,6 +612,34 @@ def _check_plots(plots, grid, random):
             problems.append(f"{where}: file {file!r} is also plot {files[file] + 1}'s: give each plot its own file")
         else:
             files[file] = i
+    return problems
+
+
+def _check_plot_axes(p, where, kind, grid, random):
+    """A plot's x, y and facet: each names a parameter that its kind can show."""
+    problems, varied = [], set(grid) | set(random)
+    for axis in ("x", "y", "facet"):
+        if axis not in PLOT_KEYS[kind]:
+            continue
+        name = p.get(axis)
+        if name is not None and not isinstance(name, str):
+            problems.append(f"{where}: {axis} = {number(name)}: the name of a varied parameter in quotes is expected")
+            continue
+        if name is None:
+            if axis != "facet":
+                problems.append(f"{where}: {axis} is missing: name a varied parameter "
+                                f"({', '.join(sorted(varied)) or 'none varies'})")
+            continue
+        if kind == "map" and name not in grid:
+            if name in random:
+                problems.append(f"{where}: {axis} = {name!r} is drawn at random, and a map needs [grid] values: "
+                                f"use a scatter plot")
+            else:
+                problems.append(f"{where}: {axis} = {number(name)} is not varied in [grid]"
+                                f"{nearest(name, grid)} (grid: {', '.join(sorted(grid)) or 'empty'})")
+        elif name not in varied:
+            problems.append(f"{where}: {axis} = {number(name)} is not a varied parameter{nearest(name, varied)} "
+                            f"(varied: {', '.join(sorted(varied)) or 'none'})")
     return problems
 
 
