@@ -12,7 +12,9 @@ source line in it where the next level was inlined.
 
 After `cargo run --release --bin build-fmu` (the host unpacks target/fmu's FMI 2 platform FMU
 and replaces its Linux x86-64 binary). The debug build goes to target/profile (a few minutes
-the first time). Needs valgrind, gcc and binutils' addr2line.
+the first time). Needs valgrind, gcc and binutils' addr2line. Code the compiler shares between
+two branches (or two inlined calls) has one inline chain in the debug information, so its count
+stands under one of them only.
 """
 
 import argparse
@@ -38,7 +40,8 @@ def debug_library():
     """The FMU's library for this machine with full debug information, not stripped."""
     env = dict(os.environ, CARGO_PROFILE_RELEASE_DEBUG="full", CARGO_PROFILE_RELEASE_STRIP="none",
                CARGO_TARGET_DIR=str(ROOT / "target" / "profile"))
-    subprocess.run(["cargo", "build", "--release", "--lib"], cwd=ROOT, env=env, check=True)
+    # `-p stewart_fmu`: the package and features build-fmu builds (not the workspace's others).
+    subprocess.run(["cargo", "build", "--release", "--lib", "-p", "stewart_fmu"], cwd=ROOT, env=env, check=True)
     return ROOT / "target" / "profile" / "release" / "libstewart_fmu.so"
 
 
