@@ -23,7 +23,8 @@ impl Narrow {
 
 impl super::Lanes for Narrow {
     type Axes = super::Pair;
-    const FOR_CHECKS: bool = false;
+    // SSE2 pairs cost the checks more than plain arrays (see JointArrays::kinematics).
+    type Checks = super::Plain;
     const AVX: bool = false;
     #[inline(always)]
     fn new(x: &[f64; 6]) -> Self {
@@ -178,7 +179,7 @@ impl Wide {
 // SAFETY (every `unsafe` block of this impl): a `Wide` exists only where AVX runs (above).
 impl super::Lanes for Wide {
     type Axes = super::Quad;
-    const FOR_CHECKS: bool = true;
+    type Checks = Wide;
     const AVX: bool = true;
     #[inline(always)]
     fn new(x: &[f64; 6]) -> Self {

@@ -90,9 +90,10 @@ pub fn wide_available() -> bool {
 pub trait Lanes: Copy {
     /// The same registers for three per-axis values ([`AxisLanes`]).
     type Axes: AxisLanes;
-    /// Whether the checks at the end of a step compute the legs in these lanes too (see
-    /// [`crate::physics::legs::geometry::JointArrays::kinematics_in`]).
-    const FOR_CHECKS: bool;
+    /// The lanes the checks at the end of a step compute the legs in: these, where they are
+    /// cheaper for it than plain arrays, else [`Plain`] (see
+    /// [`crate::physics::legs::geometry::JointArrays::kinematics_in`]); the same bits either way.
+    type Checks: Lanes;
     /// Whether these are AVX registers (code in them runs only where [`wide_available`] said
     /// so).
     const AVX: bool;

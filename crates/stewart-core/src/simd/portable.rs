@@ -21,7 +21,7 @@ mod legs {
 
     impl crate::simd::Lanes for Plain {
         type Axes = crate::simd::Pair;
-        const FOR_CHECKS: bool = false;
+        type Checks = Plain;
         const AVX: bool = false;
         #[inline(always)]
         fn new(x: &[f64; 6]) -> Self {

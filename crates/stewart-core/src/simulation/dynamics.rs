@@ -68,7 +68,8 @@ pub struct PlatformDynamics<'a, L: ?Sized, V: Lanes = Narrow> {
     /// Whether a passage through a singular leg arrangement stops the integration.
     pub stop_at_singularity: bool,
     /// Whether the determinant switching function is evaluated (see
-    /// [`PlatformSimulation::track_singularities`](crate::simulation::PlatformSimulation::track_singularities)); the stroke margins always are.
+    /// [`PlatformSimulation::track_singularities`](super::PlatformSimulation::track_singularities));
+    /// the stroke margins always are.
     pub track_singularities: bool,
     /// Lengths and rates of the legs of the last state [`OdeSystem::check`] accepted: after an
     /// integration, those of its end state (the check is the last thing a step does), so that
@@ -174,7 +175,7 @@ impl<L: LegForceLaw + ?Sized, V: Lanes> PlatformDynamics<'_, L, V> {
             && let Some(platform) = platform.first_chunk_mut::<LEG_COUNT>()
         {
             if self.form.joint_limits().is_some() {
-                self.form.joint_margins::<V>(state, legs, base, platform);
+                self.form.joint_margins::<V::Checks>(state, legs, base, platform);
             } else {
                 *base = [1.0; LEG_COUNT];
                 *platform = [1.0; LEG_COUNT];
@@ -240,8 +241,9 @@ impl<L: LegForceLaw + ?Sized, V: Lanes> PlatformDynamics<'_, L, V> {
 }
 
 /// The platform's ODE system over the whole [`SimulationState`] (`N = SIMULATION_DIM`), or
-/// over its leading [`MECHANICAL_DIM`](crate::simulation::state::MECHANICAL_DIM) components when the hydraulic legs are off (the
-/// integrators' arrays are then shorter; [`PlatformSimulation::advance`](crate::simulation::PlatformSimulation::advance) chooses).
+/// over its leading [`MECHANICAL_DIM`](super::state::MECHANICAL_DIM) components when the
+/// hydraulic legs are off (the integrators' arrays are then shorter;
+/// [`PlatformSimulation::advance`](super::PlatformSimulation::advance) chooses).
 impl<L: LegForceLaw + ?Sized, V: Lanes, const N: usize> OdeSystem<N> for PlatformDynamics<'_, L, V> {
     type Fault = PhysicsFault;
 
@@ -396,7 +398,8 @@ impl<L: LegForceLaw + ?Sized, V: Lanes, const N: usize> OdeSystem<N> for Platfor
 }
 
 /// Leg lengths and rates alone: what a controller reads every step, computed without the
-/// other outputs (the same numbers as [`PlatformOutputs`](crate::simulation::PlatformOutputs)' fields of the same names).
+/// other outputs (the same numbers as the fields of the same names of
+/// [`PlatformOutputs`](super::PlatformOutputs)).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LegOutputs {
     pub l: [f64; LEG_COUNT],

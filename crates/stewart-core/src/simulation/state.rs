@@ -28,7 +28,8 @@ pub(super) const WITH_DRIVES: usize = STATE_DIM + 9;
 
 /// The leading part of a [`SimulationState`] the integrators step when the hydraulic legs are
 /// off (their components are then 0 and constant): the shorter arrays keep the force inputs'
-/// and the drives' steps as cheap as before the hydraulics ([`PlatformSimulation::advance`](crate::simulation::PlatformSimulation::advance)).
+/// and the drives' steps as cheap as before the hydraulics
+/// ([`PlatformSimulation::advance`](super::PlatformSimulation::advance)).
 pub const MECHANICAL_DIM: usize = WITH_DRIVES;
 const _: () = assert!(MECHANICAL_DIM <= SIMULATION_DIM, "the leading part of the state");
 

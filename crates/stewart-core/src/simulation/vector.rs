@@ -1,6 +1,6 @@
 //! The door to the integrators compiled for AVX2 (the registers themselves are `crate::simd`'s).
-//! A step computes the six legs and the three body
-//! axes side by side in vector registers ([`Lanes`](crate::physics::legs::per_leg::Lanes)): SSE2 pairs everywhere (`Narrow`), or
+//! A step computes the six legs and the three body axes side by side in vector registers
+//! ([`Lanes`](crate::physics::legs::per_leg::Lanes)): SSE2 pairs everywhere (`Narrow`), or
 //! where this build has the `avx2` feature (on by default) and the processor has AVX2 and FMA,
 //! four lanes (`Wide`) with the integrators compiled for AVX2 around them. Both give the same
 //! numbers to the bit (every lane operation is the scalar one, every sum in one fixed order;

@@ -139,14 +139,11 @@ impl JointArrays {
         self.kinematics_in::<Plain>(state)
     }
 
-    /// [`JointArrays::kinematics`], computed in lanes `V` where they are cheaper for it
-    /// ([`Lanes::FOR_CHECKS`]), else in [`Plain`] lanes; the same bits either way.
+    /// [`JointArrays::kinematics`], computed in the checks' lanes of `V` ([`Lanes::Checks`]);
+    /// the same bits in any.
     #[inline(always)]
     pub fn kinematics_in<V: Lanes>(&self, state: &BodyState) -> LegKinematics {
-        if !V::FOR_CHECKS {
-            return self.kinematics_lanes::<Plain>(state);
-        }
-        self.kinematics_lanes::<V>(state)
+        self.kinematics_lanes::<V::Checks>(state)
     }
 
     #[inline(always)]
@@ -163,10 +160,7 @@ impl JointArrays {
     /// [`JointArrays::length_rates`], in lanes `V` as [`JointArrays::kinematics_in`].
     #[inline(always)]
     pub fn length_rates_in<V: Lanes>(&self, state: &BodyState, legs: &LegKinematics) -> [f64; LEG_COUNT] {
-        if !V::FOR_CHECKS {
-            return self.length_rates(state, legs);
-        }
-        let leg = components!(|c| PerLeg::<V>::new(&legs.leg[c]));
+        let leg = components!(|c| PerLeg::<V::Checks>::new(&legs.leg[c]));
         let (_, rates) =
             self.directions_and_rates(state, &leg, PerLeg::new(&legs.length), PerLeg::new(&legs.inverse_length));
         rates.to_array()
@@ -313,6 +307,10 @@ mod tests {
                 assert_eq!(bits(arrays.directions()[c]), bits(single.direction.map(|n| n[c])));
             }
             assert_eq!(bits(joints.length_rates(&state, &arrays)), bits(single.length_rates(&stand, &state)));
+            assert_eq!(
+                bits(joints.length_rates_in::<Narrow>(&state, &arrays)),
+                bits(single.length_rates(&stand, &state))
+            );
         }
     }
 }

@@ -44,7 +44,6 @@ use super::legs::per_leg::{Lanes, Narrow, PerLeg, components};
 use super::number::{Dual, Number, Real};
 use super::stand::{LEG_COUNT, Stand};
 use crate::maths;
-use crate::simd::Plain;
 
 /// A stand with its legs' end stops, and the coefficients a right-hand side needs.
 #[derive(Clone, Debug, PartialEq)]
@@ -221,25 +220,10 @@ impl SpecialForm {
 
     /// The joint limits' switching functions `cos thetaB_k - cos thetaMax_B` into
     /// `base[k]` and `cos thetaA_k - cos thetaMax_A` into `platform[k]`, from the legs of a
-    /// state, the six legs side by side in lanes `V` where they are cheaper for it
-    /// ([`Lanes::FOR_CHECKS`]), else in [`Plain`] lanes: the same bits either way.
+    /// state, the six legs side by side in lanes `V` (the checks take [`Lanes::Checks`]): the
+    /// same bits in any.
     #[inline(always)]
     pub fn joint_margins<V: Lanes>(
-        &self,
-        state: &BodyState,
-        legs: &LegKinematics,
-        base: &mut [f64; LEG_COUNT],
-        platform: &mut [f64; LEG_COUNT],
-    ) {
-        if V::FOR_CHECKS {
-            self.joint_margins_in::<V>(state, legs, base, platform)
-        } else {
-            self.joint_margins_in::<Plain>(state, legs, base, platform)
-        }
-    }
-
-    #[inline(always)]
-    fn joint_margins_in<V: Lanes>(
         &self,
         state: &BodyState,
         legs: &LegKinematics,

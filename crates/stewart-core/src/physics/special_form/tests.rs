@@ -6,7 +6,7 @@ use crate::physics::actuators::drives::DriveRate;
 use crate::physics::body::kinematics::rotation_from_angles;
 use crate::physics::legs::end_stops::EndStops;
 use crate::physics::legs::{bodies::LegBodies, friction::Friction, joint_limits::JointLimits};
-use crate::simd::Wide;
+use crate::simd::{Plain, Wide};
 
 /// The states the fast paths are checked in: the neutral pose, and deep in the lower and the
 /// upper stops, each moving and tilted, and each slightly off the constraint manifold (so that
@@ -238,9 +238,7 @@ fn the_joint_margins_are_the_joint_angles_in_every_width() {
             (base.map(f64::to_bits), platform.map(f64::to_bits))
         };
         let plain = margins(&|b, p| form.joint_margins::<Plain>(&state, &legs, b, p));
-        // `joint_margins` takes Plain lanes for Narrow (not cheaper for the checks): the SSE2
-        // form directly, so that every width is compared.
-        assert_eq!(margins(&|b, p| form.joint_margins_in::<Narrow>(&state, &legs, b, p)), plain);
+        assert_eq!(margins(&|b, p| form.joint_margins::<Narrow>(&state, &legs, b, p)), plain);
         if crate::simd::wide_testable() {
             // SAFETY: AVX2 and FMA checked just now.
             assert_eq!(margins(&|b, p| unsafe { wide_joint_margins(&form, &state, &legs, b, p) }), plain);
@@ -268,5 +266,5 @@ unsafe fn wide_joint_margins(
     base: &mut [f64; LEG_COUNT],
     platform: &mut [f64; LEG_COUNT],
 ) {
-    form.joint_margins_in::<Wide>(state, legs, base, platform)
+    form.joint_margins::<Wide>(state, legs, base, platform)
 }
