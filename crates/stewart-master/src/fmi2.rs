@@ -22,8 +22,9 @@ const CO_SIMULATION: c_int = 1;
 const TERMINATED: c_int = 3;
 
 /// The FMU calls the logger as a C-variadic function `(env, instance, status, category,
-/// message, ...)`. It is declared here without the `...`: on x86-64 (System V) the fixed
-/// arguments of a variadic call are passed exactly as in a fixed call, and a message that
+/// message, ...)`. It is declared here without the `...`: on the platforms the master is built
+/// for (x86-64 System V and Windows x64, aarch64 Linux's AAPCS64) the fixed arguments of a
+/// variadic call are passed exactly as in a fixed call, and a message that
 /// carries printf arguments is kept as its format (FMPy's logger does the same). The FMUs of
 /// this repository pass their messages pre-formatted with `%` doubled.
 type Logger = unsafe extern "C" fn(*mut c_void, *const c_char, Status, *const c_char, *const c_char);

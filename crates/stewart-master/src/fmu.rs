@@ -1,6 +1,6 @@
-//! An FMU unpacked once into a temporary folder of its own, its model description read and its
-//! Linux x86-64 binary loaded; instances are made from it as often as needed. The folder is
-//! removed when the `Fmu` is dropped.
+//! An FMU unpacked once into a temporary folder of its own, its model description read and the
+//! binary of the platform the master runs on loaded; instances are made from it as often as
+//! needed. The folder is removed when the `Fmu` is dropped.
 
 use std::io::{Cursor, Read};
 use std::path::{Path, PathBuf};
@@ -50,8 +50,21 @@ pub struct Fmu {
     folder: TempDir,
 }
 
-/// The name of the binary folder of Linux x86-64 in FMI 2.
-const PLATFORM: &str = "linux64";
+/// The FMI 2 binary folder of the platform the master is built for, the binary's extension and
+/// the platform's name in messages. FMI 2 names one folder for 64-bit Linux whatever the
+/// processor, as FMPy and FMI Library read it: an FMU for aarch64 Linux carries its aarch64
+/// binary in `linux64` (the aarch64 wheel's FMI 2 FMUs do; the repository's carry x86-64).
+#[cfg(all(target_os = "linux", target_arch = "x86_64"))]
+const PLATFORM: (&str, &str, &str) = ("linux64", "so", "Linux x86-64");
+#[cfg(all(target_os = "linux", target_arch = "aarch64"))]
+const PLATFORM: (&str, &str, &str) = ("linux64", "so", "Linux aarch64");
+#[cfg(all(windows, target_arch = "x86_64"))]
+const PLATFORM: (&str, &str, &str) = ("win64", "dll", "Windows x64");
+#[cfg(not(any(
+    all(target_os = "linux", any(target_arch = "x86_64", target_arch = "aarch64")),
+    all(windows, target_arch = "x86_64")
+)))]
+compile_error!("stewart-master loads FMU binaries on Linux x86-64 and aarch64 and on Windows x64 only");
 
 impl Fmu {
     pub fn from_path(path: &Path) -> Result<Fmu, String> {
@@ -70,16 +83,14 @@ impl Fmu {
         let xml = std::fs::read_to_string(folder.0.join("modelDescription.xml"))
             .map_err(|e| format!("{label} has no readable modelDescription.xml: {e}"))?;
         let description = ModelDescription::parse(&xml).map_err(|e| format!("{label}: {e}"))?;
-        let binary = folder.0.join("binaries").join(PLATFORM).join(format!("{}.so", description.model_identifier));
+        let (platform, extension, platform_name) = PLATFORM;
+        let file = format!("{}.{extension}", description.model_identifier);
+        let binary = folder.0.join("binaries").join(platform).join(&file);
         if !binary.is_file() {
-            return Err(format!(
-                "{label} has no binary for Linux x86-64 (binaries/{PLATFORM}/{}.so)",
-                description.model_identifier
-            ));
+            return Err(format!("{label} has no binary for {platform_name} (binaries/{platform}/{file})"));
         }
         let library = Arc::new(Library::load(&binary)?);
-        let resources = folder.0.join("resources");
-        let resource_uri = format!("file://{}", percent_encode(&resources.to_string_lossy()));
+        let resource_uri = file_uri(&folder.0.join("resources"));
         Ok(Fmu { description, label: label.to_string(), library, resource_uri, folder })
     }
 
@@ -94,11 +105,20 @@ impl Fmu {
     }
 }
 
-/// A path as a file URI's path (RFC 3986: unreserved characters and `/` stay).
+/// An absolute path as a file URI (RFC 8089): `file:///home/...`, on Windows `file:///C:/...`.
+fn file_uri(path: &Path) -> String {
+    let text = path.to_string_lossy().into_owned();
+    #[cfg(windows)]
+    let text = text.replace('\\', "/");
+    let slash = if text.starts_with('/') { "" } else { "/" };
+    format!("file://{slash}{}", percent_encode(&text))
+}
+
+/// A path as a file URI's path (RFC 3986: unreserved characters, `/` and a drive's `:` stay).
 fn percent_encode(path: &str) -> String {
     let mut out = String::with_capacity(path.len());
     for b in path.bytes() {
-        if b.is_ascii_alphanumeric() || b"/-._~".contains(&b) {
+        if b.is_ascii_alphanumeric() || b"/-._~:".contains(&b) {
             out.push(b as char);
         } else {
             out.push_str(&format!("%{b:02X}"));
