@@ -83,8 +83,11 @@ python_env() {
         fi
         sha256sum tests/requirements.txt > "$stamp"
     fi
-    step "installing the repository's Python package (python/: stewart_fmu, stewart-sweep) into .venv, editable"
-    .venv/bin/python -m pip install --quiet --disable-pip-version-check --no-deps -e python
+    # maturin (tests/requirements.txt) builds the compiled master, stewart_fmu._master, beside the
+    # package's files; without build isolation: the .venv's maturin, nothing fetched.
+    step "installing the repository's Python package (python/: stewart_fmu, stewart-sweep, the compiled master) into .venv, editable (a minute the first time)"
+    PATH="$PWD/.venv/bin:$PATH" .venv/bin/python -m pip install --quiet --disable-pip-version-check --no-deps \
+        --no-build-isolation -e python
 }
 
 # The cross toolchains (Debian 12's packages) for the Windows and aarch64 binaries.
@@ -92,9 +95,9 @@ source "$(dirname "${BASH_SOURCE[0]}")/setup_cross.sh"
 
 # The FMUs: the Rust library in release mode for Linux x86-64, Linux aarch64 and Windows x64,
 # checked and packaged (the first build takes minutes: the standard library is compiled for
-# each foreign target); then the compiled co-simulation master, the Python extension
-# stewart_fmu.master loads (target/release/libstewart_master_py.so) and its command
-# target/release/stewart-master.
+# each foreign target); then the compiled co-simulation master's command
+# target/release/stewart-master (its Python extension, stewart_fmu._master, is built by
+# `pip install -e python` in python_env: maturin, python/pyproject.toml).
 # STEWART_FMU_TARGETS=x86_64-linux (a build-fmu target list) builds those alone, with no
 # cross set-up (the platform tests then fail: they need the other binaries).
 build_fmus() {
@@ -106,8 +109,8 @@ build_fmus() {
         step "building the FMUs for Linux x86-64, Linux aarch64 and Windows x64, then packaging into target/fmu/ (about 5 minutes the first time on 2 cores, seconds after; a line per platform)"
         cargo run --release --bin build-fmu
     fi
-    step "building the compiled co-simulation master (crates/stewart-master, its Python extension; a minute the first time)"
-    cargo build --release -p stewart-master -p stewart-master-py
+    step "building the compiled co-simulation master's command (crates/stewart-master; a minute the first time)"
+    cargo build --release -p stewart-master
 }
 
 # The 3-D viewer: Node packages from the committed lock file, then the static build.

@@ -15,7 +15,7 @@ from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
 
 # Where the FMUs are. Used from its repository (python/stewart_fmu/, an editable install) the
 # package takes them from the repository's build, target/fmu/; installed from a wheel it takes
-# the copies the wheel carries (stewart_fmu/data/fmu/, python/build_wheel.sh). The environment
+# the copies the wheel carries (stewart_fmu/data/fmu/, python/build_wheels.py). The environment
 # variables STEWART_PLATFORM_FMU and STEWART_CONTROLLER_FMU (and stewart-sweep's --fmu,
 # --controller-fmu) point elsewhere.
 PACKAGE = Path(__file__).resolve().parent
@@ -37,7 +37,7 @@ def fmu_file(path, option="--fmu"):
     if IN_REPOSITORY:
         where = "build the FMUs with `cargo run --release --bin build-fmu` (both set-up commands do), or point at them"
     elif path.parent == DATA / "fmu":
-        where = ("this installation of stewart_fmu carries no FMUs (install the wheel python/build_wheel.sh "
+        where = ("this installation of stewart_fmu carries no FMUs (install a wheel `bash python/build_wheels.sh` "
                  "builds, which does), or point at them")
     else:
         where = "point at the FMUs"

@@ -6,50 +6,36 @@ of `stewart_fmu.cosim`, in one process and with the loop in compiled code; only 
 for leaves the loop (a study's metrics, outputs at an interval). `stewart-sweep` runs studies
 with it by default; `stewart-master` is its command line.
 
-The extension module `stewart_fmu._master` comes with the wheel (`python/build_wheel.sh`). In
-the repository, where `pip install -e python` installs the package's Python files only, it is
-the library cargo builds, `target/release/libstewart_master_py.so` (both set-up commands build
-it: `cargo build --release -p stewart-master-py`).
+The extension module `stewart_fmu._master` comes with the wheels (maturin builds it from
+crates/stewart-master-py: `bash python/build_wheels.sh`); in the repository, `pip install -e
+python` (both set-up commands run it) builds it beside the package's files. Where it is missing
+or cannot load, `available()` says why, and `stewart-sweep` runs its studies with the FMPy
+master instead (the same rows, slower).
 
     from stewart_fmu.master import System, closed_loop
     system = System.from_ssp(SYSTEM_SSP)
     out = system.run(10_000, 1e-3, record=["platform.r[3]"], every=10)
 """
 
-import importlib.machinery
-import importlib.util
 import sys
 
 import numpy as np
 
-from .core import CONTROLLER_FMU, IN_REPOSITORY, LEGS, PLATFORM_FMU, ROOT, check_names, check_times, fmu_file
+from .core import CONTROLLER_FMU, IN_REPOSITORY, LEGS, PLATFORM_FMU, check_names, check_times, fmu_file
 from .ssp import SYSTEMS, system_description
-
-REPOSITORY_LIBRARY = ROOT / "target" / "release" / "libstewart_master_py.so"
-BUILD = "cargo build --release -p stewart-master-py"
 
 
 def _load():
     """The extension module, or the reason it is not available."""
     try:
-        from . import _master  # the wheel's copy
+        from . import _master  # the wheel's, or the one `pip install -e python` builds in the repository
         return _master, None
     except ImportError as e:
-        installed_error = e
-    if not IN_REPOSITORY:
-        return None, f"this installation of stewart_fmu has no compiled master ({installed_error})"
-    if not REPOSITORY_LIBRARY.is_file():
-        return None, f"the compiled master is not built ({REPOSITORY_LIBRARY} is missing: {BUILD}; both set-up commands do)"
-    name = f"{__package__}._master"
-    loader = importlib.machinery.ExtensionFileLoader(name, str(REPOSITORY_LIBRARY))
-    spec = importlib.util.spec_from_file_location(name, str(REPOSITORY_LIBRARY), loader=loader)
-    try:
-        module = importlib.util.module_from_spec(spec)
-        loader.exec_module(module)
-    except ImportError as e:
-        return None, f"the compiled master {REPOSITORY_LIBRARY} cannot be loaded ({e}): rebuild it with {BUILD}"
-    sys.modules[name] = module
-    return module, None
+        error = e
+    if IN_REPOSITORY:
+        return None, (f"the compiled master is not built here ({error}): `pip install -e python` builds it (both "
+                      "set-up commands run it)")
+    return None, f"this installation of stewart_fmu has no compiled master that loads here ({error})"
 
 
 _master, UNAVAILABLE = _load()

@@ -286,6 +286,25 @@ def _drop_compiled():
         _safe(_COMPILED.pop(key).close, None)
 
 
+def compiled_point(spec, run, platform_md, variables):
+    """A run as the compiled master's study point: (drive, (steps, step, values, overrides))
+    with values and overrides by qualified name (`stewart_fmu._master.System.study`'s, and one
+    line of `stewart-master study`), or (None, why it cannot run)."""
+    study = spec["study"]
+    closed = study["system"] == "closed-loop"
+    problems = study_schema.check_run(spec, run, variables)
+    commands, mismatch = _commands(run, closed)
+    if problems or mismatch:
+        return None, "; ".join(problems or [mismatch])
+    h = float(run.get("step", study["step"]))
+    n = int(round(float(run.get("stop_time", study["stop_time"])) / h))
+    platform_values, controller_values = _parameters(spec, run, platform_md)
+    values = ([(f"platform.{k}", v) for k, v in platform_values.items()]
+              + [(f"controller.{k}", v) for k, v in controller_values.items()])
+    overrides = [(f"platform.{name}", value, at) for name, value, at in _scenario(run, closed, commands)]
+    return (1 if commands is U else 0), (n, h, values, overrides)
+
+
 def execute_many(spec, runs, fmus):
     """Runs study points with the compiled master, in this process, in one call per coupling;
     returns [(row, seconds)] in the order of `runs`. Never raises: as `execute`."""
@@ -305,20 +324,12 @@ def execute_many(spec, runs, fmus):
         row = {m: math.nan for m in METRICS}
         row.update(status="ok", message="")
         try:
-            problems = study_schema.check_run(spec, run, variables)
-            commands, mismatch = _commands(run, closed)
-            if problems or mismatch:
-                row.update(status="error", message="; ".join(problems or [mismatch]), stable=False)
+            drive, point = compiled_point(spec, run, platform_md, variables)
+            if drive is None:
+                row.update(status="error", message=point, stable=False)
                 out[i] = (row, time.perf_counter() - started)
                 continue
-            h = float(run.get("step", study["step"]))
-            n = int(round(float(run.get("stop_time", study["stop_time"])) / h))
-            platform_values, controller_values = _parameters(spec, run, platform_md)
-            values = ([(f"platform.{k}", v) for k, v in platform_values.items()]
-                      + [(f"controller.{k}", v) for k, v in controller_values.items()])
-            overrides = [(f"platform.{name}", value, at) for name, value, at in _scenario(run, closed, commands)]
-            drive = 1 if commands is U else 0
-            points.setdefault(drive, []).append((i, (n, h, values, overrides)))
+            points.setdefault(drive, []).append((i, point))
             out[i] = row
             prepared[i] = time.perf_counter() - started
         except Exception as e:  # noqa: BLE001 - a failed run is data

@@ -43,7 +43,7 @@ def built_viewer():
         if (packaged / "index.html").is_file():
             return packaged
         raise RuntimeError(f"the viewer page is not in this installation of stewart_fmu ({packaged} is missing): "
-                           "install the wheel python/build_wheel.sh builds, which carries it")
+                           "install a wheel `bash python/build_wheels.sh` builds, which carries it")
     dist = VIEWER / "dist"
     if not (dist / "index.html").exists():
         npm = shutil.which("npm")

@@ -1,5 +1,5 @@
-"""The package outside the repository: `python/build_wheel.sh` builds the wheel (the FMUs and
-the viewer page inside, nothing written into python/), which is installed into a fresh virtual
+"""The package outside the repository: the Linux x86-64 wheel (python/build_wheels.py, built once
+for the session by wheels.py, nothing written into python/) installed into a fresh virtual
 environment in a temporary folder (its dependencies from PyPI, at the versions of
 tests/requirements.txt). From a working directory outside the repository, that environment
 runs the README's tour (its Python blocks, and its design study with `stewart-sweep` on a
@@ -7,12 +7,14 @@ local Dask cluster of two worker processes on 127.0.0.1), with the repository's 
 for bit; a simulation and a closed loop whose numbers equal the repository's (the equilibrium
 holds, the legs track the programme); and `view()`, whose page, served and opened in headless
 Chromium, shows the legs Python computes from its CSV. A missing FMU is an error that names both ways
-to point at one (the environment variable and `--fmu`)."""
+to point at one (the environment variable and `--fmu`). Without its compiled master (as on a
+platform where the extension cannot load) the package runs its studies with the FMPy master,
+says so once, and gives the compiled master's rows; `--master compiled` is then an error that
+says why."""
 
 import hashlib
 import json
 import os
-import re
 import subprocess
 import sys
 import textwrap
@@ -26,6 +28,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+import wheels as W
 from test_readme import check_study, check_tour, run_study, run_tour
 from test_viewer import QuietHandler, browse, expected
 
@@ -70,13 +73,10 @@ def installed(tmp_path_factory):
     virtual environment outside the repository."""
     before = subprocess.run(["git", "status", "--porcelain", "--ignored", "python"], cwd=ROOT, capture_output=True,
                             text=True).stdout
-    build = subprocess.run(["bash", "python/build_wheel.sh"], cwd=ROOT, capture_output=True, text=True,
-                           env=dict(os.environ, PYTHON=sys.executable))
-    assert build.returncode == 0, build.stderr[-3000:]
+    wheel = W.wheels()["x86_64-linux"]
     after = subprocess.run(["git", "status", "--porcelain", "--ignored", "python"], cwd=ROOT, capture_output=True,
                            text=True).stdout
-    assert after == before, f"building the wheel wrote into python/:\n{after}"
-    wheel, = (ROOT / "target" / "wheels").glob("stewart_fmu-*-py3-none-linux_x86_64.whl")
+    assert after == before, f"building the wheels wrote into python/:\n{after}"
     with zipfile.ZipFile(wheel) as z:
         names = set(z.namelist())
         for name in PACKAGED:
@@ -93,9 +93,8 @@ def installed(tmp_path_factory):
     work.mkdir()
     # A venv from the interpreter this one was made from, as a user's `python3 -m venv`.
     subprocess.run([getattr(sys, "_base_executable", "python3"), "-m", "venv", str(venv)], check=True)
-    # tests/requirements.txt's versions as constraints (pip's constraints take no extras).
-    constraints = base / "constraints.txt"
-    constraints.write_text(re.sub(r"\[[^\]]*\]", "", (ROOT / "tests" / "requirements.txt").read_text()))
+    # tests/requirements.txt's versions as constraints.
+    constraints = W.constraints(base)
     pip = subprocess.run([str(venv / "bin" / "python"), "-m", "pip", "install", "--quiet", "--disable-pip-version-check",
                           "-c", str(constraints), str(wheel)], capture_output=True, text=True, cwd=work)
     assert pip.returncode == 0, pip.stderr[-3000:]
@@ -237,3 +236,44 @@ def test_a_missing_fmu_names_both_ways_to_point_at_one(installed):
                             str(ROOT / "target" / "fmu" / "StewartPlatform.fmu")], cwd=work, capture_output=True,
                            text=True, env=env, timeout=300)
     assert check.returncode == 0, check.stderr
+
+
+def test_without_the_compiled_master_studies_run_with_fmpys_master_and_the_same_rows(installed):
+    """The installed extension moved aside, as on a platform where it cannot load: stewart-sweep
+    says once why and that the FMPy master runs the study (on two Dask workers), and its rows
+    are the compiled master's; `--master compiled` is then an error that says why, and
+    `stewart-master` too. Runs last: the extension is put back at its end."""
+    venv, work, _ = installed
+    (work / "fallback.toml").write_text(STUDY)
+    sweep = str(venv / "bin" / "stewart-sweep")
+
+    def run(*args):
+        return subprocess.run([sweep, "fallback.toml", *args], cwd=work, capture_output=True, text=True,
+                              env=clean_env(venv), timeout=600)
+
+    compiled = run("--out", "compiled", "--serial")
+    assert compiled.returncode == 0, compiled.stderr[-3000:]
+    assert "running 6 with the compiled master" in compiled.stdout
+    extension, = (venv / "lib").glob("python3*/site-packages/stewart_fmu/_master.abi3.so")
+    hidden = extension.with_name("moved-aside")
+    extension.rename(hidden)
+    try:
+        fallback = run("--out", "fallback", "--workers", "2")
+        asked = run("--out", "asked", "--master", "compiled")
+        command = subprocess.run([str(venv / "bin" / "stewart-master"), "describe", "any.ssp"], cwd=work,
+                                 capture_output=True, text=True, env=clean_env(venv))
+    finally:
+        hidden.rename(extension)
+    assert fallback.returncode == 0, fallback.stderr[-3000:]
+    notes = [line for line in fallback.stderr.splitlines() if "compiled master" in line]
+    cells, largest = W.differences(W.rows(work / "fallback"), W.rows(work / "compiled"))
+    print(f"without the extension: {notes[0]!r}; {fallback.stdout.splitlines()[0]!r}; rows against the compiled "
+          f"master's: {cells} cells differ, the largest difference {largest}; --master compiled: exit "
+          f"{asked.returncode}: {asked.stderr.strip()!r}")
+    assert len(notes) == 1 and "has no compiled master that loads here" in notes[0]
+    assert notes[0].endswith("running with the FMPy master (--master fmpy; slower, the same rows)")
+    assert "running 6 with the fmpy master" in fallback.stdout
+    assert cells == 0 and largest == 0.0 and len(W.rows(work / "fallback")) == 6
+    assert asked.returncode == 2 and "Traceback" not in asked.stderr
+    assert asked.stderr.startswith("stewart-sweep: --master compiled: this installation of stewart_fmu has no compiled")
+    assert command.returncode == 2 and "stewart-master: this installation of stewart_fmu has no compiled" in command.stderr
