@@ -13,7 +13,7 @@ where the instructions of a step go (the platform's step, kappa, the controller'
 problem, the FMI calls, the master, Python), into benches/results/step_profile.txt.
 
     .venv/bin/python benches/sweep_bench.py             # after cargo run --release --bin build-fmu
-                                                        # and cargo build --release -p stewart-master-py
+                                                        # and pip install -e python (the compiled master)
     .venv/bin/python benches/sweep_bench.py --profile
 """
 
