@@ -50,9 +50,7 @@ stable_error = 0.01
 "controller.G" = [1e5, 2e5]
 """
 
-PACKAGED = ["StewartPlatform.fmu", "StewartController.fmu", "StewartCueing.fmu", "StewartSystem.ssp",
-            "StewartSystemDrives.ssp", "StewartSystemHydraulic.ssp", "StewartMotionSystem.ssp",
-            "fmi3/StewartPlatform.fmu", "fmi3/StewartController.fmu", "fmi3/StewartCueing.fmu"]
+PACKAGED = W.build_wheels.PACKAGED  # the FMUs and SSP files a wheel carries
 
 
 def sha(path):
