@@ -142,6 +142,9 @@ def arm64_env():
     env = {k: v for k, v in os.environ.items()
            if k not in ("PYTHONPATH", "VIRTUAL_ENV") and not k.startswith("STEWART_")}
     env["PATH"] = f"{ARM64_VENV / 'bin'}:{env.get('PATH', '')}"
+    # Every process runs several times slower under qemu: Dask's workers get longer to answer
+    # their scheduler than its default 30 s.
+    env["DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT"] = "120s"
     return env
 
 
