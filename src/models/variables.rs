@@ -84,6 +84,8 @@ pub enum VariableType {
     Integer,
     Boolean,
     Enumeration(&'static str),
+    /// A text (a file name); `fmi2GetString`/`fmi3GetString` and the `Set` functions apply.
+    String,
 }
 
 impl VariableType {
@@ -94,6 +96,10 @@ impl VariableType {
     /// Whether `fmi2GetReal`/`fmi2SetReal` (true) or the Integer functions apply.
     pub fn is_real(self) -> bool {
         self == VariableType::Real
+    }
+    /// Whether the String functions apply.
+    pub fn is_string(self) -> bool {
+        self == VariableType::String
     }
     pub fn is_integer_like(self) -> bool {
         matches!(self, VariableType::Integer | VariableType::Enumeration(_))
@@ -381,6 +387,11 @@ impl VariableGroup {
     /// An Integer parameter with a range instead of a Real one.
     pub const fn integer(self, min: i32, max: i32) -> Self {
         VariableGroup { var_type: VariableType::Integer, unit: None, range: Some((min as f64, max as f64)), ..self }
+    }
+
+    /// A String parameter instead of a Real one.
+    pub const fn string(self) -> Self {
+        VariableGroup { var_type: VariableType::String, unit: None, ..self }
     }
 
     /// A Boolean parameter instead of a Real one.

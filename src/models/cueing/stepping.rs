@@ -1,0 +1,370 @@
+//! A Co-Simulation step of the cueing FMU: the washout's states by RK4 in sub-steps of at most
+//! `solver.maxStep`, the predictive method's solves at `start + k mpc.period` and its motion
+//! under the held jerks, and the perception's lags over each sub-step (the vehicle's inputs
+//! and the command's cues taken linearly between the sub-steps' ends). Nothing allocates.
+
+use std::path::Path;
+
+use super::parameters::{MAX_STEPS_PER_CALL, Method};
+use super::{CueingModel, CueingStates, PerceptionStates, PredictiveState, check_pitch};
+use crate::control::predictive_cueing::motion::{CHANNELS, CommandedMotion};
+use crate::control::predictive_cueing::{GRID_STEPS, SolveOutcome};
+use crate::models::StepError;
+use crate::physics::cueing::jet::Jet;
+use crate::physics::cueing::perception::{Perception, PerceptionSteps};
+use crate::physics::cueing::washout::{STATE_DIM, TiltModes, VehicleMotion, WashoutParameters, WashoutPose, layout};
+
+/// Rate, 1/s, at which the commanded motion follows the classical washout's pose through a
+/// period whose solve failed (a triple pole: the hand-over is continuous in position, velocity
+/// and acceleration, and takes about 0.3 s).
+pub const FALLBACK_RATE: f64 = 20.0;
+
+/// What a step leaves.
+pub struct After {
+    pub washout: CueingStates,
+    pub tilt_modes: TiltModes,
+    pub perception: PerceptionStates,
+    pub predictive: PredictiveState,
+}
+
+/// The vehicle's future from a preview file: rows of `time, f[1..3], omega[1..3]` (s, m/s²,
+/// rad/s), read at initialisation.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Preview {
+    rows: Vec<[f64; 7]>,
+}
+
+impl Preview {
+    /// The rows of `path` (empty: no preview). The columns are found by their header names.
+    pub fn read(path: &str) -> Result<Preview, String> {
+        if path.is_empty() {
+            return Ok(Preview::default());
+        }
+        let text = std::fs::read_to_string(Path::new(path))
+            .map_err(|e| format!("parameter preview.file: cannot read {path:?}: {e}"))?;
+        Self::parse(&text).map_err(|why| format!("parameter preview.file: {path:?}: {why}"))
+    }
+
+    /// The rows of a CSV text with the header `time, f[1], f[2], f[3], omega[1], omega[2],
+    /// omega[3]` (any order, other columns ignored).
+    pub fn parse(text: &str) -> Result<Preview, String> {
+        const NAMES: [&str; 7] = ["time", "f[1]", "f[2]", "f[3]", "omega[1]", "omega[2]", "omega[3]"];
+        let mut lines = text.lines().filter(|l| !l.trim().is_empty());
+        let header: Vec<&str> = lines.next().ok_or("the file is empty")?.split(',').map(str::trim).collect();
+        let mut columns = [0usize; 7];
+        for (c, name) in NAMES.iter().enumerate() {
+            columns[c] = header
+                .iter()
+                .position(|h| h == name)
+                .ok_or_else(|| format!("no column {name:?} (the header must name {})", NAMES.join(", ")))?;
+        }
+        let mut rows = Vec::new();
+        for (n, line) in lines.enumerate() {
+            let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+            let mut row = [0.0; 7];
+            for (c, &at) in columns.iter().enumerate() {
+                let cell = cells.get(at).ok_or_else(|| format!("row {}: too few cells", n + 2))?;
+                row[c] = cell
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|x| x.is_finite())
+                    .ok_or_else(|| format!("row {}: {:?} in column {} is not a finite number", n + 2, cell, NAMES[c]))?;
+            }
+            if let Some(last) = rows.last().map(|r: &[f64; 7]| r[0])
+                && !(row[0] > last)
+            {
+                return Err(format!("row {}: the times must increase ({} after {last})", n + 2, row[0]));
+            }
+            rows.push(row);
+        }
+        if rows.len() < 2 {
+            return Err("at least two rows are needed".into());
+        }
+        Ok(Preview { rows })
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.rows.is_empty()
+    }
+
+    pub fn len(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// The vehicle's motion at `t`, linear between rows, held beyond the ends.
+    pub fn at(&self, t: f64) -> VehicleMotion {
+        let rows = &self.rows;
+        let after = rows.partition_point(|r| r[0] <= t);
+        let row = if after == 0 {
+            rows[0]
+        } else if after == rows.len() {
+            rows[rows.len() - 1]
+        } else {
+            let (a, b) = (&rows[after - 1], &rows[after]);
+            let s = (t - a[0]) / (b[0] - a[0]);
+            std::array::from_fn(|c| a[c] + s * (b[c] - a[c]))
+        };
+        VehicleMotion { f: [row[1], row[2], row[3]], omega: [row[4], row[5], row[6]] }
+    }
+}
+
+/// The predictive method's pose: the commanded motion as jets.
+pub fn predictive_pose(motion: &CommandedMotion) -> WashoutPose {
+    let (p, v, a) = motion.head();
+    let (b, bd, bdd) = motion.attitude();
+    WashoutPose {
+        head: std::array::from_fn(|i| Jet::new(p[i], v[i], a[i])),
+        angles: std::array::from_fn(|i| Jet::new(b[i], bd[i], bdd[i])),
+    }
+}
+
+/// The jerks that bring the commanded motion onto the classical washout's pose `pose`
+/// (position, velocity and acceleration error through a triple pole at [`FALLBACK_RATE`]).
+fn fallback_jerk(motion: &CommandedMotion, pose: &WashoutPose) -> [f64; CHANNELS] {
+    let l = FALLBACK_RATE;
+    std::array::from_fn(|c| {
+        let target = if c < 3 { pose.head[c] } else { pose.angles[c - 3] };
+        l * l * l * (target.v - motion.position[c])
+            + 3.0 * l * l * (target.d1 - motion.rate[c])
+            + 3.0 * l * (target.d2 - motion.acceleration[c])
+    })
+}
+
+/// The washout's states after `dt` by one RK4 step, the inputs following `at` from `tau`,
+/// the tilt's modes held.
+pub(super) fn washout_rk4(
+    w: &WashoutParameters,
+    x: &[f64; STATE_DIM],
+    modes: &TiltModes,
+    tau: f64,
+    dt: f64,
+    at: &impl Fn(f64) -> VehicleMotion,
+) -> [f64; STATE_DIM] {
+    let shifted = |x: &[f64; STATE_DIM], k: &[f64; STATE_DIM], c: f64| std::array::from_fn(|i| x[i] + c * k[i]);
+    let (start, middle, end) = (at(tau), at(tau + 0.5 * dt), at(tau + dt));
+    let k1 = w.rate(x, &start, modes);
+    let k2 = w.rate(&shifted(x, &k1, 0.5 * dt), &middle, modes);
+    let k3 = w.rate(&shifted(x, &k2, 0.5 * dt), &middle, modes);
+    let k4 = w.rate(&shifted(x, &k3, dt), &end, modes);
+    std::array::from_fn(|i| x[i] + dt / 6.0 * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]))
+}
+
+/// Most switches of the tilt's limiter within one sub-step (two angles, each switching twice
+/// at most in any motion the filters can make in a millisecond; more is a chattering target,
+/// then left to the next sub-step).
+const MAX_SWITCHES_PER_SUB_STEP: usize = 8;
+
+/// The washout over a sub-step from `tau` to `tau + dt` with the ideal tilt limiter: RK4 to the
+/// sub-step's end; where a tilt's switching function changed sign, the switch located (to
+/// round-off, along the RK4 step from the sub-step's start: a one-step method's solution is
+/// defined for every step length), the step taken to it, the mode switched, and the rest of
+/// the sub-step taken from there. Following angles are set to their targets at each end.
+pub(super) fn advance_washout(
+    w: &WashoutParameters,
+    x: &[f64; STATE_DIM],
+    modes: &TiltModes,
+    tau: f64,
+    dt: f64,
+    at: &impl Fn(f64) -> VehicleMotion,
+) -> ([f64; STATE_DIM], TiltModes) {
+    let (mut x, mut modes, mut t0, mut left) = (*x, *modes, tau, dt);
+    for _ in 0..MAX_SWITCHES_PER_SUB_STEP {
+        let end = washout_rk4(w, &x, &modes, t0, left, at);
+        let g1 = w.tilt_switching(&end, &at(t0 + left), &modes);
+        let crossed = |i: usize| g1[i] < 0.0;
+        if !crossed(0) && !crossed(1) {
+            let mut end = end;
+            w.follow_targets(&mut end, &at(t0 + left), &modes);
+            return (end, modes);
+        }
+        // The earliest crossing: regula falsi (Illinois) on s in (0, left] for each crossed
+        // function, the state at s being the RK4 step of length s.
+        let mut first: Option<(f64, usize)> = None;
+        for i in (0..2).filter(|&i| crossed(i)) {
+            let g = |s: f64| w.tilt_switching(&washout_rk4(w, &x, &modes, t0, s, at), &at(t0 + s), &modes)[i];
+            let (mut a, mut ga, mut b, mut gb) = (0.0, w.tilt_switching(&x, &at(t0), &modes)[i].max(0.0), left, g1[i]);
+            let mut side = 0;
+            for _ in 0..60 {
+                if b - a <= 1e-12 * dt {
+                    break;
+                }
+                let s = if ga - gb > 0.0 { (a * gb - b * ga) / (gb - ga) } else { 0.5 * (a + b) };
+                let s = if s > a && s < b { s } else { 0.5 * (a + b) };
+                let gs = g(s);
+                if gs < 0.0 {
+                    (b, gb) = (s, gs);
+                    if side == -1 {
+                        ga *= 0.5;
+                    }
+                    side = -1;
+                } else {
+                    (a, ga) = (s, gs);
+                    if side == 1 {
+                        gb *= 0.5;
+                    }
+                    side = 1;
+                }
+            }
+            if first.is_none_or(|(s, _)| b < s) {
+                first = Some((b, i));
+            }
+        }
+        let Some((s, i)) = first else { break };
+        x = washout_rk4(w, &x, &modes, t0, s, at);
+        t0 += s;
+        left -= s;
+        let now = at(t0);
+        w.switch_tilt(&mut x, &now, &mut modes, i);
+        w.follow_targets(&mut x, &now, &modes);
+        if left <= 0.0 {
+            return (x, modes);
+        }
+    }
+    let end = washout_rk4(w, &x, &modes, t0, left, at);
+    (end, modes)
+}
+
+fn rolled_back(t: f64, h: f64, why: String, retry_shorter: bool) -> StepError {
+    StepError { message: format!("step from t = {t:?} to {:?} rolled back: {why}", t + h), retry_shorter }
+}
+
+/// One communication step from `t` to `t + h` (see the module); the model is not changed, the
+/// states after the step are returned (or why there are none).
+pub fn step(m: &mut CueingModel, t: f64, h: f64) -> Result<After, StepError> {
+    let p = &m.parameters;
+    let predictive = p.method == Method::Predictive;
+    let period = p.predictive.period;
+    // The work is bounded: a step that would take more internal steps than the limit is
+    // refused before anything is computed.
+    let finest = if predictive { p.max_step.min(period) } else { p.max_step };
+    let steps = h / finest;
+    if !(steps <= MAX_STEPS_PER_CALL) {
+        return Err(rolled_back(
+            t,
+            h,
+            format!(
+                "a communication step of {h:e} s takes {steps:.3e} internal steps of at most {finest:e} s \
+                 (solver.maxStep{}), more than the limit of {MAX_STEPS_PER_CALL:e} per call; use shorter \
+                 communication steps",
+                if predictive { ", mpc.period" } else { "" }
+            ),
+            true,
+        ));
+    }
+    let (vehicle, rates) = (m.vehicle, m.input_rates);
+    let at = |tau: f64| VehicleMotion {
+        f: std::array::from_fn(|i| vehicle.f[i] + rates[i] * (tau - t)),
+        omega: std::array::from_fn(|i| vehicle.omega[i] + rates[3 + i] * (tau - t)),
+    };
+    let mut x = m.state.to_vector();
+    let mut modes = m.tilt_modes;
+    let (mut felt_vehicle, mut felt_simulator) = (m.perception.vehicle(), m.perception.simulator());
+    let mut predictive_state = m.predictive_state;
+    let mut cue = m.command(&x, &vehicle, &modes, &predictive_state.motion);
+    // Equal sub-steps of at most solver.maxStep; the predictive method's also cut at its solves.
+    let sub_steps = (h / p.max_step).abs().ceil().max(1.0) as u64;
+    let sub_step = h / sub_steps as f64;
+    let end = t + h;
+    let (mut tau, mut i) = (t, 0u64);
+    let mut steps = PerceptionSteps::new(sub_step);
+    let mut steps_length = sub_step;
+    while i < sub_steps {
+        let sub_end = if i + 1 == sub_steps { end } else { t + (i + 1) as f64 * sub_step };
+        let mut next = sub_end;
+        if predictive {
+            let due = m.start_time + predictive_state.solves as f64 * period;
+            // A solve due now (to a nanosecond of the period, against the host's sums of steps).
+            if tau >= due - 1e-9 * period {
+                solve(m, tau, &x, &modes, &felt_vehicle, &felt_simulator, &mut predictive_state, &at);
+            }
+            next = next.min(m.start_time + predictive_state.solves as f64 * period);
+        }
+        let dt = next - tau;
+        if dt > 0.0 {
+            let p = &m.parameters;
+            (x, modes) = advance_washout(&p.washout, &x, &modes, tau, dt, &at);
+            predictive_state.motion.advance(&predictive_state.jerk, dt);
+            let (from, to) = (at(tau), at(next));
+            let after = m.command(&x, &to, &modes, &predictive_state.motion);
+            if dt != steps_length {
+                steps = PerceptionSteps::new(dt);
+                steps_length = dt;
+            }
+            felt_vehicle.advance(&steps, &from.f, &from.omega, &to.f, &to.omega);
+            felt_simulator.advance(&steps, &cue.fsim, &cue.omegasim, &after.fsim, &after.omegasim);
+            cue = after;
+            tau = next;
+        }
+        if next >= sub_end {
+            tau = sub_end;
+            i += 1;
+        }
+    }
+    check(t, h, &x, &predictive_state, m.parameters.method)?;
+    let mut perception = m.perception;
+    perception.set(&felt_vehicle, &felt_simulator);
+    Ok(After { washout: CueingStates::from_vector(&x), tilt_modes: modes, perception, predictive: predictive_state })
+}
+
+/// The predictive method's solve at `tau`, or the classical washout's pose followed through a
+/// period whose solve failed.
+#[allow(clippy::too_many_arguments)]
+fn solve(
+    m: &mut CueingModel,
+    tau: f64,
+    x: &[f64; STATE_DIM],
+    modes: &TiltModes,
+    felt_vehicle: &Perception,
+    felt_simulator: &Perception,
+    state: &mut PredictiveState,
+    at: &impl Fn(f64) -> VehicleMotion,
+) {
+    let Some(solver) = m.predictive.as_deref_mut() else { return };
+    let dt = solver.parameters.grid_step();
+    let now = at(tau);
+    let future: [VehicleMotion; GRID_STEPS + 1] = std::array::from_fn(|j| {
+        if m.preview.is_empty() || j == 0 { now } else { m.preview.at(tau + j as f64 * dt) }
+    });
+    let outcome = solver.solve(&state.motion, &state.plan, &future, felt_vehicle, felt_simulator);
+    state.solves += 1;
+    match outcome {
+        SolveOutcome::Planned { iterations, plan } => {
+            state.plan = plan;
+            state.jerk = plan[0];
+            state.iterations = iterations as i32;
+            state.falling_back = false;
+        }
+        SolveOutcome::Failed { iterations, .. } => {
+            state.plan = [[0.0; CHANNELS]; GRID_STEPS];
+            state.iterations = iterations as i32;
+            state.fallbacks = state.fallbacks.saturating_add(1);
+            state.falling_back = true;
+            state.jerk = fallback_jerk(&state.motion, &m.parameters.washout.pose(x, &now, modes));
+        }
+    }
+}
+
+/// Whether the states after a step can be continued from.
+fn check(t: f64, h: f64, x: &[f64; STATE_DIM], p: &PredictiveState, method: Method) -> Result<(), StepError> {
+    let pitch = match method {
+        Method::Classical => x[layout::ROTATION_ANGLES + 1] + x[layout::TILT_ANGLES + 1],
+        Method::Predictive => p.motion.position[4],
+    };
+    check_pitch(pitch).map_err(|why| rolled_back(t, h, why, false))?;
+    if let Some(i) = x.iter().position(|v| !v.is_finite()) {
+        return Err(rolled_back(
+            t,
+            h,
+            format!(
+                "state {} of the washout is not finite (check the filters' parameters and the inputs)",
+                i + 1
+            ),
+            false,
+        ));
+    }
+    if !p.motion.is_finite() {
+        return Err(rolled_back(t, h, "the predictive method's command is not finite".into(), false));
+    }
+    Ok(())
+}
+
