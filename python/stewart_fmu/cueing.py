@@ -12,6 +12,14 @@ from . import vehicle
 from .core import CONTROLLER_FMU, CUEING_FMU, LEGS, PLATFORM_FMU, Component, check_times, fmu_file
 from .ssp import MOTION_SYSTEM_SSP, bindings, connections, system_description
 
+#: SPEC 12's thresholds of perception (Reid and Nahon 1985): specific force per cabin axis
+#: (m/s2) and angular velocity per axis (rad/s; 3.0, 3.6 and 2.6 deg/s).
+THRESHOLD_F = (0.17, 0.17, 0.28)
+THRESHOLD_OMEGA = tuple(math.radians(d) for d in (3.0, 3.6, 2.6))
+#: The perceived cues the cueing FMU outputs (SPEC 12): the vehicle's, then the simulator's.
+PERCEIVED = [f"perceived.{n}[{k}]" for n in ("f", "omega") for k in (1, 2, 3)]
+PERCEIVED_SIM = [f"perceived.{n}[{k}]" for n in ("fsim", "omegasim") for k in (1, 2, 3)]
+AXES = ("x", "y", "z", "roll", "pitch", "yaw")
 F = [f"f[{k}]" for k in (1, 2, 3)]
 OMEGA = [f"omega[{k}]" for k in (1, 2, 3)]
 FSIM = [f"fsim[{k}]" for k in (1, 2, 3)]
@@ -38,18 +46,19 @@ OMCT_TESTS = {
 REST = {"f[1]": 0.0, "f[2]": 0.0, "f[3]": vehicle.G, "omega[1]": 0.0, "omega[2]": 0.0, "omega[3]": 0.0}
 
 
-def run(manoeuvre, h=1e-3, parameters=None, record=POSE + FSIM + OMEGASIM + ["workspace.usage", "workspace.scale"],
-        fmu=CUEING_FMU,
-        first_order=False):
+def run(manoeuvre, h=1e-3, parameters=None,
+        record=POSE + FSIM + OMEGASIM + PERCEIVED + PERCEIVED_SIM + ["workspace.usage", "workspace.scale"],
+        fmu=CUEING_FMU, first_order=False, integers=None):
     """The cueing FMU alone on a manoeuvre (`stewart_fmu.vehicle`'s columns: time, f[1..3],
     omega[1..3]; linearly interpolated to the communication points) to the manoeuvre's end,
     the inputs held over each step of `h`, or with `first_order` following their chord to the
-    next point (fmi2SetRealInputDerivatives). Returns a dict of arrays: `time`, the vehicle's
-    `f[k]`, `omega[k]` as set, and `record` at the same instants (the outputs at a
+    next point (fmi2SetRealInputDerivatives). `integers`: Integer parameters by name (for
+    example {"cueing.method": 1}, predictive cueing). Returns a dict of arrays: `time`, the
+    vehicle's `f[k]`, `omega[k]` as set, and `record` at the same instants (the outputs at a
     communication point see the inputs set there)."""
     t_end = float(manoeuvre["time"][-1])
     check_times(t_end, h)
-    cue = Component(fmu, "cueing", parameters)
+    cue = Component(fmu, "cueing", parameters, integers)
     inputs = [cue.vr[n] for n in F + OMEGA]
     try:
         rows = []
@@ -69,6 +78,43 @@ def run(manoeuvre, h=1e-3, parameters=None, record=POSE + FSIM + OMEGASIM + ["wo
     rows = np.array(rows)
     names = ["time"] + F + OMEGA + list(record)
     return {n: rows[:, j] for j, n in enumerate(names)}
+
+
+def measures(result):
+    """SPEC 12's measures of a run of the cueing FMU (a dict of arrays with the outputs
+    `perceived.*` and `workspace.usage`, as `run` and `motion_system` return): for each cabin
+    axis the rms of the perceived error (perceived vehicle minus perceived simulator; m/s2 or
+    rad/s) and Pearson's correlation of the two perceived signals, and the share of the time
+    with a false cue (the simulator's perceived cue beyond its threshold while the vehicle's is
+    below its threshold or of the other sign; the vertical force as its deviation from g); and
+    in all: `perceived_error`, the rms of the horizontal (x and y) perceived specific-force
+    error (m/s2); `correlation`, the mean correlation over the axes on which the vehicle's cue
+    is perceived (beyond its threshold at some time); `false_cues`, the share of the time with
+    a false cue on some axis; `max_usage`, the largest workspace usage. Returns a dict."""
+    g = float(np.median(result["perceived.f[3]"][:1])) if len(result["perceived.f[3]"]) else 9.81
+    rest = np.array([0.0, 0.0, g, 0.0, 0.0, 0.0])
+    thresholds = np.array(THRESHOLD_F + THRESHOLD_OMEGA)
+    vehicle = np.column_stack([result[n] for n in PERCEIVED]) - rest
+    simulator = np.column_stack([result[n] for n in PERCEIVED_SIM]) - rest
+    error = vehicle - simulator
+    out = {}
+    felt_axes, false_any = [], np.zeros(len(error), dtype=bool)
+    for k, axis in enumerate(AXES):
+        v, s = vehicle[:, k], simulator[:, k]
+        out[f"rms_{axis}"] = float(np.sqrt(np.mean(error[:, k] ** 2)))
+        correlated = np.std(v) > 1e-12 and np.std(s) > 1e-12
+        out[f"correlation_{axis}"] = float(np.corrcoef(v, s)[0, 1]) if correlated else float("nan")
+        if np.max(np.abs(v)) > thresholds[k]:
+            felt_axes.append(out[f"correlation_{axis}"])
+        false = (np.abs(s) > thresholds[k]) & ((np.abs(v) < thresholds[k]) | (np.sign(v) != np.sign(s)))
+        out[f"false_cues_{axis}"] = float(np.mean(false))
+        false_any |= false
+    out["perceived_error"] = float(np.sqrt(np.mean(error[:, 0] ** 2 + error[:, 1] ** 2)))
+    out["correlation"] = float(np.nanmean(felt_axes)) if felt_axes else float("nan")
+    out["false_cues"] = float(np.mean(false_any))
+    if "workspace.usage" in result:
+        out["max_usage"] = float(np.max(result["workspace.usage"]))
+    return out
 
 
 def motion_system(manoeuvre, h=1e-3, stand=None, cueing=None, controller=None, platform=None,

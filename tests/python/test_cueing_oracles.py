@@ -460,11 +460,12 @@ def test_the_classical_washout_follows_the_oracle_in_co_simulation(name, runs):
 def test_the_classical_washout_follows_the_oracle_in_model_exchange(name, runs):
     """The same manoeuvres through the Model Exchange interface (a Python master on solve_ivp's
     DOP853 at rtol 1e-10, the inputs interpolated at every right-hand-side time): the pose
-    command, fsim and omegasim equal the oracle's within WASHOUT_TOLERANCE; the FMU's two event
-    indicators fire once at each of the oracle's switches of the tilt limiter, within 1e-9 s."""
+    command, fsim and omegasim equal the oracle's within WASHOUT_TOLERANCE; the FMU's four event
+    indicators (the limiter's modes, the targets' clips) fire once at each of the oracle's
+    switches of the tilt limiter and of the clips, within 1e-9 s."""
     oracle, me = runs[name]["oracle"], runs[name]["me"]
     worst = compare(name, me, oracle, f"Model Exchange (DOP853, rtol 1e-10), {len(me['event_times'])} events")
-    switches = limiter_switch_times(oracle)
+    switches = limiter_switch_times(oracle, clips=True)
     assert len(me["event_times"]) == len(switches), (me["event_times"], switches)
     offset = float(np.max(np.abs(me["event_times"] - switches)))
     print(f"{name}: the events at {', '.join(f'{x:.6f}' for x in me['event_times'])} s, "
@@ -524,27 +525,20 @@ def simulator_cues_check(t, run, jumps, kinks):
     return np.max(np.abs(got - expected), axis=0), bound
 
 
-CS_JUMP_REASON = ("StewartCueing CS: perceived.omegasim misplaces omegasim's jump at the tilt limiter's "
-                  "switches within the internal step (3.8e-3 rad/s after a brake's switch at solver.maxStep "
-                  "1 ms, 4.5e-4 at 0.1 ms; Model Exchange 6e-10); see the test's docstring")
-
 
 @pytest.mark.parametrize("interface, cue", [
     ("cs", "fsim"),
-    pytest.param("cs", "omegasim", marks=pytest.mark.xfail(strict=True, reason=CS_JUMP_REASON)),
+    ("cs", "omegasim"),
     ("me", "fsim"),
     ("me", "omegasim"),
 ])
 @pytest.mark.parametrize("name", list(MANOEUVRES))
 def test_perceived_simulator_cues_are_spec_12s_filters_on_fsim_and_omegasim(name, interface, cue, runs):
     """perceived.fsim (perceived.omegasim) equal SPEC §12's otolith (canal) filters fed with the
-    FMU's own fsim (omegasim) series within the bound of `simulator_cues_check`. In
-    Co-Simulation perceived.omegasim does not: right after each switch of the tilt limiter,
-    where omegasim jumps by the change of the tilt rate (up to 2 tilt.rateLimit), it differs by
-    a few per cent of the jump, decaying with tau_2 = 5 ms (brake: 3.8e-3 rad/s at the default
-    solver.maxStep of 1 ms, 4.5e-4 at 0.1 ms, first order in the step; against SCC applied to
-    the oracle's exact omegasim with the jumps at the oracle's switch times too); the Model
-    Exchange interface, its switches located as events, agrees to 6e-10."""
+    FMU's own fsim (omegasim) series within the bound of `simulator_cues_check`, also right
+    after each switch of the tilt limiter, where omegasim jumps by the change of the tilt rate
+    (up to 2 tilt.rateLimit): Co-Simulation ends a sub-step of the perception at each switch
+    (an earlier build that did not was off by 3.8e-3 rad/s after a braking's switch)."""
     run = runs[name][interface]
     columns = slice(0, 3) if cue == "fsim" else slice(3, 6)
     error, bound = simulator_cues_check(run["time"], run, limiter_switch_times(runs[name]["oracle"], clips=True),

@@ -17,7 +17,7 @@
 //!    direct problem, the washout's filters), each law written once over the number type
 //!    (`f64`, dual numbers, six legs side by side).
 //! 2. [`integration`]: generic ODE integrators (Dormand-Prince 5(4), RK4); [`optimisation`]:
-//!    dense quadratic programmes (Clarabel, on the crate's own elementary functions).
+//!    small dense quadratic programmes (an interior-point method).
 //! 3. [`simulation`]: a stand in motion (integration + constraint projection + roll-back, the
 //!    choice of vector registers).
 //! 4. [`control`]: the paper's programme-following feedback law (pure).

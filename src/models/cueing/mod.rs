@@ -19,7 +19,9 @@ use super::{Capabilities, DefaultExperiment, FmuModel, Initialised, ModelInfo, S
 use crate::control::predictive_cueing::motion::{CHANNELS, CommandedMotion};
 use crate::control::predictive_cueing::{GRID_STEPS, PredictiveCueing};
 use crate::physics::cueing::perception::Perception;
-use crate::physics::cueing::washout::{STATE_DIM, TiltMode, TiltModes, VehicleMotion, WashoutPose, layout};
+use crate::physics::cueing::washout::{
+    STATE_DIM, TILT_MODE_SWITCHES, TiltMode, TiltModes, VehicleMotion, WashoutPose, layout,
+};
 pub use outputs::{Command, CueingOutputs};
 pub use parameters::{CueingParameters, Method};
 pub use stepping::Preview;
@@ -41,11 +43,12 @@ pub static INFO: ModelInfo = ModelInfo {
     states: variables::STATES,
     // Co-Simulation takes the inputs' first derivatives (a first-order hold: a sampled
     // sinusoid drives the filters without the staircase of a held input).
-    // Model Exchange locates the tilt limiter's switches as events (two indicators).
+    // Model Exchange locates the tilt limiter's switches as events: the modes' and the
+    // targets' clips (four indicators).
     capabilities: Capabilities {
         model_exchange: true,
         can_interpolate_inputs: true,
-        event_indicators: 2,
+        event_indicators: 4,
         ..Capabilities::NONE
     },
 };
@@ -343,7 +346,7 @@ impl FmuModel for CueingModel {
             Some(Binding::Cached { .. }) => self.output_value(var),
             Some(Binding::Derivative) => INFO.derivative_state_index(var).map(|i| self.rate()[i]),
             Some(Binding::Computed) if var.group == variables::group::EVENT_INDICATORS => {
-                let mut z = [0.0; 2];
+                let mut z = [0.0; 4];
                 self.event_indicators(&mut z);
                 z.get(var.index).copied()
             }
@@ -509,7 +512,8 @@ impl FmuModel for CueingModel {
         dx.copy_from_slice(&rate[..dx.len()]);
     }
 
-    /// The tilt limiter's switching functions (the roll's, the pitch's).
+    /// The tilt limiter's switching functions: the roll's and the pitch's modes, then their
+    /// targets' clips.
     fn event_indicators(&mut self, z: &mut [f64]) {
         let g = self.parameters.washout.tilt_switching(&self.state.to_vector(), &self.vehicle, &self.tilt_modes);
         for (slot, value) in z.iter_mut().zip(g) {
@@ -523,7 +527,7 @@ impl FmuModel for CueingModel {
         let w = self.parameters.washout;
         let mut x = self.state.to_vector();
         let g = w.tilt_switching(&x, &self.vehicle, &self.tilt_modes);
-        for i in 0..2 {
+        for i in 0..TILT_MODE_SWITCHES {
             if g[i] <= 0.0 {
                 let before = self.tilt_modes[i];
                 w.switch_tilt(&mut x, &self.vehicle, &mut self.tilt_modes, i);

@@ -140,6 +140,7 @@ impl CueingParameters {
     pub fn predictive(&self) -> PredictiveParameters {
         PredictiveParameters {
             tilt_rate_limit: self.washout.tilt_rate_limit,
+            tilt_max: self.washout.tilt_max,
             max_iterations: self.iterations.0,
             ..self.predictive
         }

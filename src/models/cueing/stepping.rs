@@ -12,7 +12,9 @@ use crate::control::predictive_cueing::{GRID_STEPS, SolveOutcome};
 use crate::models::StepError;
 use crate::physics::cueing::jet::Jet;
 use crate::physics::cueing::perception::{Perception, PerceptionSteps};
-use crate::physics::cueing::washout::{STATE_DIM, TiltModes, VehicleMotion, WashoutParameters, WashoutPose, layout};
+use crate::physics::cueing::washout::{
+    STATE_DIM, TILT_MODE_SWITCHES, TiltModes, VehicleMotion, WashoutParameters, WashoutPose, layout,
+};
 
 /// Rate, 1/s, at which the commanded motion follows the classical washout's pose through a
 /// period whose solve failed (a triple pole: the hand-over is continuous in position, velocity
@@ -151,77 +153,95 @@ pub(super) fn washout_rk4(
 
 /// Most switches of the tilt's limiter within one sub-step (two angles, each switching twice
 /// at most in any motion the filters can make in a millisecond; more is a chattering target,
-/// then left to the next sub-step).
+/// then stepped across).
 const MAX_SWITCHES_PER_SUB_STEP: usize = 8;
 
-/// The washout over a sub-step from `tau` to `tau + dt` with the ideal tilt limiter: RK4 to the
-/// sub-step's end; where a tilt's switching function changed sign, the switch located (to
-/// round-off, along the RK4 step from the sub-step's start: a one-step method's solution is
-/// defined for every step length), the step taken to it, the mode switched, and the rest of
-/// the sub-step taken from there. Following angles are set to their targets at each end.
+/// The washout over a piece of a sub-step with the ideal tilt limiter.
+pub(super) struct Advance {
+    /// The states and modes where the piece ended.
+    pub x: [f64; STATE_DIM],
+    pub modes: TiltModes,
+    /// Where it ended: the piece's end, or the first switch of a tilt's mode before it.
+    pub reached: f64,
+    /// At a switch (a mode's or a target's clip): the states and modes just before it (the
+    /// cues jump there).
+    pub before: Option<([f64; STATE_DIM], TiltModes)>,
+}
+
+/// The washout from `tau` towards `until` with the ideal tilt limiter: RK4 to the end;
+/// where a tilt's switching function changed sign, the switch located (to round-off, along
+/// the RK4 step from `tau`: a one-step method's solution is defined for every step length)
+/// and the step taken only to it, the mode switched there (`locate` false: stepped across,
+/// the modes held). Following angles are set to their targets where the piece ends.
 pub(super) fn advance_washout(
     w: &WashoutParameters,
     x: &[f64; STATE_DIM],
     modes: &TiltModes,
     tau: f64,
-    dt: f64,
+    until: f64,
     at: &impl Fn(f64) -> VehicleMotion,
-) -> ([f64; STATE_DIM], TiltModes) {
-    let (mut x, mut modes, mut t0, mut left) = (*x, *modes, tau, dt);
-    for _ in 0..MAX_SWITCHES_PER_SUB_STEP {
-        let end = washout_rk4(w, &x, &modes, t0, left, at);
-        let g1 = w.tilt_switching(&end, &at(t0 + left), &modes);
-        let crossed = |i: usize| g1[i] < 0.0;
-        if !crossed(0) && !crossed(1) {
-            let mut end = end;
-            w.follow_targets(&mut end, &at(t0 + left), &modes);
-            return (end, modes);
-        }
-        // The earliest crossing: regula falsi (Illinois) on s in (0, left] for each crossed
-        // function, the state at s being the RK4 step of length s.
-        let mut first: Option<(f64, usize)> = None;
-        for i in (0..2).filter(|&i| crossed(i)) {
-            let g = |s: f64| w.tilt_switching(&washout_rk4(w, &x, &modes, t0, s, at), &at(t0 + s), &modes)[i];
-            let (mut a, mut ga, mut b, mut gb) = (0.0, w.tilt_switching(&x, &at(t0), &modes)[i].max(0.0), left, g1[i]);
-            let mut side = 0;
-            for _ in 0..60 {
-                if b - a <= 1e-12 * dt {
-                    break;
-                }
-                let s = if ga - gb > 0.0 { (a * gb - b * ga) / (gb - ga) } else { 0.5 * (a + b) };
-                let s = if s > a && s < b { s } else { 0.5 * (a + b) };
-                let gs = g(s);
-                if gs < 0.0 {
-                    (b, gb) = (s, gs);
-                    if side == -1 {
-                        ga *= 0.5;
-                    }
-                    side = -1;
-                } else {
-                    (a, ga) = (s, gs);
-                    if side == 1 {
-                        gb *= 0.5;
-                    }
-                    side = 1;
-                }
+    locate: bool,
+) -> Advance {
+    let dt = until - tau;
+    let end = washout_rk4(w, x, modes, tau, dt, at);
+    let g0 = w.tilt_switching(x, &at(tau), modes);
+    let g1 = w.tilt_switching(&end, &at(until), modes);
+    // A mode's function crosses below zero; a clip's either way.
+    let crossed = |i: usize, g: f64, start: f64| {
+        if i < TILT_MODE_SWITCHES { g < 0.0 } else { (g < 0.0) != (start < 0.0) }
+    };
+    if !locate || !(0..4).any(|i| crossed(i, g1[i], g0[i])) {
+        let mut end = end;
+        w.follow_targets(&mut end, &at(until), modes);
+        return Advance { x: end, modes: *modes, reached: until, before: None };
+    }
+    // The earliest crossing: regula falsi (Illinois) on s in (0, dt] for each crossed
+    // function, the state at s being the RK4 step of length s; `a` the last length on the
+    // start's side, `b` the first beyond.
+    let mut first: Option<(f64, f64, usize)> = None;
+    for i in (0..4).filter(|&i| crossed(i, g1[i], g0[i])) {
+        let g = |s: f64| w.tilt_switching(&washout_rk4(w, x, modes, tau, s, at), &at(tau + s), modes)[i];
+        let side = |v: f64| crossed(i, v, g0[i]);
+        let (mut a, mut ga, mut b, mut gb) = (0.0, g0[i], dt, g1[i]);
+        let mut last = 0;
+        for _ in 0..100 {
+            if b - a <= 1e-13 * dt {
+                break;
             }
-            if first.is_none_or(|(s, _)| b < s) {
-                first = Some((b, i));
+            let s = if ga != gb { (a * gb - b * ga) / (gb - ga) } else { 0.5 * (a + b) };
+            let s = if s > a && s < b { s } else { 0.5 * (a + b) };
+            let gs = g(s);
+            if side(gs) {
+                (b, gb) = (s, gs);
+                if last == -1 {
+                    ga *= 0.5;
+                }
+                last = -1;
+            } else {
+                (a, ga) = (s, gs);
+                if last == 1 {
+                    gb *= 0.5;
+                }
+                last = 1;
             }
         }
-        let Some((s, i)) = first else { break };
-        x = washout_rk4(w, &x, &modes, t0, s, at);
-        t0 += s;
-        left -= s;
-        let now = at(t0);
-        w.switch_tilt(&mut x, &now, &mut modes, i);
-        w.follow_targets(&mut x, &now, &modes);
-        if left <= 0.0 {
-            return (x, modes);
+        if first.is_none_or(|(_, s, _)| b < s) {
+            first = Some((a, b, i));
         }
     }
-    let end = washout_rk4(w, &x, &modes, t0, left, at);
-    (end, modes)
+    let Some((a, b, i)) = first else {
+        return Advance { x: end, modes: *modes, reached: until, before: None };
+    };
+    let mut before = washout_rk4(w, x, modes, tau, a, at);
+    w.follow_targets(&mut before, &at(tau + a), modes);
+    let mut after = washout_rk4(w, x, modes, tau, b, at);
+    let mut switched = *modes;
+    let now = at(tau + b);
+    if i < TILT_MODE_SWITCHES {
+        w.switch_tilt(&mut after, &now, &mut switched, i);
+    }
+    w.follow_targets(&mut after, &now, &switched);
+    Advance { x: after, modes: switched, reached: tau + b, before: Some((before, *modes)) }
 }
 
 fn rolled_back(t: f64, h: f64, why: String, retry_shorter: bool) -> StepError {
@@ -268,6 +288,7 @@ pub fn step(m: &mut CueingModel, t: f64, h: f64) -> Result<After, StepError> {
     let (mut tau, mut i) = (t, 0u64);
     let mut steps = PerceptionSteps::new(sub_step);
     let mut steps_length = sub_step;
+    let mut switches = 0;
     while i < sub_steps {
         let sub_end = if i + 1 == sub_steps { end } else { t + (i + 1) as f64 * sub_step };
         let mut next = sub_end;
@@ -279,25 +300,35 @@ pub fn step(m: &mut CueingModel, t: f64, h: f64) -> Result<After, StepError> {
             }
             next = next.min(m.start_time + predictive_state.solves as f64 * period);
         }
-        let dt = next - tau;
-        if dt > 0.0 {
+        if next > tau {
             let p = &m.parameters;
-            (x, modes) = advance_washout(&p.washout, &x, &modes, tau, dt, &at);
+            let piece =
+                advance_washout(&p.washout, &x, &modes, tau, next, &at, switches < MAX_SWITCHES_PER_SUB_STEP);
+            let dt = piece.reached - tau;
             predictive_state.motion.advance(&predictive_state.jerk, dt);
-            let (from, to) = (at(tau), at(next));
-            let after = m.command(&x, &to, &modes, &predictive_state.motion);
+            let (from, to) = (at(tau), at(piece.reached));
+            // The cues at the piece's end, before a switch there (they jump at it).
+            let (left_x, left_modes) = piece.before.unwrap_or((piece.x, piece.modes));
+            let left = m.command(&left_x, &to, &left_modes, &predictive_state.motion);
             if dt != steps_length {
                 steps = PerceptionSteps::new(dt);
                 steps_length = dt;
             }
             felt_vehicle.advance(&steps, &from.f, &from.omega, &to.f, &to.omega);
-            felt_simulator.advance(&steps, &cue.fsim, &cue.omegasim, &after.fsim, &after.omegasim);
-            cue = after;
-            tau = next;
+            felt_simulator.advance(&steps, &cue.fsim, &cue.omegasim, &left.fsim, &left.omegasim);
+            cue = match piece.before {
+                Some(_) => {
+                    switches += 1;
+                    m.command(&piece.x, &to, &piece.modes, &predictive_state.motion)
+                }
+                None => left,
+            };
+            (x, modes, tau) = (piece.x, piece.modes, piece.reached);
         }
-        if next >= sub_end {
+        if tau >= sub_end {
             tau = sub_end;
             i += 1;
+            switches = 0;
         }
     }
     check(t, h, &x, &predictive_state, m.parameters.method)?;

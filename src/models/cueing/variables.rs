@@ -373,10 +373,11 @@ declare_variables! {
         )
         .derivative("perception.simulator.canal", "perception.simulator.canal", 1, SIMULATOR_LAG_RATES); derivative,
         EVENT_INDICATORS => V::local(
-            "eventIndicators", &[2], 300, Some("1"),
+            "eventIndicators", &[4], 300, Some("1"),
             "Event indicators (FMI 3 Model Exchange): the tilt limiter's switching functions of the roll and the pitch \
-             (following: tilt.rateLimit - |target rate|, rad/s; slewing: the angle left to the target, rad); a sign \
-             change is a switch of the ideal rate limiter",
+             (following: tilt.rateLimit - |target rate|, rad/s; slewing: the angle left to the target, rad), whose \
+             crossing below zero is a switch of the ideal rate limiter; then sin(tilt.max) - |argument| of the roll's \
+             and the pitch's target's arcsine, whose sign change is where the target's clip starts or stops",
             KNOWNS,
         )
         .fmi3_only(); computed,

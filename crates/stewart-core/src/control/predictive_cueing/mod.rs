@@ -7,7 +7,7 @@
 //!
 //! The problem is condensed onto the jerks (one per channel and input block, [`BLOCKS`]),
 //! linearised about the previous plan (its cues and legs, [`linearisation`]) and built in
-//! [`problem`]; a dense QP ([`crate::optimisation::qp`], Clarabel) solves it. Pure: the FMU
+//! [`problem`]; a dense interior-point method ([`crate::optimisation::dense`]) solves it. Pure: the FMU
 //! (`stewart_fmu::models::cueing`) holds the state, reads the preview file, and hands a
 //! failed solve to the classical washout.
 
@@ -17,7 +17,7 @@ pub mod problem;
 
 use nalgebra::Vector3;
 
-use crate::optimisation::qp::{DenseQp, QpOutcome, QpSettings};
+use crate::optimisation::dense::{DenseQp, QpOutcome, QpSettings};
 use crate::physics::cueing::limiter::Workspace;
 use crate::physics::cueing::perception::Perception;
 use crate::physics::cueing::washout::VehicleMotion;
@@ -34,8 +34,8 @@ pub const CONSTRAINED: [usize; 4] = [1, 3, 7, 20];
 /// Unknowns of the QP: a jerk per channel and block.
 pub const UNKNOWNS: usize = CHANNELS * BLOCKS.len();
 /// Inequalities per constrained point: each leg's length and speed (upper and lower), the
-/// roll and pitch rates (upper and lower).
-pub const ROWS_PER_POINT: usize = 2 * 6 + 2 * 6 + 2 * 2;
+/// roll and pitch rates and angles (upper and lower).
+pub const ROWS_PER_POINT: usize = 2 * 6 + 2 * 6 + 2 * 2 + 2 * 2;
 /// Inequalities of the QP.
 pub const INEQUALITIES: usize = ROWS_PER_POINT * CONSTRAINED.len();
 /// Share of each leg's stroke (from its neutral length to `lmin + margin` or `lmax - margin`)
@@ -66,6 +66,8 @@ pub struct PredictiveParameters {
     /// `tilt.rateLimit`, rad/s: the simulator's roll and pitch rates may exceed the vehicle's
     /// by this much at most.
     pub tilt_rate_limit: f64,
+    /// `tilt.max`, rad: the largest roll and pitch.
+    pub tilt_max: f64,
     /// `mpc.maxIterations`: a solve that needs more fails.
     pub max_iterations: u32,
 }
@@ -74,17 +76,18 @@ pub struct PredictiveParameters {
 pub const DEFAULT_PREDICTIVE: PredictiveParameters = PredictiveParameters {
     period: 0.01,
     horizon: 2.0,
-    trust: 0.5,
-    weight_f: [1.0, 1.0, 1.0],
+    trust: 0.6,
+    weight_f: [1.0, 1.0, 4.0],
     weight_omega: [1.0, 1.0, 1.0],
-    weight_neutral: 1.0,
+    weight_neutral: 10.0,
     weight_input: 1e-3,
     leg_speed: 0.5,
     tilt_rate_limit: 3.0 * std::f64::consts::PI / 180.0,
+    tilt_max: 10.0 * std::f64::consts::PI / 180.0,
     max_iterations: 30,
 };
 
-/// Clarabel's tolerances for the cueing's QPs.
+/// The QP solver's relative tolerance (residuals and complementarity).
 pub const QP_TOLERANCE: f64 = 1e-8;
 
 impl PredictiveParameters {

@@ -29,6 +29,16 @@ use crate::physics::stand::LEG_COUNT;
 
 /// The cues: `fsim` (3), then `omegasim` (3).
 const CUES: usize = 6;
+/// Ratio of consecutive grid steps: the first is about 36 ms at the default 2 s horizon, the
+/// last 0.24 s (a bump's heave is resolved ahead, the far future only sketched).
+pub const GRID_GROWTH: f64 = 1.1;
+/// The return to neutral weighs the head's and the yaw's rates per this time, s, squared: a
+/// drift of 0.1 m/s costs as a displacement of 0.1 m.
+pub const NEUTRAL_TIME: f64 = 1.0;
+/// The return to neutral at the horizon's end weighs this many seconds of it: a plan that
+/// ends far from neutral, or moving, costs; a sustained force is then the tilt's, as in the
+/// classical washout's split.
+pub const TERMINAL_WEIGHT: f64 = 10.0;
 /// A row over the unknowns.
 type Row = [f64; UNKNOWNS];
 
@@ -55,8 +65,6 @@ pub struct Problem {
     neutral_legs: [f64; LEG_COUNT],
     otolith_steps: [[LagStep; 2]; GRID_STEPS],
     canal_steps: [[LagStep; 3]; GRID_STEPS],
-    /// Tuning knobs under study (velocity and tilt-angle weights of the return to neutral).
-    knobs: Knobs,
     /// `H`, row-major, `g`, `A`, row-major, `b` of `min du^T H du / 2 + g^T du, A du <= b`, in
     /// the scaled unknowns.
     pub hessian: [f64; UNKNOWNS * UNKNOWNS],
@@ -71,47 +79,10 @@ pub struct Problem {
     lag_rows: [[Row; 3]; CUES],
 }
 
-/// Tuning knobs (read from `STEWART_MPC_TUNE` while the defaults are chosen).
-#[derive(Clone, Copy, Debug)]
-pub struct Knobs {
-    pub growth: f64,
-    pub velocity: f64,
-    pub tilt: f64,
-    pub terminal: f64,
-    pub yaw: f64,
-}
-
-impl Knobs {
-    pub fn read() -> Knobs {
-        let mut k = Knobs { growth: 1.0, velocity: 0.0, tilt: 0.0, terminal: 0.0, yaw: 1.0 };
-        if let Ok(text) = std::env::var("STEWART_MPC_TUNE") {
-            for part in text.split(',') {
-                let mut kv = part.split('=');
-                if let (Some(key), Some(Ok(v))) = (kv.next(), kv.next().map(str::parse::<f64>)) {
-                    match key {
-                        "growth" => k.growth = v,
-                        "velocity" => k.velocity = v,
-                        "tilt" => k.tilt = v,
-                        "terminal" => k.terminal = v,
-                        "yaw" => k.yaw = v,
-                        _ => {}
-                    }
-                }
-            }
-        }
-        k
-    }
-}
-
 impl Problem {
     pub fn new(p: &PredictiveParameters, stand: &PredictiveStand) -> Problem {
-        let knobs = Knobs::read();
-        let growth = knobs.growth;
-        let first = if (growth - 1.0).abs() < 1e-12 {
-            p.horizon / GRID_STEPS as f64
-        } else {
-            p.horizon * (growth - 1.0) / (maths::pow(growth, GRID_STEPS as f64) - 1.0)
-        };
+        let growth = GRID_GROWTH;
+        let first = p.horizon * (growth - 1.0) / (maths::pow(growth, GRID_STEPS as f64) - 1.0);
         let steps: [f64; GRID_STEPS] = std::array::from_fn(|j| first * maths::pow(growth, j as f64));
         let mut times = [0.0; GRID_STEPS + 1];
         for j in 0..GRID_STEPS {
@@ -145,7 +116,6 @@ impl Problem {
             neutral_legs: Legs::at(&stand.workspace, &stand.head, &[0.0; 3], &[0.0; 3]).length,
             otolith_steps: steps.map(|h| OTOLITH.steps(h)),
             canal_steps: steps.map(|h| CANAL.steps(h)),
-            knobs,
             hessian: [0.0; UNKNOWNS * UNKNOWNS],
             gradient: [0.0; UNKNOWNS],
             constraints: [0.0; INEQUALITIES * UNKNOWNS],
@@ -290,29 +260,18 @@ impl Problem {
                 self.add_residual(dt * trust * error_weight[o], error, &row);
             }
             // Back to neutral: the head's displacement and the yaw.
+            // Back to neutral: the head's displacement and the yaw, and their rates (per
+            // NEUTRAL_TIME² s²), over the horizon and, TERMINAL_WEIGHT times more, at its end.
             for c in [0, 1, 2, 5] {
-                let mut row = [0.0; UNKNOWNS];
-                self.add_channel(&mut row, j, c, 0, 1.0);
-                let yaw = if c == 5 { self.knobs.yaw } else { 1.0 };
-                self.add_residual(dt * p.weight_neutral * yaw, motion.position[c], &row);
-                if j == GRID_STEPS && self.knobs.terminal > 0.0 {
-                    self.add_residual(self.knobs.terminal * yaw, motion.position[c], &row);
-                    let mut row = [0.0; UNKNOWNS];
-                    self.add_channel(&mut row, j, c, 1, 1.0);
-                    self.add_residual(self.knobs.terminal * yaw, motion.rate[c], &row);
+                let (mut at, mut moving) = ([0.0; UNKNOWNS], [0.0; UNKNOWNS]);
+                self.add_channel(&mut at, j, c, 0, 1.0);
+                self.add_channel(&mut moving, j, c, 1, NEUTRAL_TIME);
+                let mut w = dt * p.weight_neutral;
+                if j == GRID_STEPS {
+                    w += TERMINAL_WEIGHT * p.weight_neutral;
                 }
-                if self.knobs.velocity > 0.0 {
-                    let mut row = [0.0; UNKNOWNS];
-                    self.add_channel(&mut row, j, c, 1, 1.0);
-                    self.add_residual(dt * p.weight_neutral * self.knobs.velocity, motion.rate[c], &row);
-                }
-            }
-            if self.knobs.tilt > 0.0 {
-                for c in [3, 4] {
-                    let mut row = [0.0; UNKNOWNS];
-                    self.add_channel(&mut row, j, c, 0, 1.0);
-                    self.add_residual(dt * self.knobs.tilt, motion.position[c], &row);
-                }
+                self.add_residual(w, motion.position[c], &at);
+                self.add_residual(w, NEUTRAL_TIME * motion.rate[c], &moving);
             }
             if CONSTRAINED.contains(&j) {
                 self.constrain(constrained, p, stand, &motion, &cues, &vehicle[j]);
@@ -403,7 +362,11 @@ impl Problem {
             let row = self.cue_rows[1][3 + i];
             self.set_row(at, &row, 1.0, limit - cues.omegasim[i]);
             self.set_row(at + 1, &row, -1.0, limit + cues.omegasim[i]);
-            at += 2;
+            let mut angle = [0.0; UNKNOWNS];
+            self.add_channel(&mut angle, j, 3 + i, 0, 1.0);
+            self.set_row(at + 2, &angle, 1.0, p.tilt_max - angles[i]);
+            self.set_row(at + 3, &angle, -1.0, p.tilt_max + angles[i]);
+            at += 4;
         }
     }
 

@@ -86,9 +86,12 @@ pub struct LagStep {
 }
 
 impl LagStep {
-    /// The step of `h > 0`: with `e = exp(-h/tau)`, `from_end = 1 - tau (1 - e)/h` and
-    /// `from_start = 1 - e - from_end`.
+    /// The step of `h >= 0`: with `e = exp(-h/tau)`, `from_end = 1 - tau (1 - e)/h` and
+    /// `from_start = 1 - e - from_end` (none at all for `h = 0`).
     pub fn new(tau: f64, h: f64) -> LagStep {
+        if h == 0.0 {
+            return LagStep { decay: 1.0, from_start: 0.0, from_end: 0.0 };
+        }
         let e = maths::exp(-h / tau);
         // 1 - e, accurate when h << tau.
         let one_minus_e = -maths::exp_m1(-h / tau);

@@ -53,6 +53,11 @@ pub enum TiltMode {
 /// The modes of the roll and the pitch tilt.
 pub type TiltModes = [TiltMode; 2];
 
+/// The first [`WashoutParameters::tilt_switching`] functions are the modes' (a crossing below
+/// zero switches the mode); the others the targets' clips (a crossing either way only marks a
+/// jump of the targets' rates).
+pub const TILT_MODE_SWITCHES: usize = 2;
+
 impl TiltMode {
     /// The mode's code in the FMU state (0, 1, 2).
     pub fn code(self) -> u8 {
@@ -222,16 +227,24 @@ impl WashoutParameters {
         })
     }
 
-    /// The tilt's switching functions, positive while each angle's mode holds: following,
-    /// `tilt.rateLimit - |target'|`; slewing, the distance left to the target.
-    pub fn tilt_switching(&self, x: &[f64; STATE_DIM], m: &VehicleMotion, modes: &TiltModes) -> [f64; 2] {
+    /// The tilt's switching functions: for the roll and the pitch, positive while each
+    /// angle's mode holds (following, `tilt.rateLimit - |target'|`; slewing, the distance left
+    /// to the target; [`TILT_MODE_SWITCHES`]); then for each target, positive while its
+    /// arcsine's argument is inside `+-sin(tilt.max)` (a sign change either way is where the
+    /// target's rate jumps to 0 or from it: a following angle's rate, and the cues, jump).
+    pub fn tilt_switching(&self, x: &[f64; STATE_DIM], m: &VehicleMotion, modes: &TiltModes) -> [f64; 4] {
         let (f_s, _) = self.scaled(m);
-        let targets = self.tilt_targets(self.low_passed(x, &f_s));
-        std::array::from_fn(|i| match modes[i] {
+        let f_l = self.low_passed(x, &f_s);
+        let targets = self.tilt_targets(f_l);
+        let s_max = crate::maths::sin(self.tilt_max);
+        let roll_argument = f_l[1].v / self.gravity;
+        let pitch_argument = f_l[0].v / (self.gravity * crate::maths::cos(targets[0].v));
+        let mode = |i: usize| match modes[i] {
             TiltMode::Following => self.tilt_rate_limit - targets[i].d1.abs(),
             TiltMode::Rising => targets[i].v - x[TILT_ANGLES + i],
             TiltMode::Falling => x[TILT_ANGLES + i] - targets[i].v,
-        })
+        };
+        [mode(0), mode(1), s_max - roll_argument.abs(), s_max - pitch_argument.abs()]
     }
 
     /// Tilt angle `i`'s mode after its switching function crossed zero at `x`: a follower
