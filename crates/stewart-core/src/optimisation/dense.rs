@@ -114,27 +114,31 @@ impl DenseQp {
         }
         for iteration in 1..=self.settings.max_iterations {
             // Residuals: r_d = H x + g + A^T z, r_p = A x + s - b.
-            for j in 0..n {
-                let mut sum = g[j];
-                for k in 0..n {
-                    sum += h[j * n + k] * self.x[k];
-                }
-                self.r_dual[j] = sum;
+            for (j, h_row) in h.chunks_exact(n).enumerate() {
+                self.r_dual[j] = g[j] + dot(h_row, &self.x);
             }
+            for (i, row) in a.chunks_exact(n).enumerate() {
+                let ax = dot(row, &self.x);
+                self.ax[i] = ax;
+                self.r_primal[i] = ax + self.s[i] - b[i];
+                axpy(self.z[i], row, &mut self.r_dual);
+            }
+            let gap = dot(&self.s, &self.z);
+            let mu = if m > 0 { gap / m as f64 } else { 0.0 };
+            // The objective's size, for a relative gap: x^T H x / 2 + g^T x (r_d - A^T z = H x + g).
+            let mut objective = 0.0;
+            for k in 0..n {
+                objective += self.x[k] * (0.5 * (self.r_dual[k] - g[k]) + g[k]);
+            }
+            let mut atz_x = 0.0;
             for i in 0..m {
-                let row = &a[i * n..(i + 1) * n];
-                let mut sum = 0.0;
-                for k in 0..n {
-                    sum += row[k] * self.x[k];
-                }
-                self.ax[i] = sum;
-                self.r_primal[i] = sum + self.s[i] - b[i];
-                for k in 0..n {
-                    self.r_dual[k] += row[k] * self.z[i];
-                }
+                atz_x += self.z[i] * self.ax[i];
             }
-            let mu = if m > 0 { dot(&self.s, &self.z) / m as f64 } else { 0.0 };
-            if max_abs(&self.r_dual) <= tol * scale_d && max_abs(&self.r_primal) <= tol * scale_p && mu <= tol {
+            objective -= 0.5 * atz_x;
+            if max_abs(&self.r_dual) <= tol * scale_d
+                && max_abs(&self.r_primal) <= tol * scale_p
+                && gap <= tol * objective.abs().max(1.0)
+            {
                 x.copy_from_slice(&self.x);
                 return QpOutcome::Solved { iterations: iteration - 1 };
             }
@@ -180,36 +184,33 @@ impl DenseQp {
     /// triangle); `false` if it is not positive definite.
     fn factor(&mut self, h: &[f64], a: &[f64]) -> bool {
         let (n, m) = (self.n, self.m);
-        for j in 0..n {
-            for k in 0..=j {
-                self.normal[j * n + k] = h[j * n + k];
-            }
-        }
-        for i in 0..m {
+        self.normal.copy_from_slice(&h[..n * n]);
+        for (i, row) in a.chunks_exact(n).enumerate().take(m) {
             let d = self.z[i] / self.s[i];
-            let row = &a[i * n..(i + 1) * n];
-            for j in 0..n {
+            for (j, normal_row) in self.normal.chunks_exact_mut(n).enumerate() {
                 let dj = d * row[j];
-                if dj == 0.0 {
-                    continue;
-                }
-                for k in 0..=j {
-                    self.normal[j * n + k] += dj * row[k];
+                if dj != 0.0 {
+                    axpy(dj, &row[..=j], &mut normal_row[..=j]);
                 }
             }
         }
-        // Cholesky, row by row: L L^T = normal.
+        // Cholesky, row by row: L L^T = normal. Near the solution Z/S grows without bound on
+        // the active constraints and the matrix's condition with it: a pivot lost to round-off
+        // (below 1e-13 of its diagonal) is replaced by a huge one, so that its direction takes
+        // no step (Wright's modified Cholesky for interior-point methods).
         for j in 0..n {
+            let diagonal = self.normal[j * n + j];
             for k in 0..=j {
-                let mut sum = self.normal[j * n + k];
-                for p in 0..k {
-                    sum -= self.normal[j * n + p] * self.normal[k * n + p];
-                }
+                let (above, from_j) = self.normal.split_at(j * n);
+                let row_j = &from_j[..n];
+                let row_k = if k < j { &above[k * n..k * n + n] } else { row_j };
+                let sum = row_j[k] - dot(&row_j[..k], &row_k[..k]);
                 if k == j {
-                    if !(sum > 0.0) {
+                    if !(diagonal > 0.0 && diagonal.is_finite()) || sum.is_nan() {
                         return false;
                     }
-                    self.normal[j * n + j] = sum.sqrt();
+                    let pivot = if sum > 1e-13 * diagonal { sum } else { 1e128 };
+                    self.normal[j * n + j] = pivot.sqrt();
                 } else {
                     self.normal[j * n + k] = sum / self.normal[k * n + k];
                 }
@@ -226,20 +227,14 @@ impl DenseQp {
         for k in 0..n {
             self.rhs[k] = -self.r_dual[k];
         }
-        for i in 0..m {
+        for (i, row) in a.chunks_exact(n).enumerate().take(m) {
             let w = (self.z[i] * self.r_primal[i] - self.r_centre[i]) / self.s[i];
-            let row = &a[i * n..(i + 1) * n];
-            for k in 0..n {
-                self.rhs[k] -= row[k] * w;
-            }
+            axpy(-w, row, &mut self.rhs);
         }
         // L y = rhs, then L^T dx = y.
         for j in 0..n {
-            let mut sum = self.rhs[j];
-            for p in 0..j {
-                sum -= self.normal[j * n + p] * self.dx[p];
-            }
-            self.dx[j] = sum / self.normal[j * n + j];
+            let row = &self.normal[j * n..j * n + n];
+            self.dx[j] = (self.rhs[j] - dot(&row[..j], &self.dx[..j])) / row[j];
         }
         for j in (0..n).rev() {
             let mut sum = self.dx[j];
@@ -248,12 +243,8 @@ impl DenseQp {
             }
             self.dx[j] = sum / self.normal[j * n + j];
         }
-        for i in 0..m {
-            let row = &a[i * n..(i + 1) * n];
-            let mut adx = 0.0;
-            for k in 0..n {
-                adx += row[k] * self.dx[k];
-            }
+        for (i, row) in a.chunks_exact(n).enumerate().take(m) {
+            let adx = dot(row, &self.dx);
             self.ds[i] = -self.r_primal[i] - adx;
             self.dz[i] = (-self.r_centre[i] - self.z[i] * self.ds[i]) / self.s[i];
         }
@@ -278,12 +269,18 @@ fn max_abs(v: &[f64]) -> f64 {
     v.iter().fold(0.0f64, |m, x| m.max(x.abs()))
 }
 
+/// `a . b`, summed in index order (one order everywhere: the same bits on every platform).
+#[inline]
 fn dot(a: &[f64], b: &[f64]) -> f64 {
-    let mut sum = 0.0;
-    for i in 0..a.len() {
-        sum += a[i] * b[i];
+    a.iter().zip(b).fold(0.0, |sum, (x, y)| sum + x * y)
+}
+
+/// `y += alpha x`, element by element.
+#[inline]
+fn axpy(alpha: f64, x: &[f64], y: &mut [f64]) {
+    for (yi, xi) in y.iter_mut().zip(x) {
+        *yi += alpha * xi;
     }
-    sum
 }
 
 #[cfg(test)]

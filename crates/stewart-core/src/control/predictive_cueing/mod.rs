@@ -36,8 +36,14 @@ pub const UNKNOWNS: usize = CHANNELS * BLOCKS.len();
 /// Inequalities per constrained point: each leg's length and speed (upper and lower), the
 /// roll and pitch rates and angles (upper and lower).
 pub const ROWS_PER_POINT: usize = 2 * 6 + 2 * 6 + 2 * 2 + 2 * 2;
-/// Inequalities of the QP.
+/// Inequalities of the constrained points.
 pub const INEQUALITIES: usize = ROWS_PER_POINT * CONSTRAINED.len();
+/// The QP's unknowns: the jerks and one slack by which every inequality may give.
+pub const QP_UNKNOWNS: usize = UNKNOWNS + 1;
+/// The slack's place among them.
+pub const SLACK: usize = UNKNOWNS;
+/// The QP's inequalities: the points' and the slack's own (`slack >= 0`).
+pub const QP_ROWS: usize = INEQUALITIES + 1;
 /// Share of each leg's stroke (from its neutral length to `lmin + margin` or `lmax - margin`)
 /// the plans may use at the constrained points: the rest absorbs the motion between them and
 /// the linearisation's error, before the workspace limiter's net (`Workspace::net`) would
@@ -164,8 +170,8 @@ impl PredictiveCueing {
     pub fn new(parameters: PredictiveParameters, stand: PredictiveStand) -> Result<Self, String> {
         parameters.validate()?;
         let qp = DenseQp::new(
-            UNKNOWNS,
-            INEQUALITIES,
+            QP_UNKNOWNS,
+            QP_ROWS,
             QpSettings { max_iterations: parameters.max_iterations, tolerance: QP_TOLERANCE },
         )?;
         let problem = Box::new(Problem::new(&parameters, &stand));
@@ -189,7 +195,9 @@ impl PredictiveCueing {
         let p = &mut *self.problem;
         match self.qp.solve(&p.hessian, &p.gradient, &p.constraints, &p.bounds, &mut p.solution) {
             QpOutcome::Solved { iterations } => SolveOutcome::Planned { iterations, plan: p.plan(&nominal) },
-            QpOutcome::Failed { iterations, why } => SolveOutcome::Failed { iterations, why },
+            QpOutcome::Failed { iterations, why } => {
+                SolveOutcome::Failed { iterations, why }
+            }
         }
     }
 }

@@ -21,7 +21,10 @@ use nalgebra::Vector3;
 
 use super::linearisation::{Cues, Legs};
 use super::motion::{CHANNELS, CommandedMotion, jerk_response};
-use super::{BLOCKS, CONSTRAINED, GRID_STEPS, INEQUALITIES, PredictiveParameters, PredictiveStand, STROKE_SHARE, UNKNOWNS};
+use super::{
+    BLOCKS, CONSTRAINED, GRID_STEPS, INEQUALITIES, PredictiveParameters, PredictiveStand, QP_ROWS, QP_UNKNOWNS, SLACK,
+    STROKE_SHARE, UNKNOWNS,
+};
 use crate::maths;
 use crate::physics::cueing::perception::{CANAL, LagStep, OTOLITH, Perception, THRESHOLD_F, THRESHOLD_OMEGA};
 use crate::physics::cueing::washout::VehicleMotion;
@@ -29,6 +32,17 @@ use crate::physics::stand::LEG_COUNT;
 
 /// The cues: `fsim` (3), then `omegasim` (3).
 const CUES: usize = 6;
+/// The slack's linear weight: far above any multiplier the constraints take when they can
+/// all hold, so that it is 0 then (an exact penalty).
+pub const SLACK_PENALTY: f64 = 1e4;
+/// The slack's quadratic weight.
+pub const SLACK_CURVATURE: f64 = 1.0;
+/// What one unit of the slack lets each kind of row give: a centimetre of a leg's length,
+/// 5 cm/s of its speed, a degree per second of tilt rate, a degree of tilt.
+const GIVE_LENGTH: f64 = 0.01;
+const GIVE_SPEED: f64 = 0.05;
+const GIVE_TILT_RATE: f64 = std::f64::consts::PI / 180.0;
+const GIVE_TILT: f64 = std::f64::consts::PI / 180.0;
 /// Ratio of consecutive grid steps: the first is about 36 ms at the default 2 s horizon, the
 /// last 0.24 s (a bump's heave is resolved ahead, the far future only sketched).
 pub const GRID_GROWTH: f64 = 1.1;
@@ -67,12 +81,12 @@ pub struct Problem {
     canal_steps: [[LagStep; 3]; GRID_STEPS],
     /// `H`, row-major, `g`, `A`, row-major, `b` of `min du^T H du / 2 + g^T du, A du <= b`, in
     /// the scaled unknowns.
-    pub hessian: [f64; UNKNOWNS * UNKNOWNS],
-    pub gradient: [f64; UNKNOWNS],
-    pub constraints: [f64; INEQUALITIES * UNKNOWNS],
-    pub bounds: [f64; INEQUALITIES],
-    /// The solver's answer, in the scaled unknowns.
-    pub solution: [f64; UNKNOWNS],
+    pub hessian: [f64; QP_UNKNOWNS * QP_UNKNOWNS],
+    pub gradient: [f64; QP_UNKNOWNS],
+    pub constraints: [f64; QP_ROWS * QP_UNKNOWNS],
+    pub bounds: [f64; QP_ROWS],
+    /// The solver's answer, in the scaled unknowns (the slack last).
+    pub solution: [f64; QP_UNKNOWNS],
     /// The cues' rows at the previous and the current grid point.
     cue_rows: [[Row; CUES]; 2],
     /// The simulator's lags' rows: per cue the otoliths' two or the canals' three lags.
@@ -116,11 +130,11 @@ impl Problem {
             neutral_legs: Legs::at(&stand.workspace, &stand.head, &[0.0; 3], &[0.0; 3]).length,
             otolith_steps: steps.map(|h| OTOLITH.steps(h)),
             canal_steps: steps.map(|h| CANAL.steps(h)),
-            hessian: [0.0; UNKNOWNS * UNKNOWNS],
-            gradient: [0.0; UNKNOWNS],
-            constraints: [0.0; INEQUALITIES * UNKNOWNS],
-            bounds: [0.0; INEQUALITIES],
-            solution: [0.0; UNKNOWNS],
+            hessian: [0.0; QP_UNKNOWNS * QP_UNKNOWNS],
+            gradient: [0.0; QP_UNKNOWNS],
+            constraints: [0.0; QP_ROWS * QP_UNKNOWNS],
+            bounds: [0.0; QP_ROWS],
+            solution: [0.0; QP_UNKNOWNS],
             cue_rows: [[[0.0; UNKNOWNS]; CUES]; 2],
             lag_rows: [[[0.0; UNKNOWNS]; 3]; CUES],
         }
@@ -135,6 +149,12 @@ impl Problem {
             let k = self.times[1..].partition_point(|&end| end <= t * (1.0 + 1e-12));
             plan.get(k).copied().unwrap_or([0.0; CHANNELS])
         })
+    }
+
+    /// How far the constraints had to give in the last solve (0: not at all; in units of the
+    /// rows, each scaled to unit length).
+    pub fn slack(&self) -> f64 {
+        self.solution[SLACK]
     }
 
     /// The plan from the solution: the nominal jerks plus each block's correction.
@@ -156,7 +176,7 @@ impl Problem {
             let wi = w * row[i];
             self.gradient[i] += wi * r0;
             for k in 0..UNKNOWNS {
-                self.hessian[i * UNKNOWNS + k] += wi * row[k];
+                self.hessian[i * QP_UNKNOWNS + k] += wi * row[k];
             }
         }
     }
@@ -164,7 +184,7 @@ impl Problem {
     /// A residual of one unknown alone: `r0 + du_i`.
     fn add_unit_residual(&mut self, w: f64, r0: f64, i: usize) {
         self.gradient[i] += w * r0;
-        self.hessian[i * UNKNOWNS + i] += w;
+        self.hessian[i * QP_UNKNOWNS + i] += w;
     }
 
     /// The row of channel `c`'s position (`part` 0), rate (1) or acceleration (2) at grid
@@ -279,6 +299,13 @@ impl Problem {
             }
             self.cue_rows[0] = self.cue_rows[1];
         }
+        // The slack: at least 0, weighed SLACK_PENALTY linearly (and a little quadratically,
+        // for a definite Hessian).
+        self.hessian[SLACK * QP_UNKNOWNS + SLACK] = SLACK_CURVATURE;
+        self.gradient[SLACK] = SLACK_PENALTY;
+        self.constraints[INEQUALITIES * QP_UNKNOWNS..].fill(0.0);
+        self.constraints[INEQUALITIES * QP_UNKNOWNS + SLACK] = -1.0;
+        self.bounds[INEQUALITIES] = 0.0;
         // Smooth inputs: every grid step's jerks.
         for j in 0..GRID_STEPS {
             let b = self.block_of[j];
@@ -351,48 +378,53 @@ impl Problem {
             }
             let upper = neutral[k] + STROKE_SHARE * (ws.upper[k] - neutral[k]);
             let lower = neutral[k] + STROKE_SHARE * (ws.lower[k] - neutral[k]);
-            self.set_row(at, &length_row, 1.0, upper - legs.length[k]);
-            self.set_row(at + 1, &length_row, -1.0, legs.length[k] - lower);
-            self.set_row(at + 2, &speed_row, 1.0, p.leg_speed - speed);
-            self.set_row(at + 3, &speed_row, -1.0, p.leg_speed + speed);
+            self.set_row(at, &length_row, 1.0, upper - legs.length[k], GIVE_LENGTH);
+            self.set_row(at + 1, &length_row, -1.0, legs.length[k] - lower, GIVE_LENGTH);
+            self.set_row(at + 2, &speed_row, 1.0, p.leg_speed - speed, GIVE_SPEED);
+            self.set_row(at + 3, &speed_row, -1.0, p.leg_speed + speed, GIVE_SPEED);
             at += 4;
         }
         for i in 0..2 {
             let limit = p.tilt_rate_limit + vehicle.omega[i].abs();
             let row = self.cue_rows[1][3 + i];
-            self.set_row(at, &row, 1.0, limit - cues.omegasim[i]);
-            self.set_row(at + 1, &row, -1.0, limit + cues.omegasim[i]);
+            self.set_row(at, &row, 1.0, limit - cues.omegasim[i], GIVE_TILT_RATE);
+            self.set_row(at + 1, &row, -1.0, limit + cues.omegasim[i], GIVE_TILT_RATE);
             let mut angle = [0.0; UNKNOWNS];
             self.add_channel(&mut angle, j, 3 + i, 0, 1.0);
-            self.set_row(at + 2, &angle, 1.0, p.tilt_max - angles[i]);
-            self.set_row(at + 3, &angle, -1.0, p.tilt_max + angles[i]);
+            self.set_row(at + 2, &angle, 1.0, p.tilt_max - angles[i], GIVE_TILT);
+            self.set_row(at + 3, &angle, -1.0, p.tilt_max + angles[i], GIVE_TILT);
             at += 4;
         }
     }
 
-    /// Inequality `r`: `sign row du <= bound`, scaled to a unit row (unscaled unknowns here;
-    /// [`Problem::scale_unknowns`] scales them with the rest).
-    fn set_row(&mut self, r: usize, row: &Row, sign: f64, bound: f64) {
+    /// Inequality `r`: `sign row du <= bound + give slack`, scaled to a unit row in the jerks
+    /// (unscaled unknowns here; [`Problem::scale_unknowns`] scales them with the rest). `give`
+    /// is how much of the row's own quantity one unit of the slack lets it give (a
+    /// centimetre of a leg, a degree of tilt, ...): the problem stays solvable where the
+    /// first points' bounds conflict, and the slack's penalty keeps it 0 where they do not.
+    fn set_row(&mut self, r: usize, row: &Row, sign: f64, bound: f64, give: f64) {
         let norm = row.iter().map(|x| x * x).sum::<f64>().sqrt();
-        let s = if norm > 0.0 { sign / norm } else { sign };
+        let scale = if norm > 0.0 { 1.0 / norm } else { 1.0 };
         for i in 0..UNKNOWNS {
-            self.constraints[r * UNKNOWNS + i] = s * row[i];
+            self.constraints[r * QP_UNKNOWNS + i] = sign * scale * row[i];
         }
-        self.bounds[r] = if norm > 0.0 { bound / norm } else { bound };
+        self.constraints[r * QP_UNKNOWNS + SLACK] = -give * scale;
+        self.bounds[r] = bound * scale;
     }
 
     /// From jerks to the scaled unknowns `x = D du` (`D`: 1 for the head, g for the angles).
     fn scale_unknowns(&mut self) {
-        let d: [f64; UNKNOWNS] = std::array::from_fn(|i| unknown_scale(self.gravity, i % CHANNELS));
-        for i in 0..UNKNOWNS {
+        let d: [f64; QP_UNKNOWNS] =
+            std::array::from_fn(|i| if i == SLACK { 1.0 } else { unknown_scale(self.gravity, i % CHANNELS) });
+        for i in 0..QP_UNKNOWNS {
             self.gradient[i] /= d[i];
-            for k in 0..UNKNOWNS {
-                self.hessian[i * UNKNOWNS + k] /= d[i] * d[k];
+            for k in 0..QP_UNKNOWNS {
+                self.hessian[i * QP_UNKNOWNS + k] /= d[i] * d[k];
             }
         }
-        for r in 0..INEQUALITIES {
-            for i in 0..UNKNOWNS {
-                self.constraints[r * UNKNOWNS + i] /= d[i];
+        for r in 0..QP_ROWS {
+            for i in 0..QP_UNKNOWNS {
+                self.constraints[r * QP_UNKNOWNS + i] /= d[i];
             }
         }
     }
