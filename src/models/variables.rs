@@ -632,8 +632,13 @@ mod state_order_tests {
     fn the_cueing_states_are_the_washouts_layout() {
         use crate::physics::cueing::washout::{STATE_DIM, layout::*};
         let s = crate::models::cueing::variables::STATES;
-        assert_eq!(s.len(), STATE_DIM);
+        assert_eq!(s.len(), crate::models::cueing::CONTINUOUS_STATES);
+        // The perception's lags follow the washout's, in PerceptionStates::to_array's order.
         for (group, at, count) in [
+            ("perception.vehicle.otolith", STATE_DIM, 6),
+            ("perception.vehicle.canal", STATE_DIM + 6, 9),
+            ("perception.simulator.otolith", STATE_DIM + 15, 6),
+            ("perception.simulator.canal", STATE_DIM + 21, 9),
             ("washout.q", TRANSLATION_Q, 3),
             ("washout.r", HEAD_R, 3),
             ("washout.v", HEAD_V, 3),

@@ -210,6 +210,8 @@ pub struct CueingModel {
     pub time: f64,
     /// The start time (the predictive method's solves are at `start + k mpc.period`).
     pub start_time: f64,
+    /// Whether the model left Initialization Mode (its parameters checked, the preview read).
+    initialised: bool,
     /// The predictive method's solver (made when the method is, after initialisation).
     predictive: Option<Box<PredictiveCueing>>,
     /// The preview file's rows, read at initialisation.
@@ -230,6 +232,7 @@ impl Clone for CueingModel {
             predictive_state: self.predictive_state,
             time: self.time,
             start_time: self.start_time,
+            initialised: self.initialised,
             predictive: None,
             preview: self.preview.clone(),
             outputs: self.outputs,
@@ -250,6 +253,7 @@ impl Default for CueingModel {
             predictive_state: PredictiveState::default(),
             time: 0.0,
             start_time: 0.0,
+            initialised: false,
             predictive: None,
             preview: Preview::default(),
             outputs: None,
@@ -298,11 +302,9 @@ impl CueingModel {
         dx
     }
 
-    /// Builds what initialisation (or a restored state) needs beyond the variables: the
-    /// preview's rows and the predictive method's solver (allocations happen here, not in
-    /// the steps).
-    fn prepare(&mut self) -> Result<(), String> {
-        self.preview = Preview::read(&self.parameters.preview_file)?;
+    /// The predictive method's solver, made after initialisation and after a restored state
+    /// (allocations happen here, not in the steps).
+    fn make_solver(&mut self) -> Result<(), String> {
         self.predictive = match self.parameters.method {
             Method::Classical => None,
             Method::Predictive => Some(Box::new(PredictiveCueing::new(
@@ -402,7 +404,9 @@ impl FmuModel for CueingModel {
                         mpc.period, not by the host's integrator; use the classical washout (0) in Model Exchange"
                 .into());
         }
-        self.prepare()?;
+        self.preview = Preview::read(&self.parameters.preview_file)?;
+        self.make_solver()?;
+        self.initialised = true;
         self.time = start_time;
         self.start_time = start_time;
         self.outputs = None;
@@ -563,6 +567,10 @@ impl FmuModel for CueingModel {
         w.bool(p.falling_back);
         w.u8(self.tilt_modes[0].code());
         w.u8(self.tilt_modes[1].code());
+        // After initialisation the preview's rows belong to the state: a restored state does
+        // not read the file again.
+        w.bool(self.initialised);
+        self.preview.save(w);
     }
 
     fn restore(r: &mut ByteReader) -> Result<Self, SnapshotError> {
@@ -584,7 +592,11 @@ impl FmuModel for CueingModel {
         for i in 0..2 {
             model.tilt_modes[i] = TiltMode::from_code(r.u8()?).ok_or(SnapshotError("a tilt mode out of range".into()))?;
         }
-        model.prepare().map_err(SnapshotError)?;
+        model.initialised = r.bool()?;
+        model.preview = Preview::restore(r)?;
+        if model.initialised {
+            model.make_solver().map_err(SnapshotError)?;
+        }
         Ok(model)
     }
 }

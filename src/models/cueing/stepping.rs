@@ -89,6 +89,27 @@ impl Preview {
         self.rows.is_empty()
     }
 
+    /// The rows into an FMU state.
+    pub fn save(&self, w: &mut crate::models::snapshot::ByteWriter) {
+        w.u64(self.rows.len() as u64);
+        for row in &self.rows {
+            w.f64s(row);
+        }
+    }
+
+    /// The rows from an FMU state.
+    pub fn restore(r: &mut crate::models::snapshot::ByteReader) -> Result<Preview, crate::models::snapshot::SnapshotError> {
+        let n = r.u64()?;
+        if n > (r.remaining() / 56) as u64 {
+            return Err(crate::models::snapshot::SnapshotError("the preview's rows: more than the state holds".into()));
+        }
+        let mut rows = Vec::with_capacity(n as usize);
+        for _ in 0..n {
+            rows.push(r.finite_array::<7>("the preview's rows")?);
+        }
+        Ok(Preview { rows })
+    }
+
     pub fn len(&self) -> usize {
         self.rows.len()
     }
@@ -281,8 +302,10 @@ pub fn step(m: &mut CueingModel, t: f64, h: f64) -> Result<After, StepError> {
     let (mut felt_vehicle, mut felt_simulator) = (m.perception.vehicle(), m.perception.simulator());
     let mut predictive_state = m.predictive_state;
     let mut cue = m.command(&x, &vehicle, &modes, &predictive_state.motion);
-    // Equal sub-steps of at most solver.maxStep; the predictive method's also cut at its solves.
-    let sub_steps = (h / p.max_step).abs().ceil().max(1.0) as u64;
+    // Equal sub-steps of at most solver.maxStep (a step that exceeds a multiple of it by
+    // round-off, as a host's sums of steps do, takes no extra one); the predictive method's
+    // also cut at its solves.
+    let sub_steps = (h / p.max_step * (1.0 - 1e-12)).abs().ceil().max(1.0) as u64;
     let sub_step = h / sub_steps as f64;
     let end = t + h;
     let (mut tau, mut i) = (t, 0u64);
@@ -298,7 +321,12 @@ pub fn step(m: &mut CueingModel, t: f64, h: f64) -> Result<After, StepError> {
             if tau >= due - 1e-9 * period {
                 solve(m, tau, &x, &modes, &felt_vehicle, &felt_simulator, &mut predictive_state, &at);
             }
-            next = next.min(m.start_time + predictive_state.solves as f64 * period);
+            // The next solve cuts this step, unless it falls at the step's end (to a nanosecond):
+            // then it is the next step's first, with the inputs set for it.
+            let due = m.start_time + predictive_state.solves as f64 * period;
+            if due < sub_end - 1e-9 * period {
+                next = next.min(due);
+            }
         }
         if next > tau {
             let p = &m.parameters;
@@ -351,10 +379,10 @@ fn solve(
     at: &impl Fn(f64) -> VehicleMotion,
 ) {
     let Some(solver) = m.predictive.as_deref_mut() else { return };
-    let dt = solver.parameters.grid_step();
     let now = at(tau);
+    let times = *solver.grid_times();
     let future: [VehicleMotion; GRID_STEPS + 1] = std::array::from_fn(|j| {
-        if m.preview.is_empty() || j == 0 { now } else { m.preview.at(tau + j as f64 * dt) }
+        if m.preview.is_empty() || j == 0 { now } else { m.preview.at(tau + times[j]) }
     });
     let outcome = solver.solve(&state.motion, &state.plan, &future, felt_vehicle, felt_simulator);
     state.solves += 1;

@@ -93,6 +93,8 @@ pub const DEFAULT_PREDICTIVE: PredictiveParameters = PredictiveParameters {
     max_iterations: 30,
 };
 
+const GRID_GROWTH_TEXT: &str = "a factor 1.1";
+
 /// The QP solver's relative tolerance (residuals and complementarity).
 pub const QP_TOLERANCE: f64 = 1e-8;
 
@@ -108,9 +110,12 @@ impl PredictiveParameters {
         positive("mpc.weight.input", self.weight_input)?;
         positive("mpc.legSpeed", self.leg_speed)?;
         positive("tilt.rateLimit", self.tilt_rate_limit)?;
-        if self.horizon / GRID_STEPS as f64 <= 0.0 || self.period > self.horizon / 2.0 {
+        let first = self.first_grid_step();
+        if !(self.period <= first * (1.0 + 1e-12)) {
             return Err(format!(
-                "parameter mpc.period: {:?} s must be at most half the horizon mpc.horizon = {:?} s",
+                "parameter mpc.period: {:?} s is longer than the plans' first step ({first:.4e} s, the horizon \
+                 mpc.horizon = {:?} s over 20 steps growing by {GRID_GROWTH_TEXT}): the first block's jerks would be \
+                 held past the step they were planned for; shorten the period or lengthen the horizon",
                 self.period, self.horizon
             ));
         }
@@ -130,9 +135,10 @@ impl PredictiveParameters {
         Ok(())
     }
 
-    /// The grid step, s.
-    pub fn grid_step(&self) -> f64 {
-        self.horizon / GRID_STEPS as f64
+    /// The grid's first step, s: `h_0` of `h_j = h_0 GRID_GROWTH^j` summing to the horizon.
+    pub fn first_grid_step(&self) -> f64 {
+        let g = problem::GRID_GROWTH;
+        self.horizon * (g - 1.0) / (crate::maths::pow(g, GRID_STEPS as f64) - 1.0)
     }
 }
 
@@ -176,6 +182,11 @@ impl PredictiveCueing {
         )?;
         let problem = Box::new(Problem::new(&parameters, &stand));
         Ok(PredictiveCueing { parameters, stand, qp, problem })
+    }
+
+    /// The grid's points, s after a solve: where the vehicle's motion is wanted.
+    pub fn grid_times(&self) -> &[f64; GRID_STEPS + 1] {
+        self.problem.times()
     }
 
     /// Plans from the commanded motion `now` and the last plan (what this solve linearises

@@ -96,7 +96,7 @@ pub struct Problem {
 impl Problem {
     pub fn new(p: &PredictiveParameters, stand: &PredictiveStand) -> Problem {
         let growth = GRID_GROWTH;
-        let first = p.horizon * (growth - 1.0) / (maths::pow(growth, GRID_STEPS as f64) - 1.0);
+        let first = p.first_grid_step();
         let steps: [f64; GRID_STEPS] = std::array::from_fn(|j| first * maths::pow(growth, j as f64));
         let mut times = [0.0; GRID_STEPS + 1];
         for j in 0..GRID_STEPS {
@@ -149,6 +149,11 @@ impl Problem {
             let k = self.times[1..].partition_point(|&end| end <= t * (1.0 + 1e-12));
             plan.get(k).copied().unwrap_or([0.0; CHANNELS])
         })
+    }
+
+    /// The grid's points, s from the solve.
+    pub fn times(&self) -> &[f64; GRID_STEPS + 1] {
+        &self.times
     }
 
     /// How far the constraints had to give in the last solve (0: not at all; in units of the
