@@ -5,13 +5,10 @@ solved as the linear system of its objective's minimum, every inequality checked
 The FMU (FMI 2 Co-Simulation, default parameters, 1 ms communication steps) and the oracle see
 the same inputs: a gentle manoeuvre of `stewart_fmu.vehicle` sampled at the points t_i = i h
 and, over each step, following its chord to the next point (fmi2SetRealInputDerivatives), so
-that the inputs at a solve time are the same from both sides of it. (With the inputs held
-instead, the FMU takes the solve at k mpc.period inside the step that ends there whenever
-t_i + h rounds above k mpc.period, at t = 0.01, 0.03, 0.06, 0.12, 0.24, 0.48, 0.96 s, and then
-sees that step's held inputs, not the ones set at the point: a difference of up to 4e-5 m/s2
-in pose.a that chords avoid.) The FMU gets doStep(t_i = i h, h), the points the oracle has:
-the simulator perception's sub-steps follow the rounding of t_i + h (`Predictive.substeps`:
-two 0.5 ms sub-steps for most steps before 1 s, one after). The manoeuvres are scaled down
+that the inputs at a solve time are the same from both sides of it. (A solve due at a
+communication point, to a nanosecond of the period, is the next step's first, with the inputs
+set for it.) The FMU gets doStep(t_i = i h, h), the points the oracle has: one sub-step of the
+simulator perception per 1 ms step (`Predictive.substeps`). The manoeuvres are scaled down
 until no inequality of the QP comes near its bound (the oracle raises if one would be active;
 the margins are printed), so the QP's solution is the unconstrained minimiser.
 
@@ -54,8 +51,8 @@ CASES = {
     "brake": (lambda: vehicle.brake(duration=4.0, deceleration=0.2, speed=2.0, start=0.5), {}),
     "lane_change": (lambda: vehicle.lane_change(duration=4.5, speed=10.0, lateral=0.25, peak=0.15, start=0.5), {}),
     "all_axes": (lambda: vehicle.random_manoeuvre(3, duration=4.0, f_limit=0.2, omega_limit=0.02), {}),
-    "all_axes_period_50ms": (lambda: vehicle.random_manoeuvre(3, duration=3.0, f_limit=0.2, omega_limit=0.02),
-                             {"mpc.period": 0.05}),
+    "all_axes_period_30ms": (lambda: vehicle.random_manoeuvre(3, duration=3.0, f_limit=0.2, omega_limit=0.02),
+                             {"mpc.period": 0.03}),
 }
 
 
@@ -90,8 +87,7 @@ def fmu_run(m, changes=None):
             counts.append(cue.slave.getInteger(integers))
             if i < n:
                 cue.slave.setRealInputDerivatives(vrs, [1] * 6, list((u[i + 1] - u[i]) / H))
-                # The points as the oracle has them, i h (not a sum of steps): the FMU's
-                # sub-steps follow the rounding of t_i + h (`Predictive.substeps`).
+                # The points as the oracle has them, i h (not a sum of steps).
                 cue.slave.doStep(currentCommunicationPoint=t[i], communicationStepSize=H)
     finally:
         cue.free()

@@ -20,9 +20,8 @@ w_body = E(beta) beta'; the perception model of §12 as in `oracles.perception`)
   lags see f and omega as the test drives them (linear over each communication step: held, or
   following their chord); the simulator's see fsim and omegasim linear between the ends of
   each of the step's equal sub-steps of at most solver.maxStep, the step's length taken as
-  floating point gives it, (t_i + h) - t_i (`Predictive.substeps`: for h = solver.maxStep =
-  1 ms, two sub-steps for most steps before t = 1 s, where that length is h + 1 ulp, and one
-  from 1 s on; the FMU does the same). Start: the otolith lags at g ez, the canal lags at 0.
+  a step exceeding a multiple of it by round-off taking no extra one (`Predictive.substeps`:
+  one for h = solver.maxStep = 1 ms; the FMU does the same). Start: the otolith lags at g ez, the canal lags at 0.
   Beside that rule the oracle also carries the simulator's lags integrated finely (`fine`
   sub-steps of the exact cubic motion per step, the chord error 1/fine^2 of the 1 ms one,
   not fed back into the solves): the outputs `perceived.fsim.fine[k]`,
@@ -349,10 +348,9 @@ class Predictive:
     # -- a run in Co-Simulation ----------------------------------------------------------------
     def substeps(self, t_i, h):
         """The sub-steps of the simulator's perception over the communication step from t_i of
-        length h: equal, of at most solver.maxStep, over the step's length as floating point
-        gives it, (t_i + h) - t_i. For h = solver.maxStep = 1 ms that is h + 1 ulp for most
-        t_i below 1 s (two sub-steps) and h from 1 s on (one)."""
-        return max(1, math.ceil(((t_i + h) - t_i) / self.max_step))
+        length h: equal, of at most solver.maxStep, a step that exceeds a multiple of it by
+        round-off (1e-12 relative) taking no extra one: one for h = solver.maxStep = 1 ms."""
+        return max(1, math.ceil(h / self.max_step * (1 - 1e-12)))
 
     def simulate(self, t, inputs, hold=False, allow_active=False, perturb=None, fine=8, substeps=None):
         """The FMU's Co-Simulation run over the communication points `t` (uniform from 0; the
