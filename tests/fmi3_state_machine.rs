@@ -203,10 +203,13 @@ fn instance_in(state: &str, kind: Kind) -> Host3 {
 /// Calls `function` on the instance with well-formed arguments; returns its status.
 fn invoke(h: &mut Host3, function: &str) -> fmi3Status {
     let c = h.c;
-    let vr_r = h.vr("r");
-    let vr_f = h.vr("F");
-    let vr_method = h.vr("solver.method");
-    let vr_stops = h.vr("stops");
+    // The platform's variables, or the cueing FMU's of the same kinds (a Float64[3] output, a
+    // Float64[6]-sized input set, an Int32 parameter, a Boolean).
+    let platform = h.table.groups.iter().any(|g| g.name == "F");
+    let vr_r = h.vr(if platform { "r" } else { "pose.r" });
+    let vr_f = if platform { h.vr("F") } else { h.vr("f") };
+    let vr_method = h.vr(if platform { "solver.method" } else { "cueing.method" });
+    let vr_stops = h.vr(if platform { "stops" } else { "limited" });
     let mut r3 = [0.0f64; 3];
     let mut f6 = [0.0f64; 6];
     let mut int = 0i32;
@@ -241,7 +244,8 @@ fn invoke(h: &mut Host3, function: &str) -> fmi3Status {
                 let mut ie = [0usize; 64];
                 let mut k = [0i32; 64];
                 // The count from another instance: only the call under test may be refused here.
-                let other = Host3::platform("count", h.kind);
+                let model = if platform { ModelKind::Platform } else { ModelKind::Cueing };
+                let other = Host3::try_new("count", model, h.kind, false).unwrap_or_else(|l| panic!("{l:?}"));
                 let mut count = 0usize;
                 assert_eq!(fmi3GetNumberOfVariableDependencies(other.c, vr_r, &mut count), fmi3OK);
                 assert!(count > 0 && count <= 64, "{count}");
@@ -266,7 +270,7 @@ fn invoke(h: &mut Host3, function: &str) -> fmi3Status {
             "fmi3SetFMUState" | "fmi3FreeFMUState" | "fmi3SerializedFMUStateSize" | "fmi3SerializeFMUState" => {
                 // A state of this instance made from its bytes (deserializing is allowed in
                 // every state, so the call under test is the only one that can be refused).
-                let bytes = fresh_state_bytes(h.kind);
+                let bytes = fresh_state_bytes_of(model_of(h), h.kind);
                 let mut st: fmi3FMUState = std::ptr::null_mut();
                 assert_eq!(fmi3DeserializeFMUState(c, bytes.as_ptr(), bytes.len(), &mut st), fmi3OK);
                 let mut size = 0usize;
@@ -283,7 +287,7 @@ fn invoke(h: &mut Host3, function: &str) -> fmi3Status {
                 s
             }
             "fmi3DeserializeFMUState" => {
-                let bytes = fresh_state_bytes(h.kind);
+                let bytes = fresh_state_bytes_of(model_of(h), h.kind);
                 let mut st: fmi3FMUState = std::ptr::null_mut();
                 let s = fmi3DeserializeFMUState(c, bytes.as_ptr(), bytes.len(), &mut st);
                 if !st.is_null() {
@@ -336,7 +340,16 @@ fn invoke(h: &mut Host3, function: &str) -> fmi3Status {
 
 /// The serialized state of a freshly instantiated instance of `kind`.
 fn fresh_state_bytes(kind: Kind) -> Vec<u8> {
-    Host3::try_new("source", ModelKind::Platform, kind, true).unwrap_or_else(|l| panic!("{l:?}")).state_bytes()
+    fresh_state_bytes_of(ModelKind::Platform, kind)
+}
+
+fn fresh_state_bytes_of(model: ModelKind, kind: Kind) -> Vec<u8> {
+    Host3::try_new("source", model, kind, true).unwrap_or_else(|l| panic!("{l:?}")).state_bytes()
+}
+
+/// The model an instance runs (the platform or the cueing FMU), from its variables.
+fn model_of(h: &Host3) -> ModelKind {
+    if h.table.groups.iter().any(|g| g.name == "F") { ModelKind::Platform } else { ModelKind::Cueing }
 }
 
 /// The Model Exchange states of the neutral pose, read from an initialised instance.
@@ -533,7 +546,13 @@ fn hundred_thousand_random_fmi3_calls() {
                 // The controller (no Model Exchange: refused) or a wrong token, freed again.
                 let _ = Host3::try_new("other", ModelKind::Controller, kind, rng.chance(0.5));
                 let _ = Host3::with_token("bad", ModelKind::Platform, kind, false, "{bad}");
-            } else if let Ok(h) = Host3::try_new("fuzz", ModelKind::Platform, kind, rng.chance(0.5)) {
+            } else if let Ok(h) = Host3::try_new(
+                "fuzz",
+                // The cueing FMU too (its cueing.method an Int32 the fuzz sets at random).
+                if rng.chance(0.4) { ModelKind::Cueing } else { ModelKind::Platform },
+                kind,
+                rng.chance(0.5),
+            ) {
                 hosts.push(h);
             }
             calls += 1;
@@ -571,7 +590,7 @@ fn invoke_fuzzed(h: &mut Host3, function: &str, rng: &mut Rng) -> fmi3Status {
     let c = h.c;
     let n = rng.below(4) as usize;
     let vrs: Vec<u32> =
-        (0..n).map(|_| if rng.chance(0.1) { rng.next() as u32 } else { rng.below(250) as u32 }).collect();
+        (0..n).map(|_| if rng.chance(0.1) { rng.next() as u32 } else { rng.below(310) as u32 }).collect();
     let nv = if rng.chance(0.8) { rng.below(40) as usize } else { rng.below(4) as usize };
     let values: Vec<f64> = (0..nv).map(|_| rng.real(&SPECIALS, 10)).collect();
     let mut out = vec![0.0f64; nv];
@@ -612,7 +631,7 @@ fn invoke_fuzzed(h: &mut Host3, function: &str, rng: &mut Rng) -> fmi3Status {
                 }
             }
             "fmi3DeserializeFMUState" | "fmi3SetFMUState" => {
-                let mut bytes = fresh_state_bytes(h.kind);
+                let mut bytes = fresh_state_bytes_of(model_of(h), h.kind);
                 if rng.chance(0.5) {
                     let k = rng.below(bytes.len() as u64) as usize;
                     bytes[k] ^= 1 << rng.below(8);

@@ -19,11 +19,12 @@ use stewart_fmu::models::ModelKind;
 /// Values a fuzzed Real argument takes: the awkward ones two thirds of the time.
 const SPECIALS: [f64; 8] = [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 1e300, -1e300, 0.0, 1e-300, 5900.715];
 
-/// A value reference: a quarter of them arbitrary, the rest among the model's.
+/// A value reference: a quarter of them arbitrary, the rest among the models' (the cueing
+/// FMU's go to 303).
 fn random_vr(rng: &mut Rng) -> u32 {
     match rng.below(4) {
         0 => rng.next() as u32,
-        _ => rng.below(140) as u32,
+        _ => rng.below(310) as u32,
     }
 }
 
@@ -35,6 +36,8 @@ fn hundred_thousand_random_calls() {
     let cbs = callbacks(&sink);
     let silent = fmi2CallbackFunctions { logger: None, ..cbs };
     let good_guid = CString::new(instantiation_token(ModelKind::Platform, FmiVersion::Fmi2)).unwrap();
+    // The cueing FMU too, in both methods (cueing.method is an Integer the fuzz sets at random).
+    let cueing_guid = CString::new(instantiation_token(ModelKind::Cueing, FmiVersion::Fmi2)).unwrap();
     let mut instances: Vec<fmi2Component> = vec![];
     let mut states: Vec<(fmi2Component, fmi2FMUstate)> = vec![];
     let mut times: Vec<f64> = vec![];
@@ -42,7 +45,11 @@ fn hundred_thousand_random_calls() {
     let mut calls = 0;
     while calls < CALLS {
         if instances.is_empty() || rng.chance(0.002) {
-            let guid = if rng.chance(0.9) { good_guid.as_ptr() } else { c"{bad}".as_ptr() };
+            let guid = match rng.below(10) {
+                0 => c"{bad}".as_ptr(),
+                1..=4 => cueing_guid.as_ptr(),
+                _ => good_guid.as_ptr(),
+            };
             let name = if rng.chance(0.95) { c"fuzz".as_ptr() } else { std::ptr::null() };
             let kind = if rng.chance(0.9) { fmi2CoSimulation } else { rng.below(5) as i32 - 1 };
             let cb: *const fmi2CallbackFunctions = match rng.below(10) {

@@ -252,3 +252,95 @@ fn the_controller_answers_every_random_setting_with_a_status_and_a_reason() {
     println!("controller fuzz: 300 cases, {ran} ran, {refused} refused with a message, none hung or panicked");
     assert!(ran > 20 && refused > 20, "both kinds exercised: {ran} ran, {refused} refused");
 }
+
+/// The same fuzz over the cueing FMU in both methods: random start times, random values of
+/// random parameters and inputs (huge, tiny, negative, zero, not numbers), random
+/// communication steps (1e308 among them), then steps and reads. Every case answers within
+/// its time limit, without a panic; every refusal has a message that names something. A
+/// step the FMU cannot finish in bounded time is refused with a message (it cuts a step into
+/// sub-steps of at most solver.maxStep and solves every mpc.period).
+#[test]
+fn the_cueing_fmu_answers_every_random_setting_with_a_status_and_a_reason() {
+    use common::rng::Rng;
+    let specials = [0.0, -0.0, 1e300, -1e300, 1e-300, f64::NAN, f64::INFINITY, -1.0, 1e9, -1e9, 0.5, 2.0];
+    let steps = [1e-3, 1e-2, 0.5, 1e308, 1e6, 1e-9];
+    let table = stewart_fmu::models::variables::VariableTable::new(ModelKind::Cueing.info().groups);
+    let names: Vec<String> = table
+        .elements()
+        .filter(|(_, g, _)| {
+            matches!(
+                g.causality,
+                stewart_fmu::models::variables::Causality::Parameter | stewart_fmu::models::variables::Causality::Input
+            ) && g.var_type.is_real()
+        })
+        .map(|(_, g, i)| g.element_name(i))
+        .collect();
+    let mut rng = Rng(0x0fed_cba9_8765_4321);
+    let (mut refused, mut ran, mut long_steps_refused) = (0, 0, 0);
+    for case in 0..300 {
+        let method = (case % 2) as i32;
+        let start = if rng.chance(0.2) { rng.real(&specials, 20) * 1e3 } else { 0.0 };
+        let settings: Vec<(String, f64)> = (0..rng.below(4))
+            .map(|_| (names[rng.below(names.len() as u64) as usize].clone(), rng.real(&specials, 24)))
+            .collect();
+        let h_step = steps[rng.below(steps.len() as u64) as usize];
+        let inputs: Vec<f64> = (0..6).map(|_| rng.real(&specials, 6)).collect();
+        let (outcome, messages, step_status) = within(20, &format!("case {case}"), move || {
+            let mut h = Host::new("fuzz", ModelKind::Cueing);
+            unsafe { fmi2SetupExperiment(h.c, fmi2False, 0.0, start, fmi2False, 0.0) };
+            h.enter();
+            let vr = h.vr("cueing.method");
+            unsafe { fmi2SetInteger(h.c, &vr, 1, &method) };
+            for (n, v) in &settings {
+                h.set(n, *v);
+            }
+            let mut outcome = h.exit();
+            let mut step_status = fmi2OK;
+            if outcome == fmi2OK {
+                h.time = start;
+                for i in 0..3 {
+                    let names = ["f[1]", "f[2]", "f[3]", "omega[1]", "omega[2]", "omega[3]"];
+                    let values: Vec<f64> = (0..6).map(|k| inputs[k] + if k == 2 { 9.81 } else { 0.0 }).collect();
+                    h.set_many(&names, &values);
+                    let s = h.step(if i == 1 { h_step } else { 1e-3 });
+                    if i == 1 {
+                        step_status = s;
+                    }
+                    outcome = outcome.max(s);
+                    if s != fmi2OK {
+                        break;
+                    }
+                    let vr = h.vr("pose.r[1]");
+                    let mut x = 0.0;
+                    outcome = outcome.max(unsafe { fmi2GetReal(h.c, &vr, 1, &mut x) });
+                }
+            }
+            (outcome, h.messages(), step_status)
+        });
+        for line in &messages {
+            assert!(
+                line.category != "logStatusFatal" && !line.message.contains("panic"),
+                "case {case}: {}",
+                line.message
+            );
+            assert!(!line.message.contains(&"0".repeat(30)), "case {case}: a 300-digit number: {}", line.message);
+        }
+        if h_step >= 1e6 && step_status != fmi2OK {
+            long_steps_refused += 1;
+            let last = messages.iter().rev().find(|l| l.status != fmi2OK).expect("a refusal has a message");
+            assert!(last.message.contains("internal steps") || last.message.contains("stopTime"), "{}", last.message);
+        }
+        if outcome == fmi2OK {
+            ran += 1;
+        } else {
+            refused += 1;
+            let last = messages.iter().rev().find(|l| l.status != fmi2OK).expect("a refusal has a message");
+            assert!(last.message.len() > 20, "case {case}: {}", last.message);
+        }
+    }
+    println!(
+        "cueing fuzz: 300 cases (both methods), {ran} ran, {refused} refused with a message ({long_steps_refused} \
+         steps of 1e6 s or more among them), none hung or panicked"
+    );
+    assert!(ran > 20 && refused > 20 && long_steps_refused > 5, "{ran} ran, {refused} refused, {long_steps_refused}");
+}

@@ -52,6 +52,7 @@ require() {
     command -v npm >/dev/null || need+=(nodejs npm)
     if [ "$1" = tests ]; then
         command -v valgrind >/dev/null || need+=(valgrind)
+        command -v strace >/dev/null || need+=(strace)  # the cueing FMU's system calls in a step
         ls /usr/lib/llvm-*/lib/libclang.so* >/dev/null 2>&1 || need+=(libclang-dev)  # fmi-sim's build
         command -v chromium >/dev/null || need+=(chromium fonts-liberation)           # the viewer's browser test
     fi

@@ -116,20 +116,23 @@ def check_times(t_end, h, t_end_name="t_end", h_name="h"):
 
 def set_values(slave, md, values, what="values"):
     """Sets parameters or inputs by name through the setter of each variable's type (Real,
-    Integer or Boolean). A name the model does not have, or a value of the wrong kind, raises
+    Integer, Boolean or String). A name the model does not have, or a value of the wrong kind, raises
     ValueError naming it (`what`: the argument the values came in)."""
     types = {v.name: (v.valueReference, v.type) for v in md.modelVariables}
     check_names(values, types, md.modelName, what)
-    groups = {"Real": [], "Integer": [], "Boolean": []}
+    groups = {"Real": [], "Integer": [], "Boolean": [], "String": []}
     for name, value in values.items():
         vr, kind = types[name]
         kind = "Integer" if kind == "Enumeration" else kind
         if kind not in groups:
             raise ValueError(f"{what}: {name} is a {kind} variable, which cannot be set here")
         try:
-            if isinstance(value, (str, bytes)):
+            if kind == "String":
+                if not isinstance(value, str):
+                    raise ValueError
+            elif isinstance(value, (str, bytes)):
                 raise ValueError
-            if kind == "Real":
+            elif kind == "Real":
                 value = float(value)
             elif kind == "Integer":
                 if isinstance(value, (bool, np.bool_)) or float(value) != int(value):
@@ -140,7 +143,7 @@ def set_values(slave, md, values, what="values"):
             else:
                 raise ValueError
         except (TypeError, ValueError, OverflowError):
-            expected = {"Real": "a number", "Integer": "an integer", "Boolean": "true or false"}[kind]
+            expected = {"Real": "a number", "Integer": "an integer", "Boolean": "true or false", "String": "a text"}[kind]
             raise ValueError(f"{what}: {name} = {value!r}: {expected} is expected") from None
         groups[kind].append((vr, value))
     if groups["Real"]:
@@ -149,6 +152,8 @@ def set_values(slave, md, values, what="values"):
         slave.setInteger([vr for vr, _ in groups["Integer"]], [x for _, x in groups["Integer"]])
     if groups["Boolean"]:
         slave.setBoolean([vr for vr, _ in groups["Boolean"]], [x for _, x in groups["Boolean"]])
+    if groups["String"]:
+        slave.setString([vr for vr, _ in groups["String"]], [x for _, x in groups["String"]])
 
 
 def vector_of(values, n, what, names):

@@ -12,6 +12,14 @@ from . import vehicle
 from .core import CONTROLLER_FMU, CUEING_FMU, LEGS, PLATFORM_FMU, Component, check_times, fmu_file
 from .ssp import MOTION_SYSTEM_SSP, bindings, connections, system_description
 
+#: SPEC 12's thresholds of perception (Reid and Nahon 1985): specific force per cabin axis
+#: (m/s2) and angular velocity per axis (rad/s; 3.0, 3.6 and 2.6 deg/s).
+THRESHOLD_F = (0.17, 0.17, 0.28)
+THRESHOLD_OMEGA = tuple(math.radians(d) for d in (3.0, 3.6, 2.6))
+#: The perceived cues the cueing FMU outputs (SPEC 12): the vehicle's, then the simulator's.
+PERCEIVED = [f"perceived.{n}[{k}]" for n in ("f", "omega") for k in (1, 2, 3)]
+PERCEIVED_SIM = [f"perceived.{n}[{k}]" for n in ("fsim", "omegasim") for k in (1, 2, 3)]
+AXES = ("x", "y", "z", "roll", "pitch", "yaw")
 F = [f"f[{k}]" for k in (1, 2, 3)]
 OMEGA = [f"omega[{k}]" for k in (1, 2, 3)]
 FSIM = [f"fsim[{k}]" for k in (1, 2, 3)]
@@ -38,18 +46,27 @@ OMCT_TESTS = {
 REST = {"f[1]": 0.0, "f[2]": 0.0, "f[3]": vehicle.G, "omega[1]": 0.0, "omega[2]": 0.0, "omega[3]": 0.0}
 
 
-def run(manoeuvre, h=1e-3, parameters=None, record=POSE + FSIM + OMEGASIM + ["workspace.usage", "workspace.scale"],
-        fmu=CUEING_FMU,
-        first_order=False):
+#: What `run` records by default.
+RECORDED = POSE + FSIM + OMEGASIM + PERCEIVED + PERCEIVED_SIM + ["workspace.usage", "workspace.scale"]
+
+
+def run(manoeuvre, h=1e-3, parameters=None, record=RECORDED, fmu=CUEING_FMU, first_order=False, integers=None,
+        strings=None):
     """The cueing FMU alone on a manoeuvre (`stewart_fmu.vehicle`'s columns: time, f[1..3],
     omega[1..3]; linearly interpolated to the communication points) to the manoeuvre's end,
     the inputs held over each step of `h`, or with `first_order` following their chord to the
-    next point (fmi2SetRealInputDerivatives). Returns a dict of arrays: `time`, the vehicle's
-    `f[k]`, `omega[k]` as set, and `record` at the same instants (the outputs at a
-    communication point see the inputs set there)."""
+    next point (fmi2SetRealInputDerivatives). `integers`: Integer parameters by name (for
+    example {"cueing.method": 1}, predictive cueing); `strings`: String parameters
+    ({"preview.file": path}). Integer outputs in `record` (`mpc.fallbacks`, `mpc.iterations`)
+    are read as such. Returns a dict of arrays: `time`, the vehicle's `f[k]`, `omega[k]` as
+    set, and `record` at the same instants (the outputs at a communication point see the inputs
+    set there)."""
     t_end = float(manoeuvre["time"][-1])
     check_times(t_end, h)
-    cue = Component(fmu, "cueing", parameters)
+    cue = Component(fmu, "cueing", {**(parameters or {}), **(strings or {})}, integers)
+    counters = [n for n in record if n in ("mpc.fallbacks", "mpc.iterations")]
+    reals = [n for n in record if n not in counters]
+    counter_vrs = [cue.vr[n] for n in counters]
     inputs = [cue.vr[n] for n in F + OMEGA]
     try:
         rows = []
@@ -57,7 +74,8 @@ def run(manoeuvre, h=1e-3, parameters=None, record=POSE + FSIM + OMEGASIM + ["wo
         now = np.concatenate(vehicle.at(manoeuvre, cue.time))
         for i in range(steps + 1):
             cue.set_values(F + OMEGA, now)
-            rows.append(np.concatenate([[cue.time], now, cue.get(list(record))]))
+            counted = cue.slave.getInteger(counter_vrs) if counter_vrs else []
+            rows.append(np.concatenate([[cue.time], now, cue.get(reals), counted]))
             if i < steps:
                 then = np.concatenate(vehicle.at(manoeuvre, cue.time + h))
                 if first_order:
@@ -67,8 +85,45 @@ def run(manoeuvre, h=1e-3, parameters=None, record=POSE + FSIM + OMEGASIM + ["wo
     finally:
         cue.free()
     rows = np.array(rows)
-    names = ["time"] + F + OMEGA + list(record)
+    names = ["time"] + F + OMEGA + reals + counters
     return {n: rows[:, j] for j, n in enumerate(names)}
+
+
+def measures(result):
+    """SPEC 12's measures of a run of the cueing FMU (a dict of arrays with the outputs
+    `perceived.*` and `workspace.usage`, as `run` and `motion_system` return): for each cabin
+    axis the rms of the perceived error (perceived vehicle minus perceived simulator; m/s2 or
+    rad/s) and Pearson's correlation of the two perceived signals, and the share of the time
+    with a false cue (the simulator's perceived cue beyond its threshold while the vehicle's is
+    below its threshold or of the other sign; the vertical force as its deviation from g); and
+    in all: `perceived_error`, the rms of the horizontal (x and y) perceived specific-force
+    error (m/s2); `correlation`, the mean correlation over the axes on which the vehicle's cue
+    is perceived (beyond its threshold at some time); `false_cues`, the share of the time with
+    a false cue on some axis; `max_usage`, the largest workspace usage. Returns a dict."""
+    g = float(np.median(result["perceived.f[3]"][:1])) if len(result["perceived.f[3]"]) else 9.81
+    rest = np.array([0.0, 0.0, g, 0.0, 0.0, 0.0])
+    thresholds = np.array(THRESHOLD_F + THRESHOLD_OMEGA)
+    vehicle = np.column_stack([result[n] for n in PERCEIVED]) - rest
+    simulator = np.column_stack([result[n] for n in PERCEIVED_SIM]) - rest
+    error = vehicle - simulator
+    out = {}
+    felt_axes, false_any = [], np.zeros(len(error), dtype=bool)
+    for k, axis in enumerate(AXES):
+        v, s = vehicle[:, k], simulator[:, k]
+        out[f"rms_{axis}"] = float(np.sqrt(np.mean(error[:, k] ** 2)))
+        correlated = np.std(v) > 1e-12 and np.std(s) > 1e-12
+        out[f"correlation_{axis}"] = float(np.corrcoef(v, s)[0, 1]) if correlated else float("nan")
+        if np.max(np.abs(v)) > thresholds[k]:
+            felt_axes.append(out[f"correlation_{axis}"])
+        false = (np.abs(s) > thresholds[k]) & ((np.abs(v) < thresholds[k]) | (np.sign(v) != np.sign(s)))
+        out[f"false_cues_{axis}"] = float(np.mean(false))
+        false_any |= false
+    out["perceived_error"] = float(np.sqrt(np.mean(error[:, 0] ** 2 + error[:, 1] ** 2)))
+    out["correlation"] = float(np.nanmean(felt_axes)) if felt_axes else float("nan")
+    out["false_cues"] = float(np.mean(false_any))
+    if "workspace.usage" in result:
+        out["max_usage"] = float(np.max(result["workspace.usage"]))
+    return out
 
 
 def motion_system(manoeuvre, h=1e-3, stand=None, cueing=None, controller=None, platform=None,
@@ -193,17 +248,18 @@ def _settling_time(parameters, fmu=CUEING_FMU):
 
 
 def omct(tests=tuple(OMCT_TESTS), frequencies=OMCT_FREQUENCIES, parameters=None, samples=100, periods=3, max_step=0.01,
-         amplitude_scale=1.0, progress=None, fmu=CUEING_FMU):
+         amplitude_scale=1.0, progress=None, fmu=CUEING_FMU, integers=None):
     """The Objective Motion Cueing Test of the cueing FMU alone: for each test of OMCT_TESTS
     and each frequency, a sinusoid `A sin(omega t)` on the test's input (the others at rest),
     `samples` communication steps per period but at most `max_step` long (over each step the
     input follows its chord, a first-order hold through fmi2SetRealInputDerivatives; the
     outputs are read with the input set to its value at the point, which the filters pass
     straight through), measured over `periods` whole periods after the filters' transient
-    (twelve slowest time constants). Returns {test: {"frequency": rad/s, "gain", "phase": deg,
-    "limited": whether the limiter acted during the measurement}}; gain and phase of the
-    output's fundamental over the input's. `progress(test, frequency)` is called before each
-    run."""
+    (twelve slowest time constants). `integers`: Integer parameters (for example
+    {"cueing.method": 1}, predictive cueing). Returns {test: {"frequency": rad/s, "gain",
+    "phase": deg, "limited": whether the limiter acted during the measurement}}; gain and
+    phase of the output's fundamental over the input's. `progress(test, frequency)` is called
+    before each run."""
     settle = _settling_time(parameters, fmu)
     result = {}
     for test in tests:
@@ -220,7 +276,7 @@ def omct(tests=tuple(OMCT_TESTS), frequencies=OMCT_FREQUENCIES, parameters=None,
             h = period / per_period
             skip = int(math.ceil(settle / period)) * per_period
             n = skip + periods * per_period
-            cue = Component(fmu, "omct", parameters)
+            cue = Component(fmu, "omct", parameters, integers)
             try:
                 ys, ts = [], []
                 names = list(REST)
@@ -254,10 +310,19 @@ def omct(tests=tuple(OMCT_TESTS), frequencies=OMCT_FREQUENCIES, parameters=None,
     return result
 
 
-def bode_plot(result, path, title="Objective Motion Cueing Test: StewartCueing, default parameters", reference=None):
+#: The one fidelity region at hand (docs/cueing.md): Sinacori's and Schroeder's "high
+#: fidelity" at 1 rad/s of a direct test, gain 0.8 to 1 with a phase within 20 deg.
+HIGH_FIDELITY_AT_1 = {"gain": (0.8, 1.0), "phase": (-20.0, 20.0)}
+DIRECT_TESTS = ("surge", "sway", "heave", "roll", "pitch", "yaw")
+
+
+def bode_plot(result, path, title="Objective Motion Cueing Test: StewartCueing, default parameters", reference=None,
+              others=None, label="FMU", fidelity=False):
     """Bode diagrams (gain and phase against frequency) of an `omct` result, four tests a row
     (gain above phase, the phase unwrapped); `reference`: another result drawn dashed (the
-    filters' transfer functions)."""
+    filters' transfer functions); `others`: {label: result} drawn beside it (another method);
+    `fidelity`: the high-fidelity region at 1 rad/s drawn on the direct tests
+    (HIGH_FIDELITY_AT_1)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -273,7 +338,16 @@ def bode_plot(result, path, title="Objective Motion Cueing Test: StewartCueing, 
 
     for j, test in enumerate(tests):
         gain_ax, phase_ax = axes[2 * (j // columns), j % columns], axes[2 * (j // columns) + 1, j % columns]
-        draw(gain_ax, phase_ax, result[test], "o-", "FMU")
+        draw(gain_ax, phase_ax, result[test], "o-", label)
+        for other_label, other in (others or {}).items():
+            if test in other:
+                draw(gain_ax, phase_ax, other[test], "s-", other_label)
+        if fidelity and test in DIRECT_TESTS:
+            g0, g1 = HIGH_FIDELITY_AT_1["gain"]
+            p0, p1 = HIGH_FIDELITY_AT_1["phase"]
+            gain_ax.plot([1.0, 1.0], [g0, g1], color="tab:green", lw=5, alpha=0.4, solid_capstyle="butt",
+                         label="high fidelity at 1 rad/s")
+            phase_ax.plot([1.0, 1.0], [p0, p1], color="tab:green", lw=5, alpha=0.4, solid_capstyle="butt")
         if reference and test in reference:
             draw(gain_ax, phase_ax, reference[test], "k--", "filters (SPEC 11)")
         gain_ax.set_title(test, fontsize=9)

@@ -52,7 +52,8 @@ from .study_schema import DEFAULT_MAX_RUNS, StudyError
 
 MASTERS = ("compiled", "fmpy")
 METRICS = ["max_leg_error", "max_pose_error", "stable", "discard_time", "min_kappa", "max_stop_force",
-           "energy_residual", "peak_deceleration", "final_z", "cue_error", "max_usage", "least_scale", "max_tilt"]
+           "energy_residual", "peak_deceleration", "final_z", "cue_error", "max_usage", "least_scale", "max_tilt",
+           "perceived_error", "correlation", "false_cues", "fallbacks"]
 
 
 def plan(path, max_runs=DEFAULT_MAX_RUNS, fmus=None):
@@ -428,7 +429,10 @@ def _execute_cueing(spec, run, fmus, row):
     the communication points, held over each step). Metrics: `cue_error`, the root mean square
     of |f - fsim| (m/s2: the cue the driver misses); `max_usage`, the washout's largest
     workspace usage (1: a leg at its margin); `least_scale`, the limiter's least share of the
-    washout's command; `max_tilt`, the largest |roll| or |pitch| commanded (rad)."""
+    washout's command; `max_tilt`, the largest |roll| or |pitch| commanded (rad); SPEC 12's
+    perception measures (`stewart_fmu.cueing.measures`): `perceived_error` (rms of the
+    horizontal perceived specific-force error, m/s2), `correlation`, `false_cues`; and
+    `fallbacks`, the predictive method's failed solves."""
     from . import cueing, vehicle
     study = spec["study"]
     cue = _component("cueing", fmus["cueing"])
@@ -446,6 +450,8 @@ def _execute_cueing(spec, run, fmus, row):
         return
     inputs = cueing.F + cueing.OMEGA
     outputs = cueing.FSIM + ["workspace.usage", "workspace.scale", "pose.angles[1]", "pose.angles[2]"]
+    perceived = cueing.PERCEIVED + cueing.PERCEIVED_SIM
+    felt = []
     squares, count, usage, scale, tilt, t = 0.0, 0, 0.0, 1.0, 0.0, 0.0
     try:
         for i in range(int(round(stop / h)) + 1):
@@ -456,12 +462,18 @@ def _execute_cueing(spec, run, fmus, row):
             count += 1
             usage, scale = max(usage, float(o[3])), min(scale, float(o[4]))
             tilt = max(tilt, abs(float(o[5])), abs(float(o[6])))
+            felt.append(cue.values(perceived))
             if i < round(stop / h):
                 cue.slave.doStep(currentCommunicationPoint=t, communicationStepSize=h)
                 t += h
     except FMICallException as e:
         row.update(status="discard" if e.status == 2 else "error", discard_time=t, message=cue.last_problem() or str(e))
     row.update(cue_error=math.sqrt(squares / max(count, 1)), max_usage=usage, least_scale=scale, max_tilt=tilt)
+    if felt:
+        felt = np.array(felt)
+        m = cueing.measures({n: felt[:, j] for j, n in enumerate(perceived)})
+        row.update(perceived_error=m["perceived_error"], correlation=m["correlation"], false_cues=m["false_cues"])
+    row["fallbacks"] = int(cue.slave.getInteger([cue.vr["mpc.fallbacks"]])[0])
     row["stable"] = row["status"] == "ok"
 
 

@@ -39,7 +39,7 @@ STUDY_KEYS = {
     "system": "'platform' (the platform alone, open-loop forces), 'closed-loop' (platform + controller) or "
               "'cueing' (the motion cueing FMU alone on a vehicle's manoeuvre)",
     "manoeuvre": "system = 'cueing': the vehicle's motion, a manoeuvre of stewart_fmu.vehicle (accelerate, brake, "
-                 "lane_change, curve, bumps, emergency_stop, lane_change_05g, pothole) or a CSV file of its columns "
+                 "lane_change, curve, bumps, slalom, emergency_stop, lane_change_05g, pothole) or a CSV file of its columns "
                  "(time, f[1..3], omega[1..3]; relative to the study file)",
     "units": "'si' or 'nondimensional' (the paper's units: R_b, M, sqrt(R_b/g))",
     "stop_time": "the end of each run (s, or time units)",
@@ -50,7 +50,8 @@ STUDY_KEYS = {
 REQUIRED_STUDY_KEYS = ("stop_time", "step")
 # Metrics a plot can show (`stable` is a yes/no, shown by the map's blanks instead).
 PLOT_VALUES = ("max_leg_error", "max_pose_error", "discard_time", "min_kappa", "max_stop_force", "energy_residual",
-               "peak_deceleration", "final_z", "wall_time", "cue_error", "max_usage", "least_scale", "max_tilt")
+               "peak_deceleration", "final_z", "wall_time", "cue_error", "max_usage", "least_scale", "max_tilt",
+               "perceived_error", "correlation", "false_cues", "fallbacks")
 PLOT_KEYS = {
     "map": ("kind", "value", "x", "y", "facet", "log", "file", "title", "unstable_blank"),
     "scatter": ("kind", "value", "x", "file", "title"),

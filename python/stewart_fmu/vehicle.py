@@ -140,6 +140,14 @@ def pothole(duration=8.0, speed=15.0, depth=0.06, length=0.5, start=2.0):
     return motion(t, np.zeros_like(t), np.zeros_like(t), road=road, u0=speed)
 
 
+def slalom(duration=20.0, speed=15.0, peak=2.5, frequency=0.4, start=1.0):
+    """A slalom at constant `speed` (m/s): the lateral acceleration a sinusoid of `peak` (m/s2)
+    at `frequency` (Hz), faded in over its first second (the yaw rate follows)."""
+    t = _times(duration)
+    a_y = peak * np.sin(2 * math.pi * frequency * (t - start)) * smooth_step(t, start, 1.0)
+    return motion(t, np.zeros_like(t), a_y / speed ** 2, u0=speed)
+
+
 #: The manoeuvres the main job writes (examples/cueing_manoeuvres.py), by file name.
 MANOEUVRES = {
     "accelerate": accelerate,
@@ -147,6 +155,7 @@ MANOEUVRES = {
     "lane_change": lane_change,
     "curve": curve,
     "bumps": bumps,
+    "slalom": slalom,
 }
 #: Harsh manoeuvres: the workspace limiter's cases.
 HARSH = {

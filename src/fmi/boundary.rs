@@ -121,6 +121,18 @@ pub unsafe fn c_slice<'a, T>(ptr: *const T, n: usize) -> Option<&'a [T]> {
     Some(unsafe { std::slice::from_raw_parts(ptr, n) })
 }
 
+/// The text of a C string (`None`: NULL, or not UTF-8).
+///
+/// # Safety
+/// A non-NULL `ptr` must point to a NUL-terminated string that stays valid for the call.
+pub unsafe fn c_text<'a>(ptr: *const std::ffi::c_char) -> Option<&'a str> {
+    if ptr.is_null() {
+        return None;
+    }
+    // SAFETY: non-NULL, and the caller guarantees a NUL-terminated string.
+    unsafe { std::ffi::CStr::from_ptr(ptr) }.to_str().ok()
+}
+
 /// [`c_slice`] of a NULL pointer, out of the usual path: empty for `n == 0`.
 #[cold]
 fn null_slice<'a, T>(n: usize) -> Option<&'a [T]> {

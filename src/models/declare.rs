@@ -25,8 +25,8 @@
 //! }
 //! ```
 //!
-//! Bindings: `real`, `integer` and `boolean` name a field of the model (a path) holding the
-//! variable's value ([`RealStorage`], [`IntegerStorage`], `bool`); `cached(block.field)` is an
+//! Bindings: `real`, `integer`, `boolean` and `string` name a field of the model (a path)
+//! holding the variable's value ([`RealStorage`], [`IntegerStorage`], `bool`, `String`); `cached(block.field)` is an
 //! output read through the cache block `block` (the model method of that name returns the
 //! block's values, `field` the variable's); `cached_apart(block.field)` the same for a value
 //! that is not a field of the outputs type (its derivative is the model's own); `derivative` a
@@ -284,6 +284,16 @@ macro_rules! declare_variables {
                 None
             }
 
+            fn string_value(&self, var: $crate::models::variables::VariableRef) -> Option<&str> {
+                $($crate::models::declare::declare_variables!(@string_get self, var, $id, $kind $(($($arg)*))?);)*
+                None
+            }
+
+            fn string_slot(&mut self, var: $crate::models::variables::VariableRef) -> Option<&mut String> {
+                $($crate::models::declare::declare_variables!(@string_slot self, var, $id, $kind $(($($arg)*))?);)*
+                None
+            }
+
             fn output_value(&mut self, var: $crate::models::variables::VariableRef) -> Option<f64> {
                 $($crate::models::declare::declare_variables!(@output self, var, $id, $kind $(($($arg)*))?);)*
                 None
@@ -314,6 +324,7 @@ macro_rules! declare_variables {
     (@binding real($($p:tt)*)) => { $crate::models::declare::Binding::Stored };
     (@binding integer($($p:tt)*)) => { $crate::models::declare::Binding::Stored };
     (@binding boolean($($p:tt)*)) => { $crate::models::declare::Binding::Stored };
+    (@binding string($($p:tt)*)) => { $crate::models::declare::Binding::Stored };
     (@binding cached($block:ident . $field:ident)) => {
         $crate::models::declare::Binding::Cached { block: cache_block::$block }
     };
@@ -357,6 +368,20 @@ macro_rules! declare_variables {
     };
     (@bool_slot $($rest:tt)*) => {};
 
+    (@string_get $s:ident, $var:ident, $id:ident, string($($p:ident).+)) => {
+        if $var.group == group::$id {
+            return Some($s.$($p).+.as_str());
+        }
+    };
+    (@string_get $($rest:tt)*) => {};
+
+    (@string_slot $s:ident, $var:ident, $id:ident, string($($p:ident).+)) => {
+        if $var.group == group::$id {
+            return Some(&mut $s.$($p).+);
+        }
+    };
+    (@string_slot $($rest:tt)*) => {};
+
     (@output $s:ident, $var:ident, $id:ident, cached($block:ident . $field:ident)) => {
         if $var.group == group::$id {
             return $crate::models::declare::OutputValues::<f64>::element(&$s.$block().$field, $var.index);
@@ -389,6 +414,9 @@ macro_rules! declare_variables {
     (@save $s:ident, $w:ident, $id:ident, boolean($($p:ident).+)) => {
         $w.bool($s.$($p).+);
     };
+    (@save $s:ident, $w:ident, $id:ident, string($($p:ident).+)) => {
+        $w.str(&$s.$($p).+);
+    };
     (@save $($rest:tt)*) => {};
 
     (@restore $s:ident, $r:ident, $id:ident, real($($p:ident).+)) => {
@@ -407,6 +435,9 @@ macro_rules! declare_variables {
     };
     (@restore $s:ident, $r:ident, $id:ident, boolean($($p:ident).+)) => {
         $s.$($p).+ = $r.bool()?;
+    };
+    (@restore $s:ident, $r:ident, $id:ident, string($($p:ident).+)) => {
+        $s.$($p).+ = $r.string(GROUPS[group::$id].name)?;
     };
     (@restore $($rest:tt)*) => {};
 
@@ -432,6 +463,10 @@ pub trait Variables {
     fn set_integer_code(&mut self, var: super::variables::VariableRef, code: i32) -> Option<Result<(), String>>;
     /// The storage of a stored Boolean variable.
     fn boolean_slot(&mut self, var: super::variables::VariableRef) -> Option<&mut bool>;
+    /// The value of a stored String variable.
+    fn string_value(&self, var: super::variables::VariableRef) -> Option<&str>;
+    /// The storage of a stored String variable.
+    fn string_slot(&mut self, var: super::variables::VariableRef) -> Option<&mut String>;
     /// The current value of an output element (`cached` or `cached_apart`).
     fn output_value(&mut self, var: super::variables::VariableRef) -> Option<f64>;
     /// Writes the values of cache block `block` into the cache at their value references;

@@ -187,6 +187,14 @@ pub trait FmuModel {
     fn set_boolean(&mut self, _var: VariableRef, _value: bool) -> Result<(), String> {
         Err("not a settable Boolean variable".into())
     }
+    /// A String variable's value (`None`: not one).
+    fn get_string(&mut self, _var: VariableRef) -> Option<String> {
+        None
+    }
+    /// Stores a String parameter.
+    fn set_string(&mut self, _var: VariableRef, _value: &str) -> Result<(), String> {
+        Err("not a settable String variable".into())
+    }
     /// Validates the parameters and builds the simulation at `start_time`. `tolerance` is
     /// the importer's tolerance, if defined. Returns a summary for the log and, for a usable
     /// but probably unintended setting, a warning.
@@ -397,6 +405,8 @@ forward_to_the_model! {
     exclusive fn set_integer(var: VariableRef, value: i32) -> Result<(), String>;
     exclusive fn get_boolean(var: VariableRef) -> bool;
     exclusive fn set_boolean(var: VariableRef, value: bool) -> Result<(), String>;
+    exclusive fn get_string(var: VariableRef) -> Option<String>;
+    exclusive fn set_string(var: VariableRef, value: &str) -> Result<(), String>;
     exclusive fn report_events(sink: &mut dyn FnMut(&str));
     exclusive fn set_event_reporting(on: bool);
     exclusive fn event_indicators(z: &mut [f64]);

@@ -33,6 +33,11 @@ impl ByteWriter {
     pub fn u8(&mut self, x: u8) {
         self.bytes.push(x);
     }
+    /// A text: its length in bytes, then its UTF-8 bytes.
+    pub fn str(&mut self, x: &str) {
+        self.u64(x.len() as u64);
+        self.raw(x.as_bytes());
+    }
     pub fn bool(&mut self, x: bool) {
         self.bytes.push(x as u8);
     }
@@ -107,6 +112,12 @@ impl<'a> ByteReader<'a> {
     }
     pub fn u8(&mut self) -> Result<u8, SnapshotError> {
         Ok(self.array::<1>()?[0])
+    }
+    /// A text written by [`ByteWriter::str`].
+    pub fn string(&mut self, what: &str) -> Result<String, SnapshotError> {
+        let len = usize::try_from(self.u64()?).map_err(|_| SnapshotError(format!("{what}: a length that does not fit")))?;
+        let bytes = self.take(len)?;
+        String::from_utf8(bytes.to_vec()).map_err(|_| SnapshotError(format!("{what}: not UTF-8 text")))
     }
     pub fn bool(&mut self) -> Result<bool, SnapshotError> {
         match self.u8()? {

@@ -84,6 +84,8 @@ pub enum VariableType {
     Integer,
     Boolean,
     Enumeration(&'static str),
+    /// A text (a file name); `fmi2GetString`/`fmi3GetString` and the `Set` functions apply.
+    String,
 }
 
 impl VariableType {
@@ -94,6 +96,10 @@ impl VariableType {
     /// Whether `fmi2GetReal`/`fmi2SetReal` (true) or the Integer functions apply.
     pub fn is_real(self) -> bool {
         self == VariableType::Real
+    }
+    /// Whether the String functions apply.
+    pub fn is_string(self) -> bool {
+        self == VariableType::String
     }
     pub fn is_integer_like(self) -> bool {
         matches!(self, VariableType::Integer | VariableType::Enumeration(_))
@@ -383,6 +389,11 @@ impl VariableGroup {
         VariableGroup { var_type: VariableType::Integer, unit: None, range: Some((min as f64, max as f64)), ..self }
     }
 
+    /// A String parameter instead of a Real one.
+    pub const fn string(self) -> Self {
+        VariableGroup { var_type: VariableType::String, unit: None, ..self }
+    }
+
     /// A Boolean parameter instead of a Real one.
     pub const fn boolean(self) -> Self {
         VariableGroup { var_type: VariableType::Boolean, unit: None, ..self }
@@ -621,8 +632,13 @@ mod state_order_tests {
     fn the_cueing_states_are_the_washouts_layout() {
         use crate::physics::cueing::washout::{STATE_DIM, layout::*};
         let s = crate::models::cueing::variables::STATES;
-        assert_eq!(s.len(), STATE_DIM);
+        assert_eq!(s.len(), crate::models::cueing::CONTINUOUS_STATES);
+        // The perception's lags follow the washout's, in PerceptionStates::to_array's order.
         for (group, at, count) in [
+            ("perception.vehicle.otolith", STATE_DIM, 6),
+            ("perception.vehicle.canal", STATE_DIM + 6, 9),
+            ("perception.simulator.otolith", STATE_DIM + 15, 6),
+            ("perception.simulator.canal", STATE_DIM + 21, 9),
             ("washout.q", TRANSLATION_Q, 3),
             ("washout.r", HEAD_R, 3),
             ("washout.v", HEAD_V, 3),

@@ -153,10 +153,13 @@ def test_the_limiter_keeps_every_leg_inside_its_margins_on_fuzzed_manoeuvres(clu
         hermite = h / 2 * (v[1:] + v[:-1]) + h * h / 12 * (a[:-1] - a[1:])
         worst_v = max(worst_v, float(np.percentile(np.abs(np.diff(pos, axis=0) - hermite), 99.9)) / h)
     assert limited > 100, f"the limiter acted in only {limited} of the 150 aggressive runs"
-    # Both halves show the rule's own error on these fast inputs (0.014 m/s at most in 60 of
-    # them); a jump of the command (the first-crossing limiter of an earlier version jumped by
-    # up to 1 m/s) would stand far above it.
-    assert worst_v < 0.03, worst_v
+    # SPEC 11's ideal tilt limiter jumps the tilt rate where a slewing angle catches its target
+    # (by up to tilt.rateLimit plus the target's rate), so the centre's velocity jumps by that
+    # times the head's lever: in both halves the rule's error over such a step is about half
+    # the jump, 0.05-0.12 m/s on these drives. A jump of the workspace limiter (the
+    # first-crossing limiter of an earlier version jumped by up to 1 m/s, an error of 0.5 m/s)
+    # would stand above it.
+    assert worst_v < 0.25, worst_v
     print(f"300 fuzzed manoeuvres on Dask: closest approach to a margin {closest * 1e3:.3f} mm, the limiter acted "
           f"in {limited} of 150 aggressive runs, 99.9th percentile of the Hermite residual of r over a step at most {worst_v:.2e} m/s")
 
@@ -259,14 +262,17 @@ def test_bad_parameters_are_refused_naming_them(values, words):
 
 def test_the_motion_system_follows_the_command_and_harsh_manoeuvres_stay_inside_the_strokes():
     """StewartMotionSystem.ssp's chain at 1 ms with FMPy: the platform's legs follow the
-    controller's programme lengths within 2 mm on the lane change and 3 mm on the braking (its
+    controller's programme lengths within 6 mm on the lane change and 3 mm on the braking (its
     centre of mass the command within twice that); on the harsh manoeuvres (a 6 m/s2 emergency stop, a 0.5 g lane change, a
     pothole), with the default washout and with one that needs the limiter, every leg stays
     inside [lmin, lmax]."""
     p = start_values()
     lines = []
     # The controller's error on these commands (docs/control.md quotes the braking's).
-    for name, make, bound in (("lane change", vehicle.lane_change, 2e-3), ("braking", vehicle.brake, 3e-3)):
+    # SPEC 11's ideal tilt limiter steps the commanded tilt rate where a slewing angle catches
+    # its target; the controller follows such a step over its bandwidth (the lane change's
+    # error was 1.3 mm with the smooth 20 1/s catch-up of an earlier version).
+    for name, make, bound in (("lane change", vehicle.lane_change, 6e-3), ("braking", vehicle.brake, 3e-3)):
         r = cueing.motion_system(make())
         lp = np.array([r[f"lp[{k}]"] for k in LEGS])
         l = np.array([r[f"l[{k}]"] for k in LEGS])

@@ -84,11 +84,12 @@ pub fn check(ssd: &str) -> Result<Vec<String>, String> {
                 let kind = match group.var_type {
                     VariableType::Real => "Real",
                     VariableType::Boolean => "Boolean",
+                    VariableType::String => "String",
                     _ => "Integer",
                 };
                 parameter = Some((component.clone(), name, kind));
             }
-            "ssv:Real" | "ssv:Integer" | "ssv:Boolean" => {
+            "ssv:Real" | "ssv:Integer" | "ssv:Boolean" | "ssv:String" => {
                 let (component, name, kind) = parameter.take().ok_or("a value outside a Parameter")?;
                 let element = e.name().as_ref().to_string();
                 if element.strip_prefix("ssv:") != Some(kind) {

@@ -37,7 +37,7 @@ impl Variable {
     }
 }
 
-const VARIABLE_ELEMENTS: [&str; 3] = ["Float64", "Int32", "Boolean"];
+const VARIABLE_ELEMENTS: [&str; 4] = ["Float64", "Int32", "Boolean", "String"];
 
 pub fn check(xml: &str) -> Result<Summary, String> {
     let mut reader = Reader::from_str(xml);
@@ -116,6 +116,12 @@ pub fn check(xml: &str) -> Result<Summary, String> {
                     .parse()
                     .map_err(|_| "Dimension start is not a size")?;
                 current.as_mut().ok_or("Dimension outside a variable")?.dimensions.push(n);
+            }
+            // A String's start values are child elements, one per element.
+            "Start" => {
+                a.get("value").ok_or("Start without value")?;
+                let v = current.as_mut().ok_or("Start outside a variable")?;
+                v.start_count = Some(v.start_count.unwrap_or(0) + 1);
             }
             "Output" | "ContinuousStateDerivative" | "InitialUnknown" | "EventIndicator" => {
                 let vr =

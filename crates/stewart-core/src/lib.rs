@@ -16,7 +16,8 @@
 //! 1. [`physics`]: pure mechanics (the body, the legs, the actuators, the special form, the
 //!    direct problem, the washout's filters), each law written once over the number type
 //!    (`f64`, dual numbers, six legs side by side).
-//! 2. [`integration`]: generic ODE integrators (Dormand-Prince 5(4), RK4).
+//! 2. [`integration`]: generic ODE integrators (Dormand-Prince 5(4), RK4); [`optimisation`]:
+//!    small dense quadratic programmes (an interior-point method).
 //! 3. [`simulation`]: a stand in motion (integration + constraint projection + roll-back, the
 //!    choice of vector registers).
 //! 4. [`control`]: the paper's programme-following feedback law (pure).
@@ -28,6 +29,7 @@
 pub mod control;
 pub mod integration;
 pub mod maths;
+pub mod optimisation;
 pub mod physics;
 pub mod simd;
 pub mod simulation;

@@ -78,6 +78,13 @@ pub fn log2(x: f64) -> f64 {
     libm::log2(x)
 }
 
+/// The largest integer not above `x` (exact everywhere; `f64::floor` is a C library's call on
+/// x86-64 without SSE4.1).
+#[inline]
+pub fn floor(x: f64) -> f64 {
+    libm::floor(x)
+}
+
 #[cfg(test)]
 mod tests {
     /// The crate's functions against the platform's C library: the same to an ulp or two

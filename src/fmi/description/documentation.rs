@@ -94,6 +94,8 @@ fn start_values(model: &mut AnyModel, table: &VariableTable, g: &VariableGroup) 
                 format_real(model.get_real(r))
             } else if g.var_type.is_boolean() {
                 model.get_boolean(r).to_string()
+            } else if g.var_type.is_string() {
+                format!("{:?}", model.get_string(r).unwrap_or_default())
             } else {
                 model.get_integer(r).to_string()
             }
@@ -106,6 +108,7 @@ fn type_name(g: &VariableGroup) -> String {
         VariableType::Real => "Real".to_string(),
         VariableType::Integer => "Integer".to_string(),
         VariableType::Boolean => "Boolean".to_string(),
+        VariableType::String => "String".to_string(),
         VariableType::Enumeration(t) => format!("Enumeration {t}"),
     }
 }

@@ -89,6 +89,9 @@ pub(super) fn render_fmi2(kind: ModelKind, guid: &str) -> String {
                     format!(r#" start="{}""#, model.get_integer(v))
                 }
                 (VariableType::Boolean, Some(v)) => format!(r#" start="{}""#, model.get_boolean(v)),
+                (VariableType::String, Some(v)) => {
+                    format!(r#" start="{}""#, xml_escape(&model.get_string(v).unwrap_or_default()))
+                }
                 _ => String::new(),
             }
         } else {
@@ -109,6 +112,7 @@ pub(super) fn render_fmi2(kind: ModelKind, guid: &str) -> String {
             VariableType::Real => format!("<Real{unit}{display}{range}{derivative}{start}/>"),
             VariableType::Integer => format!("<Integer{range}{start}/>"),
             VariableType::Boolean => format!("<Boolean{start}/>"),
+            VariableType::String => format!("<String{start}/>"),
             VariableType::Enumeration(t) => {
                 format!(r#"<Enumeration declaredType="{}"{start}/>"#, xml_escape(t))
             }

@@ -90,6 +90,7 @@ pub(super) fn render_fmi3(kind: ModelKind, token: &str) -> String {
             VariableType::Real => "Float64",
             VariableType::Integer | VariableType::Enumeration(_) => "Int32",
             VariableType::Boolean => "Boolean",
+            VariableType::String => "String",
         };
         let mut attrs = format!(
             r#"name="{}" valueReference="{}" description="{}" causality="{}" variability="{}""#,
@@ -116,7 +117,15 @@ pub(super) fn render_fmi3(kind: ModelKind, token: &str) -> String {
         {
             let _ = write!(attrs, r#" derivative="{}""#, state.first_vr);
         }
-        if g.has_start() {
+        // FMI 3 gives a String's start as child elements, not as an attribute.
+        let mut string_starts = Vec::new();
+        if g.has_start() && g.var_type == VariableType::String {
+            for i in 0..g.len() {
+                if let Some((_, r)) = table.lookup(g.vr(i)) {
+                    string_starts.push(model.get_string(r).unwrap_or_default());
+                }
+            }
+        } else if g.has_start() {
             let values: Vec<String> = (0..g.len())
                 .filter_map(|i| table.lookup(g.vr(i)))
                 .map(|(_, r)| match g.var_type {
@@ -127,7 +136,16 @@ pub(super) fn render_fmi3(kind: ModelKind, token: &str) -> String {
                 .collect();
             let _ = write!(attrs, r#" start="{}""#, values.join(" "));
         }
-        if g.shape.is_empty() {
+        if !string_starts.is_empty() {
+            let _ = write!(x, "    <{element} {attrs}>");
+            for n in g.shape {
+                let _ = write!(x, r#"<Dimension start="{n}"/>"#);
+            }
+            for s in &string_starts {
+                let _ = write!(x, r#"<Start value="{}"/>"#, xml_escape(s));
+            }
+            let _ = writeln!(x, "</{element}>");
+        } else if g.shape.is_empty() {
             let _ = writeln!(x, "    <{element} {attrs}/>");
         } else {
             let _ = write!(x, "    <{element} {attrs}>");

@@ -86,6 +86,10 @@ fn digest(kind: ModelKind, version: FmiVersion) -> (u64, u64) {
                 let bits = match g.var_type {
                     VariableType::Real => model.get_real(r).to_bits(),
                     VariableType::Boolean => model.get_boolean(r) as u64,
+                    VariableType::String => {
+                        d.text(&model.get_string(r).unwrap_or_default());
+                        0
+                    }
                     _ => model.get_integer(r) as u64,
                 };
                 d.word(bits);

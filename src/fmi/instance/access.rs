@@ -13,6 +13,7 @@ pub enum BaseType {
     Real,
     Integer,
     Boolean,
+    String,
 }
 
 impl BaseType {
@@ -21,6 +22,7 @@ impl BaseType {
             BaseType::Real => t.is_real(),
             BaseType::Integer => t.is_integer_like(),
             BaseType::Boolean => t.is_boolean(),
+            BaseType::String => t.is_string(),
         }
     }
 
@@ -31,6 +33,7 @@ impl BaseType {
             (BaseType::Integer, FmiVersion::Fmi2) => "Integer",
             (BaseType::Integer, FmiVersion::Fmi3) => "Int32",
             (BaseType::Boolean, _) => "Boolean",
+            (BaseType::String, _) => "String",
         }
     }
 }
@@ -67,6 +70,8 @@ pub(super) fn base_type(t: VariableType) -> BaseType {
         BaseType::Real
     } else if t.is_boolean() {
         BaseType::Boolean
+    } else if t.is_string() {
+        BaseType::String
     } else {
         BaseType::Integer
     }

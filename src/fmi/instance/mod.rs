@@ -154,6 +154,8 @@ pub struct Instance {
     /// when the vector grows.
     #[allow(clippy::vec_box)]
     fmu_states: Vec<Box<FmuState>>,
+    /// The Strings of the last get of Strings: the pointers the importer got point into them.
+    strings: Vec<std::ffi::CString>,
 }
 
 impl Instance {
@@ -194,6 +196,7 @@ impl Instance {
             state_order,
             co_simulation: CoSimulationOptions::default(),
             fmu_states: Vec::new(),
+            strings: Vec::new(),
             access,
         };
         instance.apply_event_reporting();

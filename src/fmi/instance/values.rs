@@ -404,6 +404,45 @@ impl Instance {
         Status::Ok
     }
 
+    /// Strings: each read through the model into the instance's own buffer, which holds them
+    /// until the next get of Strings (the FMI rule for the returned pointers); `each` receives
+    /// them in order.
+    pub fn get_string(&mut self, vrs: &[u32], count: usize, mut each: impl FnMut(usize, &std::ffi::CStr)) -> Status {
+        if let Err(s) = self.check_values(vrs, BaseType::String, count, false) {
+            return s;
+        }
+        self.strings.clear();
+        for r in elements(&self.access, vrs) {
+            let text = self.model.get_string(r).unwrap_or_default();
+            // A text with a NUL cannot be a C string: cut it there (the model never stores one:
+            // set_string refuses it).
+            let bytes: Vec<u8> = text.into_bytes().into_iter().take_while(|&b| b != 0).collect();
+            self.strings.push(std::ffi::CString::new(bytes).unwrap_or_default());
+        }
+        for (i, s) in self.strings.iter().enumerate() {
+            each(i, s);
+        }
+        Status::Ok
+    }
+
+    /// Strings given as UTF-8 texts (`None`: not one), all or nothing.
+    pub fn set_string(&mut self, vrs: &[u32], values: &[Option<&str>]) -> Status {
+        if let Err(s) = self.check_values(vrs, BaseType::String, values.len(), true) {
+            return s;
+        }
+        let mut trial = self.copy_model();
+        for (r, x) in elements(&self.access, vrs).zip(values) {
+            let Some(x) = x else {
+                return self.error(&format!("{} refused: the value is not UTF-8 text", self.element_name(r)));
+            };
+            if let Err(m) = trial.set_string(r, x) {
+                return self.error(&format!("{} = {x:?} refused: {m}", self.element_name(r)));
+            }
+        }
+        self.replace_model(trial);
+        Status::Ok
+    }
+
     /// A deep copy of the model through its own serialization (models are not `Clone`
     /// through `AnyModel`).
     pub(super) fn copy_model(&self) -> AnyModel {

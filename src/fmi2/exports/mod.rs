@@ -244,8 +244,8 @@ pub unsafe extern "C" fn fmi2GetString(
 ) -> fmi2Status {
     boundary!(c, F::GetString, args("vr = {}", show(vr, nvr)), |inst| {
         let vrs = try_slice!(inst, vr, nvr, "vr");
-        let _ = try_slice_mut!(inst, value, nvr, "value");
-        inst.no_variables_of_type(vrs, "String")
+        let values = try_slice_mut!(inst, value, nvr, "value");
+        inst.get_string(vrs, nvr, |i, s| values[i] = s.as_ptr())
     })
 }
 
@@ -308,8 +308,10 @@ pub unsafe extern "C" fn fmi2SetString(
 ) -> fmi2Status {
     boundary!(c, F::SetString, args("vr = {}", show(vr, nvr)), |inst| {
         let vrs = try_slice!(inst, vr, nvr, "vr");
-        let _ = try_slice!(inst, value, nvr, "value");
-        inst.no_variables_of_type(vrs, "String")
+        let values = try_slice!(inst, value, nvr, "value");
+        // SAFETY: each value is NULL or a NUL-terminated C string (the FMI calling convention).
+        let texts: Vec<Option<&str>> = values.iter().map(|&p| unsafe { crate::fmi::boundary::c_text(p) }).collect();
+        inst.set_string(vrs, &texts)
     })
 }
 

@@ -182,7 +182,42 @@ no_variables_of_type!(fmi3GetUInt16, fmi3SetUInt16, fmi3UInt16, "UInt16");
 no_variables_of_type!(fmi3GetUInt32, fmi3SetUInt32, fmi3UInt32, "UInt32");
 no_variables_of_type!(fmi3GetInt64, fmi3SetInt64, fmi3Int64, "Int64");
 no_variables_of_type!(fmi3GetUInt64, fmi3SetUInt64, fmi3UInt64, "UInt64");
-no_variables_of_type!(fmi3GetString, fmi3SetString, fmi3String, "String");
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi3GetString(
+    instance: fmi3Instance,
+    vrs: *const fmi3ValueReference,
+    n_vrs: usize,
+    values: *mut fmi3String,
+    n_values: usize,
+) -> fmi3Status {
+    boundary!(instance, F::GetOther("fmi3GetString"), |inst| {
+        let vrs = try_slice!(inst, vrs, n_vrs, "valueReferences");
+        let values = try_slice_mut!(inst, values, n_values, "values");
+        inst.get_string(vrs, n_values, |i, s| values[i] = s.as_ptr())
+    })
+}
+
+/// # Safety
+/// See the module documentation.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi3SetString(
+    instance: fmi3Instance,
+    vrs: *const fmi3ValueReference,
+    n_vrs: usize,
+    values: *const fmi3String,
+    n_values: usize,
+) -> fmi3Status {
+    boundary!(instance, F::SetOther("fmi3SetString"), |inst| {
+        let vrs = try_slice!(inst, vrs, n_vrs, "valueReferences");
+        let values = try_slice!(inst, values, n_values, "values");
+        // SAFETY: each value is NULL or a NUL-terminated C string (the FMI calling convention).
+        let texts: Vec<Option<&str>> = values.iter().map(|&p| unsafe { crate::fmi::boundary::c_text(p) }).collect();
+        inst.set_string(vrs, &texts)
+    })
+}
 
 /// # Safety
 /// See the documentation of the `exports` module.

@@ -1,33 +1,40 @@
-//! The `StewartCueing` model: the classical washout with a workspace limiter (SPEC §11,
-//! docs/cueing.md). Inputs: the vehicle's specific force and angular velocity at the head;
-//! outputs: the pose command for the controller's `programme = 3` with its exact first and
-//! second derivatives, and what the driver would feel (`fsim`, `omegasim`). Co-Simulation steps
-//! the washout's 21 linear-filter states with a fixed-step RK4, the inputs held; Model Exchange
-//! gives the same states and derivatives to the host's integrator.
+//! The `StewartCueing` model (SPEC §11-12, docs/cueing.md): the vehicle's specific force and
+//! angular velocity at the head in; the pose command for the controller's `programme = 3`
+//! with its exact first and second derivatives, what the driver would feel (`fsim`,
+//! `omegasim`) and what they perceive (`perceived.*`) out. Two methods: the classical washout
+//! and predictive cueing. Co-Simulation steps the washout's 21 states (RK4) and the
+//! perception's 30 lags (exact over steps on which their inputs are linear); the predictive
+//! method plans every `mpc.period` and its command moves with the planned jerks in between.
+//! Model Exchange gives the classical method's 51 states and derivatives to the host.
 
+mod outputs;
+pub mod parameters;
+mod stepping;
 pub mod variables;
-
-use nalgebra::Vector3;
 
 use super::declare::{Binding, Variables, cache_block_of};
 use super::snapshot::{ByteReader, ByteWriter, SnapshotError};
 use super::variables::VariableRef;
 use super::{Capabilities, DefaultExperiment, FmuModel, Initialised, ModelInfo, StepError, StepReport};
-use crate::physics::cueing::jet::Jet;
-use crate::physics::cueing::limiter::Workspace;
+use crate::control::predictive_cueing::motion::{CHANNELS, CommandedMotion};
+use crate::control::predictive_cueing::{GRID_STEPS, PredictiveCueing};
+use crate::physics::cueing::perception::Perception;
 use crate::physics::cueing::washout::{
-    DEFAULT_WASHOUT, STATE_DIM, VehicleMotion, WashoutParameters, body_rates, layout, rotation,
+    STATE_DIM, TILT_MODE_SWITCHES, TiltMode, TiltModes, VehicleMotion, WashoutPose, layout,
 };
-use crate::physics::legs::end_stops::EndStops;
-use crate::physics::stand::{LEG_COUNT, Stand};
+pub use outputs::{Command, CueingOutputs};
+pub use parameters::{CueingParameters, Method};
+pub use stepping::Preview;
 use variables::BINDINGS;
 
 pub static INFO: ModelInfo = ModelInfo {
     model_name: "StewartCueing",
     model_identifier: "StewartCueing",
-    description: "Motion cueing for a Stewart platform motion simulator: classical washout (scaling, tilt \
-                  coordination, rotational and translational high-pass) and a workspace limiter over the six leg \
-                  strokes; outputs the pose command for StewartController's programme 3",
+    description: "Motion cueing for a Stewart platform motion simulator: the classical washout (scaling, tilt \
+                  coordination, rotational and translational high-pass) or predictive cueing (an optimal control \
+                  problem over a horizon on a vestibular perception model, every leg within its stroke), a \
+                  workspace limiter, and what the driver perceives; outputs the pose command for StewartController's \
+                  programme 3",
     groups: variables::GROUPS,
     enumerations: &[],
     units: super::units::UNITS,
@@ -36,101 +43,20 @@ pub static INFO: ModelInfo = ModelInfo {
     states: variables::STATES,
     // Co-Simulation takes the inputs' first derivatives (a first-order hold: a sampled
     // sinusoid drives the filters without the staircase of a held input).
-    capabilities: Capabilities { model_exchange: true, can_interpolate_inputs: true, ..Capabilities::NONE },
+    // Model Exchange locates the tilt limiter's switches as events: the modes' and the
+    // targets' clips (four indicators).
+    capabilities: Capabilities {
+        model_exchange: true,
+        can_interpolate_inputs: true,
+        event_indicators: 4,
+        ..Capabilities::NONE
+    },
 };
 
-/// Default head point, m, body frame from the centre of mass: the driver of the default
-/// truck cabin sits forward and on the left, about a metre above the loaded platform's centre
-/// of mass (docs/cueing.md).
-pub const DEFAULT_HEAD: [f64; 3] = [0.5, 0.4, 1.0];
-/// Default stroke kept free at each end, m: the controller's following error (mm) and room for
-/// the end stops' reach.
-pub const DEFAULT_MARGIN: f64 = 0.03;
-/// Default limiter onset (workspace usage).
-pub const DEFAULT_ONSET: f64 = 0.8;
-/// Default largest internal step, s: a thousandth of a second against the fastest rate of the
-/// default equations (the tilt's catch-up, 20 1/s; the filters up to 4 rad/s).
-pub const DEFAULT_MAX_STEP: f64 = 1e-3;
-/// Smallest `solver.maxStep`, s: below it a long communication step would take millions of
-/// sub-steps.
-pub const MIN_MAX_STEP: f64 = 1e-6;
 /// Largest commanded pitch, rad (80 deg): the Euler-angle rates of the 1-2-3 sequence are
 /// singular at 90 deg, so a washout that gets there (a slow rotational high-pass with a large
 /// `omegamax`) stops with a message instead.
 pub const MAX_PITCH: f64 = 1.396;
-
-/// The parameters of the cueing FMU.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CueingParameters {
-    pub washout: WashoutParameters,
-    pub head: [f64; 3],
-    pub margin: f64,
-    pub onset: f64,
-    pub neutral: [f64; 3],
-    pub max_step: f64,
-    pub base_joints: [Vector3<f64>; LEG_COUNT],
-    pub platform_joints: [Vector3<f64>; LEG_COUNT],
-    pub lmin: [f64; LEG_COUNT],
-    pub lmax: [f64; LEG_COUNT],
-}
-
-impl Default for CueingParameters {
-    fn default() -> Self {
-        let stand = Stand::default();
-        let stops = EndStops::default();
-        CueingParameters {
-            washout: DEFAULT_WASHOUT,
-            head: DEFAULT_HEAD,
-            margin: DEFAULT_MARGIN,
-            onset: DEFAULT_ONSET,
-            // The default stand's neutral pose (docs/model.md §3).
-            neutral: Stand::truck_cabin_neutral_position().into(),
-            max_step: DEFAULT_MAX_STEP,
-            base_joints: stand.base_joints,
-            platform_joints: stand.platform_joints,
-            lmin: stops.lower,
-            lmax: stops.upper,
-        }
-    }
-}
-
-impl CueingParameters {
-    pub fn workspace(&self) -> Workspace {
-        Workspace {
-            base_joints: self.base_joints,
-            platform_joints: self.platform_joints,
-            lower: self.lmin.map(|l| l + self.margin),
-            upper: self.lmax.map(|l| l - self.margin),
-            neutral: Vector3::from(self.neutral),
-            onset: self.onset,
-        }
-    }
-
-    fn validate(&self) -> Result<(), String> {
-        self.washout.validate()?;
-        if !(self.margin >= 0.0 && self.margin.is_finite()) {
-            return Err(format!("parameter margin: must be >= 0 m, got {:?}", self.margin));
-        }
-        if !(self.max_step >= MIN_MAX_STEP && self.max_step.is_finite()) {
-            return Err(format!(
-                "parameter solver.maxStep: must be at least {MIN_MAX_STEP:e} s, got {:?}",
-                self.max_step
-            ));
-        }
-        for k in 0..LEG_COUNT {
-            if !(self.lmin[k] + 2.0 * self.margin < self.lmax[k]) {
-                return Err(format!(
-                    "parameter margin: {:?} m at both ends leaves no stroke on leg {} (lmin = {:?} m, lmax = {:?} m)",
-                    self.margin,
-                    k + 1,
-                    self.lmin[k],
-                    self.lmax[k]
-                ));
-            }
-        }
-        self.workspace().validate()
-    }
-}
 
 /// The washout's states by name (the FMU's state variables `washout.*`).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -175,52 +101,218 @@ impl CueingStates {
     }
 }
 
-/// What the cueing FMU reports at one instant.
+/// The perception's 30 lags (the FMU's states `perception.*`): for the vehicle's motion and for
+/// the simulator's, the otoliths' two lags per axis and the canals' three.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CueingOutputs {
-    pub r: [f64; 3],
-    pub v: [f64; 3],
-    pub a: [f64; 3],
-    pub angles: [f64; 3],
-    pub angle_rates: [f64; 3],
-    pub angle_accelerations: [f64; 3],
-    pub fsim: [f64; 3],
-    pub omegasim: [f64; 3],
-    pub usage: f64,
-    pub scale: f64,
-    pub limited: bool,
+pub struct PerceptionStates {
+    pub vehicle_otolith: [f64; 6],
+    pub vehicle_canal: [f64; 9],
+    pub simulator_otolith: [f64; 6],
+    pub simulator_canal: [f64; 9],
 }
 
-impl CueingOutputs {
-    /// The pose command and the motion felt for the washout's state `x` and the vehicle's
-    /// motion `m`.
-    pub fn compute(p: &CueingParameters, x: &[f64; STATE_DIM], m: &VehicleMotion) -> CueingOutputs {
-        let pose = p.washout.pose(x, m);
-        let head = Vector3::from(p.head);
-        // The centre of mass's deviation from neutral: the head's displacement and the
-        // rotation about the head, r - neutral = P + head - R head.
-        let arm = rotated(&rotation(&pose.angles), &head);
-        let dr: [Jet; 3] = std::array::from_fn(|i| pose.head[i] - arm[i] + head[i]);
-        let limited = p.workspace().limit(&dr, &pose.angles);
-        let (r, angles) = (limited.r, limited.angles);
-        let rot = rotation(&angles);
-        let arm = rotated(&rot, &head);
-        let head_acceleration = Vector3::from_fn(|i, _| r[i].d2 + arm[i].d2);
-        let felt = rot.map(|x| x.v).transpose() * (head_acceleration + Vector3::new(0.0, 0.0, p.washout.gravity));
-        let omegasim = body_rates(&angles.map(|a| a.v), &angles.map(|a| a.d1));
-        CueingOutputs {
-            r: r.map(|x| x.v),
-            v: r.map(|x| x.d1),
-            a: r.map(|x| x.d2),
-            angles: angles.map(|x| x.v),
-            angle_rates: angles.map(|x| x.d1),
-            angle_accelerations: angles.map(|x| x.d2),
-            fsim: felt.into(),
-            omegasim: omegasim.into(),
-            usage: limited.usage,
-            scale: limited.scale,
-            limited: limited.scale < 1.0,
+/// Both perceptions at rest under gravity `g`.
+fn perception_at_rest(g: f64) -> PerceptionStates {
+    let rest = Perception::at_rest([0.0, 0.0, g]);
+    let mut p = PerceptionStates {
+        vehicle_otolith: [0.0; 6],
+        vehicle_canal: [0.0; 9],
+        simulator_otolith: [0.0; 6],
+        simulator_canal: [0.0; 9],
+    };
+    p.set(&rest, &rest);
+    p
+}
+
+impl PerceptionStates {
+    pub fn vehicle(&self) -> Perception {
+        Self::perception(&self.vehicle_otolith, &self.vehicle_canal)
+    }
+
+    pub fn simulator(&self) -> Perception {
+        Self::perception(&self.simulator_otolith, &self.simulator_canal)
+    }
+
+    fn perception(otolith: &[f64; 6], canal: &[f64; 9]) -> Perception {
+        let mut x = [0.0; 15];
+        x[..6].copy_from_slice(otolith);
+        x[6..].copy_from_slice(canal);
+        Perception::from_array(&x)
+    }
+
+    pub fn set(&mut self, vehicle: &Perception, simulator: &Perception) {
+        let (v, s) = (vehicle.to_array(), simulator.to_array());
+        self.vehicle_otolith.copy_from_slice(&v[..6]);
+        self.vehicle_canal.copy_from_slice(&v[6..]);
+        self.simulator_otolith.copy_from_slice(&s[..6]);
+        self.simulator_canal.copy_from_slice(&s[6..]);
+    }
+
+    /// The 30 lags in the state vector's order.
+    pub fn to_array(&self) -> [f64; 30] {
+        let mut x = [0.0; 30];
+        x[..6].copy_from_slice(&self.vehicle_otolith);
+        x[6..15].copy_from_slice(&self.vehicle_canal);
+        x[15..21].copy_from_slice(&self.simulator_otolith);
+        x[21..].copy_from_slice(&self.simulator_canal);
+        x
+    }
+
+    pub fn from_array(x: &[f64; 30]) -> Self {
+        fn part<const N: usize>(x: &[f64; 30], at: usize) -> [f64; N] {
+            std::array::from_fn(|i| x[at + i])
         }
+        PerceptionStates {
+            vehicle_otolith: part(x, 0),
+            vehicle_canal: part(x, 6),
+            simulator_otolith: part(x, 15),
+            simulator_canal: part(x, 21),
+        }
+    }
+}
+
+/// The predictive method's state between steps (saved with the FMU state).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PredictiveState {
+    /// The commanded head motion and attitude.
+    pub motion: CommandedMotion,
+    /// The last plan's jerks per grid step (what the next solve linearises about).
+    pub plan: [[f64; CHANNELS]; GRID_STEPS],
+    /// The jerks held until the next solve.
+    pub jerk: [f64; CHANNELS],
+    /// Solves done since the start: the next is at `start + solves mpc.period`.
+    pub solves: u64,
+    /// `mpc.iterations`: the last solve's.
+    pub iterations: i32,
+    /// `mpc.fallbacks`: failed solves since the start.
+    pub fallbacks: i32,
+    /// Whether the current period is the classical washout's (the last solve failed).
+    pub falling_back: bool,
+}
+
+/// Number of the model's continuous states (Model Exchange): the washout's and the lags.
+pub const CONTINUOUS_STATES: usize = STATE_DIM + 30;
+
+/// The cueing FMU model.
+#[derive(Debug)]
+pub struct CueingModel {
+    pub parameters: CueingParameters,
+    /// Inputs `f`, `omega`.
+    pub vehicle: VehicleMotion,
+    /// The inputs' first derivatives for the next step (`fmi2SetRealInputDerivatives`; 0
+    /// after each step): `f` then `omega`.
+    pub input_rates: [f64; 6],
+    pub state: CueingStates,
+    /// The tilt limiter's modes (discrete states).
+    pub tilt_modes: TiltModes,
+    pub perception: PerceptionStates,
+    pub predictive_state: PredictiveState,
+    pub time: f64,
+    /// The start time (the predictive method's solves are at `start + k mpc.period`).
+    pub start_time: f64,
+    /// Whether the model left Initialization Mode (its parameters checked, the preview read).
+    initialised: bool,
+    /// The predictive method's solver (made when the method is, after initialisation).
+    predictive: Option<Box<PredictiveCueing>>,
+    /// The preview file's rows, read at initialisation.
+    preview: Preview,
+    outputs: Option<CueingOutputs>,
+}
+
+impl Clone for CueingModel {
+    /// A copy without the solver, which [`CueingModel::prepare`] makes again.
+    fn clone(&self) -> Self {
+        CueingModel {
+            parameters: self.parameters.clone(),
+            vehicle: self.vehicle,
+            input_rates: self.input_rates,
+            state: self.state,
+            tilt_modes: self.tilt_modes,
+            perception: self.perception,
+            predictive_state: self.predictive_state,
+            time: self.time,
+            start_time: self.start_time,
+            initialised: self.initialised,
+            predictive: None,
+            preview: self.preview.clone(),
+            outputs: self.outputs,
+        }
+    }
+}
+
+impl Default for CueingModel {
+    fn default() -> Self {
+        let parameters = CueingParameters::default();
+        CueingModel {
+            vehicle: VehicleMotion { f: [0.0, 0.0, parameters.washout.gravity], omega: [0.0; 3] },
+            perception: perception_at_rest(parameters.washout.gravity),
+            parameters,
+            input_rates: [0.0; 6],
+            state: CueingStates::default(),
+            tilt_modes: [TiltMode::Following; 2],
+            predictive_state: PredictiveState::default(),
+            time: 0.0,
+            start_time: 0.0,
+            initialised: false,
+            predictive: None,
+            preview: Preview::default(),
+            outputs: None,
+        }
+    }
+}
+
+impl CueingModel {
+    /// The pose of the method in use, before the limiter.
+    pub fn pose(&self, x: &[f64; STATE_DIM], m: &VehicleMotion, modes: &TiltModes, motion: &CommandedMotion) -> WashoutPose {
+        match self.parameters.method {
+            Method::Classical => self.parameters.washout.pose(x, m, modes),
+            Method::Predictive => stepping::predictive_pose(motion),
+        }
+    }
+
+    fn command(&self, x: &[f64; STATE_DIM], m: &VehicleMotion, modes: &TiltModes, motion: &CommandedMotion) -> Command {
+        Command::of(&self.parameters, &self.pose(x, m, modes, motion))
+    }
+
+    fn outputs(&mut self) -> &CueingOutputs {
+        if self.outputs.is_none() {
+            let command =
+                self.command(&self.state.to_vector(), &self.vehicle, &self.tilt_modes, &self.predictive_state.motion);
+            self.outputs =
+                Some(CueingOutputs::of(&command, &self.perception.vehicle(), &self.perception.simulator()));
+        }
+        match &self.outputs {
+            Some(o) => o,
+            None => unreachable!("set above"),
+        }
+    }
+
+    /// The continuous states' rate now (Model Exchange, the classical method): the washout's
+    /// and the lags' (the simulator's driven by the command's cues).
+    pub fn rate(&self) -> [f64; CONTINUOUS_STATES] {
+        let x = self.state.to_vector();
+        let mut dx = [0.0; CONTINUOUS_STATES];
+        dx[..STATE_DIM].copy_from_slice(&self.parameters.washout.rate(&x, &self.vehicle, &self.tilt_modes));
+        let command = self.command(&x, &self.vehicle, &self.tilt_modes, &self.predictive_state.motion);
+        let vehicle = self.perception.vehicle().rate(&self.vehicle.f, &self.vehicle.omega);
+        let simulator = self.perception.simulator().rate(&command.fsim, &command.omegasim);
+        let mut lags = PerceptionStates::from_array(&[0.0; 30]);
+        lags.set(&vehicle, &simulator);
+        dx[STATE_DIM..].copy_from_slice(&lags.to_array());
+        dx
+    }
+
+    /// The predictive method's solver, made after initialisation and after a restored state
+    /// (allocations happen here, not in the steps).
+    fn make_solver(&mut self) -> Result<(), String> {
+        self.predictive = match self.parameters.method {
+            Method::Classical => None,
+            Method::Predictive => Some(Box::new(PredictiveCueing::new(
+                self.parameters.predictive(),
+                self.parameters.predictive_stand(),
+            )?)),
+        };
+        Ok(())
     }
 }
 
@@ -235,77 +327,6 @@ fn check_pitch(pitch: f64) -> Result<(), String> {
         ));
     }
     Ok(())
-}
-
-fn rotated(rot: &nalgebra::Matrix3<Jet>, v: &Vector3<f64>) -> [Jet; 3] {
-    std::array::from_fn(|i| rot[(i, 0)] * v.x + rot[(i, 1)] * v.y + rot[(i, 2)] * v.z)
-}
-
-/// The cueing FMU model.
-#[derive(Clone, Debug, PartialEq)]
-pub struct CueingModel {
-    pub parameters: CueingParameters,
-    /// Inputs `f`, `omega`.
-    pub vehicle: VehicleMotion,
-    /// The inputs' first derivatives for the next step (`fmi2SetRealInputDerivatives`; 0
-    /// after each step): `f` then `omega`.
-    pub input_rates: [f64; 6],
-    pub state: CueingStates,
-    pub time: f64,
-    outputs: Option<CueingOutputs>,
-}
-
-impl Default for CueingModel {
-    fn default() -> Self {
-        let parameters = CueingParameters::default();
-        CueingModel {
-            vehicle: VehicleMotion { f: [0.0, 0.0, parameters.washout.gravity], omega: [0.0; 3] },
-            parameters,
-            input_rates: [0.0; 6],
-            state: CueingStates::default(),
-            time: 0.0,
-            outputs: None,
-        }
-    }
-}
-
-impl CueingModel {
-    fn outputs(&mut self) -> &CueingOutputs {
-        let (p, x, m) = (&self.parameters, self.state.to_vector(), &self.vehicle);
-        self.outputs.get_or_insert_with(|| CueingOutputs::compute(p, &x, m))
-    }
-
-    /// The washout's state rate now.
-    pub fn rate(&self) -> [f64; STATE_DIM] {
-        self.parameters.washout.rate(&self.state.to_vector(), &self.vehicle)
-    }
-
-    /// Advances the states by `h` with RK4 in equal sub-steps of at most `solver.maxStep`,
-    /// the inputs following their derivatives from the step's start.
-    fn integrate(&self, h: f64) -> [f64; STATE_DIM] {
-        let w = &self.parameters.washout;
-        let (m, rates) = (&self.vehicle, &self.input_rates);
-        let at = |tau: f64| VehicleMotion {
-            f: std::array::from_fn(|i| m.f[i] + rates[i] * tau),
-            omega: std::array::from_fn(|i| m.omega[i] + rates[3 + i] * tau),
-        };
-        let n = (h / self.parameters.max_step).abs().ceil().max(1.0) as usize;
-        let dt = h / n as f64;
-        let mut x = self.state.to_vector();
-        let shifted = |x: &[f64; STATE_DIM], k: &[f64; STATE_DIM], c: f64| std::array::from_fn(|i| x[i] + c * k[i]);
-        for step in 0..n {
-            let tau = step as f64 * dt;
-            let (start, middle, end) = (at(tau), at(tau + 0.5 * dt), at(tau + dt));
-            let k1 = w.rate(&x, &start);
-            let k2 = w.rate(&shifted(&x, &k1, 0.5 * dt), &middle);
-            let k3 = w.rate(&shifted(&x, &k2, 0.5 * dt), &middle);
-            let k4 = w.rate(&shifted(&x, &k3, dt), &end);
-            for i in 0..STATE_DIM {
-                x[i] += dt / 6.0 * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
-            }
-        }
-        x
-    }
 }
 
 impl FmuModel for CueingModel {
@@ -326,6 +347,11 @@ impl FmuModel for CueingModel {
             Some(Binding::Stored) => self.real_stored(var),
             Some(Binding::Cached { .. }) => self.output_value(var),
             Some(Binding::Derivative) => INFO.derivative_state_index(var).map(|i| self.rate()[i]),
+            Some(Binding::Computed) if var.group == variables::group::EVENT_INDICATORS => {
+                let mut z = [0.0; 4];
+                self.event_indicators(&mut z);
+                z.get(var.index).copied()
+            }
             Some(Binding::Computed) => Some(self.time),
             None => None,
         };
@@ -338,32 +364,86 @@ impl FmuModel for CueingModel {
         Ok(())
     }
 
-    fn get_integer(&mut self, _var: VariableRef) -> i32 {
-        0
+    fn get_integer(&mut self, var: VariableRef) -> i32 {
+        match var.group {
+            variables::group::MPC_ITERATIONS => self.predictive_state.iterations,
+            variables::group::MPC_FALLBACKS => self.predictive_state.fallbacks,
+            _ => self.integer(var).unwrap_or(0),
+        }
     }
 
-    fn set_integer(&mut self, _var: VariableRef, _value: i32) -> Result<(), String> {
-        Err("not a settable Integer variable".into())
+    fn set_integer(&mut self, var: VariableRef, value: i32) -> Result<(), String> {
+        let result = self.set_integer_code(var, value).unwrap_or_else(|| Err("not a settable Integer variable".into()));
+        self.outputs = None;
+        result
     }
 
     fn get_boolean(&mut self, var: VariableRef) -> bool {
         var.group == variables::group::LIMITED && self.outputs().limited
     }
 
+    fn get_string(&mut self, var: VariableRef) -> Option<String> {
+        self.string_value(var).map(str::to_string)
+    }
+
+    fn set_string(&mut self, var: VariableRef, value: &str) -> Result<(), String> {
+        *self.string_slot(var).ok_or("not a settable String variable")? = value.to_string();
+        Ok(())
+    }
+
     fn exit_initialization(
         &mut self,
         start_time: f64,
         _tolerance: Option<f64>,
-        _model_exchange: bool,
+        model_exchange: bool,
     ) -> Result<Initialised, String> {
         super::check_start_time(start_time)?;
         self.parameters.validate()?;
+        if model_exchange && self.parameters.method == Method::Predictive {
+            return Err("cueing.method = 1 (predictive cueing) runs in Co-Simulation only: its plans are made every \
+                        mpc.period, not by the host's integrator; use the classical washout (0) in Model Exchange"
+                .into());
+        }
+        self.preview = Preview::read(&self.parameters.preview_file)?;
+        self.make_solver()?;
+        self.initialised = true;
         self.time = start_time;
+        self.start_time = start_time;
         self.outputs = None;
+        // Both perceptions start at rest under the vehicle's specific force as set.
+        let rest = Perception::at_rest(self.vehicle.f);
+        let mut simulator = Perception::at_rest([0.0, 0.0, self.parameters.washout.gravity]);
+        simulator.canal = rest.canal;
+        self.perception.set(&rest, &simulator);
+        self.predictive_state = PredictiveState::default();
+        self.tilt_modes = [TiltMode::Following; 2];
         let w = &self.parameters.washout;
+        let method = match self.parameters.method {
+            Method::Classical => "classical washout".to_string(),
+            Method::Predictive => {
+                let p = self.parameters.predictive();
+                format!(
+                    "predictive cueing: period {:?} s, horizon {:?} s, trust {:?} s, weights f {:?}, omega {:?}, \
+                     neutral {:?}, input {:?}, leg speed {:?} m/s, preview {}",
+                    p.period,
+                    p.horizon,
+                    p.trust,
+                    p.weight_f,
+                    p.weight_omega,
+                    p.weight_neutral,
+                    p.weight_input,
+                    p.leg_speed,
+                    if self.preview.is_empty() {
+                        "none (the inputs held over the horizon)".to_string()
+                    } else {
+                        format!("{} rows from {}", self.preview.len(), self.parameters.preview_file)
+                    }
+                )
+            }
+        };
         Ok(format!(
-            "initialised at t = {start_time:?}: K_f = {:?}, K_w = {:?}, w_t = {:?} rad/s, w_b = {:?} rad/s, tilt \
-             w_l = {:?} rad/s at most {:?} rad/s, w_r = {:?} rad/s, head {:?} m, margin {:?} m",
+            "initialised at t = {start_time:?}: {method}; K_f = {:?}, K_w = {:?}, w_t = {:?} rad/s, w_b = {:?} rad/s, \
+             tilt w_l = {:?} rad/s at most {:?} rad/s, w_r = {:?} rad/s, head {:?} m, margin {:?} m",
             w.scale_f,
             w.scale_omega,
             w.hp_f_omega,
@@ -378,24 +458,11 @@ impl FmuModel for CueingModel {
     }
 
     fn do_step(&mut self, t: f64, h: f64, _stop_at_event: bool) -> Result<StepReport, StepError> {
-        let x = self.integrate(h);
-        let pitch = x[layout::ROTATION_ANGLES + 1] + x[layout::TILT_ANGLES + 1];
-        check_pitch(pitch).map_err(|why| StepError {
-            message: format!("step from t = {t:?} to {:?} rolled back: {why}", t + h),
-            retry_shorter: false,
-        })?;
-        if let Some(i) = x.iter().position(|v| !v.is_finite()) {
-            return Err(StepError {
-                message: format!(
-                    "step from t = {t:?} to {:?} rolled back: state {} of the washout is not finite (check the \
-                     filters' parameters and the inputs)",
-                    t + h,
-                    i + 1
-                ),
-                retry_shorter: false,
-            });
-        }
-        self.state = CueingStates::from_vector(&x);
+        let after = stepping::step(self, t, h)?;
+        self.state = after.washout;
+        self.tilt_modes = after.tilt_modes;
+        self.perception = after.perception;
+        self.predictive_state = after.predictive;
         self.input_rates = [0.0; 6];
         self.time = t + h;
         self.outputs = None;
@@ -422,13 +489,20 @@ impl FmuModel for CueingModel {
     }
 
     fn continuous_states(&self, x: &mut [f64]) {
-        x.copy_from_slice(&self.state.to_vector()[..x.len()]);
+        let mut all = [0.0; CONTINUOUS_STATES];
+        all[..STATE_DIM].copy_from_slice(&self.state.to_vector());
+        all[STATE_DIM..].copy_from_slice(&self.perception.to_array());
+        x.copy_from_slice(&all[..x.len()]);
     }
 
     fn set_continuous_states(&mut self, x: &[f64]) {
-        let mut full = self.state.to_vector();
-        full[..x.len()].copy_from_slice(x);
-        self.state = CueingStates::from_vector(&full);
+        let mut all = [0.0; CONTINUOUS_STATES];
+        self.continuous_states(&mut all);
+        all[..x.len()].copy_from_slice(x);
+        let washout: [f64; STATE_DIM] = std::array::from_fn(|i| all[i]);
+        let lags: [f64; 30] = std::array::from_fn(|i| all[STATE_DIM + i]);
+        self.state = CueingStates::from_vector(&washout);
+        self.perception = PerceptionStates::from_array(&lags);
         self.outputs = None;
     }
 
@@ -442,12 +516,61 @@ impl FmuModel for CueingModel {
         dx.copy_from_slice(&rate[..dx.len()]);
     }
 
-    /// The stored variables (parameters, inputs, the washout's states), the inputs'
-    /// derivatives and the time.
+    /// The tilt limiter's switching functions: the roll's and the pitch's modes, then their
+    /// targets' clips.
+    fn event_indicators(&mut self, z: &mut [f64]) {
+        let g = self.parameters.washout.tilt_switching(&self.state.to_vector(), &self.vehicle, &self.tilt_modes);
+        for (slot, value) in z.iter_mut().zip(g) {
+            *slot = value;
+        }
+    }
+
+    /// A tilt whose switching function is not positive switches (its mode; a slewing angle
+    /// that caught up takes its target's value, which it equals to the host's tolerance).
+    fn event_update(&mut self, sink: &mut dyn FnMut(&str)) -> super::EventUpdate {
+        let w = self.parameters.washout;
+        let mut x = self.state.to_vector();
+        let g = w.tilt_switching(&x, &self.vehicle, &self.tilt_modes);
+        for i in 0..TILT_MODE_SWITCHES {
+            if g[i] <= 0.0 {
+                let before = self.tilt_modes[i];
+                w.switch_tilt(&mut x, &self.vehicle, &mut self.tilt_modes, i);
+                sink(&format!(
+                    "t = {:?}: the {} tilt switches from {before:?} to {:?}",
+                    self.time,
+                    ["roll", "pitch"][i],
+                    self.tilt_modes[i]
+                ));
+            }
+        }
+        self.state = CueingStates::from_vector(&x);
+        self.outputs = None;
+        super::EventUpdate::default()
+    }
+
+    /// The stored variables (parameters, inputs, the washout's states, the lags), the
+    /// inputs' derivatives, the time and the predictive method's state.
     fn save(&self, w: &mut ByteWriter) {
         self.save_variables(w);
         w.f64s(&self.input_rates);
         w.f64(self.time);
+        w.f64(self.start_time);
+        let p = &self.predictive_state;
+        w.f64s(&p.motion.to_array());
+        for row in &p.plan {
+            w.f64s(row);
+        }
+        w.f64s(&p.jerk);
+        w.u64(p.solves);
+        w.i32(p.iterations);
+        w.i32(p.fallbacks);
+        w.bool(p.falling_back);
+        w.u8(self.tilt_modes[0].code());
+        w.u8(self.tilt_modes[1].code());
+        // After initialisation the preview's rows belong to the state: a restored state does
+        // not read the file again.
+        w.bool(self.initialised);
+        self.preview.save(w);
     }
 
     fn restore(r: &mut ByteReader) -> Result<Self, SnapshotError> {
@@ -455,6 +578,25 @@ impl FmuModel for CueingModel {
         model.restore_variables(r)?;
         model.input_rates = r.finite_array::<6>("der(f), der(omega)")?;
         model.time = r.finite("time")?;
+        model.start_time = r.finite("start time")?;
+        let p = &mut model.predictive_state;
+        p.motion = CommandedMotion::from_array(&r.finite_array("the commanded motion")?);
+        for row in p.plan.iter_mut() {
+            *row = r.finite_array("the plan")?;
+        }
+        p.jerk = r.finite_array("the jerks")?;
+        p.solves = r.u64()?;
+        p.iterations = r.i32()?;
+        p.fallbacks = r.i32()?;
+        p.falling_back = r.bool()?;
+        for i in 0..2 {
+            model.tilt_modes[i] = TiltMode::from_code(r.u8()?).ok_or(SnapshotError("a tilt mode out of range".into()))?;
+        }
+        model.initialised = r.bool()?;
+        model.preview = Preview::restore(r)?;
+        if model.initialised {
+            model.make_solver().map_err(SnapshotError)?;
+        }
         Ok(model)
     }
 }
@@ -462,6 +604,7 @@ impl FmuModel for CueingModel {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::physics::stand::LEG_COUNT;
 
     /// The default washout after 1.5 s of braking in a left curve, or (`limited`) one that
     /// leaves the workspace on a sustained braking in a left curve (full scale,
@@ -487,6 +630,24 @@ mod tests {
         m
     }
 
+    impl CueingModel {
+        /// The washout's states `h` (either sign) ahead, the inputs held.
+        fn integrate(&self, h: f64) -> [f64; STATE_DIM] {
+            let mut x = self.state.to_vector();
+            let n = (h.abs() / 1e-3).ceil().max(1.0);
+            for i in 0..n as usize {
+                let tau = i as f64 * h / n;
+                x = stepping::washout_rk4(&self.parameters.washout, &x, &self.tilt_modes, tau, h / n, &|_| self.vehicle);
+            }
+            x
+        }
+
+        fn outputs_at(&self, x: &[f64; STATE_DIM]) -> CueingOutputs {
+            let c = self.command(x, &self.vehicle, &self.tilt_modes, &self.predictive_state.motion);
+            CueingOutputs::of(&c, &self.perception.vehicle(), &self.perception.simulator())
+        }
+    }
+
     /// The pose command's velocity and acceleration (through the washout's jets and the
     /// limiter's Newton steps on jets) against central differences of the command along the
     /// motion, the inputs held: the limiter acting, and not.
@@ -494,10 +655,10 @@ mod tests {
     fn the_command_carries_its_exact_derivatives() {
         for limited in [true, false] {
             let m = moving_model(limited);
-            let now = CueingOutputs::compute(&m.parameters, &m.state.to_vector(), &m.vehicle);
+            let now = m.outputs_at(&m.state.to_vector());
             assert_eq!(now.limited, limited, "usage {}", now.usage);
             let d = 1e-4;
-            let at = |h: f64| CueingOutputs::compute(&m.parameters, &m.integrate(h), &m.vehicle);
+            let at = |h: f64| m.outputs_at(&m.integrate(h));
             let (ahead, behind) = (at(d), at(-d));
             for i in 0..3 {
                 let v = (ahead.r[i] - behind.r[i]) / (2.0 * d);
@@ -525,7 +686,7 @@ mod tests {
     #[test]
     fn the_limited_command_keeps_the_legs_inside_their_margins() {
         let m = moving_model(true);
-        let o = CueingOutputs::compute(&m.parameters, &m.state.to_vector(), &m.vehicle);
+        let o = m.outputs_at(&m.state.to_vector());
         assert!(o.usage > 1.0, "the washout's own pose leaves the workspace (usage {})", o.usage);
         let ws = m.parameters.workspace();
         let dr = [0, 1, 2].map(|i| o.r[i] - m.parameters.neutral[i]);

@@ -1,4 +1,4 @@
-//! The `StewartCueing` variables (SPEC §11, docs/cueing.md). The pose command carries the
+//! The `StewartCueing` variables (SPEC §11-12, docs/cueing.md). The pose command carries the
 //! controller's `pose.*` input names and the stand's geometry the platform's names, so an SSP
 //! connects and binds them by name.
 
@@ -16,6 +16,26 @@ const STATE_GROUPS: [Dependency; 8] = [
     All("washout.tilt"),
     All("washout.z"),
     All("washout.angles"),
+];
+/// The perceived vehicle's cues: its lags.
+const PERCEIVED_VEHICLE: &[Dependency] = &[All("perception.vehicle.otolith"), All("perception.vehicle.canal")];
+/// The perceived simulator's cues: its lags.
+const PERCEIVED_SIMULATOR: &[Dependency] = &[All("perception.simulator.otolith"), All("perception.simulator.canal")];
+/// The simulator's lags' rates: the command's cues (the washout's states and both inputs) and
+/// the lags themselves.
+const SIMULATOR_LAG_RATES: &[Dependency] = &[
+    STATE_GROUPS[0],
+    STATE_GROUPS[1],
+    STATE_GROUPS[2],
+    STATE_GROUPS[3],
+    STATE_GROUPS[4],
+    STATE_GROUPS[5],
+    STATE_GROUPS[6],
+    STATE_GROUPS[7],
+    All("f"),
+    All("omega"),
+    All("perception.simulator.otolith"),
+    All("perception.simulator.canal"),
 ];
 /// Outputs of the pose alone: the washout's states (through the limiter, all of them).
 const POSE: &[Dependency] = &STATE_GROUPS;
@@ -71,6 +91,16 @@ const KNOWNS: &[Dependency] = &[
     All("A"),
     All("lmin"),
     All("lmax"),
+    All("cueing.method"),
+    All("mpc.period"),
+    All("mpc.horizon"),
+    All("mpc.trust"),
+    All("mpc.weight.f"),
+    All("mpc.weight.omega"),
+    All("mpc.weight.neutral"),
+    All("mpc.weight.input"),
+    All("mpc.legSpeed"),
+    All("mpc.maxIterations"),
 ];
 
 declare_variables! {
@@ -143,6 +173,60 @@ declare_variables! {
             "solver.maxStep", &[], 46, Some("s"),
             "Largest internal step of the Co-Simulation's fixed-step RK4 (the communication step is divided evenly)",
         ); real(parameters.max_step),
+        METHOD => V::parameter(
+            "cueing.method", &[], 47, None,
+            "0 = the classical washout (SPEC 11); 1 = predictive cueing (SPEC 12): an optimal control problem over \
+             mpc.horizon every mpc.period, on the perception model, every leg within its stroke (Co-Simulation only)",
+        )
+        .integer(0, 1); integer(parameters.method),
+        MPC_PERIOD => V::parameter(
+            "mpc.period", &[], 140, Some("s"), "Predictive cueing: time between solves (the jerks are held in between)",
+        ); real(parameters.predictive.period),
+        MPC_HORIZON => V::parameter(
+            "mpc.horizon", &[], 141, Some("s"),
+            "Predictive cueing: prediction horizon (20 grid steps; the jerks in 4 blocks of 1, 2, 4 and 13 steps)",
+        ); real(parameters.predictive.horizon),
+        MPC_TRUST => V::parameter(
+            "mpc.trust", &[], 142, Some("s"),
+            "Predictive cueing: the perceived errors tau ahead weigh exp(-tau/trust) (the held inputs are a guess of \
+             the vehicle's future that grows worse with tau)",
+        ); real(parameters.predictive.trust),
+        MPC_WEIGHT_F => V::parameter(
+            "mpc.weight.f", &[3], 143, Some("1"),
+            "Predictive cueing: weight of the perceived specific-force error per cabin axis, per squared threshold \
+             (0.17, 0.17, 0.28 m/s2)",
+        ); real(parameters.predictive.weight_f),
+        MPC_WEIGHT_OMEGA => V::parameter(
+            "mpc.weight.omega", &[3], 146, Some("1"),
+            "Predictive cueing: weight of the perceived angular-velocity error per cabin axis, per squared threshold \
+             (3.0, 3.6, 2.6 deg/s)",
+        ); real(parameters.predictive.weight_omega),
+        MPC_WEIGHT_NEUTRAL => V::parameter(
+            "mpc.weight.neutral", &[], 149, Some("1"),
+            "Predictive cueing: weight of the head's displacement from neutral (per m2) and of the yaw (per rad2), \
+             which return the stand to neutral",
+        ); real(parameters.predictive.weight_neutral),
+        MPC_WEIGHT_INPUT => V::parameter(
+            "mpc.weight.input", &[], 150, Some("1"),
+            "Predictive cueing: weight of the jerks (per (m/s3)2; the angular ones times g2), which keep the command \
+             smooth; > 0",
+        ); real(parameters.predictive.weight_input),
+        MPC_LEG_SPEED => V::parameter(
+            "mpc.legSpeed", &[], 151, Some("m/s"), "Predictive cueing: largest leg speed of the planned motion",
+        ); real(parameters.predictive.leg_speed),
+        MPC_MAX_ITERATIONS => V::parameter(
+            "mpc.maxIterations", &[], 152, None,
+            "Predictive cueing: the solver's iteration budget; a solve that needs more hands its period to the \
+             classical washout (mpc.fallbacks)",
+        )
+        .integer(1, 1000); integer(parameters.iterations),
+        PREVIEW_FILE => V::parameter(
+            "preview.file", &[], 153, None,
+            "Predictive cueing: a CSV file of the vehicle's future (header time, f[1], f[2], f[3], omega[1], omega[2], \
+             omega[3]; s, m/s2, rad/s; simulation time), read at initialisation; empty: the inputs are held over the \
+             horizon",
+        )
+        .string(); string(parameters.preview_file),
         B => machine::base_joints(50); real(parameters.base_joints),
         A => machine::platform_joints(70); real(parameters.platform_joints),
         LMIN => machine::stroke_lower(90); real(parameters.lmin),
@@ -187,6 +271,40 @@ declare_variables! {
             .boolean()
             .discrete()
             .depends_on(POSE); computed,
+        PERCEIVED_F => V::output(
+            "perceived.f", &[3], 160, Some("m/s2"),
+            "The vehicle's specific force as the driver perceives it (the otoliths' model of SPEC 12 on f), cabin axes",
+            KNOWNS,
+        )
+        .depends_on(PERCEIVED_VEHICLE); cached(outputs.perceived_f),
+        PERCEIVED_OMEGA => V::output(
+            "perceived.omega", &[3], 163, Some("rad/s"),
+            "The vehicle's angular velocity as the driver perceives it (the canals' model on omega), cabin axes", KNOWNS,
+        )
+        .depends_on(PERCEIVED_VEHICLE); cached(outputs.perceived_omega),
+        PERCEIVED_FSIM => V::output(
+            "perceived.fsim", &[3], 166, Some("m/s2"),
+            "The simulator's specific force as the driver perceives it (the otoliths' model on fsim)", KNOWNS,
+        )
+        .depends_on(PERCEIVED_SIMULATOR); cached(outputs.perceived_fsim),
+        PERCEIVED_OMEGASIM => V::output(
+            "perceived.omegasim", &[3], 169, Some("rad/s"),
+            "The simulator's angular velocity as the driver perceives it (the canals' model on omegasim)", KNOWNS,
+        )
+        .depends_on(PERCEIVED_SIMULATOR); cached(outputs.perceived_omegasim),
+        MPC_ITERATIONS => V::output(
+            "mpc.iterations", &[], 172, None, "Predictive cueing: the solver's iterations in the last solve", KNOWNS,
+        )
+        .integer(0, 1000)
+        .discrete(); computed,
+        MPC_FALLBACKS => V::output(
+            "mpc.fallbacks", &[], 173, None,
+            "Predictive cueing: solves that failed or ran out of iterations since the start (each hands its period \
+             to the classical washout)",
+            KNOWNS,
+        )
+        .integer(0, 2147483647)
+        .discrete(); computed,
         // The continuous states (`STATES`) are the groups whose derivatives are declared, in
         // that order: `crate::physics::cueing::washout::layout`.
         Q => V::local("washout.q", &[3], 200, Some("m.s"), "Translational filter's first state per inertial axis: its derivative is washout.r", KNOWNS); real(state.q),
@@ -213,5 +331,55 @@ declare_variables! {
             .derivative_named("washout.z", &[SameIndex("washout.angles")]); real(state.angles),
         DER_ROT_ANGLES => V::local("der(washout.angles)", &[3], 228, Some("rad/s"), "Their rates (W_r's output)", KNOWNS)
             .derivative("washout.angles", "washout.angles", 1, MOTION); derivative,
+        // The perception's lags (docs/cueing.md): per cabin axis the cue lagged by each time
+        // constant of the otoliths' (tau_oL, tau_oS) or the canals' (tau_1, tau_2, tau_a) filter.
+        VEHICLE_OTOLITH => V::local(
+            "perception.vehicle.otolith", &[3, 2], 240, Some("m/s2"),
+            "The vehicle's specific force lagged by tau_oL = 5 s and tau_oS = 0.016 s, per axis (the otoliths' model)",
+            KNOWNS,
+        ); real(perception.vehicle_otolith),
+        VEHICLE_CANAL => V::local(
+            "perception.vehicle.canal", &[3, 3], 246, Some("rad/s"),
+            "The vehicle's angular velocity lagged by tau_1 = 5.73 s, tau_2 = 0.005 s and tau_a = 80 s, per axis (the \
+             canals' model)",
+            KNOWNS,
+        ); real(perception.vehicle_canal),
+        SIMULATOR_OTOLITH => V::local(
+            "perception.simulator.otolith", &[3, 2], 255, Some("m/s2"), "The same lags of fsim", KNOWNS,
+        ); real(perception.simulator_otolith),
+        SIMULATOR_CANAL => V::local(
+            "perception.simulator.canal", &[3, 3], 261, Some("rad/s"), "The same lags of omegasim", KNOWNS,
+        ); real(perception.simulator_canal),
+        DER_VEHICLE_OTOLITH => V::local(
+            "der(perception.vehicle.otolith)", &[3, 2], 270, Some("m/s3"), "Their rates", KNOWNS,
+        )
+        .derivative(
+            "perception.vehicle.otolith", "perception.vehicle.otolith", 1,
+            &[All("f"), All("perception.vehicle.otolith")],
+        ); derivative,
+        DER_VEHICLE_CANAL => V::local(
+            "der(perception.vehicle.canal)", &[3, 3], 276, Some("rad/s2"), "Their rates", KNOWNS,
+        )
+        .derivative(
+            "perception.vehicle.canal", "perception.vehicle.canal", 1,
+            &[All("omega"), All("perception.vehicle.canal")],
+        ); derivative,
+        DER_SIMULATOR_OTOLITH => V::local(
+            "der(perception.simulator.otolith)", &[3, 2], 285, Some("m/s3"), "Their rates", KNOWNS,
+        )
+        .derivative("perception.simulator.otolith", "perception.simulator.otolith", 1, SIMULATOR_LAG_RATES); derivative,
+        DER_SIMULATOR_CANAL => V::local(
+            "der(perception.simulator.canal)", &[3, 3], 291, Some("rad/s2"), "Their rates", KNOWNS,
+        )
+        .derivative("perception.simulator.canal", "perception.simulator.canal", 1, SIMULATOR_LAG_RATES); derivative,
+        EVENT_INDICATORS => V::local(
+            "eventIndicators", &[4], 300, Some("1"),
+            "Event indicators (FMI 3 Model Exchange): the tilt limiter's switching functions of the roll and the pitch \
+             (following: tilt.rateLimit - |target rate|, rad/s; slewing: the angle left to the target, rad), whose \
+             crossing below zero is a switch of the ideal rate limiter; then sin(tilt.max) - |argument| of the roll's \
+             and the pitch's target's arcsine, whose sign change is where the target's clip starts or stops",
+            KNOWNS,
+        )
+        .fmi3_only(); computed,
     }
 }

@@ -9,6 +9,8 @@
 //! inverse kinematics ([`crate::physics::direct_problem`]), measured lengths `l` and rates
 //! `ldot`. Pure functions; the controller FMU (`stewart_fmu::models::controller`) wraps them.
 
+pub mod predictive_cueing;
+
 use crate::maths;
 use crate::physics::direct_problem::DirectProblemSolution;
 use crate::physics::stand::LEG_COUNT;

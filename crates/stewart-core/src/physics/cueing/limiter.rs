@@ -146,6 +146,36 @@ impl Workspace {
         }
     }
 
+    /// The net behind a method that keeps the legs inside by itself (the predictive
+    /// method's plans): the command as it is while every leg is inside its margins, else
+    /// pulled back along the line towards neutral until every leg is (a jump, taken only
+    /// then). `usage` is the largest leg excursion at the pose itself.
+    pub fn net(&self, dr: &[Jet; 3], da: &[Jet; 3]) -> LimitedPose {
+        let (vr, va) = (dr.map(|x| x.v), da.map(|x| x.v));
+        let mut usage = 0.0f64;
+        for k in 0..LEG_COUNT {
+            let l0 = self.leg_length(k, &[0.0; 3], &[0.0; 3]);
+            let l = self.leg_length(k, &vr, &va);
+            let e = if l > l0 { (l - l0) / (self.upper[k] - l0) } else { (l - l0) / (self.lower[k] - l0) };
+            usage = usage.max(e);
+        }
+        let mut scale = 1.0;
+        if !self.fits(1.0, &vr, &va) {
+            let (mut lo, mut hi) = (0.0, 1.0);
+            for _ in 0..60 {
+                let mid = 0.5 * (lo + hi);
+                if self.fits(mid, &vr, &va) { lo = mid } else { hi = mid }
+            }
+            scale = lo;
+        }
+        LimitedPose {
+            r: std::array::from_fn(|i| dr[i] * scale + self.neutral[i]),
+            angles: da.map(|a| a * scale),
+            usage,
+            scale,
+        }
+    }
+
     /// Why the workspace cannot be used: the neutral pose must keep every leg inside its
     /// margins, and the onset must lie in (0, 1).
     pub fn validate(&self) -> Result<(), String> {

@@ -11,4 +11,5 @@
 
 pub mod jet;
 pub mod limiter;
+pub mod perception;
 pub mod washout;

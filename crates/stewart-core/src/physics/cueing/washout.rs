@@ -37,10 +37,46 @@ pub mod layout {
 }
 use layout::*;
 
-/// Gain, 1/s, with which a tilt angle that the rate limit left behind closes its last
-/// `tilt.rateLimit / TILT_CATCH_UP` of error (0.15 deg at 3 deg/s): the ideal limiter's slew
-/// without a switch in the equations (docs/cueing.md).
-pub const TILT_CATCH_UP: f64 = 20.0;
+/// The ideal rate limiter of each tilt angle (SPEC §11): the angle equals its target while the
+/// target moves no faster than `tilt.rateLimit` (`Following`), and otherwise slews towards it
+/// at the limit (`Rising`, `Falling`) until it catches up. A switch is where
+/// [`WashoutParameters::tilt_switching`] crosses zero: Co-Simulation locates it within its
+/// steps, Model Exchange as an event.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TiltMode {
+    #[default]
+    Following,
+    Rising,
+    Falling,
+}
+
+/// The modes of the roll and the pitch tilt.
+pub type TiltModes = [TiltMode; 2];
+
+/// The first [`WashoutParameters::tilt_switching`] functions are the modes' (a crossing below
+/// zero switches the mode); the others the targets' clips (a crossing either way only marks a
+/// jump of the targets' rates).
+pub const TILT_MODE_SWITCHES: usize = 2;
+
+impl TiltMode {
+    /// The mode's code in the FMU state (0, 1, 2).
+    pub fn code(self) -> u8 {
+        match self {
+            TiltMode::Following => 0,
+            TiltMode::Rising => 1,
+            TiltMode::Falling => 2,
+        }
+    }
+
+    pub fn from_code(code: u8) -> Option<TiltMode> {
+        match code {
+            0 => Some(TiltMode::Following),
+            1 => Some(TiltMode::Rising),
+            2 => Some(TiltMode::Falling),
+            _ => None,
+        }
+    }
+}
 
 /// The washout's parameters (units SI; defaults: docs/cueing.md, a truck cabin).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -177,26 +213,78 @@ impl WashoutParameters {
         })
     }
 
-    /// The tilt angles' rates and second derivatives: the rate-limited follower of the
-    /// targets.
-    fn tilt(&self, x: &[f64; STATE_DIM], f_s: &[f64; 3]) -> [Jet; 2] {
+    /// The tilt angles with their rates and second derivatives: each follows its target, or
+    /// slews at the rate limit (the ideal limiter, by mode).
+    fn tilt(&self, x: &[f64; STATE_DIM], f_s: &[f64; 3], modes: &TiltModes) -> [Jet; 2] {
         let targets = self.tilt_targets(self.low_passed(x, f_s));
         std::array::from_fn(|i| {
             let angle = x[TILT_ANGLES + i];
-            let target = targets[i];
-            let wanted = target.d1 + TILT_CATCH_UP * (target.v - angle);
-            if wanted.abs() >= self.tilt_rate_limit {
-                Jet::new(angle, clip(wanted, self.tilt_rate_limit), 0.0)
-            } else {
-                Jet::new(angle, wanted, target.d2 + TILT_CATCH_UP * (target.d1 - wanted))
+            match modes[i] {
+                TiltMode::Following => Jet::new(angle, targets[i].d1, targets[i].d2),
+                TiltMode::Rising => Jet::new(angle, self.tilt_rate_limit, 0.0),
+                TiltMode::Falling => Jet::new(angle, -self.tilt_rate_limit, 0.0),
             }
         })
     }
 
+    /// The tilt's switching functions: for the roll and the pitch, positive while each
+    /// angle's mode holds (following, `tilt.rateLimit - |target'|`; slewing, the distance left
+    /// to the target; [`TILT_MODE_SWITCHES`]); then for each target, positive while its
+    /// arcsine's argument is inside `+-sin(tilt.max)` (a sign change either way is where the
+    /// target's rate jumps to 0 or from it: a following angle's rate, and the cues, jump).
+    pub fn tilt_switching(&self, x: &[f64; STATE_DIM], m: &VehicleMotion, modes: &TiltModes) -> [f64; 4] {
+        let (f_s, _) = self.scaled(m);
+        let f_l = self.low_passed(x, &f_s);
+        let targets = self.tilt_targets(f_l);
+        let s_max = crate::maths::sin(self.tilt_max);
+        let roll_argument = f_l[1].v / self.gravity;
+        let pitch_argument = f_l[0].v / (self.gravity * crate::maths::cos(targets[0].v));
+        let mode = |i: usize| match modes[i] {
+            TiltMode::Following => self.tilt_rate_limit - targets[i].d1.abs(),
+            TiltMode::Rising => targets[i].v - x[TILT_ANGLES + i],
+            TiltMode::Falling => x[TILT_ANGLES + i] - targets[i].v,
+        };
+        [mode(0), mode(1), s_max - roll_argument.abs(), s_max - pitch_argument.abs()]
+    }
+
+    /// Tilt angle `i`'s mode after its switching function crossed zero at `x`: a follower
+    /// whose target outran the limit slews after it; a slewing angle that caught up follows
+    /// (and takes the target's value), unless the target moves away faster than the limit.
+    pub fn switch_tilt(&self, x: &mut [f64; STATE_DIM], m: &VehicleMotion, modes: &mut TiltModes, i: usize) {
+        let (f_s, _) = self.scaled(m);
+        let target = self.tilt_targets(self.low_passed(x, &f_s))[i];
+        modes[i] = if target.d1.abs() <= self.tilt_rate_limit && modes[i] != TiltMode::Following {
+            x[TILT_ANGLES + i] = target.v;
+            TiltMode::Following
+        } else if target.d1 > 0.0 {
+            TiltMode::Rising
+        } else {
+            TiltMode::Falling
+        };
+    }
+
+    /// Following angles set to their targets' values (after a step: a follower equals its
+    /// target, the integration's error aside).
+    pub fn follow_targets(&self, x: &mut [f64; STATE_DIM], m: &VehicleMotion, modes: &TiltModes) {
+        let (f_s, _) = self.scaled(m);
+        let targets = self.tilt_targets(self.low_passed(x, &f_s));
+        for i in 0..2 {
+            if modes[i] == TiltMode::Following {
+                x[TILT_ANGLES + i] = targets[i].v;
+            }
+        }
+    }
+
     /// The washout's attitude (rotational channel plus tilt) with its rate; the rotational
     /// channel's input `u = E^-1 w_s` and the rates `y'` of its angles.
-    fn attitude(&self, x: &[f64; STATE_DIM], f_s: &[f64; 3], w_s: &[f64; 3]) -> ([Jet; 3], [Jet; 3], [f64; 3]) {
-        let tilt = self.tilt(x, f_s);
+    fn attitude(
+        &self,
+        x: &[f64; STATE_DIM],
+        f_s: &[f64; 3],
+        w_s: &[f64; 3],
+        modes: &TiltModes,
+    ) -> ([Jet; 3], [Jet; 3], [f64; 3]) {
+        let tilt = self.tilt(x, f_s, modes);
         let value: [f64; 3] = std::array::from_fn(|i| x[ROTATION_ANGLES + i] + if i < 2 { tilt[i].v } else { 0.0 });
         let u = angle_rates(&value, w_s);
         let rotation_rate: [f64; 3] = std::array::from_fn(|i| {
@@ -219,8 +307,8 @@ impl WashoutParameters {
         u - c2 * x[HEAD_V + i] - c1 * x[HEAD_R + i] - c0 * x[TRANSLATION_Q + i]
     }
 
-    /// The state's rate with the vehicle's motion `m` held.
-    pub fn rate(&self, x: &[f64; STATE_DIM], m: &VehicleMotion) -> [f64; STATE_DIM] {
+    /// The state's rate with the vehicle's motion `m` held and the tilt's modes `modes`.
+    pub fn rate(&self, x: &[f64; STATE_DIM], m: &VehicleMotion, modes: &TiltModes) -> [f64; STATE_DIM] {
         let (f_s, w_s) = self.scaled(m);
         let mut dx = [0.0; STATE_DIM];
         let f_l = self.low_passed(x, &f_s);
@@ -228,7 +316,7 @@ impl WashoutParameters {
             dx[TILT_F + i] = f_l[i].d1;
             dx[TILT_FDOT + i] = f_l[i].d2;
         }
-        let (attitude, tilt, rotation_rate) = self.attitude(x, &f_s, &w_s);
+        let (attitude, tilt, rotation_rate) = self.attitude(x, &f_s, &w_s, modes);
         for i in 0..2 {
             dx[TILT_ANGLES + i] = tilt[i].d1;
         }
@@ -246,9 +334,9 @@ impl WashoutParameters {
 
     /// The washout's pose with its exact first and second derivatives (the vehicle's motion
     /// held).
-    pub fn pose(&self, x: &[f64; STATE_DIM], m: &VehicleMotion) -> WashoutPose {
+    pub fn pose(&self, x: &[f64; STATE_DIM], m: &VehicleMotion, modes: &TiltModes) -> WashoutPose {
         let (f_s, w_s) = self.scaled(m);
-        let (attitude, tilt, rotation_rate) = self.attitude(x, &f_s, &w_s);
+        let (attitude, tilt, rotation_rate) = self.attitude(x, &f_s, &w_s, modes);
         // u' = d/dt E(angles)^-1 w_s along the attitude's rate (w_s held).
         let moving = attitude.map(|a| Jet::new(a.v, a.d1, 0.0));
         let u = angle_rates(&moving, &w_s.map(|w| Jet::new(w, 0.0, 0.0)));

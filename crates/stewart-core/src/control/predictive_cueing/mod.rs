@@ -1,0 +1,214 @@
+//! Predictive motion cueing (SPEC §12, docs/cueing.md "Predictive cueing"): every
+//! `mpc.period` an optimal control problem over `mpc.horizon` chooses the commanded head
+//! motion and attitude (triple integrators driven by their jerks, [`motion`]) so that what the
+//! driver would perceive of the simulator's motion (the vestibular model of
+//! [`crate::physics::cueing::perception`]) follows what they would perceive of the vehicle's,
+//! with every leg kept inside its margins and the tilt and leg speeds limited.
+//!
+//! The problem is condensed onto the jerks (one per channel and input block, [`BLOCKS`]),
+//! linearised about the previous plan (its cues and legs, [`linearisation`]) and built in
+//! [`problem`]; a dense interior-point method ([`crate::optimisation::dense`]) solves it. Pure: the FMU
+//! (`stewart_fmu::models::cueing`) holds the state, reads the preview file, and hands a
+//! failed solve to the classical washout.
+
+pub mod linearisation;
+pub mod motion;
+pub mod problem;
+
+use nalgebra::Vector3;
+
+use crate::optimisation::dense::{DenseQp, QpOutcome, QpSettings};
+use crate::physics::cueing::limiter::Workspace;
+use crate::physics::cueing::perception::Perception;
+use crate::physics::cueing::washout::VehicleMotion;
+use motion::{CHANNELS, CommandedMotion};
+use problem::Problem;
+
+/// Grid steps over the horizon: the cues are predicted and weighed at their ends.
+pub const GRID_STEPS: usize = 20;
+/// The input blocks, in grid steps: over each the jerks are one unknown per channel (the
+/// first block short, the later ones long: decisions far ahead are re-made before they act).
+pub const BLOCKS: [usize; 4] = [1, 2, 4, 13];
+/// The grid points (steps from now) at which the constraints hold: the blocks' ends.
+pub const CONSTRAINED: [usize; 4] = [1, 3, 7, 20];
+/// Unknowns of the QP: a jerk per channel and block.
+pub const UNKNOWNS: usize = CHANNELS * BLOCKS.len();
+/// Inequalities per constrained point: each leg's length and speed (upper and lower), the
+/// roll and pitch rates and angles (upper and lower).
+pub const ROWS_PER_POINT: usize = 2 * 6 + 2 * 6 + 2 * 2 + 2 * 2;
+/// Inequalities of the constrained points.
+pub const INEQUALITIES: usize = ROWS_PER_POINT * CONSTRAINED.len();
+/// The QP's unknowns: the jerks and one slack by which every inequality may give.
+pub const QP_UNKNOWNS: usize = UNKNOWNS + 1;
+/// The slack's place among them.
+pub const SLACK: usize = UNKNOWNS;
+/// The QP's inequalities: the points' and the slack's own (`slack >= 0`).
+pub const QP_ROWS: usize = INEQUALITIES + 1;
+/// Share of each leg's stroke (from its neutral length to `lmin + margin` or `lmax - margin`)
+/// the plans may use at the constrained points: the rest absorbs the motion between them and
+/// the linearisation's error, before the workspace limiter's net (`Workspace::net`) would
+/// have to act.
+pub const STROKE_SHARE: f64 = 0.9;
+
+/// The predictive method's parameters (SI units; defaults and reasons: docs/cueing.md).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PredictiveParameters {
+    /// `mpc.period`, s: time between solves.
+    pub period: f64,
+    /// `mpc.horizon`, s.
+    pub horizon: f64,
+    /// `mpc.trust`, s: the perceived errors at `tau` ahead weigh `exp(-tau/trust)`.
+    pub trust: f64,
+    /// `mpc.weight.f[i]`: per squared threshold of perceived specific-force error.
+    pub weight_f: [f64; 3],
+    /// `mpc.weight.omega[i]`: per squared threshold of perceived angular-velocity error.
+    pub weight_omega: [f64; 3],
+    /// `mpc.weight.neutral`: per m² of the head's displacement and per rad² of yaw.
+    pub weight_neutral: f64,
+    /// `mpc.weight.input`: per (m/s³)² of head jerk (angular jerks count times g²).
+    pub weight_input: f64,
+    /// `mpc.legSpeed`, m/s.
+    pub leg_speed: f64,
+    /// `tilt.rateLimit`, rad/s: the simulator's roll and pitch rates may exceed the vehicle's
+    /// by this much at most.
+    pub tilt_rate_limit: f64,
+    /// `tilt.max`, rad: the largest roll and pitch.
+    pub tilt_max: f64,
+    /// `mpc.maxIterations`: a solve that needs more fails.
+    pub max_iterations: u32,
+}
+
+/// The default truck cabin's tuning (docs/cueing.md).
+pub const DEFAULT_PREDICTIVE: PredictiveParameters = PredictiveParameters {
+    period: 0.01,
+    horizon: 2.0,
+    trust: 0.6,
+    weight_f: [1.0, 1.0, 4.0],
+    weight_omega: [1.0, 1.0, 1.0],
+    weight_neutral: 10.0,
+    weight_input: 1e-3,
+    leg_speed: 0.5,
+    tilt_rate_limit: 3.0 * std::f64::consts::PI / 180.0,
+    tilt_max: 10.0 * std::f64::consts::PI / 180.0,
+    max_iterations: 30,
+};
+
+const GRID_GROWTH_TEXT: &str = "a factor 1.1";
+
+/// The QP solver's relative tolerance (residuals and complementarity).
+pub const QP_TOLERANCE: f64 = 1e-8;
+
+impl PredictiveParameters {
+    /// Why the parameters cannot be used, naming the parameter.
+    pub fn validate(&self) -> Result<(), String> {
+        let positive = |name: &str, x: f64| {
+            if x > 0.0 && x.is_finite() { Ok(()) } else { Err(format!("parameter {name}: must be > 0, got {x:?}")) }
+        };
+        positive("mpc.period", self.period)?;
+        positive("mpc.horizon", self.horizon)?;
+        positive("mpc.trust", self.trust)?;
+        positive("mpc.weight.input", self.weight_input)?;
+        positive("mpc.legSpeed", self.leg_speed)?;
+        positive("tilt.rateLimit", self.tilt_rate_limit)?;
+        let first = self.first_grid_step();
+        if !(self.period <= first * (1.0 + 1e-12)) {
+            return Err(format!(
+                "parameter mpc.period: {:?} s is longer than the plans' first step ({first:.4e} s, the horizon \
+                 mpc.horizon = {:?} s over 20 steps growing by {GRID_GROWTH_TEXT}): the first block's jerks would be \
+                 held past the step they were planned for; shorten the period or lengthen the horizon",
+                self.period, self.horizon
+            ));
+        }
+        for (name, w) in [("mpc.weight.f", &self.weight_f), ("mpc.weight.omega", &self.weight_omega)] {
+            for (i, &x) in w.iter().enumerate() {
+                if !(x >= 0.0 && x.is_finite()) {
+                    return Err(format!("parameter {name}[{}]: must be >= 0, got {x:?}", i + 1));
+                }
+            }
+        }
+        if !(self.weight_neutral >= 0.0 && self.weight_neutral.is_finite()) {
+            return Err(format!("parameter mpc.weight.neutral: must be >= 0, got {:?}", self.weight_neutral));
+        }
+        if self.max_iterations == 0 {
+            return Err("parameter mpc.maxIterations: must be at least 1".into());
+        }
+        Ok(())
+    }
+
+    /// The grid's first step, s: `h_0` of `h_j = h_0 GRID_GROWTH^j` summing to the horizon.
+    pub fn first_grid_step(&self) -> f64 {
+        let g = problem::GRID_GROWTH;
+        self.horizon * (g - 1.0) / (crate::maths::pow(g, GRID_STEPS as f64) - 1.0)
+    }
+}
+
+/// The stand as the predictive method sees it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PredictiveStand {
+    /// The legs, their margins (`lmin + margin`, `lmax - margin`) and the neutral pose.
+    pub workspace: Workspace,
+    /// The head point, body frame from the centre of mass, m.
+    pub head: Vector3<f64>,
+    /// `g`, m/s².
+    pub gravity: f64,
+}
+
+/// What a solve found.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SolveOutcome {
+    /// The new plan: jerks per grid step (its first are the next period's).
+    Planned { iterations: u32, plan: [[f64; CHANNELS]; GRID_STEPS] },
+    /// No plan: the period goes to the classical washout.
+    Failed { iterations: u32, why: &'static str },
+}
+
+/// The predictive method: the QP and its buffers (no state of the motion: the caller holds
+/// the commanded motion and the plan). Allocates when made, never after.
+#[derive(Debug)]
+pub struct PredictiveCueing {
+    pub parameters: PredictiveParameters,
+    pub stand: PredictiveStand,
+    qp: DenseQp,
+    problem: Box<Problem>,
+}
+
+impl PredictiveCueing {
+    pub fn new(parameters: PredictiveParameters, stand: PredictiveStand) -> Result<Self, String> {
+        parameters.validate()?;
+        let qp = DenseQp::new(
+            QP_UNKNOWNS,
+            QP_ROWS,
+            QpSettings { max_iterations: parameters.max_iterations, tolerance: QP_TOLERANCE },
+        )?;
+        let problem = Box::new(Problem::new(&parameters, &stand));
+        Ok(PredictiveCueing { parameters, stand, qp, problem })
+    }
+
+    /// The grid's points, s after a solve: where the vehicle's motion is wanted.
+    pub fn grid_times(&self) -> &[f64; GRID_STEPS + 1] {
+        self.problem.times()
+    }
+
+    /// Plans from the commanded motion `now` and the last plan (what this solve linearises
+    /// about, shifted by the period), with the vehicle's motion at the grid's points
+    /// (`vehicle[j]` at `j` grid steps ahead, `vehicle[0]` now) and the lags of both
+    /// perceptions now.
+    pub fn solve(
+        &mut self,
+        now: &CommandedMotion,
+        plan: &[[f64; CHANNELS]; GRID_STEPS],
+        vehicle: &[VehicleMotion; GRID_STEPS + 1],
+        perceived_vehicle: &Perception,
+        perceived_simulator: &Perception,
+    ) -> SolveOutcome {
+        let nominal = self.problem.nominal_inputs(plan);
+        self.problem.build(&self.parameters, &self.stand, now, &nominal, vehicle, perceived_vehicle, perceived_simulator);
+        let p = &mut *self.problem;
+        match self.qp.solve(&p.hessian, &p.gradient, &p.constraints, &p.bounds, &mut p.solution) {
+            QpOutcome::Solved { iterations } => SolveOutcome::Planned { iterations, plan: p.plan(&nominal) },
+            QpOutcome::Failed { iterations, why } => {
+                SolveOutcome::Failed { iterations, why }
+            }
+        }
+    }
+}
