@@ -278,7 +278,7 @@ fn the_cueing_fmu_answers_every_random_setting_with_a_status_and_a_reason() {
     let mut rng = Rng(0x0fed_cba9_8765_4321);
     let (mut refused, mut ran, mut long_steps_refused) = (0, 0, 0);
     for case in 0..300 {
-        let method = (case % 2) as i32;
+        let method = case % 2;
         let start = if rng.chance(0.2) { rng.real(&specials, 20) * 1e3 } else { 0.0 };
         let settings: Vec<(String, f64)> = (0..rng.below(4))
             .map(|_| (names[rng.below(names.len() as u64) as usize].clone(), rng.real(&specials, 24)))

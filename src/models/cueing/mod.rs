@@ -220,7 +220,7 @@ pub struct CueingModel {
 }
 
 impl Clone for CueingModel {
-    /// A copy without the solver, which [`CueingModel::prepare`] makes again.
+    /// A copy without the solver, which `make_solver` makes again (after initialisation, after a restored state).
     fn clone(&self) -> Self {
         CueingModel {
             parameters: self.parameters.clone(),

@@ -155,6 +155,8 @@ pub struct PredictiveStand {
 
 /// What a solve found.
 #[derive(Clone, Copy, Debug, PartialEq)]
+// Returned by value once per solve: boxing the plan would allocate in the step.
+#[allow(clippy::large_enum_variant)]
 pub enum SolveOutcome {
     /// The new plan: jerks per grid step (its first are the next period's).
     Planned { iterations: u32, plan: [[f64; CHANNELS]; GRID_STEPS] },
