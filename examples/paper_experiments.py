@@ -20,8 +20,12 @@ from fmpy import simulate_fmu
 from fmpy.fmi1 import FMICallException
 
 from stewart_fmu.cosim import closed_loop
-from stewart_fmu import (EQUILIBRIUM_FORCE, PLATFORM_FMU, Platform, heave_forces, heave_programme,
-                         recording_callbacks, stand_parameters)
+from stewart_fmu import EQUILIBRIUM_FORCE, PLATFORM_FMU, Platform, recording_callbacks, stand_parameters
+
+# The paper's heave programme and its direct problem, written out independently of the FMU's
+# code: the tests' oracle (tests/python/oracles/heave.py).
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "python"))
+from oracles.heave import heave_forces, heave_programme  # noqa: E402
 
 OUT = Path(sys.argv[1] if len(sys.argv) > 1 else "output")
 P = stand_parameters(nondimensional=True)

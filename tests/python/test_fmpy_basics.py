@@ -8,7 +8,9 @@ from fmpy import read_model_description, simulate_fmu
 from fmpy.util import read_csv, write_csv
 from fmpy.validation import validate_fmu
 
-from stewart_fmu import EQUILIBRIUM_FORCE, GRAVITY, MASS, NEUTRAL_Z, R_B, Platform, heave_forces, heave_programme
+from stewart_fmu import Platform
+from oracles.heave import heave_forces, heave_programme
+from oracles.stand import EQUILIBRIUM_FORCE, GRAVITY, MASS, NEUTRAL_Z, R_B
 
 
 def test_validate_fmu_reports_no_problems(platform_fmu):

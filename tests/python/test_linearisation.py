@@ -8,7 +8,8 @@ import math
 import numpy as np
 
 from stewart_fmu.linearise import closed_loop, critical_gain, eigen_table, linearise, max_real_part
-from stewart_fmu import EQUILIBRIUM_FORCE, Platform, bisect_boundary, heave_forces, stand_parameters
+from stewart_fmu import EQUILIBRIUM_FORCE, Platform, bisect_boundary, stand_parameters
+from oracles.heave import heave_forces
 
 P = stand_parameters(nondimensional=True)
 

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 from fmpy import simulate_fmu
 
-from stewart_fmu import EQUILIBRIUM_FORCE, PLATFORM_FMU, Platform, heave_forces, heave_programme, stand_parameters
+from stewart_fmu import EQUILIBRIUM_FORCE, PLATFORM_FMU, Platform, stand_parameters
+from oracles.heave import heave_forces, heave_programme
 
 P = stand_parameters(nondimensional=True)
 Z0 = P["r0[3]"]

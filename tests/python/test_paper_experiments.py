@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 
-from stewart_fmu import EQUILIBRIUM_FORCE, Platform, bisect_boundary, heave_forces, heave_programme, stand_parameters
+from stewart_fmu import EQUILIBRIUM_FORCE, Platform, bisect_boundary, stand_parameters
+from oracles.heave import heave_forces, heave_programme
 
 P = stand_parameters(nondimensional=True)
 Z0 = P["r0[3]"]
