@@ -186,6 +186,8 @@ def test_the_links_between_the_pages_resolve():
 # The pages of docs/ that quote measurements, and the parts of each that do (None: all of it).
 MEASURED_PAGES = {
     "performance.md": None,
+    "validation.md": None,
+    "control.md": None,
     "studies.md": [("Throughput (", "## Tested on a real cluster")],
     "platforms.md": [("With the FMU's maths from the C library", "The Linux x86-64 binary is built"),
                      ("What it costs on x86-64", "## Building the binaries")],
