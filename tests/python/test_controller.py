@@ -5,6 +5,7 @@ component, in a Python master over two FMU2Slave instances and as an SSP system.
 import math
 
 import numpy as np
+import pytest
 from fmpy.ssp.simulation import simulate_ssp
 from fmpy.validation import validate_fmu
 
@@ -26,10 +27,12 @@ def paper_controller(gain, damping, disturbance=1e-4, amplitude=0.2):
     return c
 
 
+@pytest.mark.quick
 def test_controller_fmu_validates():
     assert validate_fmu(str(CONTROLLER_FMU)) == []
 
 
+@pytest.mark.quick
 def test_default_gains_keep_every_leg_within_a_millimetre():
     """SI defaults: the paper's heave scaled to the default stand, 1 ms communication step."""
     t, rows, errors, status = closed_loop(10.0, 1e-3, record=("r[3]",))
@@ -131,6 +134,7 @@ def test_critical_gain_through_the_controller_fmu():
     assert 0.9 < 0.5 * (lo + hi) < 1.1
 
 
+@pytest.mark.quick
 def test_ssp_run_and_python_master_agree():
     """FMPy's simulate_ssp on target/fmu/StewartSystem.ssp (SI defaults, 1 ms) and the Python
     master in its "jacobi" mode (FMPy's SSP algorithm) give the same trajectory."""

@@ -8,6 +8,7 @@ currents and voltages."""
 import math
 
 import numpy as np
+import pytest
 from fmpy import read_model_description, simulate_fmu
 
 from stewart_fmu import PLATFORM_FMU, Platform
@@ -16,6 +17,8 @@ from stewart_fmu.cosim import CONTROLLER_FMU, SYSTEM_DRIVES_SSP
 from stewart_fmu.workspace import static_rest_height, stop_defaults
 from oracles import drives as oracle
 from test_fmi3 import PLATFORM3, Fmu3
+
+pytestmark = pytest.mark.quick
 
 P = dr.drive_parameters()
 I_HOLD, U_HOLD = oracle.holding(P)

@@ -10,6 +10,7 @@ the bit."""
 import math
 
 import numpy as np
+import pytest
 from fmpy import simulate_fmu
 
 from stewart_fmu import PLATFORM_FMU, Platform
@@ -19,6 +20,8 @@ from stewart_fmu.ssp import SYSTEM_HYDRAULIC_SSP
 from oracles import hydraulics as oracle
 from oracles.stand import EQUILIBRIUM_FORCE, GRAVITY, MASS
 from test_fmi3 import PLATFORM3, Fmu3
+
+pytestmark = pytest.mark.quick
 
 P = hy.hydraulic_parameters()
 AREA_A, AREA_B = oracle.areas(P)

@@ -6,6 +6,7 @@ below, and that critical gain is the one the closed-loop simulations find."""
 import math
 
 import numpy as np
+import pytest
 
 from stewart_fmu.linearise import closed_loop, critical_gain, eigen_table, linearise, max_real_part
 from stewart_fmu import EQUILIBRIUM_FORCE, Platform, bisect_boundary, stand_parameters
@@ -15,6 +16,7 @@ from references import check_figures
 P = stand_parameters(nondimensional=True)
 
 
+@pytest.mark.quick
 def test_open_loop_eigenvalues_are_saddle_pairs_and_include_the_heave():
     lin = linearise()
     table = eigen_table(lin["A"])
@@ -67,6 +69,7 @@ def test_heave_eigenvalue_is_the_nonlinear_growth_rate():
     assert abs(growth - heave_eigenvalue) <= 1e-3 * heave_eigenvalue
 
 
+@pytest.mark.quick
 def test_closed_loop_is_marginally_stable_above_the_critical_gain_and_unstable_below():
     lin = linearise()
     g_c = critical_gain(lin)

@@ -12,6 +12,8 @@ from stewart_fmu import CONTROLLER_FMU, PLATFORM_FMU, default_stand, stand_param
 from stewart_fmu.core import CUEING_FMU
 from oracles import stand as oracle
 
+pytestmark = pytest.mark.quick
+
 
 def start_values(fmu):
     return {v.name: float(v.start) for v in read_model_description(str(fmu)).modelVariables

@@ -9,9 +9,12 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
+import pytest
 
 from stewart_fmu import labels, study_params
 from stewart_fmu.sweep import _figure, colour_limits
+
+pytestmark = pytest.mark.quick
 
 VARIABLES = study_params.fmu_variables()
 
