@@ -41,8 +41,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-from stewart_fmu import (BASE_AZIMUTHS, GRAVITY, H_C, INERTIA, MASS, NEUTRAL_Z, PLATFORM_AZIMUTHS, PLATFORM_FMU,
-                     R_B, R_P, Platform)
+from stewart_fmu import EQUILIBRIUM_FORCE, PLATFORM_FMU, Platform, default_stand
 
 OUT = Path(sys.argv[1] if len(sys.argv) > 1 else "output")
 TRIVIAL_FMU = PLATFORM_FMU.parent / "bench" / "TrivialPlatform.fmu"
@@ -50,12 +49,15 @@ NATIVE_HOST = ROOT / "target" / "release" / "examples" / "native_host"
 H = 1e-3
 T_END = 3.0
 STEPS = int(round(T_END / H))
-U0 = 0.2005 * MASS * GRAVITY
+# The default stand, the FMU's (its model description's start values), for every engine.
+STAND = default_stand()
+MASS, INERTIA, GRAVITY, NEUTRAL_Z = STAND["M"], STAND["J"], STAND["g"], STAND["r0"][2]
+U0 = EQUILIBRIUM_FORCE * MASS * GRAVITY
 GAIN, DAMPING = 2.0e5, 2.0e4
 REPEATS = 5
 
-B = [np.array([R_B * math.cos(math.radians(a)), R_B * math.sin(math.radians(a)), 0.0]) for a in BASE_AZIMUTHS]
-A = [np.array([R_P * math.cos(math.radians(a)), R_P * math.sin(math.radians(a)), -H_C]) for a in PLATFORM_AZIMUTHS]
+B = [np.array(b) for b in STAND["B"]]
+A = [np.array(a) for a in STAND["A"]]
 L0 = float(np.linalg.norm(np.array([0, 0, NEUTRAL_Z]) + A[0] - B[0]))
 
 

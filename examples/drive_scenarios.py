@@ -23,10 +23,15 @@ from stewart_fmu import workspace as ws
 
 from csv_columns import write_columns
 
+# What the runs are compared with: §9's static model, braking and descent written out
+# independently of the FMU's code, the tests' oracles (tests/python/oracles/).
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "python"))
+from oracles import drives as oracle  # noqa: E402
+
 OUT = Path(sys.argv[1] if len(sys.argv) > 1 else "output")
 LEGS = list(dr.LEGS)
 P = dr.drive_parameters()
-I_HOLD, U_HOLD = dr.holding(P)
+I_HOLD, U_HOLD = oracle.holding(P)
 PERIOD = 2 * math.pi / 2.5573423705088842  # the default heave programme's
 
 
@@ -40,23 +45,23 @@ def balance(c):
 
 
 def parameters_line():
-    n = dr.transmission(P)
+    n = oracle.transmission(P)
     return (f"drives (defaults): R = {P['motor.R']} Ohm, L = {P['motor.L'] * 1e3} mH (L/R = "
             f"{P['motor.L'] / P['motor.R'] * 1e3:.1f} ms), k_e = {P['motor.ke']} V.s/rad, k_t = {P['motor.kt']} N.m/A, "
             f"J_m = {P['motor.J']} kg.m2, D = {P['motor.D']} N.m.s/rad, i = {P['gear.ratio']}, p = "
             f"{P['screw.lead'] * 1e3} mm: N = {n:.2f} rad/m, rotor reflected along each leg {P['motor.J'] * n * n:.1f} "
             f"kg; holding the default stand: {I_HOLD:.3f} A and {U_HOLD:.3f} V per leg "
             f"({6 * U_HOLD * I_HOLD:.0f} W in all); braking damping with the windings shorted "
-            f"{dr.braking_damping(P):.4g} N.s/m per leg")
+            f"{oracle.braking_damping(P):.4g} N.s/m per leg")
 
 
 def power_loss(summary):
     print("1 power loss with dynamic braking ...")
-    c, messages, status = dr.power_loss(t_loss=0.5, t_end=16.0, h=0.01)
+    c, messages, status = dr.power_loss((I_HOLD, U_HOLD), t_loss=0.5, t_end=16.0, h=0.01)
     falling, _, _ = dr.power_loss_forces(t_loss=0.5, t_end=1.5, h=1e-3)
     assert status == "ok", status
     t, z, vz = c["time"], c["r[3]"], c["v[3]"]
-    quasi = np.array([dr.quasi_static_descent_rate(zi, P) for zi in z])
+    quasi = np.array([oracle.quasi_static_descent_rate(zi, P) for zi in z])
     landing = next(float(m.split()[2].rstrip(":")) for _, _, m in messages if "reached its lower end stop" in m)
     steady = (t > 1.0) & (t < landing - 0.2)
     write_csv("drive1_power_loss.csv", {"t": t, "z": z, "vz": vz, "vz_quasi_static": quasi, "az": c["der(v[3])"],
@@ -93,7 +98,7 @@ def power_loss(summary):
 
 def heave(summary):
     print("2 heave programme with voltage commands ...")
-    c, errors, status = dr.heave_closed_loop(10.0, record=[f"U[{k}]" for k in LEGS])
+    c, errors, status = dr.heave_closed_loop(I_HOLD, 10.0, record=[f"U[{k}]" for k in LEGS])
     assert status == "ok", status
     t = c["time"]
     i0 = int(np.searchsorted(t, t[-1] - PERIOD))
@@ -131,7 +136,7 @@ def heave(summary):
 
 def failure(summary):
     print("3 a drive loses its voltage under feedback ...")
-    c, errors, status = dr.failure(t_fail=1.0, t_end=6.0)
+    c, errors, status = dr.failure(I_HOLD, t_fail=1.0, t_end=6.0)
     forces = ws.actuator_failure(t_fail=1.0, t_end=6.0)
     assert status == "ok", status
     write_csv("drive3_failure.csv", {"t": c["time"], "l[1]": c["l[1]"], "I[1]": c["I[1]"], "roll": c["angles[1]"],
@@ -164,7 +169,7 @@ def failure(summary):
 def main():
     OUT.mkdir(parents=True, exist_ok=True)
     summary = [parameters_line()]
-    c, _, status = dr.holding_run(3.0)
+    c, _, status = dr.holding_run((I_HOLD, U_HOLD), 3.0)
     summary.append(f"0 holding at {U_HOLD:.4f} V for 3 s: heave drift {np.max(np.abs(c['r[3]'] - c['r[3]'][0])):.1e} m, "
                    f"currents within {max(np.max(np.abs(c[f'I[{k}]'] - I_HOLD)) for k in LEGS):.1e} A of the static "
                    f"model's ({status})")

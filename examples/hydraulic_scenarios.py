@@ -20,14 +20,20 @@ import matplotlib.pyplot as plt
 import numpy as np
 from stewart_fmu import Platform
 from stewart_fmu import hydraulics as hy
-from stewart_fmu.core import EQUILIBRIUM_FORCE, GRAVITY, LEGS, MASS, neutral_leg_geometry
+from stewart_fmu.core import LEGS
 
 from csv_columns import write_columns
 
+# What the runs are compared with: §10 and the stand written out independently of the FMU's
+# code, the tests' oracles (tests/python/oracles/).
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "python"))
+from oracles import hydraulics as oracle  # noqa: E402
+from oracles.stand import EQUILIBRIUM_FORCE, GRAVITY, MASS, neutral_leg_geometry  # noqa: E402
+
 OUT = Path(sys.argv[1] if len(sys.argv) > 1 else "output")
 P = hy.hydraulic_parameters()
-AREA_A, AREA_B = hy.areas(P)
-K = hy.flow_coefficient(P)
+AREA_A, AREA_B = oracle.areas(P)
+K = oracle.flow_coefficient(P)
 PERIOD = 2 * math.pi / 2.5573423705088842  # the default heave programme's
 
 
@@ -47,7 +53,7 @@ def defaults_figures():
     l0 = math.hypot(d, height)
     mid = 0.5 * (P["lmin[1]"] + P["lmax[1]"])
     n_z = height / l0
-    stiffness = lambda l: beta * (AREA_A ** 2 / hy.volumes(l, P)[0] + AREA_B ** 2 / hy.volumes(l, P)[1])  # noqa: E731
+    stiffness = lambda l: beta * (AREA_A ** 2 / oracle.volumes(l, P)[0] + AREA_B ** 2 / oracle.volumes(l, P)[1])  # noqa: E731
     # No load, valve fully open: both lands in series, p_A A_A = p_B A_B.
     speed = K * math.sqrt(ps * AREA_A / (AREA_A ** 3 + AREA_B ** 3))
     heave_mode = math.sqrt(6 * stiffness(l0) * n_z ** 2 / MASS)
@@ -63,7 +69,7 @@ def defaults_figures():
             f"{speed:.3f} m/s (valve fully open); oil spring at mid-stroke ({mid:.2f} m) {stiffness(mid) / 1e6:.2f} "
             f"MN/m per leg, at the neutral legs {stiffness(l0) / 1e6:.2f} MN/m: the stand's heave mode on its oil "
             f"{heave_mode:.0f} rad/s ({heave_mode / (2 * math.pi):.1f} Hz); holding pressures "
-            f"p_A = {hy.holding_pressures(P)[0] / 1e6:.3f} MPa, p_B = {hy.holding_pressures(P)[1] / 1e6:.1f} MPa")
+            f"p_A = {oracle.holding_pressures(P)[0] / 1e6:.3f} MPa, p_B = {oracle.holding_pressures(P)[1] / 1e6:.1f} MPa")
 
 
 def holding(summary):
@@ -132,13 +138,13 @@ def failures(summary):
     window = (t >= 3.0) & (t <= 6.0)
     creep = np.polyfit(t[window], lost["l[1]"][window], 1)[0]
     mid = int(np.argmin(np.abs(t - 4.5)))
-    quasi = hy.quasi_static_creep(lost["pA[1]"][mid], lost["pB[1]"][mid], lost["l[1]"][mid], P)
+    quasi = oracle.quasi_static_creep(lost["pA[1]"][mid], lost["pB[1]"][mid], lost["l[1]"][mid], P)
     write_columns(OUT / "hydraulic3_control_power_loss.csv", columns(lost, ["r[3]"] + hy.L + hy.PA + hy.PB + hy.SPOOL))
     summary.append(
         f"3 loss of control power at t = 1 s (every valve command 0): the spools centre ({max(abs(lost[n][-1]) for n in hy.SPOOL):.0e}) "
         f"and the legs lock on their oil; the leakage pulls both chambers towards pS/2, and the legs creep out at "
         f"{creep * 1e3:.4f} mm/s against {quasi * 1e3:.4f} mm/s quasi-static from the leakage flows and the load "
-        f"pressures (heave {creep * hy.heave_rate_of_leg_rate(lost['l[1]'][mid]) * 1e3:.4f} mm/s up)")
+        f"pressures (heave {creep * oracle.heave_rate_of_leg_rate(lost['l[1]'][mid]) * 1e3:.4f} mm/s up)")
     warning = next((m for s, _, m in events if s == 1 and "cavitate" in m), "none")
     after = pump["time"] > 1.0
     write_columns(OUT / "hydraulic4_pump_failure.csv", columns(pump, ["r[3]", "der(v[3])", "pmin", "Qsupply"] + hy.L + hy.PA + hy.PB))

@@ -43,4 +43,6 @@ step "the viewer's results"
 .venv/bin/python examples/viewer_data.py "$OUT/viewer"
 # What each file in the output folder is.
 .venv/bin/python examples/output_index.py "$OUT"
+# The figures the docs quote (docs/validation.md, docs/control.md), into benches/results/.
+.venv/bin/python examples/record_figures.py "$OUT"
 step "done: results in $OUT/ (what each file is: $OUT/README.md)"

@@ -2,7 +2,7 @@
 //! legs, linear and angular momentum of a free tumbling body (and the Euler top's unstable
 //! intermediate axis), and the constraint residual with and without projection.
 
-mod common;
+use crate::common;
 
 use common::simulation;
 use nalgebra::{Matrix3, Vector3};

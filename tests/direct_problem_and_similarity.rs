@@ -3,7 +3,7 @@
 //! takes over; and mechanical similarity (textbook 1.4): an SI run and the same run in the
 //! paper's non-dimensional units agree after scaling.
 
-mod common;
+use crate::common;
 
 use common::simulation;
 use nalgebra::Vector3;

@@ -4,7 +4,7 @@
 //! 10 µs), their energy balance, and the fixed-step method's exponential treatment of the fast
 //! armature circuit against a tight reference.
 
-mod common;
+use crate::common;
 
 use common::machine_oracle::{OracleDrives, OracleInputs, OracleMachine, OracleState};
 use nalgebra::Vector3;

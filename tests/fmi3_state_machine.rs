@@ -6,7 +6,7 @@
 //! changes nothing. Then 10^5 random calls (random functions, states, value references,
 //! array sizes, NaN and infinities, NULL pointers, damaged FMU states).
 
-mod common;
+use crate::common;
 
 use common::fmi3_host::{Host3, Kind};
 use common::rng::Rng;

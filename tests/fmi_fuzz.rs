@@ -3,7 +3,7 @@
 //! NULL arrays, random FMU-state bytes, instantiation with good and bad GUIDs, frees. The
 //! process must survive and every status must be one of the six FMI codes.
 
-mod common;
+use crate::common;
 
 use std::ffi::CString;
 use std::sync::Mutex;

@@ -1,7 +1,7 @@
 //! Instances are independent: interleaved instances and instances driven concurrently from
 //! several threads give bit-identical results to the same runs done one after another.
 
-mod common;
+use crate::common;
 
 use common::fmi_host::Host;
 use stewart_fmu::fmi2::types::*;

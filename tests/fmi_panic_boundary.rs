@@ -2,7 +2,7 @@
 //! logs it in `logStatusFatal`, poisons the instance (which then refuses every call but
 //! fmi2Reset and fmi2FreeInstance, saying why), and fmi2Reset brings it back.
 
-mod common;
+use crate::common;
 
 use common::fmi_host::Host;
 use stewart_fmu::fmi::Status;

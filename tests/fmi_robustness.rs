@@ -4,7 +4,7 @@
 
 #![allow(clippy::type_complexity)] // the case tables read best inline
 
-mod common;
+use crate::common;
 
 use common::fmi_host::Host;
 use stewart_fmu::fmi2::exports::*;

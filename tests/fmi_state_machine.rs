@@ -3,7 +3,7 @@
 //! the standard, section 4.2.4 and its table of allowed calls, independently of the crate's own
 //! table), an illegal call is logged with the function and the state, and changes nothing.
 
-mod common;
+use crate::common;
 
 use common::fmi_host::Host;
 use stewart_fmu::fmi2::exports::*;

@@ -4,7 +4,7 @@
 //! cached values follow every change of the model (steps, parameters) but not a change of
 //! an input they do not depend on.
 
-mod common;
+use crate::common;
 
 use common::fmi_host::Host;
 use common::fmi3_host::{Host3, Kind};

@@ -4,7 +4,7 @@
 //! stiff oil columns and orifices (sub-steps within its stability bound) against a tight
 //! reference: the work-precision table the docs quote.
 
-mod common;
+use crate::common;
 
 use common::machine_oracle::{OracleHydraulics, OracleInputs, OracleMachine, OracleState};
 use nalgebra::Vector3;

@@ -2,7 +2,7 @@
 //! an independent formulation (`common::machine_oracle`: Kane's equations in minimal
 //! coordinates, written from the specification alone), and its energy balance.
 
-mod common;
+use crate::common;
 
 use common::machine_oracle::{
     OracleFriction, OracleInputs, OracleJoints, OracleMachine, OracleState, identity_rotation,

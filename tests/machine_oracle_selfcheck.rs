@@ -5,7 +5,7 @@
 //! Newton-Euler balance, and the hydraulic servo legs of SPEC §10 (power balance per leg,
 //! energy balance over a run, holding pressures).
 
-mod common;
+use crate::common;
 
 use common::machine_oracle::{
     EQUILIBRIUM_LEG_FORCE, NEUTRAL_R, OracleDrives, OracleFriction, OracleHydraulics, OracleInputs, OracleJoints,

@@ -10,6 +10,9 @@ use stewart_fmu::fmi::description::{
 use stewart_fmu::models::ModelKind;
 use stewart_fmu::models::variables::Dependency;
 
+/// The repository's root: the tests' package is its `tests/` folder.
+const REPOSITORY: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
+
 fn committed(path: &str) -> String {
     std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{path}: {e}"))
 }
@@ -18,10 +21,9 @@ fn committed(path: &str) -> String {
 fn committed_model_descriptions_match_the_code() {
     for kind in ModelKind::ALL {
         let id = kind.info().model_identifier;
-        let mut versions =
-            vec![(FmiVersion::Fmi2, format!("{}/modelDescription/{id}.xml", env!("CARGO_MANIFEST_DIR")))];
+        let mut versions = vec![(FmiVersion::Fmi2, format!("{REPOSITORY}/modelDescription/{id}.xml"))];
         if !kind.is_benchmark_floor() {
-            versions.push((FmiVersion::Fmi3, format!("{}/modelDescription/fmi3/{id}.xml", env!("CARGO_MANIFEST_DIR"))));
+            versions.push((FmiVersion::Fmi3, format!("{REPOSITORY}/modelDescription/fmi3/{id}.xml")));
         }
         for (version, path) in versions {
             let text = committed(&path);
@@ -43,7 +45,7 @@ fn committed_model_descriptions_match_the_code() {
 /// `docs/model.md`'s interface tables are what the declarations generate.
 #[test]
 fn the_interface_tables_of_the_documentation_match_the_code() {
-    let path = format!("{}/docs/model.md", env!("CARGO_MANIFEST_DIR"));
+    let path = format!("{REPOSITORY}/docs/model.md");
     let text = committed(&path);
     for kind in ModelKind::ALL.into_iter().filter(|k| !k.is_benchmark_floor()) {
         let generated = with_interface_table(&text, kind).expect("the table's markers");

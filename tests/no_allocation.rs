@@ -2,7 +2,7 @@
 //! (forces), `fmi2DoStep` and `fmi2GetReal` (outputs) allocate nothing, with either
 //! integrator. Counted with a global allocator that counts this thread's allocations.
 
-mod common;
+use crate::common;
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;

@@ -3,7 +3,7 @@
 //! (the parameter or input at fault, the integrator's instability), numbers in scientific
 //! notation, and no output infinite with OK.
 
-mod common;
+use crate::common;
 
 use std::sync::mpsc;
 use std::time::Duration;

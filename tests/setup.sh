@@ -31,7 +31,8 @@ apt_install() {
     $sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "$@" >/dev/null
 }
 
-# `require main` (the main job) or `require tests` (the tests: also gcc, valgrind, libclang,
+# `require main` (the main job), `require tests` (the tests' full tier: also gcc, valgrind,
+# libclang, Chromium) or `require quick` (their quick tier: no Node.js, valgrind, libclang or
 # Chromium). Rust is not a Debian package here: rustup installs it.
 require() {
     SETUP_KIND="$1"  # what cross_toolchains installs: the linkers, and for the tests wine and qemu
@@ -49,7 +50,7 @@ require() {
         python3 -c 'import ensurepip, venv' 2>/dev/null || need+=(python3-venv)
     fi
     command -v cc >/dev/null || need+=(gcc)  # cargo's linker
-    command -v npm >/dev/null || need+=(nodejs npm)
+    [ "$1" = quick ] || command -v npm >/dev/null || need+=(nodejs npm)
     if [ "$1" = tests ]; then
         command -v valgrind >/dev/null || need+=(valgrind)
         command -v strace >/dev/null || need+=(strace)  # the cueing FMU's system calls in a step
@@ -59,6 +60,7 @@ require() {
     if [ ${#need[@]} -gt 0 ]; then
         apt_install "${need[@]}"
     fi
+    [ "$1" = quick ] && return 0
     # The viewer's build tool (vite) needs Node.js 20.19 or newer; Debian 12's own is 18.
     local node
     node=$(node --version 2>/dev/null | tr -d v)
@@ -102,13 +104,18 @@ source "$(dirname "${BASH_SOURCE[0]}")/setup_cross.sh"
 # STEWART_FMU_TARGETS=x86_64-linux (a build-fmu target list) builds those alone, with no
 # cross set-up (the platform tests then fail: they need the other binaries).
 build_fmus() {
+    # The build program in a target folder of its own, run directly (not by `cargo run`): as
+    # its dependency the FMU crate resolves otherwise than in its own build and the tests'
+    # (target/), and the two would take turns compiling it, a minute or two each time.
+    step "building the build program (crates/build-fmu, into target/build-fmu; a minute or two the first time)"
+    CARGO_TARGET_DIR=target/build-fmu cargo build --release -p build-fmu
     if [ -n "${STEWART_FMU_TARGETS:-}" ]; then
         step "building the FMUs for $STEWART_FMU_TARGETS (STEWART_FMU_TARGETS), then packaging into target/fmu/"
-        cargo run --release --bin build-fmu -- --targets "$STEWART_FMU_TARGETS"
+        target/build-fmu/release/build-fmu --targets "$STEWART_FMU_TARGETS"
     else
         cross_toolchains "${SETUP_KIND:-tests}"
         step "building the FMUs for Linux x86-64, Linux aarch64 and Windows x64, then packaging into target/fmu/ (about 5 minutes the first time on 2 cores, seconds after; a line per platform)"
-        cargo run --release --bin build-fmu
+        target/build-fmu/release/build-fmu
     fi
     step "building the compiled co-simulation master's command (crates/stewart-master; a minute the first time)"
     cargo build --release -p stewart-master

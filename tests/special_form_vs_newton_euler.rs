@@ -2,7 +2,7 @@
 //! (unit quaternion + Euler's equations, its own RK4): the paper's claim that both give the
 //! same motion, measured (docs/model.md §7).
 
-mod common;
+use crate::common;
 
 use common::newton_euler::{LegLaw, NeState, NewtonEuler};
 use common::{max_abs_diff, pose, simulation};

@@ -4,7 +4,7 @@
 //! that take every branch of a step: contacts with both stops (located and stepped across),
 //! singular arrangements passed, and both methods.
 
-mod common;
+use crate::common;
 
 use common::{pose, simulation};
 use nalgebra::Vector3;

@@ -6,7 +6,7 @@
 //!   contacts, for both integrators;
 //! - elastic stops: bounces that conserve energy, and what locating the contacts buys.
 
-mod common;
+use crate::common;
 
 use common::{neutral_state, simulation};
 use stewart_fmu::integration::{Method, SolverSettings};

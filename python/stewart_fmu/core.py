@@ -1,9 +1,9 @@
 """The basics the tests, the examples and users share: where the packaged FMUs are, the
-default stand (docs/model.md §3) in SI or the paper's non-dimensional units, computed here
-independently of the Rust code, the paper's heave programme and its direct problem, and a thin
-driver around FMPy's FMU2Slave."""
+default stand (docs/model.md §3) in SI or the paper's non-dimensional units, read from the
+platform FMU's model description, and a thin driver around FMPy's FMU2Slave."""
 
 import difflib
+import functools
 import math
 import os
 from pathlib import Path
@@ -51,37 +51,68 @@ def fmu_file(path, option="--fmu"):
 # The legs' numbers in the FMUs' variable names (`l[1]` .. `l[6]`).
 LEGS = range(1, 7)
 
-# docs/model.md §3: the truck-cabin stand.
-R_B, R_P, H_C = 1.5, 1.0, 0.5
-BASE_AZIMUTHS = [-10, 10, 110, 130, 230, 250]
-PLATFORM_AZIMUTHS = [-50, 50, 70, 170, 190, 290]
-MASS, INERTIA, GRAVITY = 3000.0, (1500.0, 1500.0, 2200.0), 9.81
-NEUTRAL_Z = 1.9589244164161732
-EQUILIBRIUM_FORCE = 0.2005  # units of M g
+# The paper's equilibrium leg force of the default stand's neutral pose, in units of M g (its
+# section 5; the stand's neutral height is chosen so that each leg carries exactly this).
+EQUILIBRIUM_FORCE = 0.2005
+# The default stand's values the package names (PEP 562: read from the FMU on first use).
+_STAND_CONSTANTS = {"MASS": lambda s: s["M"], "INERTIA": lambda s: s["J"], "GRAVITY": lambda s: s["g"],
+                    "NEUTRAL_Z": lambda s: s["r0"][2]}
 
 
-def stand_parameters(nondimensional=True):
-    """FMI parameter values of the default stand, in the paper's units (R_b, M, M g,
-    sqrt(R_b/g)) or in SI. The paper's experiments use its idealised legs: in
+@functools.cache
+def _stand_of(fmu):
+    md = read_model_description(fmu_file(fmu))
+    start = {v.name: float(v.start) for v in md.modelVariables if v.type == "Real" and v.start is not None}
+    vector = lambda name, n: tuple(start[f"{name}[{i}]"] for i in range(1, n + 1))  # noqa: E731
+    matrix = lambda name: tuple(tuple(start[f"{name}[{k},{i}]"] for i in (1, 2, 3)) for k in LEGS)  # noqa: E731
+    return {"M": start["M"], "J": vector("J", 3), "g": start["g"], "r0": vector("r0", 3), "B": matrix("B"),
+            "A": matrix("A")}
+
+
+def default_stand(fmu=PLATFORM_FMU):
+    """The default stand (docs/model.md §3), SI, as the platform FMU defines it: its model
+    description's start values of `M`, `J`, `g`, the neutral pose `r0` and the joints `B`, `A`
+    (rows by leg), as a dict of those names. The module's `MASS`, `INERTIA`, `GRAVITY` and
+    `NEUTRAL_Z` are its values."""
+    return _stand_of(str(fmu))
+
+
+def __getattr__(name):
+    if name in _STAND_CONSTANTS:
+        return _STAND_CONSTANTS[name](default_stand())
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def equilibrium_force_si(fmu=PLATFORM_FMU):
+    """The paper's equilibrium leg force of the default stand in newtons, `EQUILIBRIUM_FORCE M g`."""
+    stand = default_stand(fmu)
+    return EQUILIBRIUM_FORCE * stand["M"] * stand["g"]
+
+
+def base_radius(stand):
+    """The paper's unit of length R_b: the largest horizontal distance of a base joint from the
+    `z` axis, each correctly rounded (`math.hypot`: the default stand's 1.5 m exactly)."""
+    return max(math.hypot(b[0], b[1]) for b in stand["B"])
+
+
+def stand_parameters(nondimensional=True, fmu=PLATFORM_FMU):
+    """FMI parameter values of the default stand (`default_stand`), in the paper's units (R_b,
+    M, M g, sqrt(R_b/g)) or in SI. The paper's experiments use its idealised legs: in
     non-dimensional units the end stops and the joint limits are off (`stops`, `joints`
     false)."""
-    length = R_B if nondimensional else 1.0
-    mass = MASS if nondimensional else 1.0
-    p = {
-        "M": MASS / mass,
-        "g": 1.0 if nondimensional else GRAVITY,
-        "r0[1]": 0.0,
-        "r0[2]": 0.0,
-        "r0[3]": NEUTRAL_Z / length,
-    }
-    for a, j in enumerate(INERTIA):
+    stand = default_stand(fmu)
+    length = base_radius(stand) if nondimensional else 1.0
+    mass = stand["M"] if nondimensional else 1.0
+    p = {"M": stand["M"] / mass, "g": 1.0 if nondimensional else stand["g"]}
+    for i, x in enumerate(stand["r0"]):
+        p[f"r0[{i + 1}]"] = x / length
+    for a, j in enumerate(stand["J"]):
         p[f"J[{a + 1}]"] = j / (mass * length * length)
     for k in range(6):
-        pb, pp = math.radians(BASE_AZIMUTHS[k]), math.radians(PLATFORM_AZIMUTHS[k])
-        for i, x in enumerate((R_B * math.cos(pb), R_B * math.sin(pb), 0.0)):
-            p[f"B[{k + 1},{i + 1}]"] = x / length
-        for i, x in enumerate((R_P * math.cos(pp), R_P * math.sin(pp), -H_C)):
-            p[f"A[{k + 1},{i + 1}]"] = x / length
+        for i in range(3):
+            p[f"B[{k + 1},{i + 1}]"] = stand["B"][k][i] / length
+        for i in range(3):
+            p[f"A[{k + 1},{i + 1}]"] = stand["A"][k][i] / length
     if nondimensional:
         p["stops"] = False
         p["joints"] = False
@@ -169,42 +200,6 @@ def vector_of(values, n, what, names):
         if not math.isfinite(x):
             raise ValueError(f"{what}: {names(i)} = {x} is not a finite number")
     return array
-
-
-def neutral_leg_geometry(nondimensional=True):
-    """Horizontal leg projection d and platform joint plane height H0 of the neutral pose."""
-    length = R_B if nondimensional else 1.0
-    pb, pp = math.radians(BASE_AZIMUTHS[0]), math.radians(PLATFORM_AZIMUTHS[0])
-    dx = R_P * math.cos(pp) - R_B * math.cos(pb)
-    dy = R_P * math.sin(pp) - R_B * math.sin(pb)
-    return math.hypot(dx, dy) / length, (NEUTRAL_Z - H_C) / length
-
-
-def heave_programme(t, z0, a=0.2, omega=1.0, tc=2.0):
-    """The paper's heave law (5.1) z = z0 + a sin(omega t)(1 - exp(-t/tc))^2 with its first
-    and second derivatives (written out independently of the Rust code)."""
-    e = math.exp(-t / tc)
-    g, g1, g2 = (1 - e) ** 2, 2 * (e - e * e) / tc, 2 * (2 * e * e - e) / tc**2
-    s, c = math.sin(omega * t), math.cos(omega * t)
-    return (z0 + a * s * g, a * (omega * c * g + s * g1), a * (-omega * omega * s * g + 2 * omega * c * g1 + s * g2))
-
-
-def heave_forces(t, z0=NEUTRAL_Z / R_B):
-    """Direct problem for the pure heave of the symmetric default stand (non-dimensional):
-    the six leg forces are equal, u = (z'' + g) / (6 n_z), n_z = H / l. Returns (u, du/dt, l, ldot)."""
-    d, _ = neutral_leg_geometry()
-    joint_offset = H_C / R_B
-
-    def at(tt):
-        z, zd, zdd = heave_programme(tt, z0)
-        h = z - joint_offset
-        l = math.hypot(d, h)
-        return (zdd + 1.0) / (6.0 * h / l), l, h * zd / l
-
-    u, l, ldot = at(t)
-    eps = 1e-6
-    du = (at(t + eps)[0] - at(t - eps)[0]) / (2 * eps)
-    return u, du, l, ldot
 
 
 def recording_callbacks(messages):

@@ -9,17 +9,15 @@ job's demonstration (examples/hydraulic_scenarios.py).
 4. pump failure: `pS` to 0 with the controller still commanding;
 5. one valve stuck open under feedback.
 
-The holding pressures, the creep rate and the valve flows are computed here from the FMU's
-parameter values and §10's equations, independently of the FMU's code.
+The parameters are the FMU's (its model description's start values). What the tests and the
+demonstration compare the runs with (the holding pressures, the creep rate, the valve flows) is
+§10 written out independently of the FMU's code, in tests/python/oracles/hydraulics.py.
 """
-
-import math
 
 import numpy as np
 from fmpy import read_model_description
 
-from .core import CONTROLLER_FMU, EQUILIBRIUM_FORCE, GRAVITY, H_C, LEGS, MASS, PLATFORM_FMU, Component
-from .core import neutral_leg_geometry
+from .core import CONTROLLER_FMU, LEGS, PLATFORM_FMU, Component
 from .cosim import COMMANDS, MEASURED, steps
 
 PARAMETERS = ("hydraulic.bore", "hydraulic.rod", "hydraulic.deadVolumeA", "hydraulic.deadVolumeB",
@@ -39,60 +37,6 @@ def hydraulic_parameters(fmu=PLATFORM_FMU):
     with the strokes' ends `lmin`, `lmax` of leg 1."""
     start = {v.name: v.start for v in read_model_description(str(fmu)).modelVariables}
     return {n: float(start[n]) for n in PARAMETERS + ("lmin[1]", "lmax[1]")}
-
-
-def areas(p):
-    """`(A_A, A_B)`, m²."""
-    d, rod = p["hydraulic.bore"], p["hydraulic.rod"]
-    return math.pi * d * d / 4.0, math.pi * (d * d - rod * rod) / 4.0
-
-
-def flow_coefficient(p):
-    """`K = Q_N / sqrt(dp_N / 2)`."""
-    return p["valve.ratedFlow"] / math.sqrt(p["valve.ratedPressureDrop"] / 2.0)
-
-
-def volumes(l, p):
-    """`(V_A, V_B)`, m³, of a leg of length `l`."""
-    area_a, area_b = areas(p)
-    x = l - p["lmin[1]"]
-    return p["hydraulic.deadVolumeA"] + area_a * x, p["hydraulic.deadVolumeB"] + area_b * (p["lmax[1]"] - p["lmin[1]"] - x)
-
-
-def holding_pressures(p):
-    """The default stand's holding pressures at its neutral pose: `p_B = p_S / 2`, and the cap
-    side pushing `0.2005 M g` (docs/model.md §3) with it."""
-    area_a, area_b = areas(p)
-    pb = p["pS"] / 2.0
-    return (EQUILIBRIUM_FORCE * MASS * GRAVITY + pb * area_b) / area_a, pb
-
-
-def leakage_flows(pa, pb, p, supply=None):
-    """The leakage into each chamber at a centred spool (§10: each land's null leakage to
-    supply and to tank, the piston's internal leakage): `(Q_A, Q_B)`, m³/s."""
-    ps = p["pS"] if supply is None else supply
-    pt, cv, ci = p["hydraulic.tankPressure"], p["valve.leakage"], p["hydraulic.internalLeakage"]
-    internal = ci * (pa - pb)
-    return cv * (ps - pa) - cv * (pa - pt) - internal, cv * (ps - pb) - cv * (pb - pt) + internal
-
-
-def quasi_static_creep(pa, pb, l, p, supply=None):
-    """The leg rate (m/s) at which a locked leg (spool centred) creeps on its leakage while it
-    keeps carrying its load: the force `p_A A_A - p_B A_B` constant, so `A_A p_A' = A_B p_B'`
-    with `p_A' = beta/V_A (Q_A - A_A v)`, `p_B' = beta/V_B (Q_B + A_B v)`:
-    `v = (A_A Q_A / V_A - A_B Q_B / V_B) / (A_A^2 / V_A + A_B^2 / V_B)`."""
-    area_a, area_b = areas(p)
-    va, vb = volumes(l, p)
-    qa, qb = leakage_flows(pa, pb, p, supply)
-    return (area_a * qa / va - area_b * qb / vb) / (area_a * area_a / va + area_b * area_b / vb)
-
-
-def heave_rate_of_leg_rate(l):
-    """`z'` per unit leg rate in pure heave at leg length `l`: the legs' vertical direction
-    cosine is `n_z = H / l`, `l' = n_z z'`."""
-    d, _ = neutral_leg_geometry(nondimensional=False)
-    height = math.sqrt(max(l * l - d * d, 0.0))
-    return l / height
 
 
 def closed_loop(t_end, h=1e-3, hook=None, record=(), controller=None, platform=None, events=None):
@@ -183,6 +127,5 @@ def cycle_figures(c, period, p):
     }
 
 
-__all__ = ["hydraulic_parameters", "areas", "flow_coefficient", "volumes", "holding_pressures", "leakage_flows",
-           "quasi_static_creep", "heave_rate_of_leg_rate", "closed_loop", "resting", "heave", "control_power_loss",
-           "pump_failure", "stuck_valve", "cycle_figures", "H_C"]
+__all__ = ["hydraulic_parameters", "closed_loop", "resting", "heave", "control_power_loss", "pump_failure",
+           "stuck_valve", "cycle_figures"]

@@ -64,7 +64,7 @@ def unit_text(unit, nondimensional):
 
 def label(name, variables, nondimensional=False):
     """The axis label of a study parameter or metric `name`; `variables`: {'platform': {name:
-    Variable}, 'controller': ...} (study_schema.fmu_variables)."""
+    Variable}, 'controller': ...} (study_params.fmu_variables)."""
     if name in METRICS:
         what, unit = METRICS[name]
         symbol = ""

@@ -28,7 +28,7 @@ import numpy as np
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Model
 
-from .core import EQUILIBRIUM_FORCE, GRAVITY, LEGS, MASS, PLATFORM_FMU, fmu_file, set_values, stand_parameters
+from .core import EQUILIBRIUM_FORCE, LEGS, PLATFORM_FMU, default_stand, fmu_file, set_values, stand_parameters
 
 DOF = ["surge x", "sway y", "heave z", "roll", "pitch", "yaw"]
 
@@ -125,7 +125,8 @@ def mode_name(vector):
 def linearise(nondimensional=True, fmu=PLATFORM_FMU):
     """The 12-state linear model about the neutral equilibrium."""
     parameters = stand_parameters(nondimensional=nondimensional)
-    u_eq = EQUILIBRIUM_FORCE * (1.0 if nondimensional else MASS * GRAVITY)
+    stand = default_stand()
+    u_eq = EQUILIBRIUM_FORCE * (1.0 if nondimensional else stand["M"] * stand["g"])
     model = PlatformModel(parameters, [u_eq] * 6, fmu=fmu)
     x0 = model.states()[:24]
     residual = np.max(np.abs(model.derivatives()[:24]))

@@ -16,10 +16,9 @@ import re
 
 import numpy as np
 
-from .core import GRAVITY, LEGS, MASS, open_loop
+from .core import LEGS, equilibrium_force_si, open_loop
 from .cosim import closed_loop
 
-EQUILIBRIUM_FORCE_SI = 0.2005 * MASS * GRAVITY
 # An electric actuator of a 3-tonne simulator: 40 kg cylinder, 15 kg rod; transverse inertias
 # of a 1 m barrel (m L^2 / 12 = 3.3 kg m2; 2.5 with the mass towards the joint) and a rod.
 HEAVY = {"leg.cylinderMass": 40.0, "leg.rodMass": 15.0, "leg.cylinderInertia": 2.5, "leg.rodInertia": 0.6}
@@ -32,7 +31,8 @@ _JOINT_EVENT = re.compile(r"t = ([-+0-9.eE]+): the (base|platform) joint of leg 
 
 def ripple(t):
     """The tipping forces: 5900.715 (1 + 0.05 sin(2t + k)) N on leg k."""
-    return [EQUILIBRIUM_FORCE_SI * (1.0 + 0.05 * math.sin(2.0 * t + k)) for k in LEGS]
+    force = equilibrium_force_si()
+    return [force * (1.0 + 0.05 * math.sin(2.0 * t + k)) for k in LEGS]
 
 
 def joint_events(messages):

@@ -43,7 +43,7 @@ from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import fmi2Terminated
 
-from . import cosim, study_schema
+from . import cosim, study_params, study_schema
 from .cosim import F, L, LP, U
 from .core import LEGS, Component, fmu_file, stand_parameters
 from .ssp import couplings
@@ -58,7 +58,7 @@ METRICS = ["max_leg_error", "max_pose_error", "stable", "discard_time", "min_kap
 
 def plan(path, max_runs=DEFAULT_MAX_RUNS, fmus=None):
     """The study file's Plan, checked against the schema (`stewart_fmu.study_schema`) and the
-    FMUs (`fmus`: `study_schema.fmu_paths()`, the package's by default) before anything runs;
+    FMUs (`fmus`: `study_params.fmu_paths()`, the package's by default) before anything runs;
     raises StudyError naming every problem."""
     path = Path(path)
     try:
@@ -118,7 +118,7 @@ def _component(role, fmu):
             path.write_bytes(data)
             _FILES[key] = path
         component = Component(_FILES[key], role, messages=[], start=False)
-        component.variables = study_schema.variables_of(component.md)
+        component.variables = study_params.variables_of(component.md)
         _PROCESS[key] = component
     return _PROCESS[key]
 
@@ -132,9 +132,9 @@ def _drop_components():
 
 def fmus_for(spec, paths=None):
     """The FMUs a study needs, as bytes (they travel to the workers; no shared file system).
-    `paths`: `study_schema.fmu_paths()`, the package's FMUs by default."""
-    paths = paths or study_schema.fmu_paths()
-    roles = study_schema.ROLES[spec["study"]["system"]]
+    `paths`: `study_params.fmu_paths()`, the package's FMUs by default."""
+    paths = paths or study_params.fmu_paths()
+    roles = study_params.ROLES[spec["study"]["system"]]
     options = {"platform": "--fmu", "controller": "--controller-fmu", "cueing": "--cueing-fmu"}
     fmus = {role: Path(fmu_file(paths[role], options[role])).read_bytes() for role in roles}
     if spec["study"]["system"] == "cueing":
@@ -264,7 +264,7 @@ def _description(data):
         md = read_model_description(str(path))
         path.unlink()
         os.rmdir(folder)
-        _DESCRIPTIONS[key] = (md, study_schema.variables_of(md))
+        _DESCRIPTIONS[key] = (md, study_params.variables_of(md))
     return _DESCRIPTIONS[key]
 
 

@@ -34,7 +34,7 @@ import time
 import pandas as pd
 
 from . import study as st
-from . import study_schema
+from . import study_params
 # The parts' names the users of `stewart_fmu.sweep` know (tests, examples, docs).
 from .sweep_dask import Progress, batches, run_and_time, run_batch, run_on_dask  # noqa: F401
 from .sweep_plots import _figure, colour_limits, plot  # noqa: F401
@@ -132,7 +132,7 @@ def main(argv=None):
 
 
 def sweep(args):
-    paths = study_schema.fmu_paths(args.fmu, args.controller_fmu, args.cueing_fmu)
+    paths = study_params.fmu_paths(args.fmu, args.controller_fmu, args.cueing_fmu)
     plan = st.plan(args.study, args.max_runs, fmus=paths)
     spec = plan.spec
     if args.check:
@@ -193,7 +193,7 @@ def _sweep_locked(spec, plan, args, out, paths):
     (out / "summary.txt").write_text(summary + "\n")
     print(summary)
     status = 0
-    for path, problem in plot(spec, results, out, study_schema.fmu_variables(paths)):
+    for path, problem in plot(spec, results, out, study_params.fmu_variables(paths)):
         if problem:
             print(f"stewart-sweep: {path.name} not written: {problem}", file=sys.stderr)
             status = 1

@@ -21,10 +21,7 @@ import numpy as np
 from fmpy import read_model_description, simulate_fmu
 
 from .cosim import closed_loop
-from .core import (BASE_AZIMUTHS, GRAVITY, H_C, LEGS, MASS, PLATFORM_AZIMUTHS, PLATFORM_FMU, R_B, R_P, check_names,
-                   fmu_file, open_loop)
-
-EQUILIBRIUM_FORCE_SI = 0.2005 * MASS * GRAVITY
+from .core import LEGS, PLATFORM_FMU, check_names, default_stand, equilibrium_force_si, fmu_file, open_loop
 
 
 def start_values(names, fmu=PLATFORM_FMU):
@@ -42,14 +39,18 @@ def stop_defaults():
 
 def static_rest_height(stiffness, lmin):
     """The default platform at rest on its six lower stops, solved independently of the FMU's
-    code from the default stand's geometry (docs/model.md §3): pure heave by the stand's symmetry, `6 k_s (lmin - l) (H/l) =
-    M g` with `l = sqrt(d² + H²)`. Returns (centre-of-mass height, leg length)."""
-    pb, pp = math.radians(BASE_AZIMUTHS[0]), math.radians(PLATFORM_AZIMUTHS[0])
-    d = math.hypot(R_P * math.cos(pp) - R_B * math.cos(pb), R_P * math.sin(pp) - R_B * math.sin(pb))
+    code from the default stand's geometry (the FMU's joints, `default_stand`): pure heave by
+    the stand's symmetry, `6 k_s (lmin - l) (H/l) = M g` with `l = sqrt(d² + H²)`, `d` the
+    legs' horizontal projection and `H` the platform joints' height. Returns (centre-of-mass
+    height, leg length)."""
+    stand = default_stand()
+    (bx, by, _), (ax, ay, az) = stand["B"][0], stand["A"][0]
+    d = math.hypot(ax - bx, ay - by)
+    weight = stand["M"] * stand["g"]
 
     def excess(h):
         l = math.hypot(d, h)
-        return 6.0 * stiffness * (lmin - l) * h / l - MASS * GRAVITY
+        return 6.0 * stiffness * (lmin - l) * h / l - weight
 
     lo, hi = 0.5, math.sqrt(lmin * lmin - d * d)
     assert excess(lo) > 0 > excess(hi)
@@ -57,7 +58,7 @@ def static_rest_height(stiffness, lmin):
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if excess(mid) > 0 else (lo, mid)
     h = 0.5 * (lo + hi)
-    return h + H_C, math.hypot(d, h)
+    return h - az, math.hypot(d, h)
 
 
 def contact_events(messages):
@@ -91,7 +92,8 @@ def _platform_run(force_of_t, t_end, h, parameters=None, record=RECORD, events=N
 def power_loss(t_cut=0.5, t_end=5.0, h=1e-3, parameters=None):
     """Scenario 1. Returns the recorded outputs and the contact events."""
     events = []
-    data = _platform_run(lambda t: [EQUILIBRIUM_FORCE_SI if t < t_cut - 1e-12 else 0.0] * 6, t_end, h,
+    force = equilibrium_force_si()
+    data = _platform_run(lambda t: [force if t < t_cut - 1e-12 else 0.0] * 6, t_end, h,
                          parameters=parameters, events=events)
     data["events"] = contact_events(events)
     return data
@@ -143,7 +145,8 @@ def actuator_failure(t_fail=1.0, t_end=5.0, h=1e-3, leg=1):
 def tumble_forces(t):
     """Open-loop forces under which the platform without end stops tumbles through singular
     leg arrangements while rising (5 % more than its weight on average)."""
-    return [EQUILIBRIUM_FORCE_SI * (1.05 + 0.5 * math.sin(2.0 * t + 1.1 * k)) for k in range(6)]
+    force = equilibrium_force_si()
+    return [force * (1.05 + 0.5 * math.sin(2.0 * t + 1.1 * k)) for k in range(6)]
 
 
 def tumble(t_end=3.0, h=1e-2, rel_tol=1e-12):
@@ -159,7 +162,8 @@ def tumble(t_end=3.0, h=1e-2, rel_tol=1e-12):
 def power_loss_model_exchange(t_cut=0.5, t_end=5.0):
     """Scenario 6: scenario 1 through FMPy's Model Exchange with CVODE; the force drop is an
     input event (two rows at t_cut), the contacts are located by the event indicators."""
-    inputs = np.array([(0.0,) + (EQUILIBRIUM_FORCE_SI,) * 6, (t_cut,) + (EQUILIBRIUM_FORCE_SI,) * 6,
+    force = equilibrium_force_si()
+    inputs = np.array([(0.0,) + (force,) * 6, (t_cut,) + (force,) * 6,
                        (t_cut,) + (0.0,) * 6, (t_end,) + (0.0,) * 6],
                       dtype=[("time", float)] + [(f"F[{k}]", float) for k in LEGS])
     messages = []

@@ -13,6 +13,8 @@ from stewart_fmu import Platform
 from stewart_fmu.cosim import closed_loop
 from stewart_fmu.workspace import power_loss, start_values
 
+pytestmark = pytest.mark.quick
+
 
 @pytest.mark.parametrize("args, kwargs, expected", [
     ((0.05, -0.01), {}, "h = -0.01"),

@@ -5,11 +5,13 @@ component, in a Python master over two FMU2Slave instances and as an SSP system.
 import math
 
 import numpy as np
+import pytest
 from fmpy.ssp.simulation import simulate_ssp
 from fmpy.validation import validate_fmu
 
 from stewart_fmu.cosim import CONTROLLER_FMU, SYSTEM_SSP, closed_loop
 from stewart_fmu import bisect_boundary, stand_parameters
+from references import check_figures
 
 P = stand_parameters(nondimensional=True)
 Z0 = P["r0[3]"]
@@ -25,10 +27,12 @@ def paper_controller(gain, damping, disturbance=1e-4, amplitude=0.2):
     return c
 
 
+@pytest.mark.quick
 def test_controller_fmu_validates():
     assert validate_fmu(str(CONTROLLER_FMU)) == []
 
 
+@pytest.mark.quick
 def test_default_gains_keep_every_leg_within_a_millimetre():
     """SI defaults: the paper's heave scaled to the default stand, 1 ms communication step."""
     t, rows, errors, status = closed_loop(10.0, 1e-3, record=("r[3]",))
@@ -67,6 +71,14 @@ def test_gain_table_with_and_without_damping():
     # ... above it the heave is tracked, better for G = 10 than for G = 2.
     assert table[(2.0, False)][0] < 1e-3 and table[(10.0, False)][0] < table[(2.0, False)][0]
     assert all(table[k][2] == "ok" for k in table)
+    # The table docs/control.md quotes.
+    check_figures("control.txt", "gains, G = 0: no feedback",
+                  f"the platform departs: max leg-length error {e0.max():.2e}, "
+                  + (f"a step discarded at t = {t0[-1]:.1f}" if s0 != "ok" else "no step discarded by t = 40"))
+    for gain in (0.5, 2.0, 10.0, 100.0):
+        undamped, damped = table[(gain, False)], table[(gain, True)]
+        check_figures("control.txt", f"gains, G = {gain:g}: max leg-length error over 0..40 at step 0.002",
+                      f"{undamped[0]:.2e} with D = 0, {damped[0]:.2e} with D = {damped[3]:.2f}")
 
 
 def test_large_gain_tracks_even_without_programme_forces():
@@ -100,6 +112,9 @@ def test_communication_step_limits_stability():
           f"as a fraction of the closed loop's period: {lo * math.sqrt(6 * gain * 0.69) / (2 * math.pi):.2f}")
     assert 0.1 < lo < 0.5
     assert not stable(2 * lo)
+    check_figures("control.txt", f"gains, G = {gain:g}, D = {damping:.2f}: largest stable communication step",
+                  f"{lo:.2f} ({lo * math.sqrt(6 * gain * 0.69) / (2 * math.pi):.2f} of the closed loop's period), "
+                  f"unstable at {2 * lo:.2f}")
 
 
 def test_critical_gain_through_the_controller_fmu():
@@ -119,6 +134,7 @@ def test_critical_gain_through_the_controller_fmu():
     assert 0.9 < 0.5 * (lo + hi) < 1.1
 
 
+@pytest.mark.quick
 def test_ssp_run_and_python_master_agree():
     """FMPy's simulate_ssp on target/fmu/StewartSystem.ssp (SI defaults, 1 ms) and the Python
     master in its "jacobi" mode (FMPy's SSP algorithm) give the same trajectory."""

@@ -15,6 +15,8 @@ from fmpy.fmi2 import FMU2Slave, fmi2Discard, fmi2LastSuccessfulTime, fmi2Termin
 
 from stewart_fmu import PLATFORM_FMU, ROOT, recording_callbacks
 
+pytestmark = pytest.mark.quick
+
 
 def readme_recipe():
     """The `step_with_retry` function exactly as docs/fmi-behaviour.md gives it."""

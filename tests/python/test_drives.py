@@ -8,16 +8,20 @@ currents and voltages."""
 import math
 
 import numpy as np
+import pytest
 from fmpy import read_model_description, simulate_fmu
 
 from stewart_fmu import PLATFORM_FMU, Platform
 from stewart_fmu import drives as dr
 from stewart_fmu.cosim import CONTROLLER_FMU, SYSTEM_DRIVES_SSP
 from stewart_fmu.workspace import static_rest_height, stop_defaults
+from oracles import drives as oracle
 from test_fmi3 import PLATFORM3, Fmu3
 
+pytestmark = pytest.mark.quick
+
 P = dr.drive_parameters()
-I_HOLD, U_HOLD = dr.holding(P)
+I_HOLD, U_HOLD = oracle.holding(P)
 
 
 def balance(c):
@@ -25,7 +29,7 @@ def balance(c):
 
 
 def test_the_holding_voltage_holds_the_stand_at_the_static_models_current():
-    c, _, status = dr.holding_run(3.0)
+    c, _, status = dr.holding_run((I_HOLD, U_HOLD), 3.0)
     drift = np.max(np.abs(c["r[3]"] - c["r[3]"][0]))
     current = max(np.max(np.abs(c[f"I[{k}]"] - I_HOLD)) for k in dr.LEGS)
     print(f"holding at U = {U_HOLD:.6f} V: drift {drift:.1e} m over 3 s, currents within {current:.1e} A of the static "
@@ -40,12 +44,12 @@ def test_dynamic_braking_lowers_the_platform_at_the_quasi_static_speed():
     leg's braking force N^2 (k_t k_e / R + D) l' holds its share of the weight, computed here
     from the stand's geometry; it lands on its stops softly and rests at the static solution.
     The same power loss with ideal force actuators falls."""
-    c, messages, status = dr.power_loss(t_loss=0.5, t_end=16.0, h=0.01)
+    c, messages, status = dr.power_loss((I_HOLD, U_HOLD), t_loss=0.5, t_end=16.0, h=0.01)
     assert status == "ok"
     t, z, vz = c["time"], c["r[3]"], c["v[3]"]
     landing = next(float(m.split()[2].rstrip(":")) for _, _, m in messages if "reached its lower end stop" in m)
     steady = (t > 1.0) & (t < landing - 0.2)
-    expected = np.array([dr.quasi_static_descent_rate(zi, P) for zi in z[steady]])
+    expected = np.array([oracle.quasi_static_descent_rate(zi, P) for zi in z[steady]])
     error = np.max(np.abs(vz[steady] / expected - 1.0))
     lmin, _, stiffness, _ = stop_defaults()
     z_rest, _ = static_rest_height(stiffness, lmin)
@@ -69,7 +73,7 @@ def test_voltage_commands_follow_the_heave_programme():
     within a millimetre of its programme; voltages within Umax, currents within three times
     the holding current; over the last period the electric energy supplied equals the energy
     lost (a periodic motion stores nothing)."""
-    c, errors, status = dr.heave_closed_loop(10.0, record=[f"U[{k}]" for k in dr.LEGS])
+    c, errors, status = dr.heave_closed_loop(I_HOLD, 10.0, record=[f"U[{k}]" for k in dr.LEGS])
     assert status == "ok"
     voltages = np.concatenate([c[f"U[{k}]"] for k in dr.LEGS])
     currents = np.concatenate([c[f"I[{k}]"] for k in dr.LEGS])
@@ -123,7 +127,7 @@ def test_a_shorted_drive_brakes_its_leg_instead_of_dropping_it():
     sinks slowly (back EMF current) and stays off its stop for 6 s; the platform tilts a few
     degrees and the other five follow the programme. With ideal force actuators the failed leg
     (force 0) reaches its stop within 0.4 s (docs: workspace scenario 4)."""
-    c, errors, status = dr.failure(t_fail=1.0, t_end=6.0)
+    c, errors, status = dr.failure(I_HOLD, t_fail=1.0, t_end=6.0)
     assert status == "ok"
     after = c["time"] > 1.0005  # the rows after the first step from t = 1 s
     lmin, _, _, _ = stop_defaults()
@@ -141,12 +145,12 @@ def test_a_shorted_drive_brakes_its_leg_instead_of_dropping_it():
 def test_fmi3_equals_fmi2_with_drives_bit_for_bit():
     """Voltages from a leg feedback, 2 s at 1 ms: every output of the FMI 3 platform with
     drives equals the FMI 2 platform's bit for bit."""
-    start = dr.drive_start()
+    start = dr.drive_start(I_HOLD)
     p2 = Platform(parameters=start, name="fmi2-drives")
     p3 = Fmu3(PLATFORM3, name="fmi3-drives", integers={"drive": 1}, reals={"I0": [I_HOLD] * 6})
     names = ["r[3]", "v[1]", "E", "work.electric", "work.dissipated"] + dr.CURRENTS
     l0 = p2.vector("l", 6)
-    volts_per_newton = P["motor.R"] / (dr.transmission(P) * P["motor.kt"])
+    volts_per_newton = P["motor.R"] / (oracle.transmission(P) * P["motor.kt"])
     for i in range(2000):
         legs, rates = p2.vector("l", 6), p2.vector("ldot", 6)
         assert np.array_equal(legs, p3.get("l")) and np.array_equal(rates, p3.get("ldot"))
@@ -167,7 +171,7 @@ def test_fmi3_equals_fmi2_with_drives_bit_for_bit():
 def test_model_exchange_with_drives_matches_co_simulation():
     """FMPy's CVODE over the 59 Model Exchange states (the currents among them), braking from
     the start (U = 0, I0 the holding current): the heave after 3 s equals Co-Simulation's."""
-    start = {**dr.drive_start(), "stops": False}
+    start = {**dr.drive_start(I_HOLD), "stops": False}
     outputs = ["r[3]", "I[1]"]
     me = simulate_fmu(str(PLATFORM_FMU), fmi_type="ModelExchange", start_values=start, stop_time=3.0,
                       output_interval=0.01, relative_tolerance=1e-10, output=outputs)
@@ -186,7 +190,7 @@ def test_directional_derivatives_with_drives_match_central_differences():
     forces actuatorForce, against central differences of fmi2GetDerivatives and fmi2GetReal:
     relative error <= 1e-6."""
     from stewart_fmu.linearise import PlatformModel
-    m = PlatformModel(dr.drive_start(), [0.0] * 6)
+    m = PlatformModel(dr.drive_start(I_HOLD), [0.0] * 6)
     u_vrs = [m.vr[f"U[{k}]"] for k in dr.LEGS]
     out_vrs = [m.vr[f"actuatorForce[{k}]"] for k in (1, 4)]
     rng = np.random.default_rng(5)
@@ -229,7 +233,7 @@ def test_directional_derivatives_with_drives_match_central_differences():
 def test_an_fmu_state_with_drives_continues_bit_for_bit():
     """fmi2GetFMUstate mid-run (currents and electric work in the state), serialized and
     restored into a fresh instance: the run goes on to the bit, as the uninterrupted one."""
-    pl = Platform(parameters=dr.drive_start(), name="state-a")
+    pl = Platform(parameters=dr.drive_start(I_HOLD), name="state-a")
     u = [pl.vr[f"U[{k}]"] for k in dr.LEGS]
     voltages = lambda t: [U_HOLD * (1 + 0.4 * math.sin(4 * t + k)) for k in range(6)]  # noqa: E731
     for _ in range(300):
@@ -242,7 +246,7 @@ def test_an_fmu_state_with_drives_continues_bit_for_bit():
         pl.slave.setReal(u, voltages(pl.time))
         pl.step(1e-3)
         reference.append(pl.get(*names))
-    other = Platform(parameters=dr.drive_start(), name="state-b")
+    other = Platform(parameters=dr.drive_start(I_HOLD), name="state-b")
     other.slave.setFMUstate(other.slave.deSerializeFMUstate(state))
     other.time = t_saved
     restored = []
@@ -264,7 +268,8 @@ def test_the_actuator_force_is_the_input_or_the_drives_law_in_every_mode():
     changes sign of its rate and the legs move); with forces as inputs the input F_k itself."""
     legs = list(dr.LEGS)
     record = [f"actuatorForce[{k}]" for k in legs] + [f"I[{k}]" for k in legs] + [f"ldot[{k}]" for k in legs]
-    c, _, status = dr.open_loop(lambda t: [U_HOLD if t < 0.3 else 0.0] * 6, 1.5, h=0.01, record=record)
+    c, _, status = dr.open_loop(lambda t: [U_HOLD if t < 0.3 else 0.0] * 6, 1.5, h=0.01, parameters=dr.drive_start(I_HOLD),
+                                record=record)
     assert status == "ok"
     n = 2.0 * math.pi * P["gear.ratio"] / P["screw.lead"]
     worst, moving = 0.0, 0.0

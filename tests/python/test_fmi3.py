@@ -7,6 +7,7 @@ import math
 from pathlib import Path
 
 import numpy as np
+import pytest
 from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.fmi3 import FMU3Model, FMU3Slave
 from fmpy.validation import validate_fmu
@@ -103,6 +104,7 @@ class Fmu3:
         self.fmu.freeInstance()
 
 
+@pytest.mark.quick
 def test_fmi3_fmus_validate_clean():
     for fmu in (PLATFORM3, CONTROLLER3):
         assert validate_fmu(str(fmu)) == [], fmu
@@ -125,6 +127,7 @@ def forces_at(t, legs, rates):
             for k in range(6)]
 
 
+@pytest.mark.quick
 def test_fmi3_platform_equals_fmi2_platform_bit_for_bit():
     """Same inputs (sine forces plus leg feedback), 1 ms, 3 s: every output of the FMI 3
     platform equals the FMI 2 platform's bit for bit."""
@@ -153,6 +156,7 @@ def test_fmi3_platform_equals_fmi2_platform_bit_for_bit():
     p3.free()
 
 
+@pytest.mark.quick
 def test_fmi3_model_exchange_matches_fmi2_model_exchange():
     """FMPy over the FMI 3 Model Exchange interface (states in FMI 3 order: whole arrays)
     against the FMI 2 one. Explicit Euler with time-varying inputs: identical. CVODE with
@@ -185,6 +189,7 @@ def test_fmi3_model_exchange_matches_fmi2_model_exchange():
     assert dz < 1e-7
 
 
+@pytest.mark.quick
 def test_fmi3_co_simulation_returns_early_at_contacts_and_reports_events():
     """Power loss through FMI 3 Co-Simulation with event mode and early return: each step that
     meets a contact returns at the located contact time with eventHandlingNeeded; the
@@ -230,6 +235,7 @@ def test_fmi3_co_simulation_returns_early_at_contacts_and_reports_events():
     assert abs(z3 - z2) < 1e-7
 
 
+@pytest.mark.quick
 def test_adjoint_derivatives_are_the_transpose_of_the_directional_ones():
     """<v, J w> = <J^T v, w> to round-off for the derivatives and outputs with respect to the
     states and the inputs, at random states (FMI 3 Model Exchange)."""
@@ -259,6 +265,7 @@ def test_adjoint_derivatives_are_the_transpose_of_the_directional_ones():
     m.free()
 
 
+@pytest.mark.quick
 def test_variable_dependencies_match_the_model_structure():
     """fmi3GetNumberOfVariableDependencies / fmi3GetVariableDependencies against the
     ModelStructure of the model description."""
@@ -283,6 +290,7 @@ def test_variable_dependencies_match_the_model_structure():
     m.free()
 
 
+@pytest.mark.quick
 def test_fmi3_fmu_state_round_trip_continues_bit_for_bit():
     p = Fmu3(PLATFORM3, name="state")
     p.set("F", [FORCE * 1.01] * 6)
@@ -311,6 +319,7 @@ def test_fmi3_fmu_state_round_trip_continues_bit_for_bit():
     p.free()
 
 
+@pytest.mark.quick
 def test_fmi3_controller_closes_the_loop_like_fmi2():
     """The FMI 3 controller driving the FMI 3 platform (Gauss-Seidel, 1 ms, 2 s) gives the
     same legs as the FMI 2 pair, bit for bit."""

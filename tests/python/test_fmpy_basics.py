@@ -4,11 +4,16 @@ forces from a CSV file, variable communication steps."""
 import math
 
 import numpy as np
+import pytest
 from fmpy import read_model_description, simulate_fmu
 from fmpy.util import read_csv, write_csv
 from fmpy.validation import validate_fmu
 
-from stewart_fmu import EQUILIBRIUM_FORCE, GRAVITY, MASS, NEUTRAL_Z, R_B, Platform, heave_forces, heave_programme
+from stewart_fmu import Platform
+from oracles.heave import heave_forces, heave_programme
+from oracles.stand import EQUILIBRIUM_FORCE, GRAVITY, MASS, NEUTRAL_Z, R_B
+
+pytestmark = pytest.mark.quick
 
 
 def test_validate_fmu_reports_no_problems(platform_fmu):

@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from stewart_fmu import EQUILIBRIUM_FORCE, Platform, stand_parameters
 
@@ -72,6 +73,8 @@ sys.path.insert(0, {tests!r})
 import numpy as np
 from stewart_fmu import Platform, stand_parameters
 from test_fmu_state import drive
+
+pytestmark = pytest.mark.quick
 pl = Platform(parameters=stand_parameters(nondimensional=True), name="fresh")
 state = pl.slave.deSerializeFMUstate(open({path!r}, "rb").read())
 pl.slave.setFMUstate(state)

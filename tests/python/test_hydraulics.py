@@ -10,17 +10,22 @@ the bit."""
 import math
 
 import numpy as np
+import pytest
 from fmpy import simulate_fmu
 
 from stewart_fmu import PLATFORM_FMU, Platform
 from stewart_fmu import hydraulics as hy
-from stewart_fmu.core import EQUILIBRIUM_FORCE, GRAVITY, LEGS, MASS
+from stewart_fmu.core import LEGS
 from stewart_fmu.ssp import SYSTEM_HYDRAULIC_SSP
+from oracles import hydraulics as oracle
+from oracles.stand import EQUILIBRIUM_FORCE, GRAVITY, MASS
 from test_fmi3 import PLATFORM3, Fmu3
 
+pytestmark = pytest.mark.quick
+
 P = hy.hydraulic_parameters()
-AREA_A, AREA_B = hy.areas(P)
-K = hy.flow_coefficient(P)
+AREA_A, AREA_B = oracle.areas(P)
+K = oracle.flow_coefficient(P)
 PERIOD = 2 * math.pi / 2.5573423705088842  # the default heave programme's
 
 
@@ -45,7 +50,7 @@ def test_the_stand_rests_on_the_holding_pressures_and_draws_the_leakage_flow():
     offsets the leakage needs; Qsupply equals §10's valve law summed over the six valves."""
     c, errors, status = hy.resting(3.0)
     assert status == "ok"
-    pa0, pb0 = hy.holding_pressures(P)
+    pa0, pb0 = oracle.holding_pressures(P)
     assert abs(c["pA[1]"][0] - pa0) < 1e-6 and c["pB[1]"][0] == pb0
     force = np.array([c[f"pA[{k}]"][-1] * AREA_A - c[f"pB[{k}]"][-1] * AREA_B for k in LEGS])
     expected = sum(supply_flow(c[f"pA[{k}]"][-1], c[f"pB[{k}]"][-1], c[f"spool[{k}]"][-1], P["pS"]) for k in LEGS)
@@ -111,7 +116,7 @@ def test_the_compiled_master_and_libcosim_run_the_hydraulic_system():
         peak = max(peak, float(np.max(pa)))
     print(f"compiled master = FMPy over 2 s; libcosim on StewartSystemHydraulic.ssp, 5 s at 1 ms: largest leg error "
           f"{worst * 1e3:.3f} mm, cap pressures up to {peak / 1e6:.2f} MPa")
-    assert worst < 3e-3 and peak > hy.holding_pressures(P)[0]
+    assert worst < 3e-3 and peak > oracle.holding_pressures(P)[0]
 
 
 def test_locked_legs_creep_at_the_quasi_static_rate_of_the_leakage():
@@ -125,10 +130,10 @@ def test_locked_legs_creep_at_the_quasi_static_rate_of_the_leakage():
     window = (t >= 3.0) & (t <= 6.0)
     measured = np.polyfit(t[window], c["l[1]"][window], 1)[0]
     mid = int(np.argmin(np.abs(t - 4.5)))
-    quasi_static = hy.quasi_static_creep(c["pA[1]"][mid], c["pB[1]"][mid], c["l[1]"][mid], P)
+    quasi_static = oracle.quasi_static_creep(c["pA[1]"][mid], c["pB[1]"][mid], c["l[1]"][mid], P)
     spools = max(abs(c[f"spool[{k}]"][-1]) for k in LEGS)
     print(f"control power lost at 1 s: leg 1 creeps at {measured * 1e3:.4f} mm/s (quasi-static from the leakage "
-          f"{quasi_static * 1e3:.4f} mm/s), platform heave rate {measured * hy.heave_rate_of_leg_rate(c['l[1]'][mid]) * 1e3:.4f} "
+          f"{quasi_static * 1e3:.4f} mm/s), platform heave rate {measured * oracle.heave_rate_of_leg_rate(c['l[1]'][mid]) * 1e3:.4f} "
           f"mm/s; spools {spools:.1e}")
     assert measured > 0 and abs(measured - quasi_static) < 0.05 * quasi_static
     assert spools < 1e-9

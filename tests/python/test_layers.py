@@ -11,7 +11,11 @@ import re
 import subprocess
 from pathlib import Path
 
+import pytest
+
 from stewart_fmu import ROOT
+
+pytestmark = pytest.mark.quick
 
 CRATES = {"stewart-core": ROOT / "crates" / "stewart-core" / "src", "stewart_fmu": ROOT / "src"}
 

@@ -6,13 +6,17 @@ below, and that critical gain is the one the closed-loop simulations find."""
 import math
 
 import numpy as np
+import pytest
 
 from stewart_fmu.linearise import closed_loop, critical_gain, eigen_table, linearise, max_real_part
-from stewart_fmu import EQUILIBRIUM_FORCE, Platform, bisect_boundary, heave_forces, stand_parameters
+from stewart_fmu import EQUILIBRIUM_FORCE, Platform, bisect_boundary, stand_parameters
+from oracles.heave import heave_forces
+from references import check_figures
 
 P = stand_parameters(nondimensional=True)
 
 
+@pytest.mark.quick
 def test_open_loop_eigenvalues_are_saddle_pairs_and_include_the_heave():
     lin = linearise()
     table = eigen_table(lin["A"])
@@ -29,6 +33,8 @@ def test_open_loop_eigenvalues_are_saddle_pairs_and_include_the_heave():
     # The fastest mode involves tilt (docs/model.md §6: a lateral + tilt mode, not the heave).
     fastest = table[0][1]
     assert "roll" in fastest or "pitch" in fastest
+    check_figures("control.txt", "linearisation, open-loop eigenvalues (non-dimensional)",
+                  ", ".join(f"{v.real:+.6f}" for v, _ in table))
 
 
 def test_heave_eigenvalue_is_the_nonlinear_growth_rate():
@@ -63,6 +69,7 @@ def test_heave_eigenvalue_is_the_nonlinear_growth_rate():
     assert abs(growth - heave_eigenvalue) <= 1e-3 * heave_eigenvalue
 
 
+@pytest.mark.quick
 def test_closed_loop_is_marginally_stable_above_the_critical_gain_and_unstable_below():
     lin = linearise()
     g_c = critical_gain(lin)
@@ -74,6 +81,7 @@ def test_closed_loop_is_marginally_stable_above_the_critical_gain_and_unstable_b
     assert max(above) <= 1e-9
     assert min(below) > 0
     assert damped < -0.01  # damping makes the stable loop asymptotically stable
+    check_figures("control.txt", "linearisation, critical gain", f"G_c = {g_c:.6f}")
 
 
 def test_critical_gain_matches_the_closed_loop_simulation():
@@ -103,3 +111,5 @@ def test_critical_gain_matches_the_closed_loop_simulation():
     print(f"critical gain: linearisation {lin_gc:.4f}, closed-loop simulation {sim_gc:.4f} "
           f"(relative difference {abs(sim_gc - lin_gc) / lin_gc:.1e})")
     assert abs(sim_gc - lin_gc) <= 0.02 * lin_gc
+    check_figures("control.txt", "linearisation, closed-loop simulation's critical gain",
+                  f"{sim_gc:.4f} ({abs(sim_gc - lin_gc) / lin_gc * 100:.1f} % from the linearisation's)")

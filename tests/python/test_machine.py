@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 from fmpy import read_model_description, simulate_fmu
 
 from stewart_fmu import CONTROLLER_FMU, PLATFORM_FMU, ROOT, Platform
@@ -23,6 +24,7 @@ from test_importers import fmi_sim_binary  # noqa: E402
 
 
 
+@pytest.mark.quick
 def test_the_papers_machine_gives_the_previous_releases_numbers_to_the_bit():
     """Massless legs, no friction: heave in closed loop, a power loss onto the stops, a tumble
     through singular arrangements, a tip-over; against the bits the release before the machine
@@ -114,6 +116,7 @@ def test_tipping_forces_leave_the_platform_on_its_joint_limits_in_every_host(tmp
     assert result["time"][-1] < 2.0
 
 
+@pytest.mark.quick
 def test_heavy_legs_in_the_closed_loop_follow_the_programme_to_a_millimetre():
     """Legs of 40 kg cylinders and 15 kg rods in platform and controller (whose programme
     forces then carry the legs' weight and inertia): the default closed loop holds the heave

@@ -29,6 +29,7 @@ SWEEP = str(Path(sys.executable).parent / "stewart-sweep")
 MASTER = str(Path(sys.executable).parent / "stewart-master")
 
 
+@pytest.mark.quick
 def test_the_compiled_master_is_built_and_loads():
     ok, reason = master.available()
     assert ok, reason
@@ -107,6 +108,7 @@ def test_a_drives_study_with_a_failed_leg_gives_the_same_rows_with_both_masters(
     assert all(r["max_leg_error"] > 1e-3 for r in compiled)
 
 
+@pytest.mark.quick
 @pytest.mark.parametrize("scheme", ["gauss-seidel", "jacobi"])
 def test_the_closed_loop_is_the_fmpy_masters_to_the_bit(scheme):
     record = ("r[3]", "E", "F[1]")
@@ -118,6 +120,7 @@ def test_the_closed_loop_is_the_fmpy_masters_to_the_bit(scheme):
     assert np.array_equal(t1, t2) and np.array_equal(rows1, rows2) and np.array_equal(errors1, errors2)
 
 
+@pytest.mark.quick
 def test_the_command_line_writes_what_python_gets_and_reports_a_discard(tmp_path):
     out = tmp_path / "heave.csv"
     run = subprocess.run([MASTER, "run", str(SYSTEM_SSP), "--stop-time", "2", "--step", "0.001", "--record",

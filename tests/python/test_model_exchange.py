@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 from fmpy import simulate_fmu
 
-from stewart_fmu import EQUILIBRIUM_FORCE, PLATFORM_FMU, Platform, heave_forces, heave_programme, stand_parameters
+from stewart_fmu import EQUILIBRIUM_FORCE, PLATFORM_FMU, Platform, stand_parameters
+from oracles.heave import heave_forces, heave_programme
 
 P = stand_parameters(nondimensional=True)
 Z0 = P["r0[3]"]
@@ -74,6 +75,7 @@ def test_fmpy_model_exchange_matches_co_simulation(experiment):
     assert results["CVode"][1] < 1e-9 and results["Euler"][1] < 1e-6
 
 
+@pytest.mark.quick
 def test_model_exchange_with_exact_forces_matches_co_simulation():
     """A Model Exchange master in Python (scipy's DOP853 over fmi2SetTime, fmi2SetReal,
     fmi2SetContinuousStates, fmi2GetDerivatives) with the heave programme's forces evaluated
@@ -102,6 +104,7 @@ def test_model_exchange_with_exact_forces_matches_co_simulation():
     assert vs_programme < 1e-5 and vs_cs < 1e-5
 
 
+@pytest.mark.quick
 def test_baumgarte_keeps_the_constraints_and_none_does_not():
     """A body turning freely about its centre of mass (g = 0, no leg forces), CVODE at rtol
     1e-6 for 10 time units: with the Baumgarte terms (rate 10) the residual stays at the
@@ -121,6 +124,7 @@ def test_baumgarte_keeps_the_constraints_and_none_does_not():
     assert residual[1][1] > 10 * residual[2][1]
 
 
+@pytest.mark.quick
 def test_directional_derivatives_match_central_differences():
     """At random states and forces: d(derivatives)/d(states, inputs) and d(outputs)/d(states)
     from fmi2GetDirectionalDerivative against central differences of fmi2GetDerivatives and
@@ -168,6 +172,7 @@ def test_directional_derivatives_match_central_differences():
     assert worst <= 1e-6
 
 
+@pytest.mark.quick
 def test_co_simulation_also_provides_directional_derivatives():
     """In Co-Simulation the outputs do not depend on the forces directly (dl/dF = 0), and the
     derivative variables' Jacobians equal Model Exchange's (no Baumgarte terms at rest on

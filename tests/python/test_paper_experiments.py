@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 
-from stewart_fmu import EQUILIBRIUM_FORCE, Platform, bisect_boundary, heave_forces, heave_programme, stand_parameters
+from stewart_fmu import EQUILIBRIUM_FORCE, Platform, bisect_boundary, stand_parameters
+from oracles.heave import heave_forces, heave_programme
 
 P = stand_parameters(nondimensional=True)
 Z0 = P["r0[3]"]
@@ -17,6 +18,7 @@ def pose_deviation(pl, r0):
     return np.linalg.norm(pl.vector("r", 3) - r0) + np.linalg.norm(pl.vector("angles", 3))
 
 
+@pytest.mark.quick
 def test_1_equilibrium_is_held_then_lost():
     """u_k = 0.2005 from rest in the neutral pose: held to 1e-9 for at least 4 time units;
     the equilibrium is unstable, so round-off eventually grows."""
@@ -38,6 +40,7 @@ def test_1_equilibrium_is_held_then_lost():
     assert final > 1e-3  # the instability shows
 
 
+@pytest.mark.quick
 def test_2_parasitic_oscillations_depart_upward():
     """u_k = 0.2005 + 0.0001 sin t (paper Fig. 2): the heave rises from the start and passes
     0.01 near t = 6 and 0.1 near t = 10. Forces interpolated to first order over 0.01 steps."""
@@ -63,6 +66,7 @@ def test_2_parasitic_oscillations_depart_upward():
     assert lowest > -1e-6  # it rises from the start, the sine is only a ripple
 
 
+@pytest.mark.quick
 def test_3_heave_programme_forces_and_reproduction():
     """eta(t) = 0.2 sin t (1 - exp(-t/2))^2: the six equal forces of the direct problem stay in
     [0.152, 0.262] (paper Fig. 4) and, applied to the FMU with first-order input
@@ -83,6 +87,7 @@ def test_3_heave_programme_forces_and_reproduction():
     assert worst <= 1e-5
 
 
+@pytest.mark.quick
 def test_4_perturbed_programme_departs_upward_without_oscillation():
     """F(t) + 0.0001 sin(2t)(1 - exp(-t/2)) (paper Fig. 5): little effect at first, then a
     departure upward; the deviation never changes sign and passes 0.01 a little after t = 10."""

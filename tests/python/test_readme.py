@@ -119,6 +119,7 @@ def quoted_figures(text):
     return found
 
 
+@pytest.mark.quick
 def test_the_readme_quotes_only_figures_the_repository_records():
     text = prose(README.read_text())
     # The set-up's figures, and the studies' throughput (benches/sweep_bench.py's output).
@@ -160,6 +161,7 @@ def heading_anchor(heading):
     return text.replace(" ", "-")
 
 
+@pytest.mark.quick
 def test_the_links_between_the_pages_resolve():
     """Every relative link in README.md, ARCHITECTURE.md and docs/*.md names a file of the
     repository, and every #anchor a heading of that file."""
@@ -186,12 +188,15 @@ def test_the_links_between_the_pages_resolve():
 # The pages of docs/ that quote measurements, and the parts of each that do (None: all of it).
 MEASURED_PAGES = {
     "performance.md": None,
+    "validation.md": None,
+    "control.md": None,
     "studies.md": [("Throughput (", "## Tested on a real cluster")],
     "platforms.md": [("With the FMU's maths from the C library", "The Linux x86-64 binary is built"),
                      ("What it costs on x86-64", "## Building the binaries")],
 }
 
 
+@pytest.mark.quick
 @pytest.mark.parametrize("page", sorted(MEASURED_PAGES))
 def test_the_docs_quote_only_figures_the_benches_record(page):
     """The measured figures of docs/performance.md, and of the measured parts of docs/studies.md

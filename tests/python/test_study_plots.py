@@ -9,11 +9,14 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
+import pytest
 
-from stewart_fmu import labels, study_schema
+from stewart_fmu import labels, study_params
 from stewart_fmu.sweep import _figure, colour_limits
 
-VARIABLES = study_schema.fmu_variables()
+pytestmark = pytest.mark.quick
+
+VARIABLES = study_params.fmu_variables()
 
 
 def test_parameters_and_metrics_are_labelled_with_their_names_and_units():

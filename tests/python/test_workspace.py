@@ -5,10 +5,13 @@ independent statement of what must happen."""
 import math
 
 import numpy as np
+import pytest
 from scipy.integrate import solve_ivp
 
 from stewart_fmu import workspace as ws
-from stewart_fmu import BASE_AZIMUTHS, GRAVITY, H_C, INERTIA, MASS, NEUTRAL_Z, PLATFORM_AZIMUTHS, R_B, R_P
+from oracles.stand import BASE_AZIMUTHS, GRAVITY, H_C, INERTIA, MASS, NEUTRAL_Z, PLATFORM_AZIMUTHS, R_B, R_P
+
+pytestmark = pytest.mark.quick
 
 MGRB = MASS * GRAVITY * R_B  # energy scale, J
 

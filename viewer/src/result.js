@@ -2,23 +2,19 @@
 // scene draws (no three.js here). Conventions as in docs/model.md §1: R is body -> inertial,
 // column b is e_b; the platform joint k is at a_k = r + R A_k; R = Rx(roll) Ry(pitch) Rz(yaw).
 
+import DEFAULT_STAND from "./default_stand.json" with { type: "json" };
+
 const LEGS = [1, 2, 3, 4, 5, 6];
 const ROTATION = [1, 2, 3].flatMap((a) => [1, 2, 3].map((b) => `R[${a},${b}]`));
 const ANGLES = ["angles[1]", "angles[2]", "angles[3]"];
 
-/** The default stand of docs/model.md §3 (SI), used when no stand file is given. */
+/**
+ * The default stand of docs/model.md §3 (SI), drawn when no stand file is given: the platform
+ * FMU's start values of B, A, lmin and lmax, written from its model description into
+ * default_stand.json (tests/python/test_viewer.py holds the two equal and rewrites the file).
+ */
 export function defaultStand() {
-  const rad = Math.PI / 180;
-  const base = [-10, 10, 110, 130, 230, 250];
-  const platform = [-50, 50, 70, 170, 190, 290];
-  return {
-    B: base.map((a) => [1.5 * Math.cos(a * rad), 1.5 * Math.sin(a * rad), 0]),
-    A: platform.map((a) => [Math.cos(a * rad), Math.sin(a * rad), -0.5]),
-    lmin: Array(6).fill(1.45),
-    lmax: Array(6).fill(2.15),
-    units: "m",
-    source: "default stand (docs/model.md §3)",
-  };
+  return { ...structuredClone(DEFAULT_STAND), units: "m", source: "default stand (docs/model.md §3)" };
 }
 
 /**

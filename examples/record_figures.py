@@ -1,0 +1,43 @@
+"""The main job's figures that the docs quote, recorded in benches/results/validation.txt: the
+paper's experiments, the workspace, machine and hydraulic scenarios (docs/validation.md) and the
+motion system's braking (docs/control.md), from the summaries the main job wrote into the output
+folder, without the wall-clock times some lines carry. tests/python/test_readme.py checks that
+every figure those pages quote is in a file of benches/results/; a run that moves a figure shows
+in this file's diff.
+
+    python examples/record_figures.py [output-folder]   (default: output/)
+"""
+
+import re
+import sys
+from pathlib import Path
+
+OUT = Path(sys.argv[1] if len(sys.argv) > 1 else "output")
+RESULTS = Path(__file__).resolve().parents[1] / "benches" / "results" / "validation.txt"
+# (summary file, the script that writes it, which of its lines: all, or those starting so).
+SOURCES = [("summary.txt", "examples/paper_experiments.py", None),
+           ("workspace_summary.txt", "examples/workspace_scenarios.py", None),
+           ("machine_summary.txt", "examples/machine_scenarios.py", None),
+           # Not its work-precision line: wall-clock times.
+           ("hydraulic_summary.txt", "examples/hydraulic_scenarios.py", ("hydraulic legs", "1 ", "2 ", "3 ", "4 ", "5 ")),
+           ("cueing_summary.txt", "examples/cueing_scenarios.py", ("braking through StewartMotionSystem.ssp",))]
+
+
+def main():
+    parts = ["# The main job's figures that docs/validation.md and docs/control.md quote (bash examples/main_job.sh "
+             "writes this file\n# with examples/record_figures.py from the summaries in output/; wall-clock times "
+             "left out).\n"]
+    for name, script, start in SOURCES:
+        lines = (OUT / name).read_text().splitlines()
+        if start:
+            lines = [line for line in lines if line.startswith(start)]
+            assert lines, f"{OUT / name} has no line starting with one of {start}"
+        # Wall-clock time (", 15 s in 3.2 s)"): the machine's, not the model's.
+        lines = [re.sub(r" in \d+(?:\.\d+)? s\)", ")", line) for line in lines]
+        parts.append(f"## {name} ({script})\n" + "\n".join(lines) + "\n")
+    RESULTS.write_text("\n".join(parts))
+    print(f"wrote {RESULTS}")
+
+
+if __name__ == "__main__":
+    main()
