@@ -184,9 +184,15 @@ impl HydraulicLoop {
     /// `p_S / 20`), saturated to [-1, 1].
     pub fn valve(&self, force: f64, pa: f64, pb: f64, rate: f64, length_error: f64) -> f64 {
         let rate = rate + self.position_gain * length_error;
-        let legs = HydraulicLegs { bore: self.bore, rod: self.rod, ..HydraulicLegs::default() };
+        let legs = HydraulicLegs {
+            bore: self.bore,
+            rod: self.rod,
+            rated_flow: self.rated_flow,
+            rated_pressure_drop: self.rated_pressure_drop,
+            ..HydraulicLegs::default()
+        };
         let (area_a, area_b) = legs.areas();
-        let k = self.rated_flow / (0.5 * self.rated_pressure_drop).sqrt();
+        let k = legs.flow_coefficient();
         let (area, drop) = if rate >= 0.0 { (area_a, self.supply - pa) } else { (area_b, self.supply - pb) };
         let feedforward = self.flow_feedforward * area * rate / (k * drop.max(0.05 * self.supply).sqrt());
         let measured = pa * area_a - pb * area_b;

@@ -4,8 +4,9 @@
 
 use nalgebra::{Matrix3, Matrix6, Scalar, Vector3};
 
-use super::state::{CURRENTS, SIMULATION_DIM, SimulationState, actuator_forces, body, hydraulic, quadrature};
-use crate::physics::actuators::hydraulics::Chambers;
+use super::state::{
+    CURRENTS, SIMULATION_DIM, SimulationState, actuator_forces, body, hydraulic, quadrature, supply_flow_of,
+};
 use crate::physics::body::invariants::mechanical_energy;
 use crate::physics::body::kinematics::angles_from_rotation;
 use crate::physics::body::state::{BodyState, STATE_DIM};
@@ -15,7 +16,6 @@ use crate::physics::legs::geometry::LegGeometry;
 use crate::physics::legs::joint_limits::angle;
 use crate::physics::number::{Dual, Real, lift};
 use crate::physics::special_form::SpecialForm;
-use crate::physics::special_form::sum_over_legs;
 use crate::physics::stand::{LEG_COUNT, Stand};
 
 /// A field of an outputs type: its numbers through a function, the shape kept.
@@ -199,17 +199,7 @@ impl<T: Real> PlatformOutputs<T> {
         let pa: [T; LEG_COUNT] = std::array::from_fn(|k| y[hydraulic::PA + k]);
         let pb: [T; LEG_COUNT] = std::array::from_fn(|k| y[hydraulic::PB + k]);
         let spool: [T; LEG_COUNT] = std::array::from_fn(|k| y[hydraulic::SPOOL + k]);
-        let supply_flow = match form.hydraulics() {
-            Some(h) => {
-                let flows: [T; LEG_COUNT] = std::array::from_fn(|k| {
-                    let chambers =
-                        Chambers { pa: pa[k], pb: pb[k], spool: spool[k], spool_rate: y[hydraulic::SPOOL_RATE + k] };
-                    h.legs.rate(&chambers, &h.piston(k, legs.length[k], ldot[k]), T::zero(), supply).supply_flow
-                });
-                sum_over_legs(&flows)
-            }
-            None => T::zero(),
-        };
+        let supply_flow = form.hydraulics().map_or(T::zero(), |h| supply_flow_of(h, y, &legs.length, &ldot, supply));
         PlatformOutputs {
             r: state.r,
             v: state.v,

@@ -98,16 +98,35 @@ pub fn supply_flow(form: &SpecialForm, y: &SimulationState) -> f64 {
     let state = BodyState::from_vector(body(y));
     let legs = LegGeometry::new(&form.stand, &state);
     let l_dot = legs.length_rates(&form.stand, &state);
-    let flows: [f64; LEG_COUNT] = std::array::from_fn(|k| {
-        let chambers = Chambers {
-            pa: y[hydraulic::PA + k],
-            pb: y[hydraulic::PB + k],
-            spool: y[hydraulic::SPOOL + k],
-            spool_rate: y[hydraulic::SPOOL_RATE + k],
-        };
-        h.legs.rate(&chambers, &h.piston(k, legs.length[k], l_dot[k]), 0.0, h.supply).supply_flow
+    supply_flow_of(h, y, &legs.length, &l_dot, h.supply)
+}
+
+/// `Qsupply` of the hydraulic legs `h` at the simulation state `y` (legs of lengths `l`, rates
+/// `l_dot`) and the supply pressure `supply`, in any number type: the valves' law
+/// ([`crate::physics::actuators::hydraulics::HydraulicLegs::rate`]'s supply flow) summed over
+/// the legs.
+pub fn supply_flow_of<T: Real>(
+    h: &HydraulicActuators,
+    y: &[T; SIMULATION_DIM],
+    l: &[T; LEG_COUNT],
+    l_dot: &[T; LEG_COUNT],
+    supply: T,
+) -> T {
+    let flows: [T; LEG_COUNT] = std::array::from_fn(|k| {
+        h.legs.rate(&chambers(y, k), &h.piston(k, l[k], l_dot[k]), T::zero(), supply).supply_flow
     });
     sum_over_legs(&flows)
+}
+
+/// The chambers of hydraulic leg `k` in a simulation state.
+#[inline(always)]
+pub(crate) fn chambers<T: Copy>(y: &[T; SIMULATION_DIM], k: usize) -> Chambers<T> {
+    Chambers {
+        pa: y[hydraulic::PA + k],
+        pb: y[hydraulic::PB + k],
+        spool: y[hydraulic::SPOOL + k],
+        spool_rate: y[hydraulic::SPOOL_RATE + k],
+    }
 }
 
 /// The hydraulic legs' rates at the simulation state `y` (legs of lengths `l`, rates `l_dot`)
@@ -126,14 +145,8 @@ pub(super) fn hydraulic_rates<T: Real>(
     let mut u = [T::zero(); LEG_COUNT];
     let mut powers = [[T::zero(); LEG_COUNT]; 3];
     for k in 0..LEG_COUNT {
-        let chambers = Chambers {
-            pa: y[hydraulic::PA + k],
-            pb: y[hydraulic::PB + k],
-            spool: y[hydraulic::SPOOL + k],
-            spool_rate: y[hydraulic::SPOOL_RATE + k],
-        };
         let command = valves[k].clamp_to(T::constant(-1.0), T::constant(1.0));
-        let r = h.legs.rate(&chambers, &h.piston(k, l[k], l_dot[k]), command, supply);
+        let r = h.legs.rate(&chambers(y, k), &h.piston(k, l[k], l_dot[k]), command, supply);
         dy[hydraulic::PA + k] = r.pa_rate;
         dy[hydraulic::PB + k] = r.pb_rate;
         dy[hydraulic::SPOOL + k] = r.spool_rate;
