@@ -5,9 +5,11 @@
 //! | module | what it holds |
 //! |---|---|
 //! | [`variables`] | every variable, declared once with where its value lives |
+//! | `dependencies.rs` | what the unknowns depend on: each concern's knowns once, the lists composed |
 //! | [`parameters`] | the parameters, their checks, the simulation they describe |
 //! | [`exchange`] | Model Exchange: states, derivatives, event indicators, directional derivatives |
 
+mod dependencies;
 pub mod exchange;
 pub mod parameters;
 pub mod variables;

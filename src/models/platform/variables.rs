@@ -4,224 +4,10 @@
 use crate::models::declare::declare_variables;
 use crate::models::machine;
 use crate::models::variables::Dependency::{All, SameIndex};
+
+use super::dependencies::*;
 use crate::models::variables::VariableGroup as V;
 use crate::simulation::PlatformOutputs;
-
-const POSE_STATES: &[crate::models::variables::Dependency] = &[All("r"), All("R")];
-const ALL_STATES: &[crate::models::variables::Dependency] = &[All("r"), All("v"), All("R"), All("der(R)")];
-/// The knowns of the accelerations and powers: the end stops' forces depend on the leg rates,
-/// so with stops every acceleration depends on the whole body state, and on the leg forces
-/// (or with drives on the currents).
-const MOTION_KNOWNS: &[crate::models::variables::Dependency] =
-    &[All("r"), All("v"), All("R"), All("der(R)"), All("F"), All("I"), All("pA"), All("pB")];
-/// The knowns of the hydraulic legs' rates and powers: the body state (the legs' lengths and
-/// rates), the pressures, the spools and the supply pressure.
-const HYDRAULIC_KNOWNS: &[crate::models::variables::Dependency] =
-    &[All("r"), All("v"), All("R"), All("der(R)"), All("pA"), All("pB"), All("spool"), All("pS")];
-/// The hydraulic legs' parameters.
-const HYDRAULIC_PARAMETERS: &[crate::models::variables::Dependency] = &[
-    All("drive"),
-    All("lmin"),
-    All("lmax"),
-    All("hydraulic.bore"),
-    All("hydraulic.rod"),
-    All("hydraulic.deadVolumeA"),
-    All("hydraulic.deadVolumeB"),
-    All("hydraulic.bulkModulus"),
-    All("hydraulic.tankPressure"),
-    All("valve.ratedFlow"),
-    All("valve.ratedPressureDrop"),
-    All("valve.pcr"),
-    All("valve.leakage"),
-    All("hydraulic.internalLeakage"),
-    All("pA0"),
-    All("pB0"),
-    All("pS"),
-];
-/// The knowns of the drives' currents' rates and losses: the leg rates, the currents, the
-/// voltages.
-const DRIVE_KNOWNS: &[crate::models::variables::Dependency] =
-    &[All("r"), All("v"), All("R"), All("der(R)"), All("I"), All("U")];
-/// The knowns of the dissipated power: those of the drives' and of the hydraulic legs'.
-const DISSIPATION_KNOWNS: &[crate::models::variables::Dependency] =
-    &[All("r"), All("v"), All("R"), All("der(R)"), All("I"), All("U"), All("pA"), All("pB"), All("spool"), All("pS")];
-/// The knowns of the energy: the body state and the currents (magnetic energy).
-const ENERGY_KNOWNS: &[crate::models::variables::Dependency] = &[All("r"), All("v"), All("R"), All("der(R)"), All("I")];
-/// The drives' parameters.
-const DRIVE_PARAMETERS: &[crate::models::variables::Dependency] = &[
-    All("drive"),
-    All("motor.R"),
-    All("motor.L"),
-    All("motor.ke"),
-    All("motor.kt"),
-    All("motor.J"),
-    All("motor.D"),
-    All("gear.ratio"),
-    All("screw.lead"),
-];
-const STOP_PARAMETERS: &[crate::models::variables::Dependency] = &[
-    All("A"),
-    All("B"),
-    All("r0"),
-    All("angles0"),
-    All("v0"),
-    All("w0"),
-    All("stops"),
-    All("lmin"),
-    All("lmax"),
-    All("stops.stiffness"),
-    All("stops.damping"),
-];
-const ALL_PARAMETERS: &[crate::models::variables::Dependency] = &[
-    All("F"),
-    All("M"),
-    All("J"),
-    All("g"),
-    All("B"),
-    All("A"),
-    All("r0"),
-    All("angles0"),
-    All("v0"),
-    All("w0"),
-    All("solver.stabilisation"),
-    All("solver.baumgarteRate"),
-    All("stops"),
-    All("lmin"),
-    All("lmax"),
-    All("stops.stiffness"),
-    All("stops.damping"),
-    All("leg.cylinderMass"),
-    All("leg.rodMass"),
-    All("leg.cylinderCoM"),
-    All("leg.rodCoM"),
-    All("leg.cylinderInertia"),
-    All("leg.rodInertia"),
-    All("joints"),
-    All("joints.baseMaxAngle"),
-    All("joints.platformMaxAngle"),
-    All("joints.stiffness"),
-    All("joints.damping"),
-    All("joints.r0"),
-    All("joints.angles0"),
-    All("friction.coulomb"),
-    All("friction.static"),
-    All("friction.stribeckVelocity"),
-    All("friction.smoothing"),
-    All("friction.viscous"),
-    All("drive"),
-    All("motor.R"),
-    All("motor.L"),
-    All("motor.ke"),
-    All("motor.kt"),
-    All("motor.J"),
-    All("motor.D"),
-    All("gear.ratio"),
-    All("screw.lead"),
-    All("I0"),
-    All("U"),
-    All("hydraulic.bore"),
-    All("hydraulic.rod"),
-    All("hydraulic.deadVolumeA"),
-    All("hydraulic.deadVolumeB"),
-    All("hydraulic.bulkModulus"),
-    All("hydraulic.tankPressure"),
-    All("valve.ratedFlow"),
-    All("valve.ratedPressureDrop"),
-    All("valve.pcr"),
-    All("valve.leakage"),
-    All("hydraulic.internalLeakage"),
-    All("pA0"),
-    All("pB0"),
-    All("pS"),
-    All("valve"),
-];
-/// What the energy depends on in Initialization Mode: the stand, the initial state, the
-/// potentials' parameters and the legs' masses.
-const ENERGY_PARAMETERS: &[crate::models::variables::Dependency] = &[
-    All("M"),
-    All("J"),
-    All("g"),
-    All("A"),
-    All("B"),
-    All("r0"),
-    All("angles0"),
-    All("v0"),
-    All("w0"),
-    All("stops"),
-    All("lmin"),
-    All("lmax"),
-    All("stops.stiffness"),
-    All("leg.cylinderMass"),
-    All("leg.rodMass"),
-    All("leg.cylinderCoM"),
-    All("leg.rodCoM"),
-    All("leg.cylinderInertia"),
-    All("leg.rodInertia"),
-    All("joints"),
-    All("joints.baseMaxAngle"),
-    All("joints.platformMaxAngle"),
-    All("joints.stiffness"),
-    All("joints.r0"),
-    All("joints.angles0"),
-    All("drive"),
-    All("motor.L"),
-    All("motor.J"),
-    All("gear.ratio"),
-    All("screw.lead"),
-    All("I0"),
-];
-/// What the dissipated power depends on in Initialization Mode.
-const DISSIPATION_PARAMETERS: &[crate::models::variables::Dependency] = &[
-    All("A"),
-    All("B"),
-    All("r0"),
-    All("angles0"),
-    All("v0"),
-    All("w0"),
-    All("stops"),
-    All("lmin"),
-    All("lmax"),
-    All("stops.stiffness"),
-    All("stops.damping"),
-    All("joints"),
-    All("joints.baseMaxAngle"),
-    All("joints.platformMaxAngle"),
-    All("joints.stiffness"),
-    All("joints.damping"),
-    All("joints.r0"),
-    All("joints.angles0"),
-    All("friction.coulomb"),
-    All("friction.static"),
-    All("friction.stribeckVelocity"),
-    All("friction.smoothing"),
-    All("friction.viscous"),
-    All("drive"),
-    All("motor.R"),
-    All("motor.ke"),
-    All("motor.kt"),
-    All("motor.D"),
-    All("gear.ratio"),
-    All("screw.lead"),
-    All("I0"),
-    All("U"),
-    All("hydraulic.bore"),
-    All("hydraulic.rod"),
-    All("hydraulic.deadVolumeA"),
-    All("hydraulic.deadVolumeB"),
-    All("hydraulic.bulkModulus"),
-    All("hydraulic.tankPressure"),
-    All("valve.ratedFlow"),
-    All("valve.ratedPressureDrop"),
-    All("valve.pcr"),
-    All("valve.leakage"),
-    All("hydraulic.internalLeakage"),
-    All("pA0"),
-    All("pB0"),
-    All("pS"),
-    All("valve"),
-];
-const JOINT_ANGLE_PARAMETERS: &[crate::models::variables::Dependency] =
-    &[All("A"), All("B"), All("r0"), All("angles0"), All("joints"), All("joints.r0"), All("joints.angles0")];
 
 declare_variables! {
     model: super::PlatformModel,
@@ -314,9 +100,9 @@ declare_variables! {
              always uses Baumgarte terms unless this is 1",
         )
         .integer(1, 3); integer(parameters.stabilisation),
-        R => V::output("r", &[3], 100, Some("m"), "Centre of mass S, inertial frame", &[SameIndex("r0")]); cached(outputs.r),
-        V => V::output("v", &[3], 103, Some("m/s"), "Velocity of the centre of mass", &[SameIndex("v0")])
-            .derivative_named("r", &[SameIndex("v")]); cached(outputs.v),
+        R => V::output("r", &[3], 100, Some("m"), "Centre of mass S, inertial frame", &[SameIndex(group::R0)]); cached(outputs.r),
+        V => V::output("v", &[3], 103, Some("m/s"), "Velocity of the centre of mass", &[SameIndex(group::V0)])
+            .derivative_named("r", &[SameIndex(group::V)]); cached(outputs.v),
         // The continuous states (`STATES`) are the groups whose derivatives are declared, in
         // that order, which is `crate::simulation::state`'s layout: the special form's 24
         // `r, v, e1, e2, e3, e1', e2', e3'` (`e_b` is column `b` of `R`, hence column by
@@ -328,21 +114,21 @@ declare_variables! {
             106,
             Some("1"),
             "Rotation matrix body -> inertial: R[a,b] is component a of the body axis e_b",
-            &[All("angles0")],
+            &[All(group::ANGLES0)],
         )
         .state_by_columns(); cached(outputs.rotation),
-        ANGLES => V::output("angles", &[3], 115, Some("rad"), "Roll, pitch, yaw (1-2-3 sequence, R = Rx Ry Rz)", &[All("angles0")])
+        ANGLES => V::output("angles", &[3], 115, Some("rad"), "Roll, pitch, yaw (1-2-3 sequence, R = Rx Ry Rz)", &[All(group::ANGLES0)])
             .display("deg")
-            .depends_on(&[All("R")]); cached(outputs.angles),
-        W => V::output("w", &[3], 118, Some("rad/s"), "Angular velocity, body components", &[SameIndex("w0")])
-            .depends_on(&[All("R"), All("der(R)")]); cached(outputs.w),
+            .depends_on(&[All(group::ROT)]); cached(outputs.angles),
+        W => V::output("w", &[3], 118, Some("rad/s"), "Angular velocity, body components", &[SameIndex(group::W0)])
+            .depends_on(&[All(group::ROT), All(group::DER_R)]); cached(outputs.w),
         L => V::output(
             "l",
             &[6],
             121,
             Some("m"),
             "Leg length l_k = |a_k - B_k|",
-            &[All("A"), All("B"), All("r0"), All("angles0")],
+            LEG_PARAMETERS,
         )
         .depends_on(POSE_STATES); cached(leg_outputs.l),
         LDOT => V::output(
@@ -351,9 +137,9 @@ declare_variables! {
             127,
             Some("m/s"),
             "Leg length rate dl_k/dt",
-            &[All("A"), All("B"), All("r0"), All("angles0"), All("v0"), All("w0")],
+            LEG_RATE_PARAMETERS,
         )
-        .depends_on(ALL_STATES); cached(leg_outputs.ldot),
+        .depends_on(BODY_STATES); cached(leg_outputs.ldot),
         E => V::output(
             "E",
             &[],
@@ -371,9 +157,9 @@ declare_variables! {
             134,
             Some("1"),
             "Constraint residual max over a, b of |e_a.e_b - delta_ab|",
-            &[All("angles0")],
+            &[All(group::ANGLES0)],
         )
-        .depends_on(&[All("R")]); cached(outputs.constraint_error),
+        .depends_on(&[All(group::ROT)]); cached(outputs.constraint_error),
         BAUMGARTE_RATE => V::parameter(
             "solver.baumgarteRate",
             &[],
@@ -397,10 +183,10 @@ declare_variables! {
             143,
             Some("1/s"),
             "Time derivative of the rotation matrix: column b is de_b/dt (Model Exchange state)",
-            &[All("angles0"), All("w0")],
+            &[All(group::ANGLES0), All(group::W0)],
         )
         .state_by_columns()
-        .derivative("R", "R", 1, &[SameIndex("der(R)")]); derivative,
+        .derivative("R", "R", 1, &[SameIndex(group::DER_R)]); derivative,
         DER2_R => V::local(
             "der2(R)",
             &[3, 3],
@@ -453,7 +239,7 @@ declare_variables! {
             "End-stop force along leg k (sign as F: positive pushes the platform away from the base); 0 inside the stroke",
             STOP_PARAMETERS,
         )
-        .depends_on(ALL_STATES); cached(outputs.stop_force),
+        .depends_on(BODY_STATES); cached(outputs.stop_force),
         KAPPA => V::output(
             "kappa",
             &[],
@@ -462,7 +248,7 @@ declare_variables! {
             "Condition number of the 6x6 leg force/moment matrix (moment rows divided by the stand's characteristic \
              length): large near a singular leg arrangement; at one (or where double precision cannot tell) it is \
              1/eps = 4.5e15, its largest value",
-            &[All("A"), All("B"), All("r0"), All("angles0")],
+            LEG_PARAMETERS,
         )
         .depends_on(POSE_STATES); cached_apart(condition.kappa),
         WORK_F => V::output(
@@ -628,7 +414,7 @@ declare_variables! {
         ); real(voltages),
         I => V::output(
             "I", &[6], 430, Some("A"), "Armature current I_k of drive k (Model Exchange state; 0 when drive = 0)",
-            &[All("drive"), SameIndex("I0")],
+            &[All(group::DRIVE), SameIndex(group::I0)],
         ); cached(outputs.current),
         WORK_ELECTRIC => V::output(
             "work.electric", &[], 436, Some("J"),
@@ -645,9 +431,9 @@ declare_variables! {
         DER_WORK_ELECTRIC => V::local(
             "der(work.electric)", &[], 446, Some("W"),
             "Electric power supplied to the drives sum_k U_k I_k (Model Exchange derivative of work.electric)",
-            &[All("drive"), All("I0"), All("U")],
+            &[All(group::DRIVE), All(group::I0), All(group::U)],
         )
-        .derivative("work.electric", "work.electric", 1, &[All("I"), All("U")]); derivative,
+        .derivative("work.electric", "work.electric", 1, &[All(group::I), All(group::U)]); derivative,
         ACTUATOR_FORCE => V::output(
             "actuatorForce", &[6], 450, Some("N"),
             "Axial force of actuator k on leg k: the input F_k as last set (drive = 0), or the electric drive's N (k_t \
@@ -715,11 +501,11 @@ declare_variables! {
         ); real(parameters.initial_pb),
         PA => V::output(
             "pA", &[6], 510, Some("Pa"), "Cap-side chamber pressure p_A of leg k, gauge (Model Exchange state; 0 \
-             unless drive = 2)", &[All("drive"), SameIndex("pA0")],
+             unless drive = 2)", &[All(group::DRIVE), SameIndex(group::PA0)],
         ); cached(chamber_outputs.pa),
         PB => V::output(
             "pB", &[6], 516, Some("Pa"), "Rod-side chamber pressure p_B of leg k, gauge (Model Exchange state; 0 \
-             unless drive = 2)", &[All("drive"), SameIndex("pB0")],
+             unless drive = 2)", &[All(group::DRIVE), SameIndex(group::PB0)],
         ); cached(chamber_outputs.pb),
         SPOOL => V::output(
             "spool", &[6], 522, Some("1"), "Spool position s_k of leg k's valve, normalised (Model Exchange state; \
@@ -736,7 +522,7 @@ declare_variables! {
             "pmin", &[], 529, Some("Pa"),
             "Lowest chamber pressure of the hydraulic legs since the start (below -1 bar gauge the oil would \
              cavitate and the model is no longer valid: the FMU logs a warning once per run); 0 unless drive = 2",
-            &[All("drive"), All("pA0"), All("pB0")],
+            &[All(group::DRIVE), All(group::PA0), All(group::PB0)],
         ); computed,
         WORK_HYDRAULIC => V::output(
             "work.hydraulic", &[], 530, Some("J"),
@@ -764,13 +550,13 @@ declare_variables! {
         DER_SPOOL => V::local(
             "der(spool)", &[6], 552, Some("1/s"), "Spool rate s_k' (Model Exchange state; starts at rest)", &[],
         )
-        .derivative("spool", "spool", 1, &[SameIndex("der(spool)")]); derivative,
+        .derivative("spool", "spool", 1, &[SameIndex(group::DER_SPOOL)]); derivative,
         DER2_SPOOL => V::local(
             "der2(spool)", &[6], 558, Some("1/s2"),
             "Spool acceleration w_v^2 (c_k - s_k) - 2 zeta_v w_v s_k' (Model Exchange derivative of der(spool))",
-            &[All("drive"), All("valve.omega"), All("valve.damping"), All("valve")],
+            SPOOL_PARAMETERS,
         )
-        .derivative("der(spool)", "spool", 2, &[SameIndex("spool"), SameIndex("der(spool)"), SameIndex("valve")]); derivative,
+        .derivative("der(spool)", "spool", 2, &[SameIndex(group::SPOOL), SameIndex(group::DER_SPOOL), SameIndex(group::VALVE)]); derivative,
         DER_WORK_HYDRAULIC => V::local(
             "der(work.hydraulic)", &[], 564, Some("W"),
             "Power drawn from the hydraulic supply (Model Exchange derivative of work.hydraulic)",

@@ -104,13 +104,48 @@ impl VariableType {
     }
 }
 
-/// A dependency of an unknown (in `<ModelStructure>`) on a group of knowns.
+/// A dependency of an unknown (in `<ModelStructure>`) on a group of knowns, named by its
+/// index in the model's table (`group::R`, which `declare_variables!` generates: a name that
+/// is not a variable does not compile).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Dependency {
-    /// Every element of the named group.
-    All(&'static str),
-    /// The element of the named group with the same index (e.g. `r[2]` on `r0[2]`).
-    SameIndex(&'static str),
+    /// Every element of the group.
+    All(usize),
+    /// The element of the group with the same index (e.g. `r[2]` on `r0[2]`).
+    SameIndex(usize),
+    /// Every dependency of a list: a concern's knowns (an actuator's parameters, the body's
+    /// states), written once and named in every list they belong to.
+    Each(&'static [Dependency]),
+    /// [`Dependency::All`] by the group's name, for a table not switched to indices yet (the
+    /// cueing model's).
+    AllNamed(&'static str),
+    /// [`Dependency::SameIndex`] by the group's name.
+    SameIndexNamed(&'static str),
+}
+
+impl Dependency {
+    /// Calls `f(group, same_index)` for every known of `deps` in order, lists flattened, each
+    /// group an index into `groups` (`usize::MAX` for a name that is none, which
+    /// `tests/model_description.rs` refuses).
+    pub fn each_known(deps: &[Dependency], groups: &[VariableGroup], f: &mut impl FnMut(usize, bool)) {
+        let named = |name: &str| groups.iter().position(|g| g.name == name).unwrap_or(usize::MAX);
+        for d in deps {
+            match *d {
+                Dependency::All(g) => f(g, false),
+                Dependency::SameIndex(g) => f(g, true),
+                Dependency::Each(list) => Dependency::each_known(list, groups, f),
+                Dependency::AllNamed(name) => f(named(name), false),
+                Dependency::SameIndexNamed(name) => f(named(name), true),
+            }
+        }
+    }
+
+    /// The knowns of `deps` as `(group, same_index)`, in order (lists flattened).
+    pub fn knowns(deps: &[Dependency], groups: &[VariableGroup]) -> Vec<(usize, bool)> {
+        let mut out = vec![];
+        Dependency::each_known(deps, groups, &mut |g, same| out.push((g, same)));
+        out
+    }
 }
 
 /// A scalar variable or an array of them.
@@ -285,16 +320,13 @@ impl VariableTable {
     /// `<ModelStructure>` dependency indices of element `index` of `group`.
     pub fn dependency_indices(&self, deps: &[Dependency], index: usize) -> Vec<usize> {
         let mut out = vec![];
-        for d in deps {
-            match *d {
-                Dependency::All(name) => {
-                    if let Some((_, g)) = self.group(name) {
-                        out.extend((0..g.len()).filter_map(|i| self.model_index(name, i)));
-                    }
-                }
-                Dependency::SameIndex(name) => out.extend(self.model_index(name, index)),
+        Dependency::each_known(deps, self.groups, &mut |g, same| {
+            let Some(name) = self.groups.get(g).map(|g| g.name) else { return };
+            match same {
+                false => out.extend((0..self.groups[g].len()).filter_map(|i| self.model_index(name, i))),
+                true => out.extend(self.model_index(name, index)),
             }
-        }
+        });
         out.sort_unstable();
         out.dedup();
         out
