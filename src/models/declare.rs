@@ -165,6 +165,21 @@ impl<T: Scalar + Copy> OutputValues<T> for Vector3<T> {
     fn element(&self, i: usize) -> Option<T> {
         self.get(i).copied()
     }
+
+    /// The three components at once (a pose block is filled every step it is read).
+    #[inline]
+    fn write(&self, slots: &mut [f64]) -> bool
+    where
+        T: Into<f64>,
+    {
+        match slots.first_chunk_mut::<3>() {
+            Some(s) => {
+                *s = [self.x.into(), self.y.into(), self.z.into()];
+                s.iter().fold(false, |nan, x| nan | x.is_nan())
+            }
+            None => false,
+        }
+    }
 }
 
 /// One vector per row: `jointForce[k,c]` is `joint_force[k-1][c-1]`.
@@ -178,6 +193,21 @@ impl<T: Scalar + Copy, const N: usize> OutputValues<T> for [Vector3<T>; N] {
 impl<T: Scalar + Copy> OutputValues<T> for Matrix3<T> {
     fn element(&self, i: usize) -> Option<T> {
         self.get((i / 3, i % 3)).copied()
+    }
+
+    /// The nine elements at once, row by row.
+    #[inline]
+    fn write(&self, slots: &mut [f64]) -> bool
+    where
+        T: Into<f64>,
+    {
+        match slots.first_chunk_mut::<9>() {
+            Some(s) => {
+                *s = std::array::from_fn(|i| self[(i / 3, i % 3)].into());
+                s.iter().fold(false, |nan, x| nan | x.is_nan())
+            }
+            None => false,
+        }
     }
 }
 
@@ -291,9 +321,11 @@ macro_rules! declare_variables {
 
             #[inline]
             fn fill_block(&mut self, block: u8, cache: &mut [f64]) -> bool {
-                let mut nan = false;
-                $($crate::models::declare::declare_variables!(@fill self, block, cache, nan, $id, $kind $(($($arg)*))?);)*
-                nan
+                // One function per block (the block's variables alone, out of line).
+                match block {
+                    $(cache_block::$block => self.fill_block_out_of_line::<{ cache_block::$block }>(cache),)*
+                    _ => false,
+                }
             }
 
             fn save_variables(&self, w: &mut $crate::models::snapshot::ByteWriter) {
@@ -306,6 +338,25 @@ macro_rules! declare_variables {
             ) -> Result<(), $crate::models::snapshot::SnapshotError> {
                 $($crate::models::declare::declare_variables!(@restore self, r, $id, $kind $(($($arg)*))?);)*
                 Ok(())
+            }
+        }
+
+        #[allow(unused_variables, unused_mut, dead_code)]
+        impl $model {
+            /// The values of cache block `B` into the cache at their value references; `true` if
+            /// one is NaN. Inlined where `B` is known (the block a step's cycle fills every time).
+            #[inline(always)]
+            pub(crate) fn fill_block_values<const B: u8>(&mut self, cache: &mut [f64]) -> bool {
+                let mut nan = false;
+                $($crate::models::declare::declare_variables!(@fill self, B, cache, nan, $id, $kind $(($($arg)*))?);)*
+                nan
+            }
+
+            /// [`Self::fill_block_values`] out of line, one function per block (inlined into one
+            /// function, every block's addresses were prepared for any).
+            #[inline(never)]
+            fn fill_block_out_of_line<const B: u8>(&mut self, cache: &mut [f64]) -> bool {
+                self.fill_block_values::<B>(cache)
             }
         }
 
@@ -367,14 +418,15 @@ macro_rules! declare_variables {
     };
     (@output $($rest:tt)*) => {};
 
-    (@fill $s:ident, $b:ident, $cache:ident, $nan:ident, $id:ident, cached($block:ident . $field:ident)) => {
-        if $b == cache_block::$block {
+    // (`$want` is a constant: only the block's own variables are left.)
+    (@fill $s:ident, $want:ident, $cache:ident, $nan:ident, $id:ident, cached($block:ident . $field:ident)) => {
+        if cache_block::$block == $want {
             let g = &GROUPS[group::$id];
             $nan |= $crate::models::declare::fill($cache, g.first_vr, g.len(), &$s.$block().$field);
         }
     };
-    (@fill $s:ident, $b:ident, $cache:ident, $nan:ident, $id:ident, cached_apart($($p:tt)*)) => {
-        $crate::models::declare::declare_variables!(@fill $s, $b, $cache, $nan, $id, cached($($p)*))
+    (@fill $s:ident, $want:ident, $cache:ident, $nan:ident, $id:ident, cached_apart($($p:tt)*)) => {
+        $crate::models::declare::declare_variables!(@fill $s, $want, $cache, $nan, $id, cached($($p)*))
     };
     (@fill $($rest:tt)*) => {};
 

@@ -31,10 +31,10 @@ use crate::physics::error::leg_list;
 use crate::physics::legs::geometry::LegGeometry;
 use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::LEG_COUNT;
-use crate::simulation::outputs::condition_number;
+use crate::simulation::outputs::{LegLoadOutputs, PoseOutputs, StateOutputs, condition_number};
 use crate::simulation::platform::Reached;
 use crate::simulation::state::{SIMULATION_DIM, actuator_forces, body, hydraulic, state_rate, supply_flow, switching};
-use crate::simulation::{LegOutputs, PlatformOutputs, PlatformSimulation, SimulationState};
+use crate::simulation::{LegOutputs, PlatformSimulation, SimulationState};
 pub use parameters::{Experiment, PlatformParameters, default_leg_force, holding_pressures};
 use variables::{BINDINGS, group};
 
@@ -81,8 +81,11 @@ pub struct PlatformModel {
     cavitation_reported: bool,
     /// Present after Initialization Mode, with the experiment it was built for.
     pub simulation: Option<(PlatformSimulation, Experiment)>,
-    /// Outputs of the current state, computed on the first read after a change.
-    outputs: Option<PlatformOutputs>,
+    /// The pose, the legs' other values and the values read off the state, each computed on
+    /// its first read after a change (by group: a host pays for what it reads).
+    pose: Option<PoseOutputs>,
+    leg_loads: Option<LegLoadOutputs>,
+    state_values: Option<StateOutputs>,
     /// Leg lengths and rates of the current state: what a controller reads every step, so
     /// they are computed alone (the leg geometry) rather than with every other output.
     legs: Option<LegOutputs>,
@@ -116,7 +119,9 @@ impl Default for PlatformModel {
             supply_pressure: DEFAULT_SUPPLY_PRESSURE,
             cavitation_reported: false,
             simulation: None,
-            outputs: None,
+            pose: None,
+            leg_loads: None,
+            state_values: None,
             legs: None,
             kappa: None,
             chambers: None,
@@ -128,13 +133,20 @@ impl Default for PlatformModel {
     }
 }
 
+/// `f()`, computed out of line: a block's values, whose accessor stays small enough to inline
+/// into the fill of each of its variables.
+#[inline(never)]
+fn out_of_line<R>(f: impl FnOnce() -> R) -> R {
+    f()
+}
+
 /// The condition number of the current state's leg arrangement (a cache block of its own).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Condition {
     pub kappa: f64,
 }
 
-/// The hydraulic legs' chamber pressures and spools (the fields of [`PlatformOutputs`] of the
+/// The hydraulic legs' chamber pressures and spools (the fields of `PlatformOutputs` of the
 /// same names): states, read every step by a hydraulic controller, so a block of their own.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ChamberOutputs {
@@ -153,7 +165,7 @@ impl ChamberOutputs {
     }
 }
 
-/// The actuators' and the joints' forces alone (the fields of [`PlatformOutputs`] of the same
+/// The actuators' and the joints' forces alone (the fields of `PlatformOutputs` of the same
 /// names): they depend on the inputs, so they are a cache block of their own.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct InputDependentOutputs {
@@ -173,17 +185,40 @@ impl PlatformModel {
         self.simulation.as_mut().map(|(sim, _)| sim)
     }
 
-    /// The outputs of the current state, computed on the first read after a change.
-    fn outputs(&mut self) -> &PlatformOutputs {
+    /// The pose of the current state, computed on the first read after a change.
+    #[inline]
+    fn pose(&mut self) -> &PoseOutputs {
         let (simulation, parameters) = (&self.simulation, &self.parameters);
-        self.outputs.get_or_insert_with(|| match simulation {
-            Some((sim, _)) => PlatformOutputs::compute(&sim.form, &sim.state, None),
-            None => PlatformOutputs::compute(&parameters.special_form(), &parameters.initial_simulation_state(), None),
-        })
+        self.pose.get_or_insert_with(|| out_of_line(|| match simulation {
+            Some((sim, _)) => PoseOutputs::of(&sim.body_state()),
+            None => PoseOutputs::of(&parameters.initial_state()),
+        }))
+    }
+
+    /// The energy, the end stops' forces and the joint angles of the current state, computed on
+    /// their first read after a change.
+    #[inline]
+    fn leg_loads(&mut self) -> &LegLoadOutputs {
+        let (simulation, parameters) = (&self.simulation, &self.parameters);
+        self.leg_loads.get_or_insert_with(|| out_of_line(|| match simulation {
+            Some((sim, _)) => LegLoadOutputs::at(&sim.form, &sim.state),
+            None => LegLoadOutputs::at(&parameters.special_form(), &parameters.initial_simulation_state()),
+        }))
+    }
+
+    /// The values read off the current state, on their first read after a change.
+    #[inline]
+    fn state_values(&mut self) -> &StateOutputs {
+        let (simulation, parameters) = (&self.simulation, &self.parameters);
+        self.state_values.get_or_insert_with(|| out_of_line(|| match simulation {
+            Some((sim, _)) => StateOutputs::of(&sim.state),
+            None => StateOutputs::of(&parameters.initial_simulation_state()),
+        }))
     }
 
     /// The actuators' and the joints' forces of the current state and inputs, computed on the
     /// first read after a change.
+    #[inline]
     fn input_dependent_outputs(&mut self) -> &InputDependentOutputs {
         let inputs = self.inputs();
         let (simulation, parameters) = (&self.simulation, &self.parameters);
@@ -214,17 +249,18 @@ impl PlatformModel {
     }
 
     /// The legs' lengths and rates of the current state, computed on the first read after a
-    /// change (from the outputs if they are there).
+    /// change.
+    #[inline]
     fn leg_outputs(&mut self) -> &LegOutputs {
-        let (simulation, parameters, outputs) = (&self.simulation, &self.parameters, &self.outputs);
-        self.legs.get_or_insert_with(|| match (outputs, simulation) {
-            (Some(o), _) => LegOutputs { l: o.l, ldot: o.ldot },
-            (None, Some((sim, _))) => LegOutputs::compute(&sim.form, &sim.state),
-            (None, None) => LegOutputs::compute(&parameters.special_form(), &parameters.initial_simulation_state()),
+        let (simulation, parameters) = (&self.simulation, &self.parameters);
+        self.legs.get_or_insert_with(|| match simulation {
+            Some((sim, _)) => LegOutputs::compute(&sim.form, &sim.state),
+            None => LegOutputs::compute(&parameters.special_form(), &parameters.initial_simulation_state()),
         })
     }
 
     /// The chambers of the current state, copied on the first read after a change.
+    #[inline]
     fn chamber_outputs(&mut self) -> &ChamberOutputs {
         let (simulation, parameters) = (&self.simulation, &self.parameters);
         self.chambers.get_or_insert_with(|| match simulation {
@@ -234,6 +270,7 @@ impl PlatformModel {
     }
 
     /// `kappa` of the current state, computed on its first read after a change.
+    #[inline]
     fn condition(&mut self) -> &Condition {
         let (simulation, parameters) = (&self.simulation, &self.parameters);
         self.kappa.get_or_insert_with(|| Condition {
@@ -255,7 +292,9 @@ impl PlatformModel {
 
     /// The current state changed: the cached outputs are stale.
     fn invalidate_outputs(&mut self) {
-        self.outputs = None;
+        self.pose = None;
+        self.leg_loads = None;
+        self.state_values = None;
         self.legs = None;
         self.kappa = None;
         self.chambers = None;
@@ -334,7 +373,7 @@ impl PlatformModel {
                 );
             }
             i => {
-                let o = PlatformOutputs::compute(&sim.form, &c.y, None);
+                let o = LegLoadOutputs::at(&sim.form, &c.y);
                 let (joint, k, theta, max) = match sim.form.joint_limits() {
                     Some(j) if i < switching::PLATFORM_JOINT => {
                         let k = i - switching::BASE_JOINT;
@@ -422,8 +461,14 @@ impl FmuModel for PlatformModel {
         cache_block_of(BINDINGS, group)
     }
 
+    /// The legs' block inline (a step's cycle fills it every time), the others each in a
+    /// function of its own.
     #[inline]
     fn fill_cache(&mut self, block: u8, cache: &mut [f64]) -> bool {
+        const LEGS: u8 = variables::cache_block::leg_outputs;
+        if block == LEGS {
+            return self.fill_block_values::<LEGS>(cache);
+        }
         self.fill_block(block, cache)
     }
 

@@ -458,7 +458,7 @@ impl IntegerStorage for Stabilisation {
 /// length (a pose at rest on its limits is allowed, as on the end stops).
 fn check_initial_joint_angles(limits: &JointLimits, sim: &PlatformSimulation) -> Result<(), String> {
     let stand = sim.stand();
-    let outputs = crate::simulation::PlatformOutputs::compute(&sim.form, &sim.state, None);
+    let outputs = crate::simulation::outputs::LegLoadOutputs::at(&sim.form, &sim.state);
     let allowed = stand.mass * stand.gravity * stand.characteristic_length() / limits.stiffness;
     for k in 0..LEG_COUNT {
         for (which, name, theta, max) in [

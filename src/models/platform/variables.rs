@@ -15,8 +15,13 @@ declare_variables! {
     cache_blocks: [
         // What a controller reads every step, computed alone.
         leg_outputs,
-        // Every other output of `PlatformOutputs` that depends on the state alone.
-        outputs,
+        // The outputs of `PlatformOutputs` that depend on the state alone, by group, each
+        // computed only when read: the pose (r, v, R, angles, w); what the legs' geometry gives
+        // beyond their lengths (E, Fstop, thetaB, thetaA: the legs again, twelve acos); values
+        // read off the state (constraintError, the work integrals, I).
+        pose,
+        leg_loads,
+        state_values,
         // The actuators' and the joints' forces: they depend on the inputs too. (The declared
         // dependencies are those of both drive modes: F in mode 0, the currents in mode 1.)
         input_dependent_outputs,
@@ -100,9 +105,9 @@ declare_variables! {
              always uses Baumgarte terms unless this is 1",
         )
         .integer(1, 3); integer(parameters.stabilisation),
-        R => V::output("r", &[3], 100, Some("m"), "Centre of mass S, inertial frame", &[SameIndex(group::R0)]); cached(outputs.r),
+        R => V::output("r", &[3], 100, Some("m"), "Centre of mass S, inertial frame", &[SameIndex(group::R0)]); cached(pose.r),
         V => V::output("v", &[3], 103, Some("m/s"), "Velocity of the centre of mass", &[SameIndex(group::V0)])
-            .derivative_named("r", &[SameIndex(group::V)]); cached(outputs.v),
+            .derivative_named("r", &[SameIndex(group::V)]); cached(pose.v),
         // The continuous states (`STATES`) are the groups whose derivatives are declared, in
         // that order, which is `crate::simulation::state`'s layout: the special form's 24
         // `r, v, e1, e2, e3, e1', e2', e3'` (`e_b` is column `b` of `R`, hence column by
@@ -116,12 +121,12 @@ declare_variables! {
             "Rotation matrix body -> inertial: R[a,b] is component a of the body axis e_b",
             &[All(group::ANGLES0)],
         )
-        .state_by_columns(); cached(outputs.rotation),
+        .state_by_columns(); cached(pose.rotation),
         ANGLES => V::output("angles", &[3], 115, Some("rad"), "Roll, pitch, yaw (1-2-3 sequence, R = Rx Ry Rz)", &[All(group::ANGLES0)])
             .display("deg")
-            .depends_on(&[All(group::ROT)]); cached(outputs.angles),
+            .depends_on(&[All(group::ROT)]); cached(pose.angles),
         W => V::output("w", &[3], 118, Some("rad/s"), "Angular velocity, body components", &[SameIndex(group::W0)])
-            .depends_on(&[All(group::ROT), All(group::DER_R)]); cached(outputs.w),
+            .depends_on(&[All(group::ROT), All(group::DER_R)]); cached(pose.w),
         L => V::output(
             "l",
             &[6],
@@ -150,7 +155,7 @@ declare_variables! {
              drives' magnetic energy L I^2/2 (E(t) - E(0) = work.F + work.electric - work.dissipated)",
             ENERGY_PARAMETERS,
         )
-        .depends_on(ENERGY_KNOWNS); cached(outputs.energy),
+        .depends_on(ENERGY_KNOWNS); cached(leg_loads.energy),
         CONSTRAINT_ERROR => V::output(
             "constraintError",
             &[],
@@ -159,7 +164,7 @@ declare_variables! {
             "Constraint residual max over a, b of |e_a.e_b - delta_ab|",
             &[All(group::ANGLES0)],
         )
-        .depends_on(&[All(group::ROT)]); cached(outputs.constraint_error),
+        .depends_on(&[All(group::ROT)]); cached(state_values.constraint_error),
         BAUMGARTE_RATE => V::parameter(
             "solver.baumgarteRate",
             &[],
@@ -239,7 +244,7 @@ declare_variables! {
             "End-stop force along leg k (sign as F: positive pushes the platform away from the base); 0 inside the stroke",
             STOP_PARAMETERS,
         )
-        .depends_on(BODY_STATES); cached(outputs.stop_force),
+        .depends_on(BODY_STATES); cached(leg_loads.stop_force),
         KAPPA => V::output(
             "kappa",
             &[],
@@ -259,7 +264,7 @@ declare_variables! {
             "Work done by the leg forces F since the start, the integral of sum_k F_k ldot_k (Model Exchange state; \
              stays 0 with drive = 1, whose energy comes in as work.electric)",
             &[],
-        ); cached(outputs.work_of_forces),
+        ); cached(state_values.work_of_forces),
         WORK_DISSIPATED => V::output(
             "work.dissipated",
             &[],
@@ -268,7 +273,7 @@ declare_variables! {
             "Energy taken since the start by the end stops' and joint limits' damping, the cylinders' friction and the \
              drives' losses R I^2 + D omega^2 (+ (k_e - k_t) omega I) (>= 0; Model Exchange state)",
             &[],
-        ); cached(outputs.dissipated_energy),
+        ); cached(state_values.dissipated_energy),
         DER_WORK_F => V::local(
             "der(work.F)",
             &[],
@@ -370,7 +375,7 @@ declare_variables! {
             JOINT_ANGLE_PARAMETERS,
         )
         .display("deg")
-        .depends_on(POSE_STATES); cached(outputs.theta_b),
+        .depends_on(POSE_STATES); cached(leg_loads.theta_b),
         THETA_A => V::output(
             "thetaA", &[6], 346, Some("rad"),
             "Platform joint angle thetaA_k: the angle between leg k and its direction at the reference pose, both in \
@@ -378,7 +383,7 @@ declare_variables! {
             JOINT_ANGLE_PARAMETERS,
         )
         .display("deg")
-        .depends_on(POSE_STATES); cached(outputs.theta_a),
+        .depends_on(POSE_STATES); cached(leg_loads.theta_a),
         JOINT_FORCE => V::output(
             "jointForce", &[6, 3], 352, Some("N"),
             "Force of leg k on the platform at its joint A_k (row k: x, y, z, inertial frame): the actuator, friction, \
@@ -415,13 +420,13 @@ declare_variables! {
         I => V::output(
             "I", &[6], 430, Some("A"), "Armature current I_k of drive k (Model Exchange state; 0 when drive = 0)",
             &[All(group::DRIVE), SameIndex(group::I0)],
-        ); cached(outputs.current),
+        ); cached(state_values.current),
         WORK_ELECTRIC => V::output(
             "work.electric", &[], 436, Some("J"),
             "Electric energy supplied to the drives since the start, the integral of sum_k U_k I_k (Model Exchange \
              state; E(t) - E(0) = work.F + work.electric - work.dissipated)",
             &[],
-        ); cached(outputs.electric_work),
+        ); cached(state_values.electric_work),
         DER_I => V::local(
             "der(I)", &[6], 440, Some("A/s"),
             "Rate of the armature currents (U - R I - k_e N ldot) / L (Model Exchange derivative of I)",
@@ -530,13 +535,13 @@ declare_variables! {
              (Model Exchange state; E(t) - E(0) = work.F + work.electric + work.hydraulic - work.compression - \
              work.dissipated)",
             &[],
-        ); cached(outputs.hydraulic_work),
+        ); cached(state_values.hydraulic_work),
         WORK_COMPRESSION => V::output(
             "work.compression", &[], 531, Some("J"),
             "Energy stored by compressing the oil since the start, the integral of sum_k (p_A V_A p_A' + p_B V_B \
              p_B') / beta (Model Exchange state)",
             &[],
-        ); cached(outputs.compression_work),
+        ); cached(state_values.compression_work),
         DER_PA => V::local(
             "der(pA)", &[6], 540, Some("Pa/s"), "Rate of the cap-side pressures (Model Exchange derivative of pA)",
             HYDRAULIC_PARAMETERS,

@@ -135,41 +135,61 @@ pub struct PlatformOutputs<T> {
 }
 }
 
-impl<T: Real> PlatformOutputs<T> {
-    /// The outputs of the simulation state `y`; with the inputs `u` (leg forces, or with
-    /// drives voltages), the actuators' and the joints' forces too (they depend on them), else
-    /// those are not numbers.
-    pub fn compute(form: &SpecialForm, y: &[T; SIMULATION_DIM], u: Option<&[T; LEG_COUNT]>) -> Self {
-        let supply = T::constant(form.hydraulics().map_or(0.0, |h| h.supply));
-        Self::compute_supplied(form, y, u, supply)
-    }
+/// The body's pose and rates: the outputs `r`, `v`, `R`, `angles`, `w` (the fields of
+/// [`PlatformOutputs`] of the same names), a group a host reads without the legs' other values.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PoseOutputs<T: Scalar = f64> {
+    pub r: Vector3<T>,
+    pub v: Vector3<T>,
+    pub rotation: Matrix3<T>,
+    pub angles: Vector3<T>,
+    pub w: Vector3<T>,
+}
 
-    /// [`PlatformOutputs::compute`] with the hydraulic supply pressure in the number type (for
-    /// derivatives with respect to `pS`).
-    pub fn compute_supplied(
+impl<T: Real> PoseOutputs<T> {
+    pub fn of(state: &BodyState<T>) -> Self {
+        let rotation = state.rotation();
+        PoseOutputs {
+            r: state.r,
+            v: state.v,
+            rotation,
+            angles: angles_from_rotation(&rotation),
+            w: state.angular_velocity_body(),
+        }
+    }
+}
+
+/// What the legs' geometry gives beyond their lengths and rates: the energy (the legs', the
+/// stops' and the joint limits' potentials are in it), the end stops' forces and the joint
+/// angles (the fields of [`PlatformOutputs`] of the same names).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LegLoadOutputs<T: Scalar = f64> {
+    pub energy: T,
+    pub stop_force: [T; LEG_COUNT],
+    pub theta_b: [T; LEG_COUNT],
+    pub theta_a: [T; LEG_COUNT],
+}
+
+impl<T: Real> LegLoadOutputs<T> {
+    /// At the simulation state `y` with body state `state`, legs `legs` and leg rates `ldot`.
+    pub fn of(
         form: &SpecialForm,
         y: &[T; SIMULATION_DIM],
-        u: Option<&[T; LEG_COUNT]>,
-        supply: T,
+        state: &BodyState<T>,
+        legs: &LegGeometry<T>,
+        ldot: &[T; LEG_COUNT],
     ) -> Self {
         let stand = &form.stand;
-        let zero = [T::zero(); STATE_DIM];
-        let body = y.first_chunk::<STATE_DIM>().unwrap_or(&zero);
-        let state = BodyState::from_vector(body);
-        let legs = LegGeometry::new(stand, &state);
-        let rotation = state.rotation();
-        let ldot = legs.length_rates(stand, &state);
         let mut stop_force = [T::zero(); LEG_COUNT];
-        let mut energy = mechanical_energy(stand, &state);
+        let mut energy = mechanical_energy(stand, state);
         if let Some(stops) = form.stops() {
             for k in 0..LEG_COUNT {
                 stop_force[k] = stops.contact(k, legs.length[k], ldot[k]).force;
             }
             energy += stops.potential_energy(&legs.length);
         }
-        let current: [T; LEG_COUNT] = std::array::from_fn(|k| y[CURRENTS + k]);
         if let Some(drives) = form.drives() {
-            energy += drives.magnetic_energy(&current);
+            energy += drives.magnetic_energy(&std::array::from_fn(|k| y[CURRENTS + k]));
         }
         let (mut theta_b, mut theta_a) = ([T::zero(); LEG_COUNT], [T::zero(); LEG_COUNT]);
         let has_mass = form.legs().has_mass();
@@ -189,42 +209,116 @@ impl<T: Real> PlatformOutputs<T> {
                     limits.potential(theta_b[k], limits.base_max) + limits.potential(theta_a[k], limits.platform_max);
             }
         }
+        LegLoadOutputs { energy, stop_force, theta_b, theta_a }
+    }
+
+    /// At the simulation state `y`.
+    pub fn at(form: &SpecialForm, y: &[T; SIMULATION_DIM]) -> Self {
+        let state = BodyState::from_vector(&body_of(y));
+        let legs = LegGeometry::new(&form.stand, &state);
+        Self::of(form, y, &state, &legs, &legs.length_rates(&form.stand, &state))
+    }
+}
+
+/// What is read off the state itself: the constraint residual, the quadratures (work and
+/// energies) and the drives' currents (the fields of [`PlatformOutputs`] of the same names).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StateOutputs<T: Scalar = f64> {
+    pub constraint_error: T,
+    pub work_of_forces: T,
+    pub dissipated_energy: T,
+    pub current: [T; LEG_COUNT],
+    pub electric_work: T,
+    pub hydraulic_work: T,
+    pub compression_work: T,
+}
+
+impl<T: Real> StateOutputs<T> {
+    pub fn of(y: &[T; SIMULATION_DIM]) -> Self {
+        StateOutputs {
+            constraint_error: BodyState::from_vector(&body_of(y)).constraint_residual(),
+            work_of_forces: y[quadrature::WORK_F],
+            dissipated_energy: y[quadrature::WORK_DISSIPATED],
+            current: std::array::from_fn(|k| y[CURRENTS + k]),
+            electric_work: y[quadrature::WORK_ELECTRIC],
+            hydraulic_work: y[quadrature::WORK_HYDRAULIC],
+            compression_work: y[quadrature::WORK_COMPRESSION],
+        }
+    }
+}
+
+/// The body coordinates of a simulation state in any number type.
+#[inline(always)]
+fn body_of<T: Real>(y: &[T; SIMULATION_DIM]) -> [T; STATE_DIM] {
+    y.first_chunk::<STATE_DIM>().copied().unwrap_or([T::zero(); STATE_DIM])
+}
+
+impl<T: Real> PlatformOutputs<T> {
+    /// The outputs of the simulation state `y`; with the inputs `u` (leg forces, or with
+    /// drives voltages), the actuators' and the joints' forces too (they depend on them), else
+    /// those are not numbers.
+    pub fn compute(form: &SpecialForm, y: &[T; SIMULATION_DIM], u: Option<&[T; LEG_COUNT]>) -> Self {
+        let supply = T::constant(form.hydraulics().map_or(0.0, |h| h.supply));
+        Self::compute_supplied(form, y, u, supply)
+    }
+
+    /// [`PlatformOutputs::compute`] with the hydraulic supply pressure in the number type (for
+    /// derivatives with respect to `pS`): every group of outputs, the legs computed once.
+    pub fn compute_supplied(
+        form: &SpecialForm,
+        y: &[T; SIMULATION_DIM],
+        u: Option<&[T; LEG_COUNT]>,
+        supply: T,
+    ) -> Self {
+        let stand = &form.stand;
+        let body = body_of(y);
+        let state = BodyState::from_vector(&body);
+        let legs = LegGeometry::new(stand, &state);
+        let ldot = legs.length_rates(stand, &state);
+        let PoseOutputs { r, v, rotation, angles, w } = PoseOutputs::of(&state);
+        let LegLoadOutputs { energy, stop_force, theta_b, theta_a } = LegLoadOutputs::of(form, y, &state, &legs, &ldot);
+        let StateOutputs {
+            constraint_error,
+            work_of_forces,
+            dissipated_energy,
+            current,
+            electric_work,
+            hydraulic_work,
+            compression_work,
+        } = StateOutputs::of(y);
         let (actuator_force, joint_force) = match u {
             Some(u) => {
                 let actuator = actuator_forces(form, y, u);
-                (actuator, form.joint_forces(body, &actuator))
+                (actuator, form.joint_forces(&body, &actuator))
             }
             None => ([T::constant(f64::NAN); LEG_COUNT], [Vector3::from_element(T::constant(f64::NAN)); LEG_COUNT]),
         };
-        let pa: [T; LEG_COUNT] = std::array::from_fn(|k| y[hydraulic::PA + k]);
-        let pb: [T; LEG_COUNT] = std::array::from_fn(|k| y[hydraulic::PB + k]);
-        let spool: [T; LEG_COUNT] = std::array::from_fn(|k| y[hydraulic::SPOOL + k]);
         let supply_flow = form.hydraulics().map_or(T::zero(), |h| supply_flow_of(h, y, &legs.length, &ldot, supply));
         PlatformOutputs {
-            r: state.r,
-            v: state.v,
+            r,
+            v,
             rotation,
-            angles: angles_from_rotation(&rotation),
-            w: state.angular_velocity_body(),
+            angles,
+            w,
             l: legs.length,
             ldot,
             energy,
-            constraint_error: state.constraint_residual(),
+            constraint_error,
             stop_force,
-            work_of_forces: y[quadrature::WORK_F],
-            dissipated_energy: y[quadrature::WORK_DISSIPATED],
+            work_of_forces,
+            dissipated_energy,
             theta_b,
             theta_a,
             joint_force,
             actuator_force,
             current,
-            electric_work: y[quadrature::WORK_ELECTRIC],
-            pa,
-            pb,
-            spool,
+            electric_work,
+            pa: std::array::from_fn(|k| y[hydraulic::PA + k]),
+            pb: std::array::from_fn(|k| y[hydraulic::PB + k]),
+            spool: std::array::from_fn(|k| y[hydraulic::SPOOL + k]),
             supply_flow,
-            hydraulic_work: y[quadrature::WORK_HYDRAULIC],
-            compression_work: y[quadrature::WORK_COMPRESSION],
+            hydraulic_work,
+            compression_work,
         }
     }
 }
