@@ -171,33 +171,19 @@ pub const fn screw_lead(vr: u32) -> V {
     )
 }
 
-/// What moves the legs (`drive`): the same codes in both models.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum Drive {
-    /// 0: ideal force actuators, the leg forces `F` are the inputs.
-    #[default]
-    Forces,
-    /// 1: electric drives, the armature voltages `U` are the inputs.
-    Electric,
-    /// 2: hydraulic servo legs, the valve commands `valve` (and the supply `pS`) are the inputs.
-    Hydraulic,
-}
+/// What moves the legs (`drive`): the same codes in both models, the actuators' list's
+/// (`crate::physics::actuators`).
+pub use crate::physics::actuators::ActuatorKind as Drive;
 
 impl super::declare::IntegerStorage for Drive {
     fn code(&self) -> i32 {
-        match self {
-            Drive::Forces => 0,
-            Drive::Electric => 1,
-            Drive::Hydraulic => 2,
-        }
+        Drive::code(*self)
     }
     fn set_code(&mut self, code: i32) -> Result<(), String> {
-        *self = match code {
-            0 => Drive::Forces,
-            1 => Drive::Electric,
-            2 => Drive::Hydraulic,
-            _ => return Err(format!("{code} is none of 0 (forces), 1 (electric drives), 2 (hydraulic servo legs)")),
-        };
+        *self = Drive::from_code(code).ok_or_else(|| {
+            let items: Vec<String> = Drive::ALL.iter().map(|k| format!("{} ({})", k.code(), k.name())).collect();
+            format!("{code} is none of {}", items.join(", "))
+        })?;
         Ok(())
     }
 }

@@ -24,7 +24,8 @@ use crate::integration::dopri5::Dopri5Memory;
 use crate::integration::{Crossing, IntegratorStats, SwitchingSides};
 use crate::models::machine::Drive;
 use crate::physics::actuators::HeldForces;
-use crate::physics::actuators::hydraulics::{CAVITATION_PRESSURE, DEFAULT_SUPPLY_PRESSURE};
+use crate::physics::actuators::PerActuator;
+use crate::physics::actuators::hydraulics::CAVITATION_PRESSURE;
 use crate::physics::body::state::BodyState;
 use crate::physics::direct_problem::singular_legs;
 use crate::physics::error::leg_list;
@@ -63,20 +64,11 @@ pub static INFO: ModelInfo = ModelInfo {
 #[derive(Clone, Debug)]
 pub struct PlatformModel {
     pub parameters: PlatformParameters,
-    /// Leg forces `F[k]`, N.
-    pub forces: [f64; LEG_COUNT],
-    /// Their time derivatives for the next step, N/s (cleared after each step).
-    pub force_rates: [f64; LEG_COUNT],
-    /// The drives' voltages `U[k]`, V (the inputs when `drive = 1`).
-    pub voltages: [f64; LEG_COUNT],
-    /// Their time derivatives for the next step, V/s (cleared after each step).
-    pub voltage_rates: [f64; LEG_COUNT],
-    /// The servo valves' commands `valve[k]` (the inputs when `drive = 2`).
-    pub valves: [f64; LEG_COUNT],
-    /// Their time derivatives for the next step, 1/s (cleared after each step).
-    pub valve_rates: [f64; LEG_COUNT],
-    /// The hydraulic supply pressure `pS`, Pa (held over each step).
-    pub supply_pressure: f64,
+    /// Each actuator's inputs (the leg forces `F`, N; the drives' voltages `U`, V; the servo
+    /// valves' commands `valve`): those of kind `drive` move the legs.
+    pub inputs: PerActuator<[f64; LEG_COUNT]>,
+    /// Their time derivatives for the next step (cleared after each step).
+    pub input_rates: PerActuator<[f64; LEG_COUNT]>,
     /// Whether this run logged its warning of a chamber below the cavitation pressure.
     cavitation_reported: bool,
     /// Present after Initialization Mode, with the experiment it was built for.
@@ -110,13 +102,8 @@ impl Default for PlatformModel {
     fn default() -> Self {
         PlatformModel {
             parameters: PlatformParameters::default(),
-            forces: [default_leg_force(); LEG_COUNT],
-            force_rates: [0.0; LEG_COUNT],
-            voltages: [0.0; LEG_COUNT],
-            voltage_rates: [0.0; LEG_COUNT],
-            valves: [0.0; LEG_COUNT],
-            valve_rates: [0.0; LEG_COUNT],
-            supply_pressure: DEFAULT_SUPPLY_PRESSURE,
+            inputs: PerActuator { forces: [default_leg_force(); LEG_COUNT], ..PerActuator::default() },
+            input_rates: PerActuator::default(),
             cavitation_reported: false,
             simulation: None,
             pose: None,
@@ -241,11 +228,7 @@ impl PlatformModel {
     /// The inputs in use: the leg forces `F`, with drives the voltages `U`, with hydraulic legs
     /// the valve commands.
     pub fn inputs(&self) -> [f64; LEG_COUNT] {
-        match self.parameters.drive {
-            Drive::Forces => self.forces,
-            Drive::Electric => self.voltages,
-            Drive::Hydraulic => self.valves,
-        }
+        *self.inputs.get(self.parameters.drive)
     }
 
     /// The legs' lengths and rates of the current state, computed on the first read after a
@@ -304,11 +287,13 @@ impl PlatformModel {
     /// The inputs over the next step: the leg forces, or with drives the voltages, with
     /// their rates.
     fn held_inputs(&self, t0: f64) -> HeldForces {
-        match self.parameters.drive {
-            Drive::Forces => HeldForces { value: self.forces, slope: self.force_rates, t0 },
-            Drive::Electric => HeldForces { value: self.voltages, slope: self.voltage_rates, t0 },
-            Drive::Hydraulic => HeldForces { value: self.valves, slope: self.valve_rates, t0 },
-        }
+        let drive = self.parameters.drive;
+        HeldForces { value: *self.inputs.get(drive), slope: *self.input_rates.get(drive), t0 }
+    }
+
+    /// The kind of actuator whose inputs group `group` is.
+    fn actuator_of_inputs(group: usize) -> Option<Drive> {
+        Drive::ALL.into_iter().find(|&k| *variables::ACTUATOR_INPUTS.get(k) == group)
     }
 
     /// Why a failed RK4 step is most likely the integrator's instability rather than the motion:
@@ -402,10 +387,6 @@ impl PlatformModel {
     /// the switching functions' sides at its start.
     fn start(&self, experiment: &Experiment) -> Result<PlatformSimulation, String> {
         let mut sim = self.parameters.simulation(experiment)?;
-        if self.parameters.drive == Drive::Hydraulic {
-            crate::physics::stand::check_finite("pS", self.supply_pressure).map_err(|e| e.to_string())?;
-        }
-        sim.form.set_supply_pressure(self.supply_pressure);
         sim.set_track_singularities(self.events_reported);
         sim.integrator.sides = crate::integration::switching_sides(
             &sim.dynamics(&HeldForces::constant(self.inputs())),
@@ -432,12 +413,10 @@ impl FmuModel for PlatformModel {
                 group::PMIN if self.parameters.drive != Drive::Hydraulic => 0.0,
                 group::PMIN => match self.sim() {
                     Some(s) => s.lowest_pressure,
-                    None => self
-                        .parameters
-                        .initial_pa
-                        .iter()
-                        .chain(&self.parameters.initial_pb)
-                        .fold(f64::INFINITY, |a, &b| a.min(b)),
+                    None => {
+                        let h = &self.parameters.actuators.hydraulic;
+                        h.initial_pa.iter().chain(&h.initial_pb).fold(f64::INFINITY, |a, &b| a.min(b))
+                    }
                 },
                 _ => {
                     let mut z = [0.0; switching::COUNT];
@@ -475,11 +454,11 @@ impl FmuModel for PlatformModel {
     fn set_real(&mut self, var: VariableRef, value: f64) -> Result<(), String> {
         let slot = self.real_slot(var).ok_or("not a settable Real variable")?;
         *slot = value;
-        if var.group == group::PS
-            && let Some(sim) = self.sim_mut()
-        {
-            // The supply pressure is the hydraulic legs' input held over the next step.
-            sim.form.set_supply_pressure(value);
+        let actuators = self.parameters.actuators;
+        if let Some(sim) = self.sim_mut() {
+            // An input the actuator holds in its parameters (the hydraulic supply pressure),
+            // held over the next step.
+            sim.form.take_actuator_inputs(&actuators);
         }
         self.values_set();
         Ok(())
@@ -487,13 +466,8 @@ impl FmuModel for PlatformModel {
 
     #[inline]
     fn set_real_run(&mut self, first: VariableRef, values: &[f64]) -> Result<(), String> {
-        // The leg forces or voltages, set every step: one copy.
-        let inputs = match first.group {
-            group::F => Some(&mut self.forces),
-            group::U => Some(&mut self.voltages),
-            group::VALVE => Some(&mut self.valves),
-            _ => None,
-        };
+        // An actuator's inputs, set every step: one copy.
+        let inputs = Self::actuator_of_inputs(first.group).map(|k| self.inputs.get_mut(k));
         if let Some(inputs) = inputs.and_then(|v| v.get_mut(first.index..first.index + values.len())) {
             inputs.copy_from_slice(values);
             self.values_set();
@@ -552,11 +526,7 @@ impl FmuModel for PlatformModel {
 
     fn do_step(&mut self, t: f64, h: f64, stop_at_event: bool) -> Result<StepReport, StepError> {
         let law = self.held_inputs(t);
-        let (inputs, unit) = match self.parameters.drive {
-            Drive::Forces => ("leg forces", "N"),
-            Drive::Electric => ("voltages", "V"),
-            Drive::Hydraulic => ("valve commands", "1"),
-        };
+        let (inputs, unit) = self.parameters.drive.inputs();
         let values = self.inputs();
         let Some(sim) = self.sim_mut() else {
             return Err(StepError { message: "the model is not initialised".into(), retry_shorter: false });
@@ -571,9 +541,7 @@ impl FmuModel for PlatformModel {
         let event =
             sim.crossings.as_slice().iter().any(|c| c.index != switching::DETERMINANT) || sim.crossings.dropped > 0;
         let lowest = sim.lowest_pressure;
-        self.force_rates = [0.0; LEG_COUNT];
-        self.voltage_rates = [0.0; LEG_COUNT];
-        self.valve_rates = [0.0; LEG_COUNT];
+        self.input_rates = PerActuator::default();
         match result {
             Ok(reached) => {
                 self.invalidate_outputs();
@@ -619,12 +587,8 @@ impl FmuModel for PlatformModel {
     }
 
     fn set_input_derivative(&mut self, var: VariableRef, value: f64) {
-        let rates = match var.group {
-            group::F => &mut self.force_rates,
-            group::U => &mut self.voltage_rates,
-            group::VALVE => &mut self.valve_rates,
-            _ => return,
-        };
+        let Some(kind) = Self::actuator_of_inputs(var.group) else { return };
+        let rates = self.input_rates.get_mut(kind);
         if let Some(slot) = rates.get_mut(var.index) {
             *slot = value;
         }
@@ -709,9 +673,9 @@ impl FmuModel for PlatformModel {
     /// stops, settings and guard are built again from the parameters on restore).
     fn save(&self, w: &mut ByteWriter) {
         self.save_variables(w);
-        w.f64s(&self.force_rates);
-        w.f64s(&self.voltage_rates);
-        w.f64s(&self.valve_rates);
+        for kind in Drive::ALL {
+            w.f64s(self.input_rates.get(kind));
+        }
         w.bool(self.cavitation_reported);
         match &self.simulation {
             None => w.bool(false),
@@ -738,9 +702,10 @@ impl FmuModel for PlatformModel {
     fn restore(r: &mut ByteReader) -> Result<Self, SnapshotError> {
         let mut model = PlatformModel::default();
         model.restore_variables(r)?;
-        model.force_rates = r.finite_array::<LEG_COUNT>("der(F)")?;
-        model.voltage_rates = r.finite_array::<LEG_COUNT>("der(U)")?;
-        model.valve_rates = r.finite_array::<LEG_COUNT>("der(valve)")?;
+        for kind in Drive::ALL {
+            let name = variables::GROUPS.get(*variables::ACTUATOR_INPUTS.get(kind)).map_or("", |g| g.name);
+            *model.input_rates.get_mut(kind) = r.finite_array::<LEG_COUNT>(&format!("der({name})"))?;
+        }
         model.cavitation_reported = r.bool()?;
         if r.bool()? {
             let start_time = r.finite("start time")?;
@@ -755,7 +720,6 @@ impl FmuModel for PlatformModel {
             sim.time = r.finite("time")?;
             sim.state = r.finite_array::<SIMULATION_DIM>("state")?;
             sim.lowest_pressure = r.f64()?;
-            sim.form.set_supply_pressure(model.supply_pressure);
             let [h_next, err_old] = r.finite_array::<2>("integrator memory")?;
             sim.integrator.dopri5 = Dopri5Memory { h_next, err_old };
             sim.integrator.stats = IntegratorStats {

@@ -7,6 +7,7 @@ use crate::models::variables::Dependency::{All, SameIndex};
 
 use super::dependencies::*;
 use crate::models::variables::VariableGroup as V;
+use crate::physics::actuators::PerActuator;
 use crate::simulation::PlatformOutputs;
 
 declare_variables! {
@@ -42,7 +43,7 @@ declare_variables! {
             "Axial leg force u_k acting on the platform at A_k along the leg (positive pushes the platform away from the \
              base). Held over each communication step, or interpolated to first order when fmi2SetRealInputDerivatives \
              gave its derivative",
-        ); real(forces),
+        ); real(inputs.forces),
         M => machine::mass(10); real(parameters.stand.mass),
         J => machine::inertia(11); real(parameters.stand.inertia),
         G => machine::gravity(14); real(parameters.stand.gravity),
@@ -399,24 +400,24 @@ declare_variables! {
              its inputs",
         )
         .integer(0, 2); integer(parameters.drive),
-        MOTOR_R => machine::motor_resistance(401); real(parameters.drives.resistance),
-        MOTOR_L => machine::motor_inductance(402); real(parameters.drives.inductance),
-        MOTOR_KE => machine::motor_ke(403); real(parameters.drives.ke),
-        MOTOR_KT => machine::motor_kt(404); real(parameters.drives.kt),
-        MOTOR_J => machine::motor_inertia(405); real(parameters.drives.rotor_inertia),
-        MOTOR_D => machine::motor_damping(406); real(parameters.drives.damping),
-        GEAR_RATIO => machine::gear_ratio(407); real(parameters.drives.gear_ratio),
-        SCREW_LEAD => machine::screw_lead(408); real(parameters.drives.screw_lead),
+        MOTOR_R => machine::motor_resistance(401); real(parameters.actuators.electric.resistance),
+        MOTOR_L => machine::motor_inductance(402); real(parameters.actuators.electric.inductance),
+        MOTOR_KE => machine::motor_ke(403); real(parameters.actuators.electric.ke),
+        MOTOR_KT => machine::motor_kt(404); real(parameters.actuators.electric.kt),
+        MOTOR_J => machine::motor_inertia(405); real(parameters.actuators.electric.rotor_inertia),
+        MOTOR_D => machine::motor_damping(406); real(parameters.actuators.electric.damping),
+        GEAR_RATIO => machine::gear_ratio(407); real(parameters.actuators.electric.gear_ratio),
+        SCREW_LEAD => machine::screw_lead(408); real(parameters.actuators.electric.screw_lead),
         I0 => V::parameter(
             "I0", &[6], 410, Some("A"),
             "Initial armature current of drive k (a run that starts holding the stand starts at the holding current)",
-        ); real(parameters.initial_currents),
+        ); real(parameters.actuators.electric.initial_currents),
         U => V::input(
             "U", &[6], 420, Some("V"),
             "Armature voltage U_k of drive k (used when drive = 1; 0 = the windings shorted: dynamic braking). Held \
              over each communication step, or interpolated to first order when fmi2SetRealInputDerivatives gave its \
              derivative",
-        ); real(voltages),
+        ); real(inputs.electric),
         I => V::output(
             "I", &[6], 430, Some("A"), "Armature current I_k of drive k (Model Exchange state; 0 when drive = 0)",
             &[All(group::DRIVE), SameIndex(group::I0)],
@@ -452,58 +453,58 @@ declare_variables! {
              towards extension (supply to the cap side), 0 centres the spool (the legs lock on their oil), -1 towards \
              retraction. Held over each communication step, or interpolated to first order when \
              fmi2SetRealInputDerivatives gave its derivative",
-        ); real(valves),
+        ); real(inputs.hydraulic),
         PS => V::input(
             "pS", &[], 466, Some("Pa"),
             "Hydraulic supply pressure p_S (gauge; drive = 2). Drop it to 0 to model a pump failure: the supply port \
              then acts as a second tank (no check valve)",
-        ); real(supply_pressure),
+        ); real(parameters.actuators.hydraulic.supply),
         TANK_PRESSURE => V::parameter(
             "hydraulic.tankPressure", &[], 470, Some("Pa"), "Tank (return line) pressure p_T, gauge",
-        ); real(parameters.hydraulics.tank_pressure),
-        BORE => machine::hydraulic_bore(471); real(parameters.hydraulics.bore),
-        ROD => machine::hydraulic_rod(472); real(parameters.hydraulics.rod),
+        ); real(parameters.actuators.hydraulic.legs.tank_pressure),
+        BORE => machine::hydraulic_bore(471); real(parameters.actuators.hydraulic.legs.bore),
+        ROD => machine::hydraulic_rod(472); real(parameters.actuators.hydraulic.legs.rod),
         DEAD_VOLUME_A => V::parameter(
             "hydraulic.deadVolumeA", &[], 473, Some("m3"),
             "Dead volume V_A0 of each cap-side chamber at lmin (ports, hoses, the cap's end): V_A = V_A0 + A_A (l - lmin)",
-        ); real(parameters.hydraulics.dead_volume_a),
+        ); real(parameters.actuators.hydraulic.legs.dead_volume_a),
         DEAD_VOLUME_B => V::parameter(
             "hydraulic.deadVolumeB", &[], 474, Some("m3"),
             "Dead volume V_B0 of each rod-side chamber at lmax: V_B = V_B0 + A_B (lmax - l)",
-        ); real(parameters.hydraulics.dead_volume_b),
+        ); real(parameters.actuators.hydraulic.legs.dead_volume_b),
         BULK_MODULUS => V::parameter(
             "hydraulic.bulkModulus", &[], 475, Some("Pa"),
             "Effective bulk modulus beta of the oil with its hoses and seals",
-        ); real(parameters.hydraulics.bulk_modulus),
-        RATED_FLOW => machine::valve_rated_flow(476); real(parameters.hydraulics.rated_flow),
-        RATED_DROP => machine::valve_rated_pressure_drop(477); real(parameters.hydraulics.rated_pressure_drop),
+        ); real(parameters.actuators.hydraulic.legs.bulk_modulus),
+        RATED_FLOW => machine::valve_rated_flow(476); real(parameters.actuators.hydraulic.legs.rated_flow),
+        RATED_DROP => machine::valve_rated_pressure_drop(477); real(parameters.actuators.hydraulic.legs.rated_pressure_drop),
         VALVE_OMEGA => V::parameter(
             "valve.omega", &[], 478, Some("rad/s"), "Natural frequency w_v of each valve's spool (second order)",
-        ); real(parameters.hydraulics.valve_omega),
+        ); real(parameters.actuators.hydraulic.legs.valve_omega),
         VALVE_DAMPING => V::parameter(
             "valve.damping", &[], 479, Some("1"), "Damping ratio zeta_v of each valve's spool",
-        ); real(parameters.hydraulics.valve_damping),
+        ); real(parameters.actuators.hydraulic.legs.valve_damping),
         VALVE_PCR => V::parameter(
             "valve.pcr", &[], 480, Some("Pa"),
             "Regularisation pressure p_cr of the orifice law phi(dp) = dp / (dp^2 + p_cr^2)^(1/4): the flow is \
              linear in dp below about p_cr, the square root above",
-        ); real(parameters.hydraulics.pcr),
+        ); real(parameters.actuators.hydraulic.legs.pcr),
         VALVE_LEAKAGE => V::parameter(
             "valve.leakage", &[], 481, Some("m3/(s.Pa)"),
             "Null leakage coefficient C_v of each land: each chamber leaks C_v dp to supply and to tank",
-        ); real(parameters.hydraulics.valve_leakage),
+        ); real(parameters.actuators.hydraulic.legs.valve_leakage),
         INTERNAL_LEAKAGE => V::parameter(
             "hydraulic.internalLeakage", &[], 482, Some("m3/(s.Pa)"),
             "Internal leakage coefficient C_i across each piston: Q_i = C_i (p_A - p_B)",
-        ); real(parameters.hydraulics.internal_leakage),
+        ); real(parameters.actuators.hydraulic.legs.internal_leakage),
         PA0 => V::parameter(
             "pA0", &[6], 490, Some("Pa"),
             "Initial cap-side pressure of leg k (default: what holds the default stand at rest in its neutral pose \
              with pB0 = pS/2)",
-        ); real(parameters.initial_pa),
+        ); real(parameters.actuators.hydraulic.initial_pa),
         PB0 => V::parameter(
             "pB0", &[6], 496, Some("Pa"), "Initial rod-side pressure of leg k (default pS/2 at the default supply)",
-        ); real(parameters.initial_pb),
+        ); real(parameters.actuators.hydraulic.initial_pb),
         PA => V::output(
             "pA", &[6], 510, Some("Pa"), "Cap-side chamber pressure p_A of leg k, gauge (Model Exchange state; 0 \
              unless drive = 2)", &[All(group::DRIVE), SameIndex(group::PA0)],
@@ -576,3 +577,7 @@ declare_variables! {
         .derivative("work.compression", "work.compression", 1, HYDRAULIC_KNOWNS); derivative,
     }
 }
+
+/// Each actuator's inputs (`drive`'s kind): the group a host sets every step.
+pub const ACTUATOR_INPUTS: PerActuator<usize> =
+    PerActuator { forces: group::F, electric: group::U, hydraulic: group::VALVE };

@@ -7,6 +7,7 @@ use nalgebra::{Matrix3, Matrix6, Scalar, Vector3};
 use super::state::{
     CURRENTS, SIMULATION_DIM, SimulationState, actuator_forces, body, hydraulic, quadrature, supply_flow_of,
 };
+use crate::physics::actuators::{Actuator, with_actuator};
 use crate::physics::body::invariants::mechanical_energy;
 use crate::physics::body::kinematics::angles_from_rotation;
 use crate::physics::body::state::{BodyState, STATE_DIM};
@@ -188,8 +189,9 @@ impl<T: Real> LegLoadOutputs<T> {
             }
             energy += stops.potential_energy(&legs.length);
         }
-        if let Some(drives) = form.drives() {
-            energy += drives.magnetic_energy(&std::array::from_fn(|k| y[CURRENTS + k]));
+        let x = y.get(form.actuator().kind().block()).unwrap_or(&[]);
+        if let Some(stored) = with_actuator!(form.actuator(), a => a.stored_energy(x)) {
+            energy += stored;
         }
         let (mut theta_b, mut theta_a) = ([T::zero(); LEG_COUNT], [T::zero(); LEG_COUNT]);
         let has_mass = form.legs().has_mass();

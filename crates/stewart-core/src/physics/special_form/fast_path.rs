@@ -159,7 +159,7 @@ impl SpecialForm {
         let inverse_length = PerLeg::splat(1.0) / length;
         let (n, l_dot, velocity) = self.joints.directions_rates_and_velocities(&state, &leg, length, inverse_length);
         // The actuators' axial forces: given, or the drive law's, six legs at once.
-        let (actuator, drive) = match (actuation, &self.drives) {
+        let (actuator, drive) = match (actuation, self.drives()) {
             (Actuation::Forces(u), _) => (PerLeg::<V>::new(u), None),
             (Actuation::Drives { currents, voltages }, Some(drives)) => {
                 let rate = drives.rate(PerLeg::<V>::new(voltages), PerLeg::new(currents), l_dot);

@@ -11,7 +11,7 @@ impl SpecialForm {
         let mut loads = Loads::new(legs.arm);
         let mut inertia = [None; LEG_COUNT];
         let drives = match actuation {
-            Actuation::Drives { currents, voltages } => self.drives.map(|d| (d, currents, voltages)),
+            Actuation::Drives { currents, voltages } => self.drives().map(|d| (*d, currents, voltages)),
             Actuation::Forces(_) => None,
         };
         for k in 0..LEG_COUNT {
