@@ -29,7 +29,9 @@
 //! variable's value ([`RealStorage`], [`IntegerStorage`], `bool`); `cached(block.field)` is an
 //! output read through the cache block `block` (the model method of that name returns the
 //! block's values, `field` the variable's); `cached_apart(block.field)` the same for a value
-//! that is not a field of the outputs type (its derivative is the model's own); `derivative` a
+//! that is not a field of the outputs type (its derivative is the model's own);
+//! `cached_at(block.field, offset)` the elements of an array field from `offset` on (an
+//! actuator's states in the actuators' part of the state); `derivative` a
 //! state derivative
 //! (`VariableGroup::derivative_of`), computed from the model's state rate; `computed` a value
 //! the model computes itself ([`Binding::Computed`]).
@@ -179,6 +181,24 @@ impl<T: Scalar + Copy> OutputValues<T> for Vector3<T> {
             }
             None => false,
         }
+    }
+}
+
+/// A part of an array of values (`cached_at`: the elements from an offset on).
+impl<T: Copy> OutputValues<T> for [T] {
+    fn element(&self, i: usize) -> Option<T> {
+        self.get(i).copied()
+    }
+
+    #[inline]
+    fn write(&self, slots: &mut [f64]) -> bool
+    where
+        T: Into<f64>,
+    {
+        for (slot, &x) in slots.iter_mut().zip(self) {
+            *slot = x.into();
+        }
+        slots.iter().fold(false, |nan, x| nan | x.is_nan())
     }
 }
 
@@ -370,6 +390,9 @@ macro_rules! declare_variables {
     };
     // `cached_apart` is `cached` in every arm but `@element` (none: not in the outputs type).
     (@binding cached_apart($($p:tt)*)) => { $crate::models::declare::declare_variables!(@binding cached($($p)*)) };
+    (@binding cached_at($block:ident . $field:ident, $at:expr)) => {
+        $crate::models::declare::declare_variables!(@binding cached($block . $field))
+    };
     (@binding derivative) => { $crate::models::declare::Binding::Derivative };
     (@binding computed) => { $crate::models::declare::Binding::Computed };
 
@@ -416,6 +439,11 @@ macro_rules! declare_variables {
     (@output $s:ident, $var:ident, $id:ident, cached_apart($($p:tt)*)) => {
         $crate::models::declare::declare_variables!(@output $s, $var, $id, cached($($p)*))
     };
+    (@output $s:ident, $var:ident, $id:ident, cached_at($block:ident . $field:ident, $at:expr)) => {
+        if $var.group == group::$id {
+            return $crate::models::declare::OutputValues::<f64>::element(&$s.$block().$field[..], $at + $var.index);
+        }
+    };
     (@output $($rest:tt)*) => {};
 
     // (`$want` is a constant: only the block's own variables are left.)
@@ -427,6 +455,14 @@ macro_rules! declare_variables {
     };
     (@fill $s:ident, $want:ident, $cache:ident, $nan:ident, $id:ident, cached_apart($($p:tt)*)) => {
         $crate::models::declare::declare_variables!(@fill $s, $want, $cache, $nan, $id, cached($($p)*))
+    };
+    (@fill $s:ident, $want:ident, $cache:ident, $nan:ident, $id:ident, cached_at($block:ident . $field:ident, $at:expr)) => {
+        if cache_block::$block == $want {
+            let g = &GROUPS[group::$id];
+            if let Some(values) = $s.$block().$field.get($at..$at + g.len()) {
+                $nan |= $crate::models::declare::fill($cache, g.first_vr, g.len(), values);
+            }
+        }
     };
     (@fill $($rest:tt)*) => {};
 
@@ -465,6 +501,11 @@ macro_rules! declare_variables {
     (@element $o:ident, $var:ident, $id:ident, cached($block:ident . $field:ident)) => {
         if $var.group == group::$id {
             return $crate::models::declare::OutputValues::element(&$o.$field, $var.index);
+        }
+    };
+    (@element $o:ident, $var:ident, $id:ident, cached_at($block:ident . $field:ident, $at:expr)) => {
+        if $var.group == group::$id {
+            return $crate::models::declare::OutputValues::element(&$o.$field[..], $at + $var.index);
         }
     };
     (@element $($rest:tt)*) => {};

@@ -32,9 +32,9 @@ use crate::physics::error::leg_list;
 use crate::physics::legs::geometry::LegGeometry;
 use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::LEG_COUNT;
-use crate::simulation::outputs::{LegLoadOutputs, PoseOutputs, StateOutputs, condition_number};
+use crate::simulation::outputs::{ActuatorStateOutputs, LegLoadOutputs, PoseOutputs, StateOutputs, condition_number};
 use crate::simulation::platform::Reached;
-use crate::simulation::state::{SIMULATION_DIM, actuator_forces, body, hydraulic, state_rate, supply_flow, switching};
+use crate::simulation::state::{SIMULATION_DIM, actuator_forces, body, state_rate, supply_flow, switching};
 use crate::simulation::{LegOutputs, PlatformSimulation, SimulationState};
 pub use parameters::{Experiment, PlatformParameters, default_leg_force, holding_pressures};
 use variables::{BINDINGS, group};
@@ -83,9 +83,9 @@ pub struct PlatformModel {
     legs: Option<LegOutputs>,
     /// `kappa` of the current state, computed on its first read after a change.
     kappa: Option<Condition>,
-    /// The hydraulic legs' pressures and spools of the current state (a hydraulic controller
-    /// reads them every step: a copy of states, apart from the other outputs).
-    chambers: Option<ChamberOutputs>,
+    /// The actuators' states of the current state (a hydraulic controller reads the pressures
+    /// every step: a copy of states, apart from the other outputs).
+    actuator_states: Option<ActuatorStateOutputs>,
     /// The actuators' and the joints' forces of the current state and inputs, computed on the
     /// first read after a change.
     input_dependent: Option<InputDependentOutputs>,
@@ -111,7 +111,7 @@ impl Default for PlatformModel {
             state_values: None,
             legs: None,
             kappa: None,
-            chambers: None,
+            actuator_states: None,
             input_dependent: None,
             events_reported: true,
             last_completed_step: 0.0,
@@ -131,25 +131,6 @@ fn out_of_line<R>(f: impl FnOnce() -> R) -> R {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Condition {
     pub kappa: f64,
-}
-
-/// The hydraulic legs' chamber pressures and spools (the fields of `PlatformOutputs` of the
-/// same names): states, read every step by a hydraulic controller, so a block of their own.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ChamberOutputs {
-    pub pa: [f64; LEG_COUNT],
-    pub pb: [f64; LEG_COUNT],
-    pub spool: [f64; LEG_COUNT],
-}
-
-impl ChamberOutputs {
-    fn of(y: &SimulationState) -> Self {
-        ChamberOutputs {
-            pa: std::array::from_fn(|k| y[hydraulic::PA + k]),
-            pb: std::array::from_fn(|k| y[hydraulic::PB + k]),
-            spool: std::array::from_fn(|k| y[hydraulic::SPOOL + k]),
-        }
-    }
 }
 
 /// The actuators' and the joints' forces alone (the fields of `PlatformOutputs` of the same
@@ -242,13 +223,13 @@ impl PlatformModel {
         })
     }
 
-    /// The chambers of the current state, copied on the first read after a change.
+    /// The actuators' states of the current state, copied on the first read after a change.
     #[inline]
-    fn chamber_outputs(&mut self) -> &ChamberOutputs {
+    fn actuators(&mut self) -> &ActuatorStateOutputs {
         let (simulation, parameters) = (&self.simulation, &self.parameters);
-        self.chambers.get_or_insert_with(|| match simulation {
-            Some((sim, _)) => ChamberOutputs::of(&sim.state),
-            None => ChamberOutputs::of(&parameters.initial_simulation_state()),
+        self.actuator_states.get_or_insert_with(|| match simulation {
+            Some((sim, _)) => ActuatorStateOutputs::of(&sim.state),
+            None => ActuatorStateOutputs::of(&parameters.initial_simulation_state()),
         })
     }
 
@@ -280,7 +261,7 @@ impl PlatformModel {
         self.state_values = None;
         self.legs = None;
         self.kappa = None;
-        self.chambers = None;
+        self.actuator_states = None;
         self.input_dependent = None;
     }
 

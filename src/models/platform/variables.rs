@@ -9,6 +9,8 @@ use super::dependencies::*;
 use crate::models::variables::VariableGroup as V;
 use crate::physics::actuators::PerActuator;
 use crate::simulation::PlatformOutputs;
+use crate::simulation::outputs::actuator_state;
+use crate::simulation::state::{CURRENTS, hydraulic, quadrature};
 
 declare_variables! {
     model: super::PlatformModel,
@@ -29,9 +31,10 @@ declare_variables! {
         // The condition number `kappa` (an eigenvalue problem): read by studies every step,
         // by most hosts never.
         condition,
-        // The hydraulic legs' pressures and spools: what a hydraulic controller reads every
-        // step besides the legs, copied from the state.
-        chamber_outputs,
+        // The actuators' states and integrals (the drives' currents, the hydraulic legs'
+        // pressures and spools: what a hydraulic controller reads every step besides the legs),
+        // copied from the state.
+        actuators,
     ],
     variables: {
         TIME => V::time(0); computed,
@@ -421,13 +424,13 @@ declare_variables! {
         I => V::output(
             "I", &[6], 430, Some("A"), "Armature current I_k of drive k (Model Exchange state; 0 when drive = 0)",
             &[All(group::DRIVE), SameIndex(group::I0)],
-        ); cached(state_values.current),
+        ); cached_at(actuators.actuator_states, actuator_state(CURRENTS)),
         WORK_ELECTRIC => V::output(
             "work.electric", &[], 436, Some("J"),
             "Electric energy supplied to the drives since the start, the integral of sum_k U_k I_k (Model Exchange \
              state; E(t) - E(0) = work.F + work.electric - work.dissipated)",
             &[],
-        ); cached(state_values.electric_work),
+        ); cached_at(actuators.actuator_states, actuator_state(quadrature::WORK_ELECTRIC)),
         DER_I => V::local(
             "der(I)", &[6], 440, Some("A/s"),
             "Rate of the armature currents (U - R I - k_e N ldot) / L (Model Exchange derivative of I)",
@@ -508,15 +511,15 @@ declare_variables! {
         PA => V::output(
             "pA", &[6], 510, Some("Pa"), "Cap-side chamber pressure p_A of leg k, gauge (Model Exchange state; 0 \
              unless drive = 2)", &[All(group::DRIVE), SameIndex(group::PA0)],
-        ); cached(chamber_outputs.pa),
+        ); cached_at(actuators.actuator_states, actuator_state(hydraulic::PA)),
         PB => V::output(
             "pB", &[6], 516, Some("Pa"), "Rod-side chamber pressure p_B of leg k, gauge (Model Exchange state; 0 \
              unless drive = 2)", &[All(group::DRIVE), SameIndex(group::PB0)],
-        ); cached(chamber_outputs.pb),
+        ); cached_at(actuators.actuator_states, actuator_state(hydraulic::PB)),
         SPOOL => V::output(
             "spool", &[6], 522, Some("1"), "Spool position s_k of leg k's valve, normalised (Model Exchange state; \
              starts centred)", &[],
-        ); cached(chamber_outputs.spool),
+        ); cached_at(actuators.actuator_states, actuator_state(hydraulic::SPOOL)),
         QSUPPLY => V::output(
             "Qsupply", &[], 528, Some("m3/s"),
             "Total flow drawn from the supply by the six valves, null leakage included (negative when the supply \
@@ -536,13 +539,13 @@ declare_variables! {
              (Model Exchange state; E(t) - E(0) = work.F + work.electric + work.hydraulic - work.compression - \
              work.dissipated)",
             &[],
-        ); cached(state_values.hydraulic_work),
+        ); cached_at(actuators.actuator_states, actuator_state(quadrature::WORK_HYDRAULIC)),
         WORK_COMPRESSION => V::output(
             "work.compression", &[], 531, Some("J"),
             "Energy stored by compressing the oil since the start, the integral of sum_k (p_A V_A p_A' + p_B V_B \
              p_B') / beta (Model Exchange state)",
             &[],
-        ); cached(state_values.compression_work),
+        ); cached_at(actuators.actuator_states, actuator_state(quadrature::WORK_COMPRESSION)),
         DER_PA => V::local(
             "der(pA)", &[6], 540, Some("Pa/s"), "Rate of the cap-side pressures (Model Exchange derivative of pA)",
             HYDRAULIC_PARAMETERS,

@@ -7,7 +7,7 @@ use nalgebra::{Matrix3, Matrix6, Scalar, Vector3};
 use super::state::{
     CURRENTS, SIMULATION_DIM, SimulationState, actuator_forces, body, hydraulic, quadrature, supply_flow_of,
 };
-use crate::physics::actuators::{Actuator, with_actuator};
+use crate::physics::actuators::{Actuator, layout, with_actuator};
 use crate::physics::body::invariants::mechanical_energy;
 use crate::physics::body::kinematics::angles_from_rotation;
 use crate::physics::body::state::{BodyState, STATE_DIM};
@@ -133,7 +133,32 @@ pub struct PlatformOutputs<T> {
     /// `work.hydraulic`, `work.compression`, J.
     pub hydraulic_work: T,
     pub compression_work: T,
+    /// The actuators' part of the state (every actuator's block, [`actuator_state`]): an
+    /// actuator's states and integrals are outputs read off it.
+    pub actuator_states: [T; ACTUATOR_STATES],
 }
+}
+
+/// How many states the actuators' blocks hold together.
+pub const ACTUATOR_STATES: usize = layout::END - layout::START;
+
+/// Where the simulation state's component `at` (an actuator's) sits in
+/// [`PlatformOutputs::actuator_states`].
+pub const fn actuator_state(at: usize) -> usize {
+    at - layout::START
+}
+
+/// The actuators' states read off the simulation state (the field of [`PlatformOutputs`] of the
+/// same name).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ActuatorStateOutputs<T: Scalar = f64> {
+    pub actuator_states: [T; ACTUATOR_STATES],
+}
+
+impl<T: Real> ActuatorStateOutputs<T> {
+    pub fn of(y: &[T; SIMULATION_DIM]) -> Self {
+        ActuatorStateOutputs { actuator_states: std::array::from_fn(|i| y[layout::START + i]) }
+    }
 }
 
 /// The body's pose and rates: the outputs `r`, `v`, `R`, `angles`, `w` (the fields of
@@ -222,17 +247,13 @@ impl<T: Real> LegLoadOutputs<T> {
     }
 }
 
-/// What is read off the state itself: the constraint residual, the quadratures (work and
-/// energies) and the drives' currents (the fields of [`PlatformOutputs`] of the same names).
+/// What is read off the body's state and the legs' integrals: the constraint residual,
+/// `work.F` and `work.dissipated` (the fields of [`PlatformOutputs`] of the same names).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StateOutputs<T: Scalar = f64> {
     pub constraint_error: T,
     pub work_of_forces: T,
     pub dissipated_energy: T,
-    pub current: [T; LEG_COUNT],
-    pub electric_work: T,
-    pub hydraulic_work: T,
-    pub compression_work: T,
 }
 
 impl<T: Real> StateOutputs<T> {
@@ -241,10 +262,6 @@ impl<T: Real> StateOutputs<T> {
             constraint_error: BodyState::from_vector(&body_of(y)).constraint_residual(),
             work_of_forces: y[quadrature::WORK_F],
             dissipated_energy: y[quadrature::WORK_DISSIPATED],
-            current: std::array::from_fn(|k| y[CURRENTS + k]),
-            electric_work: y[quadrature::WORK_ELECTRIC],
-            hydraulic_work: y[quadrature::WORK_HYDRAULIC],
-            compression_work: y[quadrature::WORK_COMPRESSION],
         }
     }
 }
@@ -279,15 +296,7 @@ impl<T: Real> PlatformOutputs<T> {
         let ldot = legs.length_rates(stand, &state);
         let PoseOutputs { r, v, rotation, angles, w } = PoseOutputs::of(&state);
         let LegLoadOutputs { energy, stop_force, theta_b, theta_a } = LegLoadOutputs::of(form, y, &state, &legs, &ldot);
-        let StateOutputs {
-            constraint_error,
-            work_of_forces,
-            dissipated_energy,
-            current,
-            electric_work,
-            hydraulic_work,
-            compression_work,
-        } = StateOutputs::of(y);
+        let StateOutputs { constraint_error, work_of_forces, dissipated_energy } = StateOutputs::of(y);
         let (actuator_force, joint_force) = match u {
             Some(u) => {
                 let actuator = actuator_forces(form, y, u);
@@ -313,14 +322,15 @@ impl<T: Real> PlatformOutputs<T> {
             theta_a,
             joint_force,
             actuator_force,
-            current,
-            electric_work,
+            current: std::array::from_fn(|k| y[CURRENTS + k]),
+            electric_work: y[quadrature::WORK_ELECTRIC],
             pa: std::array::from_fn(|k| y[hydraulic::PA + k]),
             pb: std::array::from_fn(|k| y[hydraulic::PB + k]),
             spool: std::array::from_fn(|k| y[hydraulic::SPOOL + k]),
             supply_flow,
-            hydraulic_work,
-            compression_work,
+            hydraulic_work: y[quadrature::WORK_HYDRAULIC],
+            compression_work: y[quadrature::WORK_COMPRESSION],
+            actuator_states: ActuatorStateOutputs::of(y).actuator_states,
         }
     }
 }
