@@ -8,9 +8,13 @@
 //! | `dependencies.rs` | what the unknowns depend on: each concern's knowns once, the lists composed |
 //! | [`parameters`] | the parameters, their checks, the simulation they describe |
 //! | [`exchange`] | Model Exchange: states, derivatives, event indicators, directional derivatives |
+//! | `outputs.rs` | the outputs by cache block, each computed on its first read after a change |
+//! | `messages.rs` | what a failed step or an event is, in words |
 
 mod dependencies;
 pub mod exchange;
+mod messages;
+mod outputs;
 pub mod parameters;
 pub mod variables;
 
@@ -21,21 +25,17 @@ use super::snapshot::{ByteReader, ByteWriter, SnapshotError};
 use super::variables::VariableRef;
 use super::{DefaultExperiment, FmuModel, ModelInfo, StepError, StepReport};
 use crate::integration::dopri5::Dopri5Memory;
-use crate::integration::{Crossing, IntegratorStats, SwitchingSides};
+use crate::integration::{IntegratorStats, SwitchingSides};
 use crate::models::machine::Drive;
 use crate::physics::actuators::HeldForces;
 use crate::physics::actuators::PerActuator;
 use crate::physics::actuators::hydraulics::CAVITATION_PRESSURE;
-use crate::physics::body::state::BodyState;
-use crate::physics::direct_problem::singular_legs;
-use crate::physics::error::leg_list;
-use crate::physics::legs::geometry::LegGeometry;
-use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::LEG_COUNT;
-use crate::simulation::outputs::{ActuatorStateOutputs, LegLoadOutputs, PoseOutputs, StateOutputs, condition_number};
+use crate::simulation::outputs::{ActuatorStateOutputs, LegLoadOutputs, PoseOutputs, StateOutputs};
 use crate::simulation::platform::Reached;
-use crate::simulation::state::{SIMULATION_DIM, actuator_forces, body, state_rate, supply_flow, switching};
-use crate::simulation::{LegOutputs, PlatformSimulation, SimulationState};
+use crate::simulation::state::{SIMULATION_DIM, state_rate, switching};
+use crate::simulation::{LegOutputs, PlatformSimulation};
+pub use outputs::{Condition, InputDependentOutputs};
 pub use parameters::{Experiment, PlatformParameters, default_leg_force, holding_pressures};
 use variables::{BINDINGS, group};
 
@@ -120,29 +120,6 @@ impl Default for PlatformModel {
     }
 }
 
-/// `f()`, computed out of line: a block's values, whose accessor stays small enough to inline
-/// into the fill of each of its variables.
-#[inline(never)]
-fn out_of_line<R>(f: impl FnOnce() -> R) -> R {
-    f()
-}
-
-/// The condition number of the current state's leg arrangement (a cache block of its own).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Condition {
-    pub kappa: f64,
-}
-
-/// The actuators' and the joints' forces alone (the fields of `PlatformOutputs` of the same
-/// names): they depend on the inputs, so they are a cache block of their own.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct InputDependentOutputs {
-    pub joint_force: [nalgebra::Vector3<f64>; LEG_COUNT],
-    pub actuator_force: [f64; LEG_COUNT],
-    /// `Qsupply` (it depends on the input `pS`).
-    pub supply_flow: f64,
-}
-
 impl PlatformModel {
     /// The simulation, after Initialization Mode.
     pub fn sim(&self) -> Option<&PlatformSimulation> {
@@ -153,116 +130,10 @@ impl PlatformModel {
         self.simulation.as_mut().map(|(sim, _)| sim)
     }
 
-    /// The pose of the current state, computed on the first read after a change.
-    #[inline]
-    fn pose(&mut self) -> &PoseOutputs {
-        let (simulation, parameters) = (&self.simulation, &self.parameters);
-        self.pose.get_or_insert_with(|| out_of_line(|| match simulation {
-            Some((sim, _)) => PoseOutputs::of(&sim.body_state()),
-            None => PoseOutputs::of(&parameters.initial_state()),
-        }))
-    }
-
-    /// The energy, the end stops' forces and the joint angles of the current state, computed on
-    /// their first read after a change.
-    #[inline]
-    fn leg_loads(&mut self) -> &LegLoadOutputs {
-        let (simulation, parameters) = (&self.simulation, &self.parameters);
-        self.leg_loads.get_or_insert_with(|| out_of_line(|| match simulation {
-            Some((sim, _)) => LegLoadOutputs::at(&sim.form, &sim.state),
-            None => LegLoadOutputs::at(&parameters.special_form(), &parameters.initial_simulation_state()),
-        }))
-    }
-
-    /// The values read off the current state, on their first read after a change.
-    #[inline]
-    fn state_values(&mut self) -> &StateOutputs {
-        let (simulation, parameters) = (&self.simulation, &self.parameters);
-        self.state_values.get_or_insert_with(|| out_of_line(|| match simulation {
-            Some((sim, _)) => StateOutputs::of(&sim.state),
-            None => StateOutputs::of(&parameters.initial_simulation_state()),
-        }))
-    }
-
-    /// The actuators' and the joints' forces of the current state and inputs, computed on the
-    /// first read after a change.
-    #[inline]
-    fn input_dependent_outputs(&mut self) -> &InputDependentOutputs {
-        let inputs = self.inputs();
-        let (simulation, parameters) = (&self.simulation, &self.parameters);
-        self.input_dependent.get_or_insert_with(|| {
-            let forces = |form: &SpecialForm, y: &SimulationState| {
-                let actuator_force = actuator_forces(form, y, &inputs);
-                InputDependentOutputs {
-                    joint_force: form.joint_forces(body(y), &actuator_force),
-                    actuator_force,
-                    supply_flow: supply_flow(form, y),
-                }
-            };
-            match simulation {
-                Some((sim, _)) => forces(&sim.form, &sim.state),
-                None => forces(&parameters.special_form(), &parameters.initial_simulation_state()),
-            }
-        })
-    }
-
     /// The inputs in use: the leg forces `F`, with drives the voltages `U`, with hydraulic legs
     /// the valve commands.
     pub fn inputs(&self) -> [f64; LEG_COUNT] {
         *self.inputs.get(self.parameters.drive)
-    }
-
-    /// The legs' lengths and rates of the current state, computed on the first read after a
-    /// change.
-    #[inline]
-    fn leg_outputs(&mut self) -> &LegOutputs {
-        let (simulation, parameters) = (&self.simulation, &self.parameters);
-        self.legs.get_or_insert_with(|| match simulation {
-            Some((sim, _)) => LegOutputs::compute(&sim.form, &sim.state),
-            None => LegOutputs::compute(&parameters.special_form(), &parameters.initial_simulation_state()),
-        })
-    }
-
-    /// The actuators' states of the current state, copied on the first read after a change.
-    #[inline]
-    fn actuators(&mut self) -> &ActuatorStateOutputs {
-        let (simulation, parameters) = (&self.simulation, &self.parameters);
-        self.actuator_states.get_or_insert_with(|| match simulation {
-            Some((sim, _)) => ActuatorStateOutputs::of(&sim.state),
-            None => ActuatorStateOutputs::of(&parameters.initial_simulation_state()),
-        })
-    }
-
-    /// `kappa` of the current state, computed on its first read after a change.
-    #[inline]
-    fn condition(&mut self) -> &Condition {
-        let (simulation, parameters) = (&self.simulation, &self.parameters);
-        self.kappa.get_or_insert_with(|| Condition {
-            kappa: match simulation {
-                Some((sim, _)) => condition_number(sim.stand(), &sim.state),
-                None => condition_number(&parameters.stand, &parameters.initial_simulation_state()),
-            },
-        })
-    }
-
-    /// After a set of values: in Initialization Mode the outputs follow the parameters; the
-    /// actuators' and the joints' forces follow the inputs always.
-    fn values_set(&mut self) {
-        self.input_dependent = None;
-        if self.simulation.is_none() {
-            self.invalidate_outputs();
-        }
-    }
-
-    /// The current state changed: the cached outputs are stale.
-    fn invalidate_outputs(&mut self) {
-        self.pose = None;
-        self.leg_loads = None;
-        self.state_values = None;
-        self.legs = None;
-        self.kappa = None;
-        self.actuator_states = None;
-        self.input_dependent = None;
     }
 
     /// The inputs over the next step: the leg forces, or with drives the voltages, with
@@ -275,93 +146,6 @@ impl PlatformModel {
     /// The kind of actuator whose inputs group `group` is.
     fn actuator_of_inputs(group: usize) -> Option<Drive> {
         Drive::ALL.into_iter().find(|&k| *variables::ACTUATOR_INPUTS.get(k) == group)
-    }
-
-    /// Why a failed RK4 step is most likely the integrator's instability rather than the motion:
-    /// its internal step (for a communication step `h`) against the stiffest law's stable step.
-    fn rk4_instability(&self, h: f64) -> Option<String> {
-        let (sim, _) = self.simulation.as_ref()?;
-        let settings = &sim.integrator.settings;
-        if settings.method != crate::integration::Method::RungeKutta4 {
-            return None;
-        }
-        let step = if settings.fixed_step > 0.0 { settings.fixed_step.min(h) } else { h };
-        let law = self.parameters.stiffest_law()?;
-        (step > law.rk4_stable_step).then(|| {
-            format!(
-                "; the likely cause is RK4's instability, not the motion: its internal step of {step:.3e} s is longer \
-                 than the {:.3e} s it integrates stably, because {} is about {:.3e} s: set solver.fixedStep below {:.1e} s \
-                 or use the adaptive method (solver.method = 1)",
-                law.rk4_stable_step,
-                law.what,
-                law.time,
-                law.rk4_stable_step / 5.0
-            )
-        })
-    }
-
-    /// Model Exchange: the host's integrator owns the step: its step (the last completed one,
-    /// or the time since if longer) against the stiffest law, when it is too long for an
-    /// explicit method.
-    fn host_step_hint(&self) -> Option<String> {
-        let (sim, experiment) = self.simulation.as_ref()?;
-        if !experiment.model_exchange {
-            return None;
-        }
-        let since = self.host_step.max(sim.time - self.last_completed_step);
-        let law = self.parameters.stiffest_law()?;
-        (since > 0.1 * law.time).then(|| {
-            format!(
-                "the host's integrator steps {since:.3e} s, while {} is about {:.3e} s: an \
-                 explicit integrator needs steps well below it (a tenth or less), an implicit or adaptive one (CVODE) \
-                 finds them itself",
-                law.what, law.time
-            )
-        })
-    }
-
-    /// What a crossing of switching function `c.index` means, in words.
-    fn describe_crossing(sim: &PlatformSimulation, c: &Crossing<SIMULATION_DIM>) -> String {
-        let state = BodyState::from_vector(body(&c.y));
-        let legs = LegGeometry::new(sim.stand(), &state);
-        let rates = legs.length_rates(sim.stand(), &state);
-        let what = if c.rising { "left" } else { "reached" };
-        let (stop, k) = match c.index {
-            i if i < switching::UPPER => ("lower", i - switching::LOWER),
-            i if i < switching::DETERMINANT => ("upper", i - switching::UPPER),
-            switching::DETERMINANT => {
-                let involved = singular_legs(sim.stand(), &legs);
-                return format!(
-                    "t = {:?}: the legs passed through a singular arrangement (determinant of the force/moment matrix \
-                     changed sign; legs {} form a force combination without resultant there)",
-                    c.t,
-                    leg_list(&involved)
-                );
-            }
-            i => {
-                let o = LegLoadOutputs::at(&sim.form, &c.y);
-                let (joint, k, theta, max) = match sim.form.joint_limits() {
-                    Some(j) if i < switching::PLATFORM_JOINT => {
-                        let k = i - switching::BASE_JOINT;
-                        ("base", k, o.theta_b.get(k).copied().unwrap_or(f64::NAN), j.base_max)
-                    }
-                    Some(j) => {
-                        let k = i - switching::PLATFORM_JOINT;
-                        ("platform", k, o.theta_a.get(k).copied().unwrap_or(f64::NAN), j.platform_max)
-                    }
-                    None => return String::new(),
-                };
-                return format!(
-                    "t = {:?}: the {joint} joint of leg {} {what} its angle limit ({:.4} deg, limit {:.4} deg)",
-                    c.t,
-                    k + 1,
-                    theta.to_degrees(),
-                    max.to_degrees()
-                );
-            }
-        };
-        let (Some(l), Some(ldot)) = (legs.length.get(k), rates.get(k)) else { return String::new() };
-        format!("t = {:?}: leg {} {what} its {stop} end stop (l = {l:?} m, ldot = {ldot:?} m/s)", c.t, k + 1)
     }
 
     /// A simulation for the parameters and `experiment`, told what the instance reports, with
