@@ -224,8 +224,7 @@ impl<T: Real> LegLoadOutputs<T> {
             if !(legs.length[k] > T::zero()) || (form.joint_limits().is_none() && !has_mass) {
                 continue;
             }
-            let a_dot = state.v + state.body_vector_rate(&stand.platform_joints[k]);
-            let motion = LegMotion::new(&legs.leg[k], legs.length[k], &a_dot);
+            let motion = LegMotion::at(state, &stand.platform_joints[k], &legs.leg[k], legs.length[k]);
             if has_mass {
                 energy += form.legs().energy(&motion, stand.base_joints[k].z, stand.gravity);
             }

@@ -22,7 +22,7 @@
 use super::{Actuator, BodyRate, LegPower};
 use crate::physics::body::state::{BodyState, STATE_DIM};
 use crate::physics::error::ParameterError;
-use crate::physics::legs::geometry::LegGeometry;
+use crate::physics::legs::geometry::{LegGeometry, joint_rate};
 use crate::physics::number::{Number, Real};
 use crate::physics::stand::{LEG_COUNT, check_finite};
 
@@ -225,11 +225,7 @@ impl Actuator for ElectricDrives {
     ) -> [T; LEG_COUNT] {
         std::array::from_fn(|k| {
             let l = legs.length[k];
-            let l_dot = if l > T::zero() {
-                legs.leg[k].dot(&(state.v + state.body_vector_rate(&platform_joints[k]))) / l
-            } else {
-                T::zero()
-            };
+            let l_dot = if l > T::zero() { joint_rate(state, &platform_joints[k], &legs.leg[k]).0 / l } else { T::zero() };
             self.rate(u[k], x.get(k).copied().unwrap_or(T::zero()), l_dot).force
         })
     }

@@ -8,8 +8,6 @@ use nalgebra::{Matrix3, Vector3};
 use crate::maths;
 use crate::physics::number::Real;
 
-use crate::physics::stand::{LEG_COUNT, Stand};
-
 /// `(sin x, cos x)`, at `x = ±0` the exact `(±0, 1)` without the library call: a programme's
 /// constant degrees of freedom and zero angles are most of the controller's sines (the same
 /// bits as `maths::sin_cos(x)` everywhere).
@@ -137,21 +135,6 @@ pub fn body_rates_from_angle_rates(
         dd.x * sb + ad * cb * bd + dd.z,
     );
     (w, w_dot)
-}
-
-/// Inverse kinematics: leg lengths `l_k = |r + R A_k - B_k|` and their rates for a pose.
-pub fn leg_lengths_and_rates(stand: &Stand, pose: &PoseTrajectoryPoint) -> ([f64; LEG_COUNT], [f64; LEG_COUNT]) {
-    let omega = pose.rotation * pose.w;
-    let mut lengths = [0.0; LEG_COUNT];
-    let mut rates = [0.0; LEG_COUNT];
-    for k in 0..LEG_COUNT {
-        let arm = pose.rotation * stand.platform_joints[k];
-        let d = pose.r + arm - stand.base_joints[k];
-        let l = d.norm();
-        lengths[k] = l;
-        rates[k] = if l > 0.0 { d.dot(&(pose.v + omega.cross(&arm))) / l } else { 0.0 };
-    }
-    (lengths, rates)
 }
 
 #[cfg(test)]

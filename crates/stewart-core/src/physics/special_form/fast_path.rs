@@ -431,9 +431,13 @@ impl SpecialForm {
         for k in 0..LEG_COUNT {
             let (leg, l) = (legs.leg[k], legs.length[k]);
             if l > 0.0 {
-                let a_dot = state.v + state.body_vector_rate(&self.stand.platform_joints[k]);
                 let mut load = MachineLoad::none();
-                self.add_joint_limits(k, state, &LegMotion::new(&leg, l, &a_dot), &mut load);
+                self.add_joint_limits(
+                    k,
+                    state,
+                    &LegMotion::at(state, &self.stand.platform_joints[k], &leg, l),
+                    &mut load,
+                );
                 loads.add_machine(k, &load);
             }
         }
