@@ -156,10 +156,7 @@ impl<T: Copy, const N: usize> OutputValues<T> for [T; N] {
     where
         T: Into<f64>,
     {
-        for (slot, &x) in slots.iter_mut().zip(self) {
-            *slot = x.into();
-        }
-        slots.iter().fold(false, |nan, x| nan | x.is_nan())
+        self[..].write(slots)
     }
 }
 
@@ -184,12 +181,13 @@ impl<T: Scalar + Copy> OutputValues<T> for Vector3<T> {
     }
 }
 
-/// A part of an array of values (`cached_at`: the elements from an offset on).
+/// A part of an array of values (`cached_at`: the elements from an offset on), or a whole one.
 impl<T: Copy> OutputValues<T> for [T] {
     fn element(&self, i: usize) -> Option<T> {
         self.get(i).copied()
     }
 
+    /// One copy, then a check without early exit.
     #[inline]
     fn write(&self, slots: &mut [f64]) -> bool
     where

@@ -5,6 +5,39 @@
 
 use super::variables::VariableGroup as V;
 
+/// The legs as bodies' parameters as knowns of a dependency list, in the indices of the
+/// model's own `group` module (both models declare them, under the same names).
+macro_rules! leg_body_knowns {
+    () => {
+        &[
+            All(group::LEG_CYLINDER_MASS),
+            All(group::LEG_ROD_MASS),
+            All(group::LEG_CYLINDER_COM),
+            All(group::LEG_ROD_COM),
+            All(group::LEG_CYLINDER_INERTIA),
+            All(group::LEG_ROD_INERTIA),
+        ]
+    };
+}
+pub(crate) use leg_body_knowns;
+
+/// The electric drives' law's parameters as knowns, as [`leg_body_knowns`].
+macro_rules! drive_law_knowns {
+    () => {
+        &[
+            All(group::MOTOR_R),
+            All(group::MOTOR_L),
+            All(group::MOTOR_KE),
+            All(group::MOTOR_KT),
+            All(group::MOTOR_J),
+            All(group::MOTOR_D),
+            All(group::GEAR_RATIO),
+            All(group::SCREW_LEAD),
+        ]
+    };
+}
+pub(crate) use drive_law_knowns;
+
 /// `M`, kg.
 pub const fn mass(vr: u32) -> V {
     V::parameter("M", &[], vr, Some("kg"), "Mass of the loaded platform (platform plus payload)")

@@ -47,27 +47,9 @@ const PROGRAMMES: &[Dependency] = &[
     All(group::STARTUP_DURATION),
 ];
 /// The legs as bodies, whose weight and inertia the programme forces carry.
-const LEG_BODIES: &[Dependency] = &[
-    All(group::LEG_CYLINDER_MASS),
-    All(group::LEG_ROD_MASS),
-    All(group::LEG_CYLINDER_COM),
-    All(group::LEG_ROD_COM),
-    All(group::LEG_CYLINDER_INERTIA),
-    All(group::LEG_ROD_INERTIA),
-];
+const LEG_BODIES: &[Dependency] = machine::leg_body_knowns!();
 /// The electric drives, whose static model gives the voltages.
-const DRIVES: &[Dependency] = &[
-    All(group::DRIVE),
-    All(group::MOTOR_R),
-    All(group::MOTOR_L),
-    All(group::MOTOR_KE),
-    All(group::MOTOR_KT),
-    All(group::MOTOR_J),
-    All(group::MOTOR_D),
-    All(group::GEAR_RATIO),
-    All(group::SCREW_LEAD),
-    All(group::UMAX),
-];
+const DRIVES: &[Dependency] = &[All(group::DRIVE), Each(machine::drive_law_knowns!()), All(group::UMAX)];
 /// In Initialization Mode the outputs depend on (almost) every known; listing them all is
 /// the honest answer.
 const ALL_KNOWNS: &[Dependency] = &[

@@ -5,6 +5,7 @@
 //! knowns stood.
 
 use super::variables::group;
+use crate::models::machine;
 use crate::models::variables::Dependency::{self, All, Each};
 
 /// The body's pose states.
@@ -18,14 +19,7 @@ const INITIAL_MOTION: &[Dependency] = &[All(group::R0), All(group::ANGLES0), All
 const STOPS_STROKE: &[Dependency] = &[All(group::STOPS), All(group::LMIN), All(group::LMAX), All(group::STOP_STIFFNESS)];
 const STOPS: &[Dependency] = &[Each(STOPS_STROKE), All(group::STOP_DAMPING)];
 /// The legs as bodies.
-const LEG_BODIES: &[Dependency] = &[
-    All(group::LEG_CYLINDER_MASS),
-    All(group::LEG_ROD_MASS),
-    All(group::LEG_CYLINDER_COM),
-    All(group::LEG_ROD_COM),
-    All(group::LEG_CYLINDER_INERTIA),
-    All(group::LEG_ROD_INERTIA),
-];
+const LEG_BODIES: &[Dependency] = machine::leg_body_knowns!();
 /// The joint limits: the limits and their reference pose, then the damping.
 const JOINT_LIMITS: &[Dependency] =
     &[All(group::JOINTS), All(group::JOINTS_BASE_MAX), All(group::JOINTS_PLATFORM_MAX), All(group::JOINTS_STIFFNESS)];
@@ -41,16 +35,7 @@ const FRICTION: &[Dependency] = &[
 ];
 
 /// The electric drives' law (`drive = 1`).
-const DRIVE_LAW: &[Dependency] = &[
-    All(group::MOTOR_R),
-    All(group::MOTOR_L),
-    All(group::MOTOR_KE),
-    All(group::MOTOR_KT),
-    All(group::MOTOR_J),
-    All(group::MOTOR_D),
-    All(group::GEAR_RATIO),
-    All(group::SCREW_LEAD),
-];
+const DRIVE_LAW: &[Dependency] = machine::drive_law_knowns!();
 /// The drives' parameters.
 pub const DRIVE_PARAMETERS: &[Dependency] = &[All(group::DRIVE), Each(DRIVE_LAW)];
 /// The knowns of the drives' currents' rates and losses: the leg rates, the currents, the
