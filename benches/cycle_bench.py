@@ -6,7 +6,8 @@ lengths and rates, through the packaged FMI 2 and FMI 3 platform FMUs. Prints on
   exported call inside each alone, per call), from callgrind over 5000 cycles (repeatable;
   wall times on this shared machine vary up to 2x between runs), in four
   motions: hovering on the leg feedback (no stop touched), resting in contact with all six
-  lower stops (zero forces), hovering with the end stops switched off, and (FMI 2) hovering
+  lower stops (zero forces), hovering with the end stops switched off, hovering while the host
+  reads the pose (r, R, angles) besides the legs, and (FMI 2) hovering
   with `logEvents` delivered to a logger that drops it, so that passages through singular
   arrangements are tracked (skipped when nobody can be told);
 - wall-clock time per cycle with the clock outside the loop (as MuJoCo's own C loop is timed):
@@ -159,8 +160,8 @@ def instruction_table(host, fmus, folder):
              "(hover: leg feedback, no stop touched; contact: resting on all six lower stops; nostops: hover with "
              "stops = false; nojoints: hover with joints = false; heavylegs: hover with 40 kg cylinders and 15 kg "
              "rods; drives: hover with the default electric drives, voltages in; hydraulics: hover with the default hydraulic "
-             "legs, valve commands in, 12 pressures out besides the legs; logevents: hover with logEvents delivered, "
-             "singular passages tracked)",
+             "legs, valve commands in, 12 pressures out besides the legs; pose: hover reading the pose (r, R, angles: 15 "
+             "values) besides the legs; logevents: hover with logEvents delivered, singular passages tracked)",
              "(set, step, get: the host's functions, each around one call; in the FMU: that exported call alone, "
              "per call)",
              f"{'FMU':6} {'method':7} {'motion':9} {'cycle':>8} {'set':>7} {'step':>8} {'get':>7}   "
@@ -168,8 +169,8 @@ def instruction_table(host, fmus, folder):
     cycles = {}
     for version, (binary, token) in fmus.items():
         for method in ("rk4", "dopri5"):
-            scenarios = (("hover", "contact", "nostops", "nojoints", "heavylegs", "drives", "hydraulics", "logevents")
-                         if version == "fmi2" else ("hover", "contact", "drives", "hydraulics"))
+            scenarios = (("hover", "contact", "nostops", "nojoints", "heavylegs", "drives", "hydraulics", "pose",
+                          "logevents") if version == "fmi2" else ("hover", "contact", "drives", "hydraulics", "pose"))
             for scenario in scenarios:
                 c = instructions(host, version, binary, token, method, folder, scenario)
                 cycles[(version, method, scenario)] = c

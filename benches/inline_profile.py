@@ -7,7 +7,7 @@ counts, maps every instruction of the library to the chain of functions inlined 
 source line in it where the next level was inlined.
 
     .venv/bin/python benches/inline_profile.py              # hover, RK4, FMI 2: writes benches/results/cycle_profile.txt
-    .venv/bin/python benches/inline_profile.py drives dopri5 [--depth 10] [--least 10]
+    .venv/bin/python benches/inline_profile.py drives dopri5 [--depth 14] [--least 10]
         # another motion (cycle_host's CYCLE_SCENARIO), method or depth: printed, nothing written
 
 After `cargo run --release --bin build-fmu` (the host unpacks target/fmu's FMI 2 platform FMU
@@ -167,7 +167,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("scenario", nargs="?", default="hover")
     parser.add_argument("method", nargs="?", default="rk4", choices=("rk4", "dopri5"))
-    parser.add_argument("--depth", type=int, default=10, help="levels of inlined calls shown (10)")
+    parser.add_argument("--depth", type=int, default=14, help="levels of inlined calls shown (14)")
     parser.add_argument("--least", type=float, default=10.0, help="instructions per cycle a line needs (10)")
     args = parser.parse_args()
     for tool in ("valgrind", "gcc", "addr2line"):
@@ -191,7 +191,7 @@ def main():
               "what is inlined below it, not of the calls it makes (each callee has its own tree).", ""]
     text = "\n".join(header + body) + "\n"
     print(text)
-    if (args.scenario, args.method, args.depth, args.least) == ("hover", "rk4", 10, 10.0):
+    if (args.scenario, args.method, args.depth, args.least) == ("hover", "rk4", 14, 10.0):
         OUT.write_text(text)
         print(f"written to {OUT.relative_to(ROOT)}")
 

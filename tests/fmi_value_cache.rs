@@ -134,6 +134,53 @@ fn fmi3_reads_of_consecutive_arrays_equal_reads_of_each() {
     }
 }
 
+/// A host's read of several cache blocks every step (the legs, the pose and the actuators'
+/// forces, which follow the inputs): one call gives the bits that a read of each element gives,
+/// step after step, for the same references as the last read (kept runs), for other references
+/// of the same count, and with the forces' block stale after a set of the forces.
+#[test]
+fn reads_of_several_blocks_repeated_every_step_give_what_single_reads_give() {
+    let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+    let mut h = Host::platform("blocks");
+    assert_eq!(h.initialise(&[]), fmi2OK);
+    let pose = ["r[1]", "r[2]", "r[3]"].into_iter().map(String::from).chain(
+        (1..=3)
+            .flat_map(|a| (1..=3).map(move |b| format!("R[{a},{b}]")))
+            .chain((1..=3).map(|i| format!("angles[{i}]"))),
+    );
+    let names: Vec<String> =
+        legs().into_iter().chain(pose).chain((1..=6).map(|k| format!("actuatorForce[{k}]"))).collect();
+    let mut rotated = names.clone();
+    rotated.rotate_left(5);
+    for step in 0..30 {
+        let f: [f64; 6] = std::array::from_fn(|k| 5_900.0 + 300.0 * ((step * (k + 2)) as f64).sin());
+        assert_eq!(h.set_forces(f), fmi2OK);
+        for names in [&names, &names, &rotated, &names] {
+            let run = read(&h, names);
+            let singles: Vec<f64> = names.iter().map(|n| h.get(n)).collect();
+            assert_eq!(bits(&run), bits(&singles), "step {step}");
+        }
+        assert_eq!(read(&h, &names)[27..], f, "step {step}: the forces just set");
+        assert_eq!(h.step(1e-3), fmi2OK);
+    }
+    // FMI 3: whole variables of several blocks, the same every step.
+    let mut h = Host3::platform("blocks", Kind::CoSimulation);
+    assert_eq!(h.initialise(&[]), fmi3OK);
+    let variables = ["l", "ldot", "r", "R", "angles", "actuatorForce"];
+    let refs: Vec<u32> = variables.iter().map(|v| h.vr(v)).collect();
+    for step in 0..30 {
+        let f: Vec<f64> = (0..6).map(|k| 5_900.0 + 300.0 * ((step * (k + 2)) as f64).cos()).collect();
+        assert_eq!(h.set("F", &f), fmi3OK);
+        for _ in 0..2 {
+            let mut out = [f64::NAN; 33];
+            assert_eq!(unsafe { fmi3GetFloat64(h.c, refs.as_ptr(), refs.len(), out.as_mut_ptr(), 33) }, fmi3OK);
+            let each: Vec<f64> = variables.iter().flat_map(|v| h.get(v)).collect();
+            assert_eq!(bits(&out), bits(&each), "step {step}");
+        }
+        assert_eq!(h.step(1e-3).0, fmi3OK);
+    }
+}
+
 /// One `fmi2GetReal` of all `names`: the status and the values.
 fn try_read(h: &Host, names: &[String]) -> (fmi2Status, Vec<f64>) {
     let vrs = vrs(h, names);

@@ -64,24 +64,26 @@ fn every_dependency_names_an_existing_variable() {
     for kind in ModelKind::ALL {
         let groups = kind.info().groups;
         for g in groups {
-            for d in g.output_dependencies.iter().chain(g.initial_dependencies).chain(g.derivative_dependencies) {
-                let (Dependency::All(name) | Dependency::SameIndex(name)) = *d;
-                let target = groups.iter().find(|t| t.name == name);
-                assert!(
-                    target.is_some(),
-                    "{}: {} depends on {name}, which does not exist",
-                    kind.info().model_name,
-                    g.name
-                );
-                if let (Dependency::SameIndex(_), Some(t)) = (d, target) {
-                    assert_eq!(
-                        t.len(),
-                        g.len(),
-                        "{}: {} depends element-wise on {name} of another size",
+            for deps in [g.output_dependencies, g.initial_dependencies, g.derivative_dependencies] {
+                Dependency::each_known(deps, groups, &mut |known, same| {
+                    let target = groups.get(known);
+                    assert!(
+                        target.is_some(),
+                        "{}: {} depends on a variable that does not exist",
                         kind.info().model_name,
                         g.name
                     );
-                }
+                    if let (true, Some(t)) = (same, target) {
+                        assert_eq!(
+                            t.len(),
+                            g.len(),
+                            "{}: {} depends element-wise on {} of another size",
+                            kind.info().model_name,
+                            g.name,
+                            t.name
+                        );
+                    }
+                });
             }
             if let Some(state) = g.derivative_of {
                 assert!(groups.iter().any(|t| t.name == state), "{}: derivative of unknown {state}", g.name);

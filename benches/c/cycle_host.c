@@ -31,7 +31,8 @@
  * force loop on the measured pA, pB and the leg error through the flow; the host gets the 12
  * leg values and the 12 pressures),
  * logevents (FMI 2: hover with a logger that drops messages and logEvents on, so that the FMU
- * tracks passages through singular arrangements, which it skips when nobody can be told).
+ * tracks passages through singular arrangements, which it skips when nobody can be told),
+ * pose (hover; the host also gets the pose: r, R and angles, 15 values besides the 12 leg values).
  */
 #define _GNU_SOURCE
 #include <dlfcn.h>
@@ -104,6 +105,11 @@ static const unsigned VALVES3[1] = {460};
 static const unsigned LEGS_PRESSURES2[24] = {121, 122, 123, 124, 125, 126, 127, 128, 129, 130, 131, 132,
                                              510, 511, 512, 513, 514, 515, 516, 517, 518, 519, 520, 521};
 static const unsigned LEGS_PRESSURES3[4] = {121, 127, 510, 516};
+/* The pose read with the legs: r, R, angles (27 values in all). */
+static int pose_on = 0;
+static const unsigned LEGS_POSE2[27] = {121, 122, 123, 124, 125, 126, 127, 128, 129, 130, 131, 132, 100, 101,
+                                        102, 106, 107, 108, 109, 110, 111, 112, 113, 114, 115, 116, 117};
+static const unsigned LEGS_POSE3[5] = {121, 127, 100, 106, 115};
 static const double FORCE_GAIN = 1.5e-5, LENGTH_GAIN = 50.0, AREA_A = 3.1172453105244723e-3,
                     AREA_B = 2.0993692907613796e-3, OPENING_PER_RATE = 1.2371183800845102;
 
@@ -179,6 +185,7 @@ __attribute__((noinline)) static void do_step(Instance c, double t) {
 __attribute__((noinline)) static void get_outputs(Instance c, double *legs) {
     int s = hydraulic_on ? (fmi3 ? fmi3GetFloat64(c, LEGS_PRESSURES3, 4, legs, 24)
                                  : fmi2GetReal(c, LEGS_PRESSURES2, 24, legs))
+            : pose_on    ? (fmi3 ? fmi3GetFloat64(c, LEGS_POSE3, 5, legs, 27) : fmi2GetReal(c, LEGS_POSE2, 27, legs))
                          : (fmi3 ? fmi3GetFloat64(c, LEGS3, 2, legs, 12) : fmi2GetReal(c, LEGS2, 12, legs));
     if (s) exit(6);
 }
@@ -237,7 +244,7 @@ typedef struct { long n; double seconds; pthread_barrier_t *warm; } Job;
 static void *thread_job(void *arg) {
     Job *job = arg;
     Instance c = make();
-    double legs[24];
+    double legs[27];
     get_outputs(c, legs);
     long first = warm_up_cycles(c, legs);
     pthread_barrier_wait(job->warm); /* every thread starts its timed cycles together */
@@ -284,12 +291,14 @@ int main(int argc, char **argv) {
         hydraulic_on = 1;
         inputs2 = VALVES2;
         inputs3 = VALVES3;
+    } else if (scenario && strcmp(scenario, "pose") == 0) {
+        pose_on = 1;
     } else if (scenario && strcmp(scenario, "logevents") == 0) {
         if (fmi3) { fprintf(stderr, "CYCLE_SCENARIO=logevents is for FMI 2\n"); return 2; }
         log_events = 1;
     } else if (scenario && strcmp(scenario, "hover") != 0) {
-        fprintf(stderr, "CYCLE_SCENARIO must be hover, contact, nostops, nojoints, heavylegs, drives, hydraulics or "
-                        "logevents\n");
+        fprintf(stderr, "CYCLE_SCENARIO must be hover, contact, nostops, nojoints, heavylegs, drives, hydraulics, "
+                        "pose or logevents\n");
         return 2;
     }
     if (fmi3) {
@@ -329,7 +338,7 @@ int main(int argc, char **argv) {
         return 0;
     }
     Instance c = make();
-    double legs[24];
+    double legs[27];
     get_outputs(c, legs);
     if (strcmp(mode, "count") == 0) {
         /* Uncounted: the same calls, outside the counted functions. */

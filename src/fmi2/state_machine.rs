@@ -282,4 +282,15 @@ mod tests {
             }
         }
     }
+
+    /// The table's functions are the exported list's (which `build-fmu` checks the binaries
+    /// against), all but the three without an instance.
+    #[test]
+    fn the_table_names_the_exported_functions() {
+        let names: Vec<&str> = Fmi2Function::ALL.iter().map(|f| f.name()).collect();
+        let without_instance = ["fmi2GetTypesPlatform", "fmi2GetVersion", "fmi2Instantiate"];
+        let exported: Vec<&str> =
+            crate::fmi2::FUNCTIONS.into_iter().filter(|f| !without_instance.contains(f)).collect();
+        assert_eq!(names, exported);
+    }
 }

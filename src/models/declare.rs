@@ -29,7 +29,9 @@
 //! holding the variable's value ([`RealStorage`], [`IntegerStorage`], `bool`, `String`); `cached(block.field)` is an
 //! output read through the cache block `block` (the model method of that name returns the
 //! block's values, `field` the variable's); `cached_apart(block.field)` the same for a value
-//! that is not a field of the outputs type (its derivative is the model's own); `derivative` a
+//! that is not a field of the outputs type (its derivative is the model's own);
+//! `cached_at(block.field, offset)` the elements of an array field from `offset` on (an
+//! actuator's states in the actuators' part of the state); `derivative` a
 //! state derivative
 //! (`VariableGroup::derivative_of`), computed from the model's state rate; `computed` a value
 //! the model computes itself ([`Binding::Computed`]).
@@ -154,16 +156,47 @@ impl<T: Copy, const N: usize> OutputValues<T> for [T; N] {
     where
         T: Into<f64>,
     {
-        for (slot, &x) in slots.iter_mut().zip(self) {
-            *slot = x.into();
-        }
-        slots.iter().fold(false, |nan, x| nan | x.is_nan())
+        self[..].write(slots)
     }
 }
 
 impl<T: Scalar + Copy> OutputValues<T> for Vector3<T> {
     fn element(&self, i: usize) -> Option<T> {
         self.get(i).copied()
+    }
+
+    /// The three components at once (a pose block is filled every step it is read).
+    #[inline]
+    fn write(&self, slots: &mut [f64]) -> bool
+    where
+        T: Into<f64>,
+    {
+        match slots.first_chunk_mut::<3>() {
+            Some(s) => {
+                *s = [self.x.into(), self.y.into(), self.z.into()];
+                s.iter().fold(false, |nan, x| nan | x.is_nan())
+            }
+            None => false,
+        }
+    }
+}
+
+/// A part of an array of values (`cached_at`: the elements from an offset on), or a whole one.
+impl<T: Copy> OutputValues<T> for [T] {
+    fn element(&self, i: usize) -> Option<T> {
+        self.get(i).copied()
+    }
+
+    /// One copy, then a check without early exit.
+    #[inline]
+    fn write(&self, slots: &mut [f64]) -> bool
+    where
+        T: Into<f64>,
+    {
+        for (slot, &x) in slots.iter_mut().zip(self) {
+            *slot = x.into();
+        }
+        slots.iter().fold(false, |nan, x| nan | x.is_nan())
     }
 }
 
@@ -178,6 +211,21 @@ impl<T: Scalar + Copy, const N: usize> OutputValues<T> for [Vector3<T>; N] {
 impl<T: Scalar + Copy> OutputValues<T> for Matrix3<T> {
     fn element(&self, i: usize) -> Option<T> {
         self.get((i / 3, i % 3)).copied()
+    }
+
+    /// The nine elements at once, row by row.
+    #[inline]
+    fn write(&self, slots: &mut [f64]) -> bool
+    where
+        T: Into<f64>,
+    {
+        match slots.first_chunk_mut::<9>() {
+            Some(s) => {
+                *s = std::array::from_fn(|i| self[(i / 3, i % 3)].into());
+                s.iter().fold(false, |nan, x| nan | x.is_nan())
+            }
+            None => false,
+        }
     }
 }
 
@@ -301,9 +349,11 @@ macro_rules! declare_variables {
 
             #[inline]
             fn fill_block(&mut self, block: u8, cache: &mut [f64]) -> bool {
-                let mut nan = false;
-                $($crate::models::declare::declare_variables!(@fill self, block, cache, nan, $id, $kind $(($($arg)*))?);)*
-                nan
+                // One function per block (the block's variables alone, out of line).
+                match block {
+                    $(cache_block::$block => self.fill_block_out_of_line::<{ cache_block::$block }>(cache),)*
+                    _ => false,
+                }
             }
 
             fn save_variables(&self, w: &mut $crate::models::snapshot::ByteWriter) {
@@ -319,6 +369,25 @@ macro_rules! declare_variables {
             }
         }
 
+        #[allow(unused_variables, unused_mut, dead_code)]
+        impl $model {
+            /// The values of cache block `B` into the cache at their value references; `true` if
+            /// one is NaN. Inlined where `B` is known (the block a step's cycle fills every time).
+            #[inline(always)]
+            pub(crate) fn fill_block_values<const B: u8>(&mut self, cache: &mut [f64]) -> bool {
+                let mut nan = false;
+                $($crate::models::declare::declare_variables!(@fill self, B, cache, nan, $id, $kind $(($($arg)*))?);)*
+                nan
+            }
+
+            /// [`Self::fill_block_values`] out of line, one function per block (inlined into one
+            /// function, every block's addresses were prepared for any).
+            #[inline(never)]
+            fn fill_block_out_of_line<const B: u8>(&mut self, cache: &mut [f64]) -> bool {
+                self.fill_block_values::<B>(cache)
+            }
+        }
+
     };
 
     (@binding real($($p:tt)*)) => { $crate::models::declare::Binding::Stored };
@@ -330,6 +399,9 @@ macro_rules! declare_variables {
     };
     // `cached_apart` is `cached` in every arm but `@element` (none: not in the outputs type).
     (@binding cached_apart($($p:tt)*)) => { $crate::models::declare::declare_variables!(@binding cached($($p)*)) };
+    (@binding cached_at($block:ident . $field:ident, $at:expr)) => {
+        $crate::models::declare::declare_variables!(@binding cached($block . $field))
+    };
     (@binding derivative) => { $crate::models::declare::Binding::Derivative };
     (@binding computed) => { $crate::models::declare::Binding::Computed };
 
@@ -390,16 +462,30 @@ macro_rules! declare_variables {
     (@output $s:ident, $var:ident, $id:ident, cached_apart($($p:tt)*)) => {
         $crate::models::declare::declare_variables!(@output $s, $var, $id, cached($($p)*))
     };
+    (@output $s:ident, $var:ident, $id:ident, cached_at($block:ident . $field:ident, $at:expr)) => {
+        if $var.group == group::$id {
+            return $crate::models::declare::OutputValues::<f64>::element(&$s.$block().$field[..], $at + $var.index);
+        }
+    };
     (@output $($rest:tt)*) => {};
 
-    (@fill $s:ident, $b:ident, $cache:ident, $nan:ident, $id:ident, cached($block:ident . $field:ident)) => {
-        if $b == cache_block::$block {
+    // (`$want` is a constant: only the block's own variables are left.)
+    (@fill $s:ident, $want:ident, $cache:ident, $nan:ident, $id:ident, cached($block:ident . $field:ident)) => {
+        if cache_block::$block == $want {
             let g = &GROUPS[group::$id];
             $nan |= $crate::models::declare::fill($cache, g.first_vr, g.len(), &$s.$block().$field);
         }
     };
-    (@fill $s:ident, $b:ident, $cache:ident, $nan:ident, $id:ident, cached_apart($($p:tt)*)) => {
-        $crate::models::declare::declare_variables!(@fill $s, $b, $cache, $nan, $id, cached($($p)*))
+    (@fill $s:ident, $want:ident, $cache:ident, $nan:ident, $id:ident, cached_apart($($p:tt)*)) => {
+        $crate::models::declare::declare_variables!(@fill $s, $want, $cache, $nan, $id, cached($($p)*))
+    };
+    (@fill $s:ident, $want:ident, $cache:ident, $nan:ident, $id:ident, cached_at($block:ident . $field:ident, $at:expr)) => {
+        if cache_block::$block == $want {
+            let g = &GROUPS[group::$id];
+            if let Some(values) = $s.$block().$field.get($at..$at + g.len()) {
+                $nan |= $crate::models::declare::fill($cache, g.first_vr, g.len(), values);
+            }
+        }
     };
     (@fill $($rest:tt)*) => {};
 
@@ -444,6 +530,11 @@ macro_rules! declare_variables {
     (@element $o:ident, $var:ident, $id:ident, cached($block:ident . $field:ident)) => {
         if $var.group == group::$id {
             return $crate::models::declare::OutputValues::element(&$o.$field, $var.index);
+        }
+    };
+    (@element $o:ident, $var:ident, $id:ident, cached_at($block:ident . $field:ident, $at:expr)) => {
+        if $var.group == group::$id {
+            return $crate::models::declare::OutputValues::element(&$o.$field[..], $at + $var.index);
         }
     };
     (@element $($rest:tt)*) => {};

@@ -5,6 +5,39 @@
 
 use super::variables::VariableGroup as V;
 
+/// The legs as bodies' parameters as knowns of a dependency list, in the indices of the
+/// model's own `group` module (both models declare them, under the same names).
+macro_rules! leg_body_knowns {
+    () => {
+        &[
+            All(group::LEG_CYLINDER_MASS),
+            All(group::LEG_ROD_MASS),
+            All(group::LEG_CYLINDER_COM),
+            All(group::LEG_ROD_COM),
+            All(group::LEG_CYLINDER_INERTIA),
+            All(group::LEG_ROD_INERTIA),
+        ]
+    };
+}
+pub(crate) use leg_body_knowns;
+
+/// The electric drives' law's parameters as knowns, as [`leg_body_knowns`].
+macro_rules! drive_law_knowns {
+    () => {
+        &[
+            All(group::MOTOR_R),
+            All(group::MOTOR_L),
+            All(group::MOTOR_KE),
+            All(group::MOTOR_KT),
+            All(group::MOTOR_J),
+            All(group::MOTOR_D),
+            All(group::GEAR_RATIO),
+            All(group::SCREW_LEAD),
+        ]
+    };
+}
+pub(crate) use drive_law_knowns;
+
 /// `M`, kg.
 pub const fn mass(vr: u32) -> V {
     V::parameter("M", &[], vr, Some("kg"), "Mass of the loaded platform (platform plus payload)")
@@ -171,33 +204,19 @@ pub const fn screw_lead(vr: u32) -> V {
     )
 }
 
-/// What moves the legs (`drive`): the same codes in both models.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum Drive {
-    /// 0: ideal force actuators, the leg forces `F` are the inputs.
-    #[default]
-    Forces,
-    /// 1: electric drives, the armature voltages `U` are the inputs.
-    Electric,
-    /// 2: hydraulic servo legs, the valve commands `valve` (and the supply `pS`) are the inputs.
-    Hydraulic,
-}
+/// What moves the legs (`drive`): the same codes in both models, the actuators' list's
+/// (`crate::physics::actuators`).
+pub use crate::physics::actuators::ActuatorKind as Drive;
 
 impl super::declare::IntegerStorage for Drive {
     fn code(&self) -> i32 {
-        match self {
-            Drive::Forces => 0,
-            Drive::Electric => 1,
-            Drive::Hydraulic => 2,
-        }
+        Drive::code(*self)
     }
     fn set_code(&mut self, code: i32) -> Result<(), String> {
-        *self = match code {
-            0 => Drive::Forces,
-            1 => Drive::Electric,
-            2 => Drive::Hydraulic,
-            _ => return Err(format!("{code} is none of 0 (forces), 1 (electric drives), 2 (hydraulic servo legs)")),
-        };
+        *self = Drive::from_code(code).ok_or_else(|| {
+            let items: Vec<String> = Drive::ALL.iter().map(|k| format!("{} ({})", k.code(), k.name())).collect();
+            format!("{code} is none of {}", items.join(", "))
+        })?;
         Ok(())
     }
 }

@@ -18,13 +18,9 @@
 //! GUID or instantiation token the importer passes (each FMU's `modelDescription.xml` carries
 //! its own; see [`crate::fmi::description`]).
 
-pub mod controller;
-pub mod cueing;
 pub mod declare;
 pub mod machine;
-pub mod platform;
 pub mod snapshot;
-pub mod trivial;
 pub mod units;
 pub mod variables;
 
@@ -292,89 +288,92 @@ pub fn set_one_by_one<M: FmuModel + ?Sized>(model: &mut M, first: VariableRef, v
 /// Most blocks a model's value cache may have (see [`FmuModel::cache_block`]).
 pub const CACHE_BLOCKS: u8 = 31;
 
-/// Every model this binary implements.
-pub enum AnyModel {
-    Platform(Box<platform::PlatformModel>),
-    Controller(Box<controller::ControllerModel>),
-    Cueing(Box<cueing::CueingModel>),
-    Trivial(Box<trivial::TrivialModel>),
-}
+/// Every model this binary implements, each named once: its kind, its code in the
+/// instantiation tokens (`crate::fmi::description`), its module (declared here; it holds the
+/// model's [`ModelInfo`] `INFO`) and model type, and, marked `benchmark_floor`, one packaged
+/// for the benchmarks only. [`ModelKind`] (`ALL`, `info`, `code`, `instantiate`), [`AnyModel`]
+/// and the dispatch of its methods to the model follow: a new FMU is its folder and one line.
+macro_rules! models {
+    ($($(#[$floor:ident])? $kind:ident = $code:literal => $module:ident :: $model:ident,)*) => {
+        models!(@with ($) $($(#[$floor])? $kind = $code => $module :: $model,)*);
+    };
+    (@with ($d:tt) $($(#[$floor:ident])? $kind:ident = $code:literal => $module:ident :: $model:ident,)*) => {
+        $(pub mod $module;)*
 
-/// The models, for instantiation by GUID and for packaging.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ModelKind {
-    Platform,
-    Controller,
-    Cueing,
-    Trivial,
-}
-
-impl ModelKind {
-    pub const ALL: [ModelKind; 4] = [ModelKind::Platform, ModelKind::Controller, ModelKind::Cueing, ModelKind::Trivial];
-
-    /// Packaged for the benchmarks only (`target/fmu/bench/`), not a product FMU.
-    pub fn is_benchmark_floor(self) -> bool {
-        self == ModelKind::Trivial
-    }
-
-    pub fn info(self) -> &'static ModelInfo {
-        match self {
-            ModelKind::Platform => &platform::INFO,
-            ModelKind::Controller => &controller::INFO,
-            ModelKind::Cueing => &cueing::INFO,
-            ModelKind::Trivial => &trivial::INFO,
+        /// Every model this binary implements.
+        pub enum AnyModel {
+            $($kind(Box<$module::$model>),)*
         }
-    }
 
-    pub fn code(self) -> u8 {
-        match self {
-            ModelKind::Platform => 1,
-            ModelKind::Controller => 2,
-            ModelKind::Trivial => 3,
-            ModelKind::Cueing => 4,
+        /// The models, for instantiation by GUID and for packaging.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+        pub enum ModelKind {
+            $($kind,)*
         }
-    }
 
-    /// A model with its start values.
-    pub fn instantiate(self) -> AnyModel {
-        match self {
-            ModelKind::Platform => AnyModel::Platform(Box::default()),
-            ModelKind::Controller => AnyModel::Controller(Box::default()),
-            ModelKind::Cueing => AnyModel::Cueing(Box::default()),
-            ModelKind::Trivial => AnyModel::Trivial(Box::default()),
+        impl ModelKind {
+            pub const ALL: [ModelKind; 0 $(+ models!(@one $kind))*] = [$(ModelKind::$kind),*];
+
+            /// Packaged for the benchmarks only (`target/fmu/bench/`), not a product FMU.
+            pub fn is_benchmark_floor(self) -> bool {
+                match self {
+                    $(ModelKind::$kind => models!(@floor $($floor)?),)*
+                }
+            }
+
+            pub fn info(self) -> &'static ModelInfo {
+                match self {
+                    $(ModelKind::$kind => &$module::INFO,)*
+                }
+            }
+
+            pub fn code(self) -> u8 {
+                match self {
+                    $(ModelKind::$kind => $code,)*
+                }
+            }
+
+            /// A model with its start values.
+            pub fn instantiate(self) -> AnyModel {
+                match self {
+                    $(ModelKind::$kind => AnyModel::$kind(Box::default()),)*
+                }
+            }
         }
-    }
-}
 
-macro_rules! dispatch {
-    ($self:expr, $m:ident => $e:expr) => {
-        match $self {
-            AnyModel::Platform($m) => $e,
-            AnyModel::Controller($m) => $e,
-            AnyModel::Cueing($m) => $e,
-            AnyModel::Trivial($m) => $e,
+        macro_rules! dispatch {
+            ($d self_:expr, $d m:ident => $d e:expr) => {
+                match $d self_ {
+                    $(AnyModel::$kind($d m) => $d e,)*
+                }
+            };
+        }
+
+        impl AnyModel {
+            pub fn kind(&self) -> ModelKind {
+                match self {
+                    $(AnyModel::$kind(_) => ModelKind::$kind,)*
+                }
+            }
+
+            pub fn restore(kind: ModelKind, r: &mut ByteReader) -> Result<AnyModel, SnapshotError> {
+                Ok(match kind {
+                    $(ModelKind::$kind => AnyModel::$kind(Box::new($module::$model::restore(r)?)),)*
+                })
+            }
         }
     };
+    (@one $kind:ident) => { 1 };
+    (@floor benchmark_floor) => { true };
+    (@floor) => { false };
 }
 
-impl AnyModel {
-    pub fn kind(&self) -> ModelKind {
-        match self {
-            AnyModel::Platform(_) => ModelKind::Platform,
-            AnyModel::Controller(_) => ModelKind::Controller,
-            AnyModel::Cueing(_) => ModelKind::Cueing,
-            AnyModel::Trivial(_) => ModelKind::Trivial,
-        }
-    }
-
-    pub fn restore(kind: ModelKind, r: &mut ByteReader) -> Result<AnyModel, SnapshotError> {
-        Ok(match kind {
-            ModelKind::Platform => AnyModel::Platform(Box::new(platform::PlatformModel::restore(r)?)),
-            ModelKind::Controller => AnyModel::Controller(Box::new(controller::ControllerModel::restore(r)?)),
-            ModelKind::Cueing => AnyModel::Cueing(Box::new(cueing::CueingModel::restore(r)?)),
-            ModelKind::Trivial => AnyModel::Trivial(Box::new(trivial::TrivialModel::restore(r)?)),
-        })
-    }
+models! {
+    Platform = 1 => platform::PlatformModel,
+    Controller = 2 => controller::ControllerModel,
+    Cueing = 4 => cueing::CueingModel,
+    #[benchmark_floor]
+    Trivial = 3 => trivial::TrivialModel,
 }
 
 /// `AnyModel`'s methods that forward to the model's [`FmuModel`] method of the same name and

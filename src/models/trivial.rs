@@ -42,7 +42,7 @@ impl FmuModel for TrivialModel {
         if let Some(g) = INFO.groups.get(var.group)
             && matches!(g.causality, Causality::Output | Causality::Local)
         {
-            return self.storage.forces[var.index % 6];
+            return self.storage.inputs.forces[var.index % 6];
         }
         self.storage.get_real(var)
     }

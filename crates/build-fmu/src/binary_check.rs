@@ -6,55 +6,6 @@ use std::path::Path;
 
 use stewart_fmu::fmi2::types::*;
 
-/// The FMI 2.0 functions every FMU must export (common + Co-Simulation; FMPy resolves all 34),
-/// plus the Model Exchange ones this binary also provides.
-pub const REQUIRED_SYMBOLS: [&str; 44] = [
-    "fmi2GetTypesPlatform",
-    "fmi2GetVersion",
-    "fmi2SetDebugLogging",
-    "fmi2Instantiate",
-    "fmi2FreeInstance",
-    "fmi2SetupExperiment",
-    "fmi2EnterInitializationMode",
-    "fmi2ExitInitializationMode",
-    "fmi2Terminate",
-    "fmi2Reset",
-    "fmi2GetReal",
-    "fmi2GetInteger",
-    "fmi2GetBoolean",
-    "fmi2GetString",
-    "fmi2SetReal",
-    "fmi2SetInteger",
-    "fmi2SetBoolean",
-    "fmi2SetString",
-    "fmi2GetFMUstate",
-    "fmi2SetFMUstate",
-    "fmi2FreeFMUstate",
-    "fmi2SerializedFMUstateSize",
-    "fmi2SerializeFMUstate",
-    "fmi2DeSerializeFMUstate",
-    "fmi2GetDirectionalDerivative",
-    "fmi2SetRealInputDerivatives",
-    "fmi2GetRealOutputDerivatives",
-    "fmi2DoStep",
-    "fmi2CancelStep",
-    "fmi2GetStatus",
-    "fmi2GetRealStatus",
-    "fmi2GetIntegerStatus",
-    "fmi2GetBooleanStatus",
-    "fmi2GetStringStatus",
-    "fmi2EnterEventMode",
-    "fmi2NewDiscreteStates",
-    "fmi2EnterContinuousTimeMode",
-    "fmi2CompletedIntegratorStep",
-    "fmi2SetTime",
-    "fmi2SetContinuousStates",
-    "fmi2GetDerivatives",
-    "fmi2GetEventIndicators",
-    "fmi2GetContinuousStates",
-    "fmi2GetNominalsOfContinuousStates",
-];
-
 type Instantiate = unsafe extern "C" fn(
     fmi2String,
     fmi2Type,
@@ -67,7 +18,7 @@ type Instantiate = unsafe extern "C" fn(
 type FreeInstance = unsafe extern "C" fn(fmi2Component);
 
 pub fn check(library: &Path, guid: &str) -> Result<(), String> {
-    let lib = Loaded::open(library, &REQUIRED_SYMBOLS)?;
+    let lib = Loaded::open(library, &stewart_fmu::fmi2::FUNCTIONS)?;
     let symbol = |name: &str| lib.symbol(name);
     // SAFETY: the symbols have exactly these C signatures (fmi2FunctionTypes.h).
     let instantiate: Instantiate = unsafe { std::mem::transmute(symbol("fmi2Instantiate")?) };
@@ -164,85 +115,6 @@ impl Loaded {
     }
 }
 
-/// Every FMI 3.0 function (an FMU exports them all, implemented or answering with an error).
-pub const REQUIRED_SYMBOLS_FMI3: [&str; 75] = [
-    "fmi3GetVersion",
-    "fmi3SetDebugLogging",
-    "fmi3InstantiateModelExchange",
-    "fmi3InstantiateCoSimulation",
-    "fmi3InstantiateScheduledExecution",
-    "fmi3FreeInstance",
-    "fmi3EnterInitializationMode",
-    "fmi3ExitInitializationMode",
-    "fmi3EnterEventMode",
-    "fmi3Terminate",
-    "fmi3Reset",
-    "fmi3GetFloat32",
-    "fmi3GetFloat64",
-    "fmi3GetInt8",
-    "fmi3GetUInt8",
-    "fmi3GetInt16",
-    "fmi3GetUInt16",
-    "fmi3GetInt32",
-    "fmi3GetUInt32",
-    "fmi3GetInt64",
-    "fmi3GetUInt64",
-    "fmi3GetBoolean",
-    "fmi3GetString",
-    "fmi3GetBinary",
-    "fmi3GetClock",
-    "fmi3SetFloat32",
-    "fmi3SetFloat64",
-    "fmi3SetInt8",
-    "fmi3SetUInt8",
-    "fmi3SetInt16",
-    "fmi3SetUInt16",
-    "fmi3SetInt32",
-    "fmi3SetUInt32",
-    "fmi3SetInt64",
-    "fmi3SetUInt64",
-    "fmi3SetBoolean",
-    "fmi3SetString",
-    "fmi3SetBinary",
-    "fmi3SetClock",
-    "fmi3GetNumberOfVariableDependencies",
-    "fmi3GetVariableDependencies",
-    "fmi3GetFMUState",
-    "fmi3SetFMUState",
-    "fmi3FreeFMUState",
-    "fmi3SerializedFMUStateSize",
-    "fmi3SerializeFMUState",
-    "fmi3DeserializeFMUState",
-    "fmi3GetDirectionalDerivative",
-    "fmi3GetAdjointDerivative",
-    "fmi3EnterConfigurationMode",
-    "fmi3ExitConfigurationMode",
-    "fmi3GetIntervalDecimal",
-    "fmi3GetIntervalFraction",
-    "fmi3GetShiftDecimal",
-    "fmi3GetShiftFraction",
-    "fmi3SetIntervalDecimal",
-    "fmi3SetIntervalFraction",
-    "fmi3SetShiftDecimal",
-    "fmi3SetShiftFraction",
-    "fmi3EvaluateDiscreteStates",
-    "fmi3UpdateDiscreteStates",
-    "fmi3EnterContinuousTimeMode",
-    "fmi3CompletedIntegratorStep",
-    "fmi3SetTime",
-    "fmi3SetContinuousStates",
-    "fmi3GetContinuousStateDerivatives",
-    "fmi3GetEventIndicators",
-    "fmi3GetContinuousStates",
-    "fmi3GetNominalsOfContinuousStates",
-    "fmi3GetNumberOfEventIndicators",
-    "fmi3GetNumberOfContinuousStates",
-    "fmi3EnterStepMode",
-    "fmi3GetOutputDerivatives",
-    "fmi3DoStep",
-    "fmi3ActivateModelPartition",
-];
-
 type Instantiate3 = unsafe extern "C" fn(
     *const std::ffi::c_char,
     *const std::ffi::c_char,
@@ -262,7 +134,7 @@ type FreeInstance3 = unsafe extern "C" fn(*mut c_void);
 /// The FMI 3 counterpart of [`check`]: every `fmi3*` symbol, and
 /// `fmi3InstantiateCoSimulation` accepting the description's token and refusing a wrong one.
 pub fn check_fmi3(library: &Path, token: &str) -> Result<(), String> {
-    let lib = Loaded::open(library, &REQUIRED_SYMBOLS_FMI3)?;
+    let lib = Loaded::open(library, &stewart_fmu::fmi3::FUNCTIONS)?;
     let symbol = |name: &str| lib.symbol(name);
     // SAFETY: the symbols have exactly these C signatures (fmi3FunctionTypes.h).
     let instantiate: Instantiate3 = unsafe { std::mem::transmute(symbol("fmi3InstantiateCoSimulation")?) };

@@ -11,7 +11,6 @@ use object::read::elf::{Dyn, ElfFile64};
 use object::read::macho::{LoadCommandVariant, MachOFile64};
 use object::{Endianness, FileKind, Object};
 
-use crate::binary_check::{REQUIRED_SYMBOLS, REQUIRED_SYMBOLS_FMI3};
 use crate::platforms::{Format, Platform};
 
 /// The C library's functions whose results differ between platforms (they are not required
@@ -91,7 +90,7 @@ pub fn check(path: &Path, platform: &Platform) -> Result<String, String> {
     }
 
     let exports = exported_names(&file)?;
-    let fmi_functions = || REQUIRED_SYMBOLS.iter().chain(REQUIRED_SYMBOLS_FMI3.iter());
+    let fmi_functions = || stewart_fmu::fmi2::FUNCTIONS.iter().chain(stewart_fmu::fmi3::FUNCTIONS.iter());
     for name in fmi_functions() {
         if !exports.iter().any(|e| e == name) {
             return Err(format!("{} does not export {name}", path.display()));
@@ -291,7 +290,6 @@ mod tests {
     use std::process::Command;
 
     use super::{c_maths_name, check};
-    use crate::binary_check::{REQUIRED_SYMBOLS, REQUIRED_SYMBOLS_FMI3};
     use crate::platforms::{PLATFORMS, Platform, host_triple};
 
     fn platform(name: &str) -> &'static Platform {
@@ -313,7 +311,7 @@ mod tests {
              __attribute__((visibility(\"default\")))\n#endif\n",
         );
         source.push_str(head);
-        for name in REQUIRED_SYMBOLS.iter().chain(REQUIRED_SYMBOLS_FMI3.iter()) {
+        for name in stewart_fmu::fmi2::FUNCTIONS.iter().chain(stewart_fmu::fmi3::FUNCTIONS.iter()) {
             let body = if *name == "fmi2DoStep" { step } else { "return 0;" };
             source.push_str(&format!("EXPORT int {name}(void) {{ {body} }}\n"));
         }

@@ -8,7 +8,8 @@
 //! - `fmi2`: the C API (function pointers, an instance, its messages);
 //! - `fmu`: an FMU unpacked and loaded; `description`: its model description;
 //! - `ssd`: an SSP system description; `ssp`: an `.ssp` archive opened into a `System`;
-//! - `system`: the components, connections, schemes and the run loop (`Observer`);
+//! - `system`: the components, connections and the run loop; `run`: what a run is given (the
+//!   scheme, values, overrides, input tables, the `Observer`) and how it ended;
 //! - `study`: a design study's run with its metrics; `record`: outputs at an interval;
 //! - `cli`: the command line.
 
@@ -17,6 +18,7 @@ pub mod description;
 pub mod fmi2;
 pub mod fmu;
 pub mod record;
+pub mod run;
 pub mod ssd;
 pub mod ssp;
 pub mod study;

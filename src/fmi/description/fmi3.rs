@@ -35,14 +35,10 @@ pub(super) fn fmi3_state_groups(info: &ModelInfo) -> Vec<&'static str> {
 
 /// Value references of the variables a dependency list names (FMI 3: whole variables).
 pub(super) fn dependency_vrs(info: &ModelInfo, deps: &[Dependency]) -> Vec<u32> {
-    let mut out: Vec<u32> = deps
+    let mut out: Vec<u32> = Dependency::knowns(deps, info.groups)
         .iter()
-        .filter_map(|d| {
-            let name = match d {
-                Dependency::All(n) | Dependency::SameIndex(n) => *n,
-            };
-            info.groups.iter().find(|g| g.name == name).map(|g| g.first_vr)
-        })
+        .filter_map(|&(g, _)| info.groups.get(g))
+        .map(|g| g.first_vr)
         .collect();
     out.sort_unstable();
     out.dedup();

@@ -10,7 +10,7 @@ use std::sync::OnceLock;
 
 use super::FmiVersion;
 use super::log::LogCategory;
-use crate::models::variables::{VariableGroup, VariableTable, VariableType};
+use crate::models::variables::{Dependency, VariableGroup, VariableTable, VariableType};
 use crate::models::{ModelInfo, ModelKind};
 
 mod documentation;
@@ -73,10 +73,12 @@ fn digest(kind: ModelKind, version: FmiVersion) -> (u64, u64) {
         d.text(g.unit.unwrap_or(""));
         d.text(g.display_unit.unwrap_or(""));
         d.text(g.description);
+        // Each known as `All("r")` or `SameIndex("r0")`, in the order declared (lists flattened).
         for deps in [g.output_dependencies, g.initial_dependencies, g.derivative_dependencies] {
-            for dep in deps {
-                d.text(&format!("{dep:?}"));
-            }
+            Dependency::each_known(deps, info.groups, &mut |known, same| {
+                let name = info.groups.get(known).map_or("", |k| k.name);
+                d.text(&format!("{}({name:?})", if same { "SameIndex" } else { "All" }));
+            });
         }
         d.text(g.derivative_of.unwrap_or(""));
         d.text(&format!("{:?}{}", g.display_base, g.fmi3_only));

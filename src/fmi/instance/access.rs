@@ -88,20 +88,20 @@ pub(super) fn access_table(
     let blocks: Vec<Option<u8>> = (0..table.groups.len()).map(cache_block).collect();
     // The cache blocks holding a value that depends on an input group, by the model's
     // declared structure: outputs, initial unknowns and derivatives.
-    let dependants = |input: &VariableGroup| {
-        let on_input = |d: &Dependency| matches!(*d, Dependency::All(n) | Dependency::SameIndex(n) if n == input.name);
+    let dependants = |input: usize| {
+        let on_input = |deps: &[Dependency]| Dependency::knowns(deps, table.groups).iter().any(|&(g, _)| g == input);
         table.groups.iter().zip(&blocks).fold(0u32, |mask, (g, block)| {
-            let mut knowns =
-                g.output_dependencies.iter().chain(g.initial_dependencies).chain(g.derivative_dependencies);
+            let knowns = [g.output_dependencies, g.initial_dependencies, g.derivative_dependencies];
             match block {
-                Some(b) if knowns.any(on_input) => mask | 1 << b,
+                Some(b) if knowns.into_iter().any(on_input) => mask | 1 << b,
                 _ => mask,
             }
         })
     };
     // Per group: what a set of it makes stale.
-    let stales: Vec<u32> =
-        table.groups.iter().map(|g| if g.causality == Causality::Input { dependants(g) } else { u32::MAX }).collect();
+    let stales: Vec<u32> = (table.groups.iter().enumerate())
+        .map(|(i, g)| if g.causality == Causality::Input { dependants(i) } else { u32::MAX })
+        .collect();
     (0..=max_vr)
         .map(|vr| {
             let (g, r) = match version {

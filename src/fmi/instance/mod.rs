@@ -128,6 +128,8 @@ pub struct Instance {
     /// By value reference: the width of the variable it names (0 if none), for FMI 3's check
     /// of consecutive whole variables (4 bytes a reference against the access entries' 40).
     variable_width: Vec<u32>,
+    /// The runs of the last read of several cache blocks (a host reads the same every step).
+    read_plan: values::ReadPlan,
     pub table: VariableTable,
     /// Hash of the instantiation token, stamped into serialized states.
     token_hash: u64,
@@ -182,6 +184,7 @@ impl Instance {
             set_since_step: 0,
             cached: cached_elements(&access),
             variable_width: access.iter().map(|a| a.map_or(0, |a| u32::try_from(a.width).unwrap_or(0))).collect(),
+            read_plan: values::ReadPlan::NONE,
             model,
             table,
             token_hash: fnv1a64(token.as_bytes()),

@@ -41,6 +41,84 @@ impl Instance {
         Some(if self.nan & bit == 0 { Status::Ok } else { self.check_nan(vrs, values) })
     }
 
+    /// A read of several runs, each of consecutive elements of one cache block that the step
+    /// has computed already (the legs and the pose: a few copies, no look-up per element). A
+    /// host reads the same references every step: the runs of the last such read are kept
+    /// ([`ReadPlan`]), so that the next is a comparison of its references and the copies.
+    /// `None`: the general path, which fills a stale block first (the values written so far are
+    /// written again).
+    #[inline(always)]
+    fn get_fresh_runs(&mut self, vrs: &[u32], values: &mut [f64]) -> Option<Status> {
+        let plan = &self.read_plan;
+        let blocks = if plan.reads(vrs, values.len()) {
+            let mut filled = 0;
+            for &(first, width) in plan.runs.get(..plan.count)? {
+                let (first, width) = (first as usize, width as usize);
+                copy_f64(values.get_mut(filled..filled + width)?, self.value_cache.get(first..first + width)?);
+                filled += width;
+            }
+            (self.fresh & plan.blocks == plan.blocks).then_some(plan.blocks)?
+        } else {
+            self.resolve_runs(vrs, values)?
+        };
+        self.read_since_step |= blocks;
+        Some(if self.nan & blocks == 0 { Status::Ok } else { self.check_nan(vrs, values) })
+    }
+
+    /// [`Instance::get_fresh_runs`] of references not read before: each run looked up, copied,
+    /// and the runs kept for the next read; the blocks read, or `None`.
+    #[inline(never)]
+    fn resolve_runs(&mut self, vrs: &[u32], values: &mut [f64]) -> Option<u32> {
+        let mut plan = ReadPlan::NONE;
+        let (mut at, mut filled, mut blocks) = (0, 0, 0u32);
+        while let Some(&vr) = vrs.get(at) {
+            let first = vr as usize;
+            let CachedElement { block, run } = *self.cached.get(first)?;
+            let run = usize::from(run);
+            let (width, references) = match self.version {
+                FmiVersion::Fmi2 => {
+                    // The references from `at` that go on consecutively within the run: all of
+                    // them (one comparison), or up to the first that does not.
+                    let refs = vrs.get(at..at + run.min(vrs.len() - at))?;
+                    let n = if consecutive(refs) {
+                        refs.len()
+                    } else {
+                        refs.iter().zip(first..).take_while(|&(&r, v)| r as usize == v).count()
+                    };
+                    (n, n)
+                }
+                FmiVersion::Fmi3 => (self.variable_width.get(first).map_or(0, |&w| w as usize), 1),
+            };
+            let bit = 1u32.checked_shl(block.into())?;
+            if width == 0 || width > run || self.fresh & bit == 0 {
+                return None;
+            }
+            copy_f64(values.get_mut(filled..filled + width)?, self.value_cache.get(first..first + width)?);
+            // A run that goes on where the last ended (FMI 3's `l` then `ldot`) extends it.
+            match plan.count.checked_sub(1).and_then(|last| plan.runs.get_mut(last)) {
+                Some((start, n)) if *start as usize + *n as usize == first => *n += width as u32,
+                _ => {
+                    if let Some(slot) = plan.runs.get_mut(plan.count) {
+                        *slot = (vr, width as u32);
+                    }
+                    plan.count += 1;
+                }
+            }
+            (at, filled, blocks) = (at + references, filled + width, blocks | bit);
+        }
+        if filled != values.len() {
+            return None;
+        }
+        if let Some(references) = plan.references.get_mut(..vrs.len())
+            && plan.count <= plan.runs.len()
+        {
+            references.copy_from_slice(vrs);
+            (plan.len, plan.values, plan.blocks) = (vrs.len(), filled, blocks);
+            self.read_plan = plan;
+        }
+        Some(blocks)
+    }
+
     /// Fills the cache blocks in `blocks` from the model and notes which hold a NaN.
     #[inline(never)]
     pub(super) fn refresh(&mut self, blocks: u32) {
@@ -71,6 +149,9 @@ impl Instance {
     /// line, so that the fast path above keeps few registers.
     #[inline(never)]
     pub(super) fn get_real_elementwise(&mut self, vrs: &[u32], values: &mut [f64]) -> Status {
+        if let Some(status) = self.get_fresh_runs(vrs, values) {
+            return status;
+        }
         if self.version == FmiVersion::Fmi2 && vrs.len() == values.len() {
             // One element per reference: the cache block of each comes from one table. Loops
             // without calls (so the tables stay in registers): which blocks the references
@@ -134,7 +215,8 @@ impl Instance {
         // `&`, not `&&`: one branch for the usual case (a run outside the cache has run 0).
         let fits = (n != 0) & (n <= usize::from(run));
         let whole = match version {
-            FmiVersion::Fmi2 => (vrs.len() == n) & consecutive(vrs),
+            // (A read longer than the run, of several blocks, compares no references here.)
+            FmiVersion::Fmi2 => fits && (vrs.len() == n) & consecutive(vrs),
             FmiVersion::Fmi3 => fits && self.consecutive_variables(vrs, n),
         };
         (fits & whole).then_some((first, block))
@@ -459,5 +541,31 @@ impl Instance {
             Some(vr) => self
                 .error(&format!("value reference {vr}: {} has no {type_name} variables", self.kind.info().model_name)),
         }
+    }
+}
+
+/// The runs of the last read of several cache blocks' elements (see
+/// [`Instance::get_fresh_runs`]): its references, and each run's first element (its place in
+/// the value cache) and width.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct ReadPlan {
+    references: [u32; 32],
+    /// How many references (`usize::MAX`: none kept).
+    len: usize,
+    runs: [(u32, u32); 8],
+    count: usize,
+    /// How many values the runs give, and the blocks they lie in.
+    values: usize,
+    blocks: u32,
+}
+
+impl ReadPlan {
+    pub(super) const NONE: ReadPlan =
+        ReadPlan { references: [0; 32], len: usize::MAX, runs: [(0, 0); 8], count: 0, values: 0, blocks: 0 };
+
+    /// Whether this is the plan of a read of `vrs` into `n` values.
+    #[inline(always)]
+    fn reads(&self, vrs: &[u32], n: usize) -> bool {
+        vrs.len() == self.len && n == self.values && self.references.get(..self.len) == Some(vrs)
     }
 }

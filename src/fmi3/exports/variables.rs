@@ -318,13 +318,10 @@ fn dependencies_of(inst: &Instance, vr: u32) -> Result<Vec<DependencyEntry>, Str
     };
     let index = |shape: &[usize], i: usize| if shape.is_empty() { 0 } else { i + 1 };
     let mut out = vec![];
+    let knowns = Dependency::knowns(deps, inst.table.groups);
     for i in 0..g.len() {
-        for d in deps {
-            let (name, same) = match d {
-                Dependency::All(n) => (*n, false),
-                Dependency::SameIndex(n) => (*n, true),
-            };
-            let Some((_, known)) = inst.table.group(name) else { continue };
+        for &(known, same) in &knowns {
+            let Some(known) = inst.table.groups.get(known) else { continue };
             if same {
                 out.push((index(g.shape, i), known.first_vr, index(known.shape, i)));
             } else {

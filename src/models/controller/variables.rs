@@ -3,95 +3,68 @@
 
 use crate::models::declare::declare_variables;
 use crate::models::machine;
-use crate::models::variables::Dependency::{All, SameIndex};
+use crate::models::variables::Dependency::{self, All, Each, SameIndex};
 use crate::models::variables::VariableGroup as V;
 
-const POSE_INPUTS: &[crate::models::variables::Dependency] = &[
-    All("pose.r"),
-    All("pose.v"),
-    All("pose.a"),
-    All("pose.angles"),
-    All("pose.angleRates"),
-    All("pose.angleAccelerations"),
+/// The external programme's pose inputs (`pose.*`).
+const POSE_INPUTS: &[Dependency] = &[
+    All(group::POSE_R),
+    All(group::POSE_V),
+    All(group::POSE_A),
+    All(group::POSE_ANGLES),
+    All(group::POSE_ANGLE_RATES),
+    All(group::POSE_ANGLE_ACCELERATIONS),
 ];
-const FORCE_DEPENDENCIES: &[crate::models::variables::Dependency] = &[
-    SameIndex("l"),
-    SameIndex("ldot"),
-    All("pose.r"),
-    All("pose.v"),
-    All("pose.a"),
-    All("pose.angles"),
-    All("pose.angleRates"),
-    All("pose.angleAccelerations"),
+/// The measured legs, leg by leg.
+const MEASURED_LEGS: &[Dependency] = &[SameIndex(group::L), SameIndex(group::LDOT)];
+/// The force and voltage commands: the measured legs and the programme.
+const FORCE_DEPENDENCIES: &[Dependency] = &[Each(MEASURED_LEGS), Each(POSE_INPUTS)];
+/// The valve commands: the measured legs and pressures and the programme.
+const HYDRAULIC_DEPENDENCIES: &[Dependency] =
+    &[Each(MEASURED_LEGS), SameIndex(group::PA), SameIndex(group::PB), Each(POSE_INPUTS)];
+const LENGTH_DEPENDENCIES: &[Dependency] =
+    &[All(group::POSE_R), All(group::POSE_V), All(group::POSE_ANGLES), All(group::POSE_ANGLE_RATES)];
+/// The stand, as the platform's parameters of the same names.
+const STAND: &[Dependency] = &[All(group::M), All(group::J), All(group::G_GRAVITY), All(group::B), All(group::A)];
+/// The programmes' parameters.
+const PROGRAMMES: &[Dependency] = &[
+    All(group::PROGRAMME),
+    All(group::HEAVE_CENTRE),
+    All(group::HEAVE_AMPLITUDE),
+    All(group::HEAVE_FREQUENCY),
+    All(group::HEAVE_TIME_CONSTANT),
+    All(group::SINE_OFFSET),
+    All(group::SINE_ANGLE_OFFSET),
+    All(group::SINE_AMPLITUDE),
+    All(group::SINE_ANGLE_AMPLITUDE),
+    All(group::SINE_FREQUENCY),
+    All(group::SINE_PHASE),
+    All(group::SINE_TIME_CONSTANT),
+    All(group::DISTURBANCE_AMPLITUDE),
+    All(group::DISTURBANCE_FREQUENCY),
+    All(group::DISTURBANCE_TIME_CONSTANT),
+    All(group::STARTUP_POSITION),
+    All(group::STARTUP_DURATION),
 ];
-const HYDRAULIC_DEPENDENCIES: &[crate::models::variables::Dependency] = &[
-    SameIndex("l"),
-    SameIndex("ldot"),
-    SameIndex("pA"),
-    SameIndex("pB"),
-    All("pose.r"),
-    All("pose.v"),
-    All("pose.a"),
-    All("pose.angles"),
-    All("pose.angleRates"),
-    All("pose.angleAccelerations"),
-];
-const LENGTH_DEPENDENCIES: &[crate::models::variables::Dependency] =
-    &[All("pose.r"), All("pose.v"), All("pose.angles"), All("pose.angleRates")];
+/// The legs as bodies, whose weight and inertia the programme forces carry.
+const LEG_BODIES: &[Dependency] = machine::leg_body_knowns!();
+/// The electric drives, whose static model gives the voltages.
+const DRIVES: &[Dependency] = &[All(group::DRIVE), Each(machine::drive_law_knowns!()), All(group::UMAX)];
 /// In Initialization Mode the outputs depend on (almost) every known; listing them all is
 /// the honest answer.
-const ALL_KNOWNS: &[crate::models::variables::Dependency] = &[
-    All("l"),
-    All("ldot"),
-    All("pose.r"),
-    All("pose.v"),
-    All("pose.a"),
-    All("pose.angles"),
-    All("pose.angleRates"),
-    All("pose.angleAccelerations"),
-    All("M"),
-    All("J"),
-    All("g"),
-    All("B"),
-    All("A"),
-    All("G"),
-    All("D"),
-    All("feedforward"),
-    All("programme"),
-    All("heave.centre"),
-    All("heave.amplitude"),
-    All("heave.frequency"),
-    All("heave.timeConstant"),
-    All("sine.offset"),
-    All("sine.angleOffset"),
-    All("sine.amplitude"),
-    All("sine.angleAmplitude"),
-    All("sine.frequency"),
-    All("sine.phase"),
-    All("sine.timeConstant"),
-    All("disturbance.amplitude"),
-    All("disturbance.frequency"),
-    All("disturbance.timeConstant"),
-    All("startup.position"),
-    All("startup.duration"),
-    All("Fmin"),
-    All("Fmax"),
-    All("leg.cylinderMass"),
-    All("leg.rodMass"),
-    All("leg.cylinderCoM"),
-    All("leg.rodCoM"),
-    All("leg.cylinderInertia"),
-    All("leg.rodInertia"),
-    All("drive"),
-    All("motor.R"),
-    All("motor.L"),
-    All("motor.ke"),
-    All("motor.kt"),
-    All("motor.J"),
-    All("motor.D"),
-    All("gear.ratio"),
-    All("screw.lead"),
-    All("Umax"),
+const ALL_KNOWNS: &[Dependency] = &[
+    All(group::L),
+    All(group::LDOT),
+    Each(POSE_INPUTS),
+    Each(STAND),
+    All(group::GAIN),
+    All(group::DAMPING),
+    All(group::FEEDFORWARD),
+    Each(PROGRAMMES),
+    All(group::FMIN),
+    All(group::FMAX),
+    Each(LEG_BODIES),
+    Each(DRIVES),
 ];
 
 declare_variables! {
@@ -183,10 +156,10 @@ declare_variables! {
             .depends_on(LENGTH_DEPENDENCIES); cached(programme_outputs.lp),
         LDOTP => V::output("ldotp", &[6], 168, Some("m/s"), "Programme leg length rates", ALL_KNOWNS)
             .depends_on(LENGTH_DEPENDENCIES); cached(programme_outputs.ldotp),
-        RP => V::output("rp", &[3], 174, Some("m"), "Programme centre of mass", ALL_KNOWNS).depends_on(&[All("pose.r")]); cached(programme_outputs.rp),
+        RP => V::output("rp", &[3], 174, Some("m"), "Programme centre of mass", ALL_KNOWNS).depends_on(&[All(group::POSE_R)]); cached(programme_outputs.rp),
         ANGLESP => V::output("anglesp", &[3], 177, Some("rad"), "Programme roll, pitch, yaw", ALL_KNOWNS)
             .display("deg")
-            .depends_on(&[All("pose.angles")]); cached(programme_angles.anglesp),
+            .depends_on(&[All(group::POSE_ANGLES)]); cached(programme_angles.anglesp),
         STARTUP_POSITION => V::parameter(
             "startup.position",
             &[3],

@@ -4,7 +4,7 @@
 
 use crate::models::declare::declare_variables;
 use crate::models::machine;
-use crate::models::variables::Dependency::{self, All, SameIndex};
+use crate::models::variables::Dependency::{self, AllNamed as All, SameIndexNamed as SameIndex};
 use crate::models::variables::VariableGroup as V;
 
 const STATE_GROUPS: [Dependency; 8] = [

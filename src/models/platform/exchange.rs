@@ -3,7 +3,7 @@
 //! through the instance, output time derivatives), all from the physics' one definition
 //! evaluated on duals.
 
-use super::variables::{BINDINGS, GROUPS, group, output_element};
+use super::variables::{ACTUATOR_INPUTS, BINDINGS, GROUPS, group, output_element};
 use super::{INFO, PlatformModel};
 use crate::integration::{Crossing, switching_sides};
 use crate::models::EventUpdate;
@@ -96,16 +96,12 @@ impl PlatformModel {
                 d_supply += seed;
                 continue;
             }
-            let input = match self.parameters.drive {
-                Drive::Forces => group::F,
-                Drive::Electric => group::U,
-                Drive::Hydraulic => group::VALVE,
-            };
+            let input = *ACTUATOR_INPUTS.get(self.parameters.drive);
             let slot = match INFO.state_index(*k) {
                 Some(i) => dy.get_mut(i),
                 None if k.group == input => du.get_mut(k.index),
-                // The input not in use: nothing depends on it.
-                None if k.group == group::F || k.group == group::U || k.group == group::VALVE => continue,
+                // Another actuator's inputs: nothing depends on them.
+                None if Drive::ALL.iter().any(|&d| *ACTUATOR_INPUTS.get(d) == k.group) => continue,
                 None => None,
             };
             let Some(slot) = slot else {

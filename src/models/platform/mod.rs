@@ -5,10 +5,16 @@
 //! | module | what it holds |
 //! |---|---|
 //! | [`variables`] | every variable, declared once with where its value lives |
+//! | `dependencies.rs` | what the unknowns depend on: each concern's knowns once, the lists composed |
 //! | [`parameters`] | the parameters, their checks, the simulation they describe |
 //! | [`exchange`] | Model Exchange: states, derivatives, event indicators, directional derivatives |
+//! | `outputs.rs` | the outputs by cache block, each computed on its first read after a change |
+//! | `messages.rs` | what a failed step or an event is, in words |
 
+mod dependencies;
 pub mod exchange;
+mod messages;
+mod outputs;
 pub mod parameters;
 pub mod variables;
 
@@ -19,20 +25,17 @@ use super::snapshot::{ByteReader, ByteWriter, SnapshotError};
 use super::variables::VariableRef;
 use super::{DefaultExperiment, FmuModel, ModelInfo, StepError, StepReport};
 use crate::integration::dopri5::Dopri5Memory;
-use crate::integration::{Crossing, IntegratorStats, SwitchingSides};
+use crate::integration::{IntegratorStats, SwitchingSides};
 use crate::models::machine::Drive;
 use crate::physics::actuators::HeldForces;
-use crate::physics::actuators::hydraulics::{CAVITATION_PRESSURE, DEFAULT_SUPPLY_PRESSURE};
-use crate::physics::body::state::BodyState;
-use crate::physics::direct_problem::singular_legs;
-use crate::physics::error::leg_list;
-use crate::physics::legs::geometry::LegGeometry;
-use crate::physics::special_form::SpecialForm;
+use crate::physics::actuators::PerActuator;
+use crate::physics::actuators::hydraulics::CAVITATION_PRESSURE;
 use crate::physics::stand::LEG_COUNT;
-use crate::simulation::outputs::condition_number;
+use crate::simulation::outputs::{ActuatorStateOutputs, LegLoadOutputs, PoseOutputs, StateOutputs};
 use crate::simulation::platform::Reached;
-use crate::simulation::state::{SIMULATION_DIM, actuator_forces, body, hydraulic, state_rate, supply_flow, switching};
-use crate::simulation::{LegOutputs, PlatformOutputs, PlatformSimulation, SimulationState};
+use crate::simulation::state::{SIMULATION_DIM, state_rate, switching};
+use crate::simulation::{LegOutputs, PlatformSimulation};
+pub use outputs::{Condition, InputDependentOutputs};
 pub use parameters::{Experiment, PlatformParameters, default_leg_force, holding_pressures};
 use variables::{BINDINGS, group};
 
@@ -61,34 +64,28 @@ pub static INFO: ModelInfo = ModelInfo {
 #[derive(Clone, Debug)]
 pub struct PlatformModel {
     pub parameters: PlatformParameters,
-    /// Leg forces `F[k]`, N.
-    pub forces: [f64; LEG_COUNT],
-    /// Their time derivatives for the next step, N/s (cleared after each step).
-    pub force_rates: [f64; LEG_COUNT],
-    /// The drives' voltages `U[k]`, V (the inputs when `drive = 1`).
-    pub voltages: [f64; LEG_COUNT],
-    /// Their time derivatives for the next step, V/s (cleared after each step).
-    pub voltage_rates: [f64; LEG_COUNT],
-    /// The servo valves' commands `valve[k]` (the inputs when `drive = 2`).
-    pub valves: [f64; LEG_COUNT],
-    /// Their time derivatives for the next step, 1/s (cleared after each step).
-    pub valve_rates: [f64; LEG_COUNT],
-    /// The hydraulic supply pressure `pS`, Pa (held over each step).
-    pub supply_pressure: f64,
+    /// Each actuator's inputs (the leg forces `F`, N; the drives' voltages `U`, V; the servo
+    /// valves' commands `valve`): those of kind `drive` move the legs.
+    pub inputs: PerActuator<[f64; LEG_COUNT]>,
+    /// Their time derivatives for the next step (cleared after each step).
+    pub input_rates: PerActuator<[f64; LEG_COUNT]>,
     /// Whether this run logged its warning of a chamber below the cavitation pressure.
     cavitation_reported: bool,
     /// Present after Initialization Mode, with the experiment it was built for.
     pub simulation: Option<(PlatformSimulation, Experiment)>,
-    /// Outputs of the current state, computed on the first read after a change.
-    outputs: Option<PlatformOutputs>,
+    /// The pose, the legs' other values and the values read off the state, each computed on
+    /// its first read after a change (by group: a host pays for what it reads).
+    pose: Option<PoseOutputs>,
+    leg_loads: Option<LegLoadOutputs>,
+    state_values: Option<StateOutputs>,
     /// Leg lengths and rates of the current state: what a controller reads every step, so
     /// they are computed alone (the leg geometry) rather than with every other output.
     legs: Option<LegOutputs>,
     /// `kappa` of the current state, computed on its first read after a change.
     kappa: Option<Condition>,
-    /// The hydraulic legs' pressures and spools of the current state (a hydraulic controller
-    /// reads them every step: a copy of states, apart from the other outputs).
-    chambers: Option<ChamberOutputs>,
+    /// The actuators' states of the current state (a hydraulic controller reads the pressures
+    /// every step: a copy of states, apart from the other outputs).
+    actuator_states: Option<ActuatorStateOutputs>,
     /// The actuators' and the joints' forces of the current state and inputs, computed on the
     /// first read after a change.
     input_dependent: Option<InputDependentOutputs>,
@@ -105,60 +102,22 @@ impl Default for PlatformModel {
     fn default() -> Self {
         PlatformModel {
             parameters: PlatformParameters::default(),
-            forces: [default_leg_force(); LEG_COUNT],
-            force_rates: [0.0; LEG_COUNT],
-            voltages: [0.0; LEG_COUNT],
-            voltage_rates: [0.0; LEG_COUNT],
-            valves: [0.0; LEG_COUNT],
-            valve_rates: [0.0; LEG_COUNT],
-            supply_pressure: DEFAULT_SUPPLY_PRESSURE,
+            inputs: PerActuator { forces: [default_leg_force(); LEG_COUNT], ..PerActuator::default() },
+            input_rates: PerActuator::default(),
             cavitation_reported: false,
             simulation: None,
-            outputs: None,
+            pose: None,
+            leg_loads: None,
+            state_values: None,
             legs: None,
             kappa: None,
-            chambers: None,
+            actuator_states: None,
             input_dependent: None,
             events_reported: true,
             last_completed_step: 0.0,
             host_step: 0.0,
         }
     }
-}
-
-/// The condition number of the current state's leg arrangement (a cache block of its own).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Condition {
-    pub kappa: f64,
-}
-
-/// The hydraulic legs' chamber pressures and spools (the fields of [`PlatformOutputs`] of the
-/// same names): states, read every step by a hydraulic controller, so a block of their own.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ChamberOutputs {
-    pub pa: [f64; LEG_COUNT],
-    pub pb: [f64; LEG_COUNT],
-    pub spool: [f64; LEG_COUNT],
-}
-
-impl ChamberOutputs {
-    fn of(y: &SimulationState) -> Self {
-        ChamberOutputs {
-            pa: std::array::from_fn(|k| y[hydraulic::PA + k]),
-            pb: std::array::from_fn(|k| y[hydraulic::PB + k]),
-            spool: std::array::from_fn(|k| y[hydraulic::SPOOL + k]),
-        }
-    }
-}
-
-/// The actuators' and the joints' forces alone (the fields of [`PlatformOutputs`] of the same
-/// names): they depend on the inputs, so they are a cache block of their own.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct InputDependentOutputs {
-    pub joint_force: [nalgebra::Vector3<f64>; LEG_COUNT],
-    pub actuator_force: [f64; LEG_COUNT],
-    /// `Qsupply` (it depends on the input `pS`).
-    pub supply_flow: f64,
 }
 
 impl PlatformModel {
@@ -171,200 +130,28 @@ impl PlatformModel {
         self.simulation.as_mut().map(|(sim, _)| sim)
     }
 
-    /// The outputs of the current state, computed on the first read after a change.
-    fn outputs(&mut self) -> &PlatformOutputs {
-        let (simulation, parameters) = (&self.simulation, &self.parameters);
-        self.outputs.get_or_insert_with(|| match simulation {
-            Some((sim, _)) => PlatformOutputs::compute(&sim.form, &sim.state, None),
-            None => PlatformOutputs::compute(&parameters.special_form(), &parameters.initial_simulation_state(), None),
-        })
-    }
-
-    /// The actuators' and the joints' forces of the current state and inputs, computed on the
-    /// first read after a change.
-    fn input_dependent_outputs(&mut self) -> &InputDependentOutputs {
-        let inputs = self.inputs();
-        let (simulation, parameters) = (&self.simulation, &self.parameters);
-        self.input_dependent.get_or_insert_with(|| {
-            let forces = |form: &SpecialForm, y: &SimulationState| {
-                let actuator_force = actuator_forces(form, y, &inputs);
-                InputDependentOutputs {
-                    joint_force: form.joint_forces(body(y), &actuator_force),
-                    actuator_force,
-                    supply_flow: supply_flow(form, y),
-                }
-            };
-            match simulation {
-                Some((sim, _)) => forces(&sim.form, &sim.state),
-                None => forces(&parameters.special_form(), &parameters.initial_simulation_state()),
-            }
-        })
-    }
-
     /// The inputs in use: the leg forces `F`, with drives the voltages `U`, with hydraulic legs
     /// the valve commands.
     pub fn inputs(&self) -> [f64; LEG_COUNT] {
-        match self.parameters.drive {
-            Drive::Forces => self.forces,
-            Drive::Electric => self.voltages,
-            Drive::Hydraulic => self.valves,
-        }
-    }
-
-    /// The legs' lengths and rates of the current state, computed on the first read after a
-    /// change (from the outputs if they are there).
-    fn leg_outputs(&mut self) -> &LegOutputs {
-        let (simulation, parameters, outputs) = (&self.simulation, &self.parameters, &self.outputs);
-        self.legs.get_or_insert_with(|| match (outputs, simulation) {
-            (Some(o), _) => LegOutputs { l: o.l, ldot: o.ldot },
-            (None, Some((sim, _))) => LegOutputs::compute(&sim.form, &sim.state),
-            (None, None) => LegOutputs::compute(&parameters.special_form(), &parameters.initial_simulation_state()),
-        })
-    }
-
-    /// The chambers of the current state, copied on the first read after a change.
-    fn chamber_outputs(&mut self) -> &ChamberOutputs {
-        let (simulation, parameters) = (&self.simulation, &self.parameters);
-        self.chambers.get_or_insert_with(|| match simulation {
-            Some((sim, _)) => ChamberOutputs::of(&sim.state),
-            None => ChamberOutputs::of(&parameters.initial_simulation_state()),
-        })
-    }
-
-    /// `kappa` of the current state, computed on its first read after a change.
-    fn condition(&mut self) -> &Condition {
-        let (simulation, parameters) = (&self.simulation, &self.parameters);
-        self.kappa.get_or_insert_with(|| Condition {
-            kappa: match simulation {
-                Some((sim, _)) => condition_number(sim.stand(), &sim.state),
-                None => condition_number(&parameters.stand, &parameters.initial_simulation_state()),
-            },
-        })
-    }
-
-    /// After a set of values: in Initialization Mode the outputs follow the parameters; the
-    /// actuators' and the joints' forces follow the inputs always.
-    fn values_set(&mut self) {
-        self.input_dependent = None;
-        if self.simulation.is_none() {
-            self.invalidate_outputs();
-        }
-    }
-
-    /// The current state changed: the cached outputs are stale.
-    fn invalidate_outputs(&mut self) {
-        self.outputs = None;
-        self.legs = None;
-        self.kappa = None;
-        self.chambers = None;
-        self.input_dependent = None;
+        *self.inputs.get(self.parameters.drive)
     }
 
     /// The inputs over the next step: the leg forces, or with drives the voltages, with
     /// their rates.
     fn held_inputs(&self, t0: f64) -> HeldForces {
-        match self.parameters.drive {
-            Drive::Forces => HeldForces { value: self.forces, slope: self.force_rates, t0 },
-            Drive::Electric => HeldForces { value: self.voltages, slope: self.voltage_rates, t0 },
-            Drive::Hydraulic => HeldForces { value: self.valves, slope: self.valve_rates, t0 },
-        }
+        let drive = self.parameters.drive;
+        HeldForces { value: *self.inputs.get(drive), slope: *self.input_rates.get(drive), t0 }
     }
 
-    /// Why a failed RK4 step is most likely the integrator's instability rather than the motion:
-    /// its internal step (for a communication step `h`) against the stiffest law's stable step.
-    fn rk4_instability(&self, h: f64) -> Option<String> {
-        let (sim, _) = self.simulation.as_ref()?;
-        let settings = &sim.integrator.settings;
-        if settings.method != crate::integration::Method::RungeKutta4 {
-            return None;
-        }
-        let step = if settings.fixed_step > 0.0 { settings.fixed_step.min(h) } else { h };
-        let law = self.parameters.stiffest_law()?;
-        (step > law.rk4_stable_step).then(|| {
-            format!(
-                "; the likely cause is RK4's instability, not the motion: its internal step of {step:.3e} s is longer \
-                 than the {:.3e} s it integrates stably, because {} is about {:.3e} s: set solver.fixedStep below {:.1e} s \
-                 or use the adaptive method (solver.method = 1)",
-                law.rk4_stable_step,
-                law.what,
-                law.time,
-                law.rk4_stable_step / 5.0
-            )
-        })
-    }
-
-    /// Model Exchange: the host's integrator owns the step: its step (the last completed one,
-    /// or the time since if longer) against the stiffest law, when it is too long for an
-    /// explicit method.
-    fn host_step_hint(&self) -> Option<String> {
-        let (sim, experiment) = self.simulation.as_ref()?;
-        if !experiment.model_exchange {
-            return None;
-        }
-        let since = self.host_step.max(sim.time - self.last_completed_step);
-        let law = self.parameters.stiffest_law()?;
-        (since > 0.1 * law.time).then(|| {
-            format!(
-                "the host's integrator steps {since:.3e} s, while {} is about {:.3e} s: an \
-                 explicit integrator needs steps well below it (a tenth or less), an implicit or adaptive one (CVODE) \
-                 finds them itself",
-                law.what, law.time
-            )
-        })
-    }
-
-    /// What a crossing of switching function `c.index` means, in words.
-    fn describe_crossing(sim: &PlatformSimulation, c: &Crossing<SIMULATION_DIM>) -> String {
-        let state = BodyState::from_vector(body(&c.y));
-        let legs = LegGeometry::new(sim.stand(), &state);
-        let rates = legs.length_rates(sim.stand(), &state);
-        let what = if c.rising { "left" } else { "reached" };
-        let (stop, k) = match c.index {
-            i if i < switching::UPPER => ("lower", i - switching::LOWER),
-            i if i < switching::DETERMINANT => ("upper", i - switching::UPPER),
-            switching::DETERMINANT => {
-                let involved = singular_legs(sim.stand(), &legs);
-                return format!(
-                    "t = {:?}: the legs passed through a singular arrangement (determinant of the force/moment matrix \
-                     changed sign; legs {} form a force combination without resultant there)",
-                    c.t,
-                    leg_list(&involved)
-                );
-            }
-            i => {
-                let o = PlatformOutputs::compute(&sim.form, &c.y, None);
-                let (joint, k, theta, max) = match sim.form.joint_limits() {
-                    Some(j) if i < switching::PLATFORM_JOINT => {
-                        let k = i - switching::BASE_JOINT;
-                        ("base", k, o.theta_b.get(k).copied().unwrap_or(f64::NAN), j.base_max)
-                    }
-                    Some(j) => {
-                        let k = i - switching::PLATFORM_JOINT;
-                        ("platform", k, o.theta_a.get(k).copied().unwrap_or(f64::NAN), j.platform_max)
-                    }
-                    None => return String::new(),
-                };
-                return format!(
-                    "t = {:?}: the {joint} joint of leg {} {what} its angle limit ({:.4} deg, limit {:.4} deg)",
-                    c.t,
-                    k + 1,
-                    theta.to_degrees(),
-                    max.to_degrees()
-                );
-            }
-        };
-        let (Some(l), Some(ldot)) = (legs.length.get(k), rates.get(k)) else { return String::new() };
-        format!("t = {:?}: leg {} {what} its {stop} end stop (l = {l:?} m, ldot = {ldot:?} m/s)", c.t, k + 1)
+    /// The kind of actuator whose inputs group `group` is.
+    fn actuator_of_inputs(group: usize) -> Option<Drive> {
+        Drive::ALL.into_iter().find(|&k| *variables::ACTUATOR_INPUTS.get(k) == group)
     }
 
     /// A simulation for the parameters and `experiment`, told what the instance reports, with
     /// the switching functions' sides at its start.
     fn start(&self, experiment: &Experiment) -> Result<PlatformSimulation, String> {
         let mut sim = self.parameters.simulation(experiment)?;
-        if self.parameters.drive == Drive::Hydraulic {
-            crate::physics::stand::check_finite("pS", self.supply_pressure).map_err(|e| e.to_string())?;
-        }
-        sim.form.set_supply_pressure(self.supply_pressure);
         sim.set_track_singularities(self.events_reported);
         sim.integrator.sides = crate::integration::switching_sides(
             &sim.dynamics(&HeldForces::constant(self.inputs())),
@@ -391,12 +178,10 @@ impl FmuModel for PlatformModel {
                 group::PMIN if self.parameters.drive != Drive::Hydraulic => 0.0,
                 group::PMIN => match self.sim() {
                     Some(s) => s.lowest_pressure,
-                    None => self
-                        .parameters
-                        .initial_pa
-                        .iter()
-                        .chain(&self.parameters.initial_pb)
-                        .fold(f64::INFINITY, |a, &b| a.min(b)),
+                    None => {
+                        let h = &self.parameters.actuators.hydraulic;
+                        h.initial_pa.iter().chain(&h.initial_pb).fold(f64::INFINITY, |a, &b| a.min(b))
+                    }
                 },
                 _ => {
                     let mut z = [0.0; switching::COUNT];
@@ -420,19 +205,25 @@ impl FmuModel for PlatformModel {
         cache_block_of(BINDINGS, group)
     }
 
+    /// The legs' block inline (a step's cycle fills it every time), the others each in a
+    /// function of its own.
     #[inline]
     fn fill_cache(&mut self, block: u8, cache: &mut [f64]) -> bool {
+        const LEGS: u8 = variables::cache_block::leg_outputs;
+        if block == LEGS {
+            return self.fill_block_values::<LEGS>(cache);
+        }
         self.fill_block(block, cache)
     }
 
     fn set_real(&mut self, var: VariableRef, value: f64) -> Result<(), String> {
         let slot = self.real_slot(var).ok_or("not a settable Real variable")?;
         *slot = value;
-        if var.group == group::PS
-            && let Some(sim) = self.sim_mut()
-        {
-            // The supply pressure is the hydraulic legs' input held over the next step.
-            sim.form.set_supply_pressure(value);
+        let actuators = self.parameters.actuators;
+        if let Some(sim) = self.sim_mut() {
+            // An input the actuator holds in its parameters (the hydraulic supply pressure),
+            // held over the next step.
+            sim.form.take_actuator_inputs(&actuators);
         }
         self.values_set();
         Ok(())
@@ -440,13 +231,8 @@ impl FmuModel for PlatformModel {
 
     #[inline]
     fn set_real_run(&mut self, first: VariableRef, values: &[f64]) -> Result<(), String> {
-        // The leg forces or voltages, set every step: one copy.
-        let inputs = match first.group {
-            group::F => Some(&mut self.forces),
-            group::U => Some(&mut self.voltages),
-            group::VALVE => Some(&mut self.valves),
-            _ => None,
-        };
+        // An actuator's inputs, set every step: one copy.
+        let inputs = Self::actuator_of_inputs(first.group).map(|k| self.inputs.get_mut(k));
         if let Some(inputs) = inputs.and_then(|v| v.get_mut(first.index..first.index + values.len())) {
             inputs.copy_from_slice(values);
             self.values_set();
@@ -505,11 +291,7 @@ impl FmuModel for PlatformModel {
 
     fn do_step(&mut self, t: f64, h: f64, stop_at_event: bool) -> Result<StepReport, StepError> {
         let law = self.held_inputs(t);
-        let (inputs, unit) = match self.parameters.drive {
-            Drive::Forces => ("leg forces", "N"),
-            Drive::Electric => ("voltages", "V"),
-            Drive::Hydraulic => ("valve commands", "1"),
-        };
+        let (inputs, unit) = self.parameters.drive.inputs();
         let values = self.inputs();
         let Some(sim) = self.sim_mut() else {
             return Err(StepError { message: "the model is not initialised".into(), retry_shorter: false });
@@ -524,9 +306,7 @@ impl FmuModel for PlatformModel {
         let event =
             sim.crossings.as_slice().iter().any(|c| c.index != switching::DETERMINANT) || sim.crossings.dropped > 0;
         let lowest = sim.lowest_pressure;
-        self.force_rates = [0.0; LEG_COUNT];
-        self.voltage_rates = [0.0; LEG_COUNT];
-        self.valve_rates = [0.0; LEG_COUNT];
+        self.input_rates = PerActuator::default();
         match result {
             Ok(reached) => {
                 self.invalidate_outputs();
@@ -572,12 +352,8 @@ impl FmuModel for PlatformModel {
     }
 
     fn set_input_derivative(&mut self, var: VariableRef, value: f64) {
-        let rates = match var.group {
-            group::F => &mut self.force_rates,
-            group::U => &mut self.voltage_rates,
-            group::VALVE => &mut self.valve_rates,
-            _ => return,
-        };
+        let Some(kind) = Self::actuator_of_inputs(var.group) else { return };
+        let rates = self.input_rates.get_mut(kind);
         if let Some(slot) = rates.get_mut(var.index) {
             *slot = value;
         }
@@ -662,9 +438,9 @@ impl FmuModel for PlatformModel {
     /// stops, settings and guard are built again from the parameters on restore).
     fn save(&self, w: &mut ByteWriter) {
         self.save_variables(w);
-        w.f64s(&self.force_rates);
-        w.f64s(&self.voltage_rates);
-        w.f64s(&self.valve_rates);
+        for kind in Drive::ALL {
+            w.f64s(self.input_rates.get(kind));
+        }
         w.bool(self.cavitation_reported);
         match &self.simulation {
             None => w.bool(false),
@@ -691,9 +467,10 @@ impl FmuModel for PlatformModel {
     fn restore(r: &mut ByteReader) -> Result<Self, SnapshotError> {
         let mut model = PlatformModel::default();
         model.restore_variables(r)?;
-        model.force_rates = r.finite_array::<LEG_COUNT>("der(F)")?;
-        model.voltage_rates = r.finite_array::<LEG_COUNT>("der(U)")?;
-        model.valve_rates = r.finite_array::<LEG_COUNT>("der(valve)")?;
+        for kind in Drive::ALL {
+            let name = variables::GROUPS.get(*variables::ACTUATOR_INPUTS.get(kind)).map_or("", |g| g.name);
+            *model.input_rates.get_mut(kind) = r.finite_array::<LEG_COUNT>(&format!("der({name})"))?;
+        }
         model.cavitation_reported = r.bool()?;
         if r.bool()? {
             let start_time = r.finite("start time")?;
@@ -708,7 +485,6 @@ impl FmuModel for PlatformModel {
             sim.time = r.finite("time")?;
             sim.state = r.finite_array::<SIMULATION_DIM>("state")?;
             sim.lowest_pressure = r.f64()?;
-            sim.form.set_supply_pressure(model.supply_pressure);
             let [h_next, err_old] = r.finite_array::<2>("integrator memory")?;
             sim.integrator.dopri5 = Dopri5Memory { h_next, err_old };
             sim.integrator.stats = IntegratorStats {

@@ -6,8 +6,7 @@ use nalgebra::Vector3;
 use crate::integration::{Method, SolverSettings};
 use crate::models::declare::IntegerStorage;
 use crate::models::machine::Drive;
-use crate::physics::actuators::drives::ElectricDrives;
-use crate::physics::actuators::hydraulics::{DEFAULT_SUPPLY_PRESSURE, HydraulicActuators, HydraulicLegs};
+use crate::physics::actuators::{ActiveActuator, Actuators};
 use crate::physics::body::kinematics::rotation_from_angles;
 use crate::physics::body::state::{BodyState, STATE_DIM};
 use crate::physics::direct_problem::SINGULAR_CONDITION_NUMBER;
@@ -18,7 +17,6 @@ use crate::physics::legs::joint_limits::{self, JointLimits};
 use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::{LEG_COUNT, PAPER_EQUILIBRIUM_LEG_FORCE, Stand};
 use crate::simulation::outputs::condition_number;
-use crate::simulation::state::{CURRENTS, hydraulic};
 use crate::simulation::{PlatformSimulation, SIMULATION_DIM, SimulationState, Stabilisation};
 
 /// Everything set through parameters.
@@ -49,15 +47,10 @@ pub struct PlatformParameters {
     pub joints: JointParameters,
     /// `drive`: what moves the legs (forces, electric drives, hydraulic servo legs).
     pub drive: Drive,
-    /// `motor.*`, `gear.ratio`, `screw.lead`.
-    pub drives: ElectricDrives,
-    /// `I0`: the drives' initial armature currents, A.
-    pub initial_currents: [f64; LEG_COUNT],
-    /// `hydraulic.*`, `valve.*`.
-    pub hydraulics: HydraulicLegs,
-    /// `pA0`, `pB0`: the hydraulic legs' initial chamber pressures, Pa.
-    pub initial_pa: [f64; LEG_COUNT],
-    pub initial_pb: [f64; LEG_COUNT],
+    /// Every actuator's parameters and initial states (`motor.*`, `gear.ratio`, `screw.lead`,
+    /// `I0`; `hydraulic.*`, `valve.*`, `pA0`, `pB0`, and the input `pS` the hydraulic legs hold):
+    /// the one of kind `drive` is the legs'.
+    pub actuators: Actuators,
 }
 
 /// The joint-limit parameters (`joints.*`).
@@ -111,11 +104,7 @@ impl Default for PlatformParameters {
             joints_enabled: true,
             joints: JointParameters::default(),
             drive: Drive::Forces,
-            drives: ElectricDrives::default(),
-            initial_currents: [0.0; LEG_COUNT],
-            hydraulics: HydraulicLegs::default(),
-            initial_pa: [holding_pressures().0; LEG_COUNT],
-            initial_pb: [holding_pressures().1; LEG_COUNT],
+            actuators: Actuators::default(),
         }
     }
 }
@@ -138,13 +127,7 @@ pub fn default_leg_force() -> f64 {
     PAPER_EQUILIBRIUM_LEG_FORCE * s.mass * s.gravity
 }
 
-/// The default stand's holding pressures `(p_A, p_B)`, Pa: the rod side at half the default
-/// supply, the cap side pushing the paper's equilibrium force `0.2005 M g` with it (the legs are
-/// massless by default). The start values of `pA0`, `pB0`.
-pub fn holding_pressures() -> (f64, f64) {
-    let pb = 0.5 * DEFAULT_SUPPLY_PRESSURE;
-    (HydraulicLegs::default().cap_pressure(default_leg_force(), pb), pb)
-}
+pub use crate::physics::actuators::hydraulics::holding_pressures;
 
 /// How the model left Initialization Mode: with the parameters, all a simulation is built
 /// from (so that a restored FMU state builds it again rather than storing it twice).
@@ -182,15 +165,9 @@ impl PlatformParameters {
         Some(JointLimits::new(j.base_max, j.platform_max, j.stiffness, j.damping, n0, &rotation0))
     }
 
-    /// The drives if they are on.
-    pub fn electric_drives(&self) -> Option<ElectricDrives> {
-        (self.drive == Drive::Electric).then_some(self.drives)
-    }
-
-    /// The hydraulic legs if on (with the strokes `lmin`, `lmax`).
-    pub fn hydraulic_actuators(&self) -> Option<HydraulicActuators> {
-        (self.drive == Drive::Hydraulic)
-            .then(|| HydraulicActuators::new(self.hydraulics, self.stops.lower, self.stops.upper))
+    /// The actuator of kind `drive` with its parameters, on the end stops' strokes.
+    pub fn actuator(&self) -> ActiveActuator {
+        self.actuators.active(self.drive).on_strokes(&self.stops.lower, &self.stops.upper)
     }
 
     /// The special form these parameters describe (before initialisation).
@@ -198,8 +175,7 @@ impl PlatformParameters {
         SpecialForm::new(self.stand.clone())
             .with_end_stops(self.end_stops())
             .with_machine(self.legs, self.friction, self.joint_limits())
-            .with_drives(self.electric_drives())
-            .with_hydraulics(self.hydraulic_actuators())
+            .with_actuator(self.actuator())
     }
 
     /// The simulation state these parameters describe (before initialisation).
@@ -208,13 +184,7 @@ impl PlatformParameters {
         if let Some(b) = y.first_chunk_mut::<STATE_DIM>() {
             *b = self.initial_state().to_vector();
         }
-        if self.drive == Drive::Electric {
-            y[CURRENTS..CURRENTS + LEG_COUNT].copy_from_slice(&self.initial_currents);
-        }
-        if self.drive == Drive::Hydraulic {
-            y[hydraulic::PA..hydraulic::PA + LEG_COUNT].copy_from_slice(&self.initial_pa);
-            y[hydraulic::PB..hydraulic::PB + LEG_COUNT].copy_from_slice(&self.initial_pb);
-        }
+        self.actuator().initial_state(&mut y);
         y
     }
 
@@ -245,8 +215,7 @@ impl PlatformParameters {
         };
         let mut sim = sim
             .with_machine(self.legs, self.friction, joint_limits)
-            .and_then(|sim| sim.with_drives(self.electric_drives(), self.initial_currents))
-            .and_then(|sim| sim.with_hydraulics(self.hydraulic_actuators(), self.initial_pa, self.initial_pb))
+            .and_then(|sim| sim.with_actuator(self.actuator()))
             .map_err(|e| e.to_string())?;
         if let Some(limits) = &joint_limits {
             check_initial_joint_angles(limits, &sim)?;
@@ -322,31 +291,7 @@ impl PlatformParameters {
             ),
             None => "end stops off".to_string(),
         };
-        let drives = match self.electric_drives() {
-            Some(d) => format!(
-                ", electric drives (voltage inputs U; N = {:.4} rad/m, rotor {:.1} kg along each leg, L/R = {:e} s, \
-                 initial currents {:?} A)",
-                d.transmission(),
-                d.reflected_mass(),
-                1.0 / d.current_decay_rate(),
-                self.initial_currents
-            ),
-            None => String::new(),
-        };
-        let drives = match self.hydraulic_actuators() {
-            Some(h) => {
-                let (area_a, area_b) = h.legs.areas();
-                format!(
-                    "{drives}, hydraulic servo legs (valve inputs; A_A = {area_a:.4e} m2, A_B = {area_b:.4e} m2, K = \
-                     {:.4e} m3/(s.Pa^0.5), beta = {:e} Pa, initial pA {:?} Pa, pB {:?} Pa)",
-                    h.legs.flow_coefficient(),
-                    h.legs.bulk_modulus,
-                    self.initial_pa,
-                    self.initial_pb
-                )
-            }
-            None => drives,
-        };
+        let drives = self.actuator().describe();
         let p = self;
         format!(
             "initialised at t = {:?}: M = {:?} kg, J = {:?} kg.m2, g = {:?} m/s2, leg lengths {:?} m, kappa {:.4}, \
@@ -458,7 +403,7 @@ impl IntegerStorage for Stabilisation {
 /// length (a pose at rest on its limits is allowed, as on the end stops).
 fn check_initial_joint_angles(limits: &JointLimits, sim: &PlatformSimulation) -> Result<(), String> {
     let stand = sim.stand();
-    let outputs = crate::simulation::PlatformOutputs::compute(&sim.form, &sim.state, None);
+    let outputs = crate::simulation::outputs::LegLoadOutputs::at(&sim.form, &sim.state);
     let allowed = stand.mass * stand.gravity * stand.characteristic_length() / limits.stiffness;
     for k in 0..LEG_COUNT {
         for (which, name, theta, max) in [

@@ -4,224 +4,13 @@
 use crate::models::declare::declare_variables;
 use crate::models::machine;
 use crate::models::variables::Dependency::{All, SameIndex};
-use crate::models::variables::VariableGroup as V;
-use crate::simulation::PlatformOutputs;
 
-const POSE_STATES: &[crate::models::variables::Dependency] = &[All("r"), All("R")];
-const ALL_STATES: &[crate::models::variables::Dependency] = &[All("r"), All("v"), All("R"), All("der(R)")];
-/// The knowns of the accelerations and powers: the end stops' forces depend on the leg rates,
-/// so with stops every acceleration depends on the whole body state, and on the leg forces
-/// (or with drives on the currents).
-const MOTION_KNOWNS: &[crate::models::variables::Dependency] =
-    &[All("r"), All("v"), All("R"), All("der(R)"), All("F"), All("I"), All("pA"), All("pB")];
-/// The knowns of the hydraulic legs' rates and powers: the body state (the legs' lengths and
-/// rates), the pressures, the spools and the supply pressure.
-const HYDRAULIC_KNOWNS: &[crate::models::variables::Dependency] =
-    &[All("r"), All("v"), All("R"), All("der(R)"), All("pA"), All("pB"), All("spool"), All("pS")];
-/// The hydraulic legs' parameters.
-const HYDRAULIC_PARAMETERS: &[crate::models::variables::Dependency] = &[
-    All("drive"),
-    All("lmin"),
-    All("lmax"),
-    All("hydraulic.bore"),
-    All("hydraulic.rod"),
-    All("hydraulic.deadVolumeA"),
-    All("hydraulic.deadVolumeB"),
-    All("hydraulic.bulkModulus"),
-    All("hydraulic.tankPressure"),
-    All("valve.ratedFlow"),
-    All("valve.ratedPressureDrop"),
-    All("valve.pcr"),
-    All("valve.leakage"),
-    All("hydraulic.internalLeakage"),
-    All("pA0"),
-    All("pB0"),
-    All("pS"),
-];
-/// The knowns of the drives' currents' rates and losses: the leg rates, the currents, the
-/// voltages.
-const DRIVE_KNOWNS: &[crate::models::variables::Dependency] =
-    &[All("r"), All("v"), All("R"), All("der(R)"), All("I"), All("U")];
-/// The knowns of the dissipated power: those of the drives' and of the hydraulic legs'.
-const DISSIPATION_KNOWNS: &[crate::models::variables::Dependency] =
-    &[All("r"), All("v"), All("R"), All("der(R)"), All("I"), All("U"), All("pA"), All("pB"), All("spool"), All("pS")];
-/// The knowns of the energy: the body state and the currents (magnetic energy).
-const ENERGY_KNOWNS: &[crate::models::variables::Dependency] = &[All("r"), All("v"), All("R"), All("der(R)"), All("I")];
-/// The drives' parameters.
-const DRIVE_PARAMETERS: &[crate::models::variables::Dependency] = &[
-    All("drive"),
-    All("motor.R"),
-    All("motor.L"),
-    All("motor.ke"),
-    All("motor.kt"),
-    All("motor.J"),
-    All("motor.D"),
-    All("gear.ratio"),
-    All("screw.lead"),
-];
-const STOP_PARAMETERS: &[crate::models::variables::Dependency] = &[
-    All("A"),
-    All("B"),
-    All("r0"),
-    All("angles0"),
-    All("v0"),
-    All("w0"),
-    All("stops"),
-    All("lmin"),
-    All("lmax"),
-    All("stops.stiffness"),
-    All("stops.damping"),
-];
-const ALL_PARAMETERS: &[crate::models::variables::Dependency] = &[
-    All("F"),
-    All("M"),
-    All("J"),
-    All("g"),
-    All("B"),
-    All("A"),
-    All("r0"),
-    All("angles0"),
-    All("v0"),
-    All("w0"),
-    All("solver.stabilisation"),
-    All("solver.baumgarteRate"),
-    All("stops"),
-    All("lmin"),
-    All("lmax"),
-    All("stops.stiffness"),
-    All("stops.damping"),
-    All("leg.cylinderMass"),
-    All("leg.rodMass"),
-    All("leg.cylinderCoM"),
-    All("leg.rodCoM"),
-    All("leg.cylinderInertia"),
-    All("leg.rodInertia"),
-    All("joints"),
-    All("joints.baseMaxAngle"),
-    All("joints.platformMaxAngle"),
-    All("joints.stiffness"),
-    All("joints.damping"),
-    All("joints.r0"),
-    All("joints.angles0"),
-    All("friction.coulomb"),
-    All("friction.static"),
-    All("friction.stribeckVelocity"),
-    All("friction.smoothing"),
-    All("friction.viscous"),
-    All("drive"),
-    All("motor.R"),
-    All("motor.L"),
-    All("motor.ke"),
-    All("motor.kt"),
-    All("motor.J"),
-    All("motor.D"),
-    All("gear.ratio"),
-    All("screw.lead"),
-    All("I0"),
-    All("U"),
-    All("hydraulic.bore"),
-    All("hydraulic.rod"),
-    All("hydraulic.deadVolumeA"),
-    All("hydraulic.deadVolumeB"),
-    All("hydraulic.bulkModulus"),
-    All("hydraulic.tankPressure"),
-    All("valve.ratedFlow"),
-    All("valve.ratedPressureDrop"),
-    All("valve.pcr"),
-    All("valve.leakage"),
-    All("hydraulic.internalLeakage"),
-    All("pA0"),
-    All("pB0"),
-    All("pS"),
-    All("valve"),
-];
-/// What the energy depends on in Initialization Mode: the stand, the initial state, the
-/// potentials' parameters and the legs' masses.
-const ENERGY_PARAMETERS: &[crate::models::variables::Dependency] = &[
-    All("M"),
-    All("J"),
-    All("g"),
-    All("A"),
-    All("B"),
-    All("r0"),
-    All("angles0"),
-    All("v0"),
-    All("w0"),
-    All("stops"),
-    All("lmin"),
-    All("lmax"),
-    All("stops.stiffness"),
-    All("leg.cylinderMass"),
-    All("leg.rodMass"),
-    All("leg.cylinderCoM"),
-    All("leg.rodCoM"),
-    All("leg.cylinderInertia"),
-    All("leg.rodInertia"),
-    All("joints"),
-    All("joints.baseMaxAngle"),
-    All("joints.platformMaxAngle"),
-    All("joints.stiffness"),
-    All("joints.r0"),
-    All("joints.angles0"),
-    All("drive"),
-    All("motor.L"),
-    All("motor.J"),
-    All("gear.ratio"),
-    All("screw.lead"),
-    All("I0"),
-];
-/// What the dissipated power depends on in Initialization Mode.
-const DISSIPATION_PARAMETERS: &[crate::models::variables::Dependency] = &[
-    All("A"),
-    All("B"),
-    All("r0"),
-    All("angles0"),
-    All("v0"),
-    All("w0"),
-    All("stops"),
-    All("lmin"),
-    All("lmax"),
-    All("stops.stiffness"),
-    All("stops.damping"),
-    All("joints"),
-    All("joints.baseMaxAngle"),
-    All("joints.platformMaxAngle"),
-    All("joints.stiffness"),
-    All("joints.damping"),
-    All("joints.r0"),
-    All("joints.angles0"),
-    All("friction.coulomb"),
-    All("friction.static"),
-    All("friction.stribeckVelocity"),
-    All("friction.smoothing"),
-    All("friction.viscous"),
-    All("drive"),
-    All("motor.R"),
-    All("motor.ke"),
-    All("motor.kt"),
-    All("motor.D"),
-    All("gear.ratio"),
-    All("screw.lead"),
-    All("I0"),
-    All("U"),
-    All("hydraulic.bore"),
-    All("hydraulic.rod"),
-    All("hydraulic.deadVolumeA"),
-    All("hydraulic.deadVolumeB"),
-    All("hydraulic.bulkModulus"),
-    All("hydraulic.tankPressure"),
-    All("valve.ratedFlow"),
-    All("valve.ratedPressureDrop"),
-    All("valve.pcr"),
-    All("valve.leakage"),
-    All("hydraulic.internalLeakage"),
-    All("pA0"),
-    All("pB0"),
-    All("pS"),
-    All("valve"),
-];
-const JOINT_ANGLE_PARAMETERS: &[crate::models::variables::Dependency] =
-    &[All("A"), All("B"), All("r0"), All("angles0"), All("joints"), All("joints.r0"), All("joints.angles0")];
+use super::dependencies::*;
+use crate::models::variables::VariableGroup as V;
+use crate::physics::actuators::PerActuator;
+use crate::simulation::PlatformOutputs;
+use crate::simulation::outputs::actuator_state;
+use crate::simulation::state::{CURRENTS, hydraulic, quadrature};
 
 declare_variables! {
     model: super::PlatformModel,
@@ -229,17 +18,23 @@ declare_variables! {
     cache_blocks: [
         // What a controller reads every step, computed alone.
         leg_outputs,
-        // Every other output of `PlatformOutputs` that depends on the state alone.
-        outputs,
+        // The outputs of `PlatformOutputs` that depend on the state alone, by group, each
+        // computed only when read: the pose (r, v, R, angles, w); what the legs' geometry gives
+        // beyond their lengths (E, Fstop, thetaB, thetaA: the legs again, twelve acos); values
+        // read off the state (constraintError, the work integrals, I).
+        pose,
+        leg_loads,
+        state_values,
         // The actuators' and the joints' forces: they depend on the inputs too. (The declared
         // dependencies are those of both drive modes: F in mode 0, the currents in mode 1.)
         input_dependent_outputs,
         // The condition number `kappa` (an eigenvalue problem): read by studies every step,
         // by most hosts never.
         condition,
-        // The hydraulic legs' pressures and spools: what a hydraulic controller reads every
-        // step besides the legs, copied from the state.
-        chamber_outputs,
+        // The actuators' states and integrals (the drives' currents, the hydraulic legs'
+        // pressures and spools: what a hydraulic controller reads every step besides the legs),
+        // copied from the state.
+        actuators,
     ],
     variables: {
         TIME => V::time(0); computed,
@@ -251,7 +46,7 @@ declare_variables! {
             "Axial leg force u_k acting on the platform at A_k along the leg (positive pushes the platform away from the \
              base). Held over each communication step, or interpolated to first order when fmi2SetRealInputDerivatives \
              gave its derivative",
-        ); real(forces),
+        ); real(inputs.forces),
         M => machine::mass(10); real(parameters.stand.mass),
         J => machine::inertia(11); real(parameters.stand.inertia),
         G => machine::gravity(14); real(parameters.stand.gravity),
@@ -314,9 +109,9 @@ declare_variables! {
              always uses Baumgarte terms unless this is 1",
         )
         .integer(1, 3); integer(parameters.stabilisation),
-        R => V::output("r", &[3], 100, Some("m"), "Centre of mass S, inertial frame", &[SameIndex("r0")]); cached(outputs.r),
-        V => V::output("v", &[3], 103, Some("m/s"), "Velocity of the centre of mass", &[SameIndex("v0")])
-            .derivative_named("r", &[SameIndex("v")]); cached(outputs.v),
+        R => V::output("r", &[3], 100, Some("m"), "Centre of mass S, inertial frame", &[SameIndex(group::R0)]); cached(pose.r),
+        V => V::output("v", &[3], 103, Some("m/s"), "Velocity of the centre of mass", &[SameIndex(group::V0)])
+            .derivative_named("r", &[SameIndex(group::V)]); cached(pose.v),
         // The continuous states (`STATES`) are the groups whose derivatives are declared, in
         // that order, which is `crate::simulation::state`'s layout: the special form's 24
         // `r, v, e1, e2, e3, e1', e2', e3'` (`e_b` is column `b` of `R`, hence column by
@@ -328,21 +123,21 @@ declare_variables! {
             106,
             Some("1"),
             "Rotation matrix body -> inertial: R[a,b] is component a of the body axis e_b",
-            &[All("angles0")],
+            &[All(group::ANGLES0)],
         )
-        .state_by_columns(); cached(outputs.rotation),
-        ANGLES => V::output("angles", &[3], 115, Some("rad"), "Roll, pitch, yaw (1-2-3 sequence, R = Rx Ry Rz)", &[All("angles0")])
+        .state_by_columns(); cached(pose.rotation),
+        ANGLES => V::output("angles", &[3], 115, Some("rad"), "Roll, pitch, yaw (1-2-3 sequence, R = Rx Ry Rz)", &[All(group::ANGLES0)])
             .display("deg")
-            .depends_on(&[All("R")]); cached(outputs.angles),
-        W => V::output("w", &[3], 118, Some("rad/s"), "Angular velocity, body components", &[SameIndex("w0")])
-            .depends_on(&[All("R"), All("der(R)")]); cached(outputs.w),
+            .depends_on(&[All(group::ROT)]); cached(pose.angles),
+        W => V::output("w", &[3], 118, Some("rad/s"), "Angular velocity, body components", &[SameIndex(group::W0)])
+            .depends_on(&[All(group::ROT), All(group::DER_R)]); cached(pose.w),
         L => V::output(
             "l",
             &[6],
             121,
             Some("m"),
             "Leg length l_k = |a_k - B_k|",
-            &[All("A"), All("B"), All("r0"), All("angles0")],
+            LEG_PARAMETERS,
         )
         .depends_on(POSE_STATES); cached(leg_outputs.l),
         LDOT => V::output(
@@ -351,9 +146,9 @@ declare_variables! {
             127,
             Some("m/s"),
             "Leg length rate dl_k/dt",
-            &[All("A"), All("B"), All("r0"), All("angles0"), All("v0"), All("w0")],
+            LEG_RATE_PARAMETERS,
         )
-        .depends_on(ALL_STATES); cached(leg_outputs.ldot),
+        .depends_on(BODY_STATES); cached(leg_outputs.ldot),
         E => V::output(
             "E",
             &[],
@@ -364,16 +159,16 @@ declare_variables! {
              drives' magnetic energy L I^2/2 (E(t) - E(0) = work.F + work.electric - work.dissipated)",
             ENERGY_PARAMETERS,
         )
-        .depends_on(ENERGY_KNOWNS); cached(outputs.energy),
+        .depends_on(ENERGY_KNOWNS); cached(leg_loads.energy),
         CONSTRAINT_ERROR => V::output(
             "constraintError",
             &[],
             134,
             Some("1"),
             "Constraint residual max over a, b of |e_a.e_b - delta_ab|",
-            &[All("angles0")],
+            &[All(group::ANGLES0)],
         )
-        .depends_on(&[All("R")]); cached(outputs.constraint_error),
+        .depends_on(&[All(group::ROT)]); cached(state_values.constraint_error),
         BAUMGARTE_RATE => V::parameter(
             "solver.baumgarteRate",
             &[],
@@ -397,10 +192,10 @@ declare_variables! {
             143,
             Some("1/s"),
             "Time derivative of the rotation matrix: column b is de_b/dt (Model Exchange state)",
-            &[All("angles0"), All("w0")],
+            &[All(group::ANGLES0), All(group::W0)],
         )
         .state_by_columns()
-        .derivative("R", "R", 1, &[SameIndex("der(R)")]); derivative,
+        .derivative("R", "R", 1, &[SameIndex(group::DER_R)]); derivative,
         DER2_R => V::local(
             "der2(R)",
             &[3, 3],
@@ -453,7 +248,7 @@ declare_variables! {
             "End-stop force along leg k (sign as F: positive pushes the platform away from the base); 0 inside the stroke",
             STOP_PARAMETERS,
         )
-        .depends_on(ALL_STATES); cached(outputs.stop_force),
+        .depends_on(BODY_STATES); cached(leg_loads.stop_force),
         KAPPA => V::output(
             "kappa",
             &[],
@@ -462,7 +257,7 @@ declare_variables! {
             "Condition number of the 6x6 leg force/moment matrix (moment rows divided by the stand's characteristic \
              length): large near a singular leg arrangement; at one (or where double precision cannot tell) it is \
              1/eps = 4.5e15, its largest value",
-            &[All("A"), All("B"), All("r0"), All("angles0")],
+            LEG_PARAMETERS,
         )
         .depends_on(POSE_STATES); cached_apart(condition.kappa),
         WORK_F => V::output(
@@ -473,7 +268,7 @@ declare_variables! {
             "Work done by the leg forces F since the start, the integral of sum_k F_k ldot_k (Model Exchange state; \
              stays 0 with drive = 1, whose energy comes in as work.electric)",
             &[],
-        ); cached(outputs.work_of_forces),
+        ); cached(state_values.work_of_forces),
         WORK_DISSIPATED => V::output(
             "work.dissipated",
             &[],
@@ -482,7 +277,7 @@ declare_variables! {
             "Energy taken since the start by the end stops' and joint limits' damping, the cylinders' friction and the \
              drives' losses R I^2 + D omega^2 (+ (k_e - k_t) omega I) (>= 0; Model Exchange state)",
             &[],
-        ); cached(outputs.dissipated_energy),
+        ); cached(state_values.dissipated_energy),
         DER_WORK_F => V::local(
             "der(work.F)",
             &[],
@@ -584,7 +379,7 @@ declare_variables! {
             JOINT_ANGLE_PARAMETERS,
         )
         .display("deg")
-        .depends_on(POSE_STATES); cached(outputs.theta_b),
+        .depends_on(POSE_STATES); cached(leg_loads.theta_b),
         THETA_A => V::output(
             "thetaA", &[6], 346, Some("rad"),
             "Platform joint angle thetaA_k: the angle between leg k and its direction at the reference pose, both in \
@@ -592,7 +387,7 @@ declare_variables! {
             JOINT_ANGLE_PARAMETERS,
         )
         .display("deg")
-        .depends_on(POSE_STATES); cached(outputs.theta_a),
+        .depends_on(POSE_STATES); cached(leg_loads.theta_a),
         JOINT_FORCE => V::output(
             "jointForce", &[6, 3], 352, Some("N"),
             "Force of leg k on the platform at its joint A_k (row k: x, y, z, inertial frame): the actuator, friction, \
@@ -608,34 +403,34 @@ declare_variables! {
              its inputs",
         )
         .integer(0, 2); integer(parameters.drive),
-        MOTOR_R => machine::motor_resistance(401); real(parameters.drives.resistance),
-        MOTOR_L => machine::motor_inductance(402); real(parameters.drives.inductance),
-        MOTOR_KE => machine::motor_ke(403); real(parameters.drives.ke),
-        MOTOR_KT => machine::motor_kt(404); real(parameters.drives.kt),
-        MOTOR_J => machine::motor_inertia(405); real(parameters.drives.rotor_inertia),
-        MOTOR_D => machine::motor_damping(406); real(parameters.drives.damping),
-        GEAR_RATIO => machine::gear_ratio(407); real(parameters.drives.gear_ratio),
-        SCREW_LEAD => machine::screw_lead(408); real(parameters.drives.screw_lead),
+        MOTOR_R => machine::motor_resistance(401); real(parameters.actuators.electric.resistance),
+        MOTOR_L => machine::motor_inductance(402); real(parameters.actuators.electric.inductance),
+        MOTOR_KE => machine::motor_ke(403); real(parameters.actuators.electric.ke),
+        MOTOR_KT => machine::motor_kt(404); real(parameters.actuators.electric.kt),
+        MOTOR_J => machine::motor_inertia(405); real(parameters.actuators.electric.rotor_inertia),
+        MOTOR_D => machine::motor_damping(406); real(parameters.actuators.electric.damping),
+        GEAR_RATIO => machine::gear_ratio(407); real(parameters.actuators.electric.gear_ratio),
+        SCREW_LEAD => machine::screw_lead(408); real(parameters.actuators.electric.screw_lead),
         I0 => V::parameter(
             "I0", &[6], 410, Some("A"),
             "Initial armature current of drive k (a run that starts holding the stand starts at the holding current)",
-        ); real(parameters.initial_currents),
+        ); real(parameters.actuators.electric.initial_currents),
         U => V::input(
             "U", &[6], 420, Some("V"),
             "Armature voltage U_k of drive k (used when drive = 1; 0 = the windings shorted: dynamic braking). Held \
              over each communication step, or interpolated to first order when fmi2SetRealInputDerivatives gave its \
              derivative",
-        ); real(voltages),
+        ); real(inputs.electric),
         I => V::output(
             "I", &[6], 430, Some("A"), "Armature current I_k of drive k (Model Exchange state; 0 when drive = 0)",
-            &[All("drive"), SameIndex("I0")],
-        ); cached(outputs.current),
+            &[All(group::DRIVE), SameIndex(group::I0)],
+        ); cached_at(actuators.actuator_states, actuator_state(CURRENTS)),
         WORK_ELECTRIC => V::output(
             "work.electric", &[], 436, Some("J"),
             "Electric energy supplied to the drives since the start, the integral of sum_k U_k I_k (Model Exchange \
              state; E(t) - E(0) = work.F + work.electric - work.dissipated)",
             &[],
-        ); cached(outputs.electric_work),
+        ); cached_at(actuators.actuator_states, actuator_state(quadrature::WORK_ELECTRIC)),
         DER_I => V::local(
             "der(I)", &[6], 440, Some("A/s"),
             "Rate of the armature currents (U - R I - k_e N ldot) / L (Model Exchange derivative of I)",
@@ -645,9 +440,9 @@ declare_variables! {
         DER_WORK_ELECTRIC => V::local(
             "der(work.electric)", &[], 446, Some("W"),
             "Electric power supplied to the drives sum_k U_k I_k (Model Exchange derivative of work.electric)",
-            &[All("drive"), All("I0"), All("U")],
+            &[All(group::DRIVE), All(group::I0), All(group::U)],
         )
-        .derivative("work.electric", "work.electric", 1, &[All("I"), All("U")]); derivative,
+        .derivative("work.electric", "work.electric", 1, &[All(group::I), All(group::U)]); derivative,
         ACTUATOR_FORCE => V::output(
             "actuatorForce", &[6], 450, Some("N"),
             "Axial force of actuator k on leg k: the input F_k as last set (drive = 0), or the electric drive's N (k_t \
@@ -661,70 +456,70 @@ declare_variables! {
              towards extension (supply to the cap side), 0 centres the spool (the legs lock on their oil), -1 towards \
              retraction. Held over each communication step, or interpolated to first order when \
              fmi2SetRealInputDerivatives gave its derivative",
-        ); real(valves),
+        ); real(inputs.hydraulic),
         PS => V::input(
             "pS", &[], 466, Some("Pa"),
             "Hydraulic supply pressure p_S (gauge; drive = 2). Drop it to 0 to model a pump failure: the supply port \
              then acts as a second tank (no check valve)",
-        ); real(supply_pressure),
+        ); real(parameters.actuators.hydraulic.supply),
         TANK_PRESSURE => V::parameter(
             "hydraulic.tankPressure", &[], 470, Some("Pa"), "Tank (return line) pressure p_T, gauge",
-        ); real(parameters.hydraulics.tank_pressure),
-        BORE => machine::hydraulic_bore(471); real(parameters.hydraulics.bore),
-        ROD => machine::hydraulic_rod(472); real(parameters.hydraulics.rod),
+        ); real(parameters.actuators.hydraulic.legs.tank_pressure),
+        BORE => machine::hydraulic_bore(471); real(parameters.actuators.hydraulic.legs.bore),
+        ROD => machine::hydraulic_rod(472); real(parameters.actuators.hydraulic.legs.rod),
         DEAD_VOLUME_A => V::parameter(
             "hydraulic.deadVolumeA", &[], 473, Some("m3"),
             "Dead volume V_A0 of each cap-side chamber at lmin (ports, hoses, the cap's end): V_A = V_A0 + A_A (l - lmin)",
-        ); real(parameters.hydraulics.dead_volume_a),
+        ); real(parameters.actuators.hydraulic.legs.dead_volume_a),
         DEAD_VOLUME_B => V::parameter(
             "hydraulic.deadVolumeB", &[], 474, Some("m3"),
             "Dead volume V_B0 of each rod-side chamber at lmax: V_B = V_B0 + A_B (lmax - l)",
-        ); real(parameters.hydraulics.dead_volume_b),
+        ); real(parameters.actuators.hydraulic.legs.dead_volume_b),
         BULK_MODULUS => V::parameter(
             "hydraulic.bulkModulus", &[], 475, Some("Pa"),
             "Effective bulk modulus beta of the oil with its hoses and seals",
-        ); real(parameters.hydraulics.bulk_modulus),
-        RATED_FLOW => machine::valve_rated_flow(476); real(parameters.hydraulics.rated_flow),
-        RATED_DROP => machine::valve_rated_pressure_drop(477); real(parameters.hydraulics.rated_pressure_drop),
+        ); real(parameters.actuators.hydraulic.legs.bulk_modulus),
+        RATED_FLOW => machine::valve_rated_flow(476); real(parameters.actuators.hydraulic.legs.rated_flow),
+        RATED_DROP => machine::valve_rated_pressure_drop(477); real(parameters.actuators.hydraulic.legs.rated_pressure_drop),
         VALVE_OMEGA => V::parameter(
             "valve.omega", &[], 478, Some("rad/s"), "Natural frequency w_v of each valve's spool (second order)",
-        ); real(parameters.hydraulics.valve_omega),
+        ); real(parameters.actuators.hydraulic.legs.valve_omega),
         VALVE_DAMPING => V::parameter(
             "valve.damping", &[], 479, Some("1"), "Damping ratio zeta_v of each valve's spool",
-        ); real(parameters.hydraulics.valve_damping),
+        ); real(parameters.actuators.hydraulic.legs.valve_damping),
         VALVE_PCR => V::parameter(
             "valve.pcr", &[], 480, Some("Pa"),
             "Regularisation pressure p_cr of the orifice law phi(dp) = dp / (dp^2 + p_cr^2)^(1/4): the flow is \
              linear in dp below about p_cr, the square root above",
-        ); real(parameters.hydraulics.pcr),
+        ); real(parameters.actuators.hydraulic.legs.pcr),
         VALVE_LEAKAGE => V::parameter(
             "valve.leakage", &[], 481, Some("m3/(s.Pa)"),
             "Null leakage coefficient C_v of each land: each chamber leaks C_v dp to supply and to tank",
-        ); real(parameters.hydraulics.valve_leakage),
+        ); real(parameters.actuators.hydraulic.legs.valve_leakage),
         INTERNAL_LEAKAGE => V::parameter(
             "hydraulic.internalLeakage", &[], 482, Some("m3/(s.Pa)"),
             "Internal leakage coefficient C_i across each piston: Q_i = C_i (p_A - p_B)",
-        ); real(parameters.hydraulics.internal_leakage),
+        ); real(parameters.actuators.hydraulic.legs.internal_leakage),
         PA0 => V::parameter(
             "pA0", &[6], 490, Some("Pa"),
             "Initial cap-side pressure of leg k (default: what holds the default stand at rest in its neutral pose \
              with pB0 = pS/2)",
-        ); real(parameters.initial_pa),
+        ); real(parameters.actuators.hydraulic.initial_pa),
         PB0 => V::parameter(
             "pB0", &[6], 496, Some("Pa"), "Initial rod-side pressure of leg k (default pS/2 at the default supply)",
-        ); real(parameters.initial_pb),
+        ); real(parameters.actuators.hydraulic.initial_pb),
         PA => V::output(
             "pA", &[6], 510, Some("Pa"), "Cap-side chamber pressure p_A of leg k, gauge (Model Exchange state; 0 \
-             unless drive = 2)", &[All("drive"), SameIndex("pA0")],
-        ); cached(chamber_outputs.pa),
+             unless drive = 2)", &[All(group::DRIVE), SameIndex(group::PA0)],
+        ); cached_at(actuators.actuator_states, actuator_state(hydraulic::PA)),
         PB => V::output(
             "pB", &[6], 516, Some("Pa"), "Rod-side chamber pressure p_B of leg k, gauge (Model Exchange state; 0 \
-             unless drive = 2)", &[All("drive"), SameIndex("pB0")],
-        ); cached(chamber_outputs.pb),
+             unless drive = 2)", &[All(group::DRIVE), SameIndex(group::PB0)],
+        ); cached_at(actuators.actuator_states, actuator_state(hydraulic::PB)),
         SPOOL => V::output(
             "spool", &[6], 522, Some("1"), "Spool position s_k of leg k's valve, normalised (Model Exchange state; \
              starts centred)", &[],
-        ); cached(chamber_outputs.spool),
+        ); cached_at(actuators.actuator_states, actuator_state(hydraulic::SPOOL)),
         QSUPPLY => V::output(
             "Qsupply", &[], 528, Some("m3/s"),
             "Total flow drawn from the supply by the six valves, null leakage included (negative when the supply \
@@ -736,7 +531,7 @@ declare_variables! {
             "pmin", &[], 529, Some("Pa"),
             "Lowest chamber pressure of the hydraulic legs since the start (below -1 bar gauge the oil would \
              cavitate and the model is no longer valid: the FMU logs a warning once per run); 0 unless drive = 2",
-            &[All("drive"), All("pA0"), All("pB0")],
+            &[All(group::DRIVE), All(group::PA0), All(group::PB0)],
         ); computed,
         WORK_HYDRAULIC => V::output(
             "work.hydraulic", &[], 530, Some("J"),
@@ -744,13 +539,13 @@ declare_variables! {
              (Model Exchange state; E(t) - E(0) = work.F + work.electric + work.hydraulic - work.compression - \
              work.dissipated)",
             &[],
-        ); cached(outputs.hydraulic_work),
+        ); cached_at(actuators.actuator_states, actuator_state(quadrature::WORK_HYDRAULIC)),
         WORK_COMPRESSION => V::output(
             "work.compression", &[], 531, Some("J"),
             "Energy stored by compressing the oil since the start, the integral of sum_k (p_A V_A p_A' + p_B V_B \
              p_B') / beta (Model Exchange state)",
             &[],
-        ); cached(outputs.compression_work),
+        ); cached_at(actuators.actuator_states, actuator_state(quadrature::WORK_COMPRESSION)),
         DER_PA => V::local(
             "der(pA)", &[6], 540, Some("Pa/s"), "Rate of the cap-side pressures (Model Exchange derivative of pA)",
             HYDRAULIC_PARAMETERS,
@@ -764,13 +559,13 @@ declare_variables! {
         DER_SPOOL => V::local(
             "der(spool)", &[6], 552, Some("1/s"), "Spool rate s_k' (Model Exchange state; starts at rest)", &[],
         )
-        .derivative("spool", "spool", 1, &[SameIndex("der(spool)")]); derivative,
+        .derivative("spool", "spool", 1, &[SameIndex(group::DER_SPOOL)]); derivative,
         DER2_SPOOL => V::local(
             "der2(spool)", &[6], 558, Some("1/s2"),
             "Spool acceleration w_v^2 (c_k - s_k) - 2 zeta_v w_v s_k' (Model Exchange derivative of der(spool))",
-            &[All("drive"), All("valve.omega"), All("valve.damping"), All("valve")],
+            SPOOL_PARAMETERS,
         )
-        .derivative("der(spool)", "spool", 2, &[SameIndex("spool"), SameIndex("der(spool)"), SameIndex("valve")]); derivative,
+        .derivative("der(spool)", "spool", 2, &[SameIndex(group::SPOOL), SameIndex(group::DER_SPOOL), SameIndex(group::VALVE)]); derivative,
         DER_WORK_HYDRAULIC => V::local(
             "der(work.hydraulic)", &[], 564, Some("W"),
             "Power drawn from the hydraulic supply (Model Exchange derivative of work.hydraulic)",
@@ -785,3 +580,7 @@ declare_variables! {
         .derivative("work.compression", "work.compression", 1, HYDRAULIC_KNOWNS); derivative,
     }
 }
+
+/// Each actuator's inputs (`drive`'s kind): the group a host sets every step.
+pub const ACTUATOR_INPUTS: PerActuator<usize> =
+    PerActuator { forces: group::F, electric: group::U, hydraulic: group::VALVE };

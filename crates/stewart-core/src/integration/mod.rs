@@ -367,6 +367,42 @@ impl Integrator {
     }
 }
 
+/// A plain ODE `y' = f(t, y)` of fixed size, from its rate: an [`OdeSystem`] without checks,
+/// switching functions or faults, so that the methods serve any state array (the washout's
+/// filters, a test's oscillator) without a platform around it.
+#[derive(Clone, Copy, Debug)]
+pub struct Ode<F>(pub F);
+
+impl<F: Fn(f64, &[f64; N]) -> [f64; N], const N: usize> OdeSystem<N> for Ode<F> {
+    type Fault = std::convert::Infallible;
+
+    #[inline(always)]
+    fn derivative(&self, t: f64, y: &[f64; N], dy: &mut [f64; N]) {
+        *dy = (self.0)(t, y);
+    }
+
+    #[inline(always)]
+    fn derivative_of(&self, t: f64, y: &[f64; N]) -> [f64; N] {
+        (self.0)(t, y)
+    }
+}
+
+/// Classical RK4 on the plain ODE `rate` from `t0` to exactly `t1`, in the fewest equal steps
+/// not longer than `max_step` ([`Method::RungeKutta4`]'s rule: an interval within 1e-9 of a
+/// multiple of `max_step` takes that multiple): the integrators' own method, for a state array
+/// and a rate closure. Never fails: a plain ODE has no checks (the step count is bounded by
+/// [`SolverSettings::max_steps_per_call`]; beyond it `y` is left as it was).
+pub fn rk4_fixed_steps<F: Fn(f64, &[f64; N]) -> [f64; N], const N: usize>(
+    rate: F,
+    t0: f64,
+    y: &mut [f64; N],
+    t1: f64,
+    max_step: f64,
+) {
+    let settings = SolverSettings { method: Method::RungeKutta4, fixed_step: max_step, ..SolverSettings::default() };
+    let _ = Integrator::new(settings).integrate(&Ode(rate), t0, y, t1, &mut CrossingLog::default());
+}
+
 /// What a method works with during one call, besides the system and the interval.
 pub(crate) struct MethodCall<'a, 'e, const N: usize> {
     pub settings: &'a SolverSettings,

@@ -287,6 +287,31 @@ fn exponential_step<S: OdeSystem<N>, const N: usize>(
 mod tests {
     use crate::integration::{Integrator, Method, OdeSystem, SolverSettings};
 
+    /// A plain ODE from its rate (`Ode`, `rk4_fixed_steps`) steps as the classical RK4 written
+    /// out by hand (as the washout FMU's steps were), to the bit, for an interval that is a
+    /// whole number of steps.
+    #[test]
+    fn a_rate_closure_steps_as_the_classical_method_by_hand() {
+        let rate = |t: f64, y: &[f64; 3]| [y[1], -4.0 * y[0] + 0.3 * t.sin(), -0.5 * y[2] + y[0] * y[1]];
+        let (h, n) = (1e-2, 4);
+        let mut by_hand = [0.2, -0.1, 1.0];
+        let dt = h / n as f64;
+        let shifted = |x: &[f64; 3], k: &[f64; 3], c: f64| std::array::from_fn(|i| x[i] + c * k[i]);
+        for step in 0..n {
+            let tau = step as f64 * dt;
+            let k1 = rate(tau, &by_hand);
+            let k2 = rate(tau + 0.5 * dt, &shifted(&by_hand, &k1, 0.5 * dt));
+            let k3 = rate(tau + 0.5 * dt, &shifted(&by_hand, &k2, 0.5 * dt));
+            let k4 = rate(if step + 1 == n { h } else { (step + 1) as f64 * dt }, &shifted(&by_hand, &k3, dt));
+            for i in 0..3 {
+                by_hand[i] += dt / 6.0 * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
+            }
+        }
+        let mut y = [0.2, -0.1, 1.0];
+        crate::integration::rk4_fixed_steps(rate, 0.0, &mut y, h, dt);
+        assert_eq!(y.map(f64::to_bits), by_hand.map(f64::to_bits));
+    }
+
     /// y' = -y, y(0) = 1: a known answer for both methods.
     struct Decay;
     impl OdeSystem<1> for Decay {

@@ -2,8 +2,7 @@
 //! quadratures, as an ODE system for the integrators; and the legs it measured last.
 
 use crate::integration::{LinearDecay, MAX_SWITCHING, OdeSystem, SwitchingKind};
-use crate::physics::actuators::HeldForces;
-use crate::physics::actuators::hydraulics::{Chambers, HydraulicActuators};
+use crate::physics::actuators::{Actuator, InState, with_actuator};
 use crate::physics::body::state::{BodyState, STATE_DIM, StateVector, all_finite};
 use std::cell::Cell;
 
@@ -15,14 +14,11 @@ use crate::physics::error::PhysicsFault;
 use crate::physics::legs::end_stops::STROKE_LIMITS;
 use crate::physics::legs::geometry::{LegGeometry, LegKinematics};
 use crate::physics::legs::per_leg::{Lanes, Narrow};
-use crate::physics::special_form::{Actuation, SpecialForm};
+use crate::physics::special_form::{FastPath, SpecialForm};
 use crate::physics::stand::LEG_COUNT;
 use std::marker::PhantomData;
 
-use super::state::{
-    CURRENTS, SIMULATION_DIM, SimulationState, WITH_DRIVES, WITHOUT_DRIVES, body, hydraulic, hydraulic_rates,
-    quadrature, switching,
-};
+use super::state::{SimulationState, body, rate_in, switching};
 
 /// How the constraints `e_a . e_b = delta_ab` are kept during integration.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -81,10 +77,6 @@ pub struct PlatformDynamics<'a, L: ?Sized, V: Lanes = Narrow> {
     pub(super) lanes: PhantomData<V>,
 }
 
-/// The fraction of RK4's real stability interval (2.785) a hydraulic step may use: the fast
-/// rates grow within a step as a land's drop shrinks.
-const STABLE_STEP_FACTOR: f64 = 2.0;
-
 impl<'a, L: ?Sized> PlatformDynamics<'a, L> {
     /// Dynamics that evaluate every switching function (singular arrangements tracked).
     pub fn new(
@@ -125,21 +117,34 @@ impl<'a, L: ?Sized, V: Lanes> PlatformDynamics<'a, L, V> {
         }
     }
 
-    /// The hydraulic legs' chambers at an accepted state: each volume must stay positive (a
-    /// leg far beyond its stroke, through its stop); the lowest pressure is recorded.
-    #[inline(never)]
-    fn check_chambers(&self, h: &HydraulicActuators, y: &[f64], l: &[f64; LEG_COUNT]) -> Result<(), PhysicsFault> {
-        let mut lowest = self.lowest_pressure.get();
-        for k in 0..LEG_COUNT {
-            let (va, vb) = h.legs.volumes(&h.piston(k, l[k], 0.0));
-            if !(va > 0.0 && vb > 0.0) {
-                return Err(PhysicsFault::ChamberEmptied { leg: k + 1, length: l[k] });
-            }
-            let pressure = |i: usize| y.get(i).copied().unwrap_or(f64::NAN);
-            lowest = lowest.min(pressure(hydraulic::PA + k)).min(pressure(hydraulic::PB + k));
+    /// The actuator's check of its states at an accepted state ([`Actuator::check`]), what it
+    /// tracks (the lowest chamber pressure) recorded; nothing to do for an actuator without one.
+    #[inline(always)]
+    fn check_actuator<A: Actuator + InState>(
+        &self,
+        a: &A,
+        y: &[f64],
+        l: &[f64; LEG_COUNT],
+    ) -> Result<(), PhysicsFault> {
+        if !A::CHECKS {
+            return Ok(());
         }
+        std::hint::cold_path();
+        let mut lowest = self.lowest_pressure.get();
+        a.check(y.get(A::BLOCK).unwrap_or(&[]), l, &mut lowest)?;
         self.lowest_pressure.set(lowest);
         Ok(())
+    }
+
+    /// [`OdeSystem::stable_step`] for actuator `A`: none asked for where it has no bound.
+    #[inline(always)]
+    fn stable_step_of<A: Actuator + InState, const N: usize>(&self, a: &A, y: &[f64; N]) -> f64 {
+        if !A::BOUNDED {
+            return f64::INFINITY;
+        }
+        std::hint::cold_path();
+        let lengths = || self.form.joints.kinematics_in::<Narrow>(&BodyState::from_vector(body(y))).lengths();
+        a.stable_step(y.get(A::BLOCK).unwrap_or(&[]), lengths)
     }
 
     fn tracks_singularities(&self) -> bool {
@@ -183,36 +188,6 @@ impl<L: LegForceLaw + ?Sized, V: Lanes> PlatformDynamics<'_, L, V> {
         }
     }
 
-    /// The rate with hydraulic legs: the valve commands from the law, the legs' lengths and
-    /// rates, the hydraulic law leg by leg, and the body under the resulting forces (the force
-    /// inputs' fast path where it applies). Inlined into the caller, which is compiled for the
-    /// lanes' registers (the intrinsics would otherwise be calls); `cold_path` there keeps it out
-    /// of the force inputs' way.
-    #[inline(always)]
-    fn hydraulic_derivative(&self, h: &HydraulicActuators, t: f64, y: &SimulationState, dy: &mut SimulationState) {
-        let state = BodyState::from_vector(body(y));
-        let valves = if self.law.depends_on_state() {
-            self.law.leg_forces(t, &state, &LegGeometry::new(&self.form.stand, &state))
-        } else {
-            self.law.leg_forces_at(t)
-        };
-        let legs = self.form.joints.kinematics_in::<V>(&state);
-        let l_dot = self.form.joints.length_rates_in::<V>(&state, &legs);
-        let (u, [supplied, compression, losses]) =
-            hydraulic_rates(h, y, &legs.lengths(), &l_dot, &valves, h.supply, dy);
-        let forces = HeldForces::constant(u);
-        if let Some(body_rate) = dy.first_chunk_mut::<STATE_DIM>() {
-            let power = self.form.derivative_in::<HeldForces, V>(t, body(y), &forces, body_rate);
-            dy[quadrature::WORK_DISSIPATED] = power.dissipation + losses;
-        }
-        dy[quadrature::WORK_F] = 0.0;
-        for x in &mut dy[CURRENTS..hydraulic::PA] {
-            *x = 0.0;
-        }
-        dy[quadrature::WORK_HYDRAULIC] = supplied;
-        dy[quadrature::WORK_COMPRESSION] = compression;
-    }
-
     /// The guard, the switching functions and the leg outputs from one computation of the
     /// legs (in lanes `V`: see `JointArrays::kinematics_in`).
     #[inline(always)]
@@ -228,10 +203,7 @@ impl<L: LegForceLaw + ?Sized, V: Lanes> PlatformDynamics<'_, L, V> {
         let legs = self.form.joints.kinematics_in::<V>(&state);
         self.guard.check_legs(&state, &legs)?;
         let ldot = self.form.joints.length_rates_in::<V>(&state, &legs);
-        if let Some(h) = self.form.hydraulics() {
-            std::hint::cold_path();
-            self.check_chambers(h, y, &legs.lengths())?;
-        }
+        with_actuator!(self.form.actuator(), a => self.check_actuator(a, y, &legs.lengths()))?;
         self.checked_legs.set(Some(LegOutputs { l: legs.lengths(), ldot }));
         if let Some(g) = g {
             self.switching_of(&state, &legs, g, self.tracks_singularities());
@@ -249,89 +221,30 @@ impl<L: LegForceLaw + ?Sized, V: Lanes, const N: usize> OdeSystem<N> for Platfor
 
     #[inline(always)]
     fn derivative(&self, t: f64, y: &[f64; N], dy: &mut [f64; N]) {
-        if let Some(h) = self.form.hydraulics() {
-            std::hint::cold_path();
-            // Only ever stepped over the whole state.
-            if let (Ok(y), Ok(dy)) =
-                (<&SimulationState>::try_from(&y[..]), <&mut SimulationState>::try_from(&mut dy[..]))
-            {
-                self.hydraulic_derivative(h, t, y, dy);
-            }
-            return;
-        }
-        if self.form.drives().is_some() {
-            // Out of the force-input path's way (its code and registers stay as without drives).
-            std::hint::cold_path();
-            // The law gives the voltages.
-            let inputs = if self.law.depends_on_state() {
-                let state = BodyState::from_vector(body(y));
-                self.law.leg_forces(t, &state, &LegGeometry::new(&self.form.stand, &state))
-            } else {
-                self.law.leg_forces_at(t)
-            };
-            let currents: [f64; LEG_COUNT] = std::array::from_fn(|k| y[CURRENTS + k]);
-            let actuation = Actuation::Drives { currents: &currents, voltages: &inputs };
-            if let Some((body_rate, rest)) = dy.split_first_chunk_mut::<STATE_DIM>() {
-                let rates = self.form.derivative_machine_of::<V>(body(y), actuation, body_rate);
-                if let Some([work, dissipated, currents @ .., electric]) = rest.first_chunk_mut::<9>() {
-                    *work = 0.0;
-                    *dissipated = rates.power.dissipation + rates.drive_dissipation;
-                    currents.copy_from_slice(&rates.current_rate);
-                    *electric = rates.electric_power;
-                }
-            }
-            return;
-        }
-        if let Some((body_rate, rest)) = dy.split_first_chunk_mut::<STATE_DIM>() {
-            let power = self.form.derivative_in::<L, V>(t, body(y), self.law, body_rate);
-            if let [work, dissipated, drives @ ..] = rest {
-                *work = power.actuator;
-                *dissipated = power.dissipation;
-                // No drives: the currents and the electric work stay as they are (0).
-                for x in drives {
-                    *x = 0.0;
-                }
-            }
-        }
+        let body = FastPath::<L, V> { form: self.form, t, body: body(y), law: self.law, lanes: PhantomData };
+        rate_in(self.form, &body, y, dy);
     }
 
+    /// Up to the end of the actuator's block: the later blocks stay 0 and constant.
     fn active_dimension(&self) -> usize {
-        let n = if self.form.hydraulics().is_some() {
-            SIMULATION_DIM
-        } else if self.form.drives().is_some() {
-            WITH_DRIVES
-        } else {
-            WITHOUT_DRIVES
-        };
-        n.min(N)
+        self.form.actuator().kind().block().end.min(N)
     }
 
-    /// With hydraulic legs, the step the explicit fixed-step method stays stable for at `y`:
-    /// the legs' fast modes ([`crate::physics::actuators::hydraulics::HydraulicLegs::stiffness`])
-    /// against RK4's stability interval (2.78 on the negative real axis), with a margin for
-    /// the rate's growth within the step.
+    /// The actuator's bound ([`Actuator::stable_step`]: the hydraulic legs' fast modes), at the
+    /// legs' lengths in SSE2 pairs (the baseline of x86-64: inlined wherever this is called
+    /// from).
     fn stable_step(&self, _t: f64, y: &[f64; N]) -> f64 {
-        let Some(h) = self.form.hydraulics() else { return f64::INFINITY };
-        let state = BodyState::from_vector(body(y));
-        // SSE2 pairs, the baseline of x86-64: inlined wherever this is called from.
-        let legs = self.form.joints.kinematics_in::<Narrow>(&state);
-        let l = legs.lengths();
-        let mut fastest = 0.0_f64;
-        for k in 0..LEG_COUNT {
-            let at = |i: usize| y.get(i).copied().unwrap_or(0.0);
-            let chambers = Chambers {
-                pa: at(hydraulic::PA + k),
-                pb: at(hydraulic::PB + k),
-                spool: at(hydraulic::SPOOL + k),
-                spool_rate: at(hydraulic::SPOOL_RATE + k),
-            };
-            fastest = fastest.max(h.legs.stiffness(&chambers, &h.piston(k, l[k], 0.0), h.supply));
-        }
-        STABLE_STEP_FACTOR / fastest
+        with_actuator!(self.form.actuator(), a => self.stable_step_of(a, y))
     }
 
+    /// The actuator's block decaying linearly ([`Actuator::linear_decay`]: the drives' currents).
     fn linear_decay(&self) -> Option<LinearDecay> {
-        self.form.drives().map(|d| LinearDecay { start: CURRENTS, len: LEG_COUNT, rate: d.current_decay_rate() })
+        let start = self.form.actuator().kind().block().start;
+        with_actuator!(self.form.actuator(), a => a.linear_decay()).map(|(first, len, rate)| LinearDecay {
+            start: start + first,
+            len,
+            rate,
+        })
     }
 
     #[inline(always)]

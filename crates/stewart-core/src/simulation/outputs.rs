@@ -4,8 +4,10 @@
 
 use nalgebra::{Matrix3, Matrix6, Scalar, Vector3};
 
-use super::state::{CURRENTS, SIMULATION_DIM, SimulationState, actuator_forces, body, hydraulic, quadrature};
-use crate::physics::actuators::hydraulics::Chambers;
+use super::state::{
+    CURRENTS, SIMULATION_DIM, SimulationState, actuator_forces, body, hydraulic, quadrature, supply_flow_of,
+};
+use crate::physics::actuators::{Actuator, layout, with_actuator};
 use crate::physics::body::invariants::mechanical_energy;
 use crate::physics::body::kinematics::angles_from_rotation;
 use crate::physics::body::state::{BodyState, STATE_DIM};
@@ -15,7 +17,6 @@ use crate::physics::legs::geometry::LegGeometry;
 use crate::physics::legs::joint_limits::angle;
 use crate::physics::number::{Dual, Real, lift};
 use crate::physics::special_form::SpecialForm;
-use crate::physics::special_form::sum_over_legs;
 use crate::physics::stand::{LEG_COUNT, Stand};
 
 /// A field of an outputs type: its numbers through a function, the shape kept.
@@ -132,7 +133,142 @@ pub struct PlatformOutputs<T> {
     /// `work.hydraulic`, `work.compression`, J.
     pub hydraulic_work: T,
     pub compression_work: T,
+    /// The actuators' part of the state (every actuator's block, [`actuator_state`]): an
+    /// actuator's states and integrals are outputs read off it.
+    pub actuator_states: [T; ACTUATOR_STATES],
 }
+}
+
+/// How many states the actuators' blocks hold together.
+pub const ACTUATOR_STATES: usize = layout::END - layout::START;
+
+/// Where the simulation state's component `at` (an actuator's) sits in
+/// [`PlatformOutputs::actuator_states`].
+pub const fn actuator_state(at: usize) -> usize {
+    at - layout::START
+}
+
+/// The actuators' states read off the simulation state (the field of [`PlatformOutputs`] of the
+/// same name).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ActuatorStateOutputs<T: Scalar = f64> {
+    pub actuator_states: [T; ACTUATOR_STATES],
+}
+
+impl<T: Real> ActuatorStateOutputs<T> {
+    pub fn of(y: &[T; SIMULATION_DIM]) -> Self {
+        ActuatorStateOutputs { actuator_states: std::array::from_fn(|i| y[layout::START + i]) }
+    }
+}
+
+/// The body's pose and rates: the outputs `r`, `v`, `R`, `angles`, `w` (the fields of
+/// [`PlatformOutputs`] of the same names), a group a host reads without the legs' other values.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PoseOutputs<T: Scalar = f64> {
+    pub r: Vector3<T>,
+    pub v: Vector3<T>,
+    pub rotation: Matrix3<T>,
+    pub angles: Vector3<T>,
+    pub w: Vector3<T>,
+}
+
+impl<T: Real> PoseOutputs<T> {
+    pub fn of(state: &BodyState<T>) -> Self {
+        let rotation = state.rotation();
+        PoseOutputs {
+            r: state.r,
+            v: state.v,
+            rotation,
+            angles: angles_from_rotation(&rotation),
+            w: state.angular_velocity_body(),
+        }
+    }
+}
+
+/// What the legs' geometry gives beyond their lengths and rates: the energy (the legs', the
+/// stops' and the joint limits' potentials are in it), the end stops' forces and the joint
+/// angles (the fields of [`PlatformOutputs`] of the same names).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LegLoadOutputs<T: Scalar = f64> {
+    pub energy: T,
+    pub stop_force: [T; LEG_COUNT],
+    pub theta_b: [T; LEG_COUNT],
+    pub theta_a: [T; LEG_COUNT],
+}
+
+impl<T: Real> LegLoadOutputs<T> {
+    /// At the simulation state `y` with body state `state`, legs `legs` and leg rates `ldot`.
+    pub fn of(
+        form: &SpecialForm,
+        y: &[T; SIMULATION_DIM],
+        state: &BodyState<T>,
+        legs: &LegGeometry<T>,
+        ldot: &[T; LEG_COUNT],
+    ) -> Self {
+        let stand = &form.stand;
+        let mut stop_force = [T::zero(); LEG_COUNT];
+        let mut energy = mechanical_energy(stand, state);
+        if let Some(stops) = form.stops() {
+            for k in 0..LEG_COUNT {
+                stop_force[k] = stops.contact(k, legs.length[k], ldot[k]).force;
+            }
+            energy += stops.potential_energy(&legs.length);
+        }
+        let x = y.get(form.actuator().kind().block()).unwrap_or(&[]);
+        if let Some(stored) = with_actuator!(form.actuator(), a => a.stored_energy(x)) {
+            energy += stored;
+        }
+        let (mut theta_b, mut theta_a) = ([T::zero(); LEG_COUNT], [T::zero(); LEG_COUNT]);
+        let has_mass = form.legs().has_mass();
+        for k in 0..LEG_COUNT {
+            if !(legs.length[k] > T::zero()) || (form.joint_limits().is_none() && !has_mass) {
+                continue;
+            }
+            let motion = LegMotion::at(state, &stand.platform_joints[k], &legs.leg[k], legs.length[k]);
+            if has_mass {
+                energy += form.legs().energy(&motion, stand.base_joints[k].z, stand.gravity);
+            }
+            if let Some(limits) = form.joint_limits() {
+                theta_b[k] = angle(motion.n.dot(&lift(&limits.base_reference[k])));
+                theta_a[k] = angle(motion.n.dot(&state.body_vector(&limits.platform_reference[k])));
+                energy +=
+                    limits.potential(theta_b[k], limits.base_max) + limits.potential(theta_a[k], limits.platform_max);
+            }
+        }
+        LegLoadOutputs { energy, stop_force, theta_b, theta_a }
+    }
+
+    /// At the simulation state `y`.
+    pub fn at(form: &SpecialForm, y: &[T; SIMULATION_DIM]) -> Self {
+        let state = BodyState::from_vector(&body_of(y));
+        let legs = LegGeometry::new(&form.stand, &state);
+        Self::of(form, y, &state, &legs, &legs.length_rates(&form.stand, &state))
+    }
+}
+
+/// What is read off the body's state and the legs' integrals: the constraint residual,
+/// `work.F` and `work.dissipated` (the fields of [`PlatformOutputs`] of the same names).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StateOutputs<T: Scalar = f64> {
+    pub constraint_error: T,
+    pub work_of_forces: T,
+    pub dissipated_energy: T,
+}
+
+impl<T: Real> StateOutputs<T> {
+    pub fn of(y: &[T; SIMULATION_DIM]) -> Self {
+        StateOutputs {
+            constraint_error: BodyState::from_vector(&body_of(y)).constraint_residual(),
+            work_of_forces: y[quadrature::WORK_F],
+            dissipated_energy: y[quadrature::WORK_DISSIPATED],
+        }
+    }
+}
+
+/// The body coordinates of a simulation state in any number type.
+#[inline(always)]
+fn body_of<T: Real>(y: &[T; SIMULATION_DIM]) -> [T; STATE_DIM] {
+    y.first_chunk::<STATE_DIM>().copied().unwrap_or([T::zero(); STATE_DIM])
 }
 
 impl<T: Real> PlatformOutputs<T> {
@@ -145,7 +281,7 @@ impl<T: Real> PlatformOutputs<T> {
     }
 
     /// [`PlatformOutputs::compute`] with the hydraulic supply pressure in the number type (for
-    /// derivatives with respect to `pS`).
+    /// derivatives with respect to `pS`): every group of outputs, the legs computed once.
     pub fn compute_supplied(
         form: &SpecialForm,
         y: &[T; SIMULATION_DIM],
@@ -153,88 +289,47 @@ impl<T: Real> PlatformOutputs<T> {
         supply: T,
     ) -> Self {
         let stand = &form.stand;
-        let zero = [T::zero(); STATE_DIM];
-        let body = y.first_chunk::<STATE_DIM>().unwrap_or(&zero);
-        let state = BodyState::from_vector(body);
+        let body = body_of(y);
+        let state = BodyState::from_vector(&body);
         let legs = LegGeometry::new(stand, &state);
-        let rotation = state.rotation();
         let ldot = legs.length_rates(stand, &state);
-        let mut stop_force = [T::zero(); LEG_COUNT];
-        let mut energy = mechanical_energy(stand, &state);
-        if let Some(stops) = form.stops() {
-            for k in 0..LEG_COUNT {
-                stop_force[k] = stops.contact(k, legs.length[k], ldot[k]).force;
-            }
-            energy += stops.potential_energy(&legs.length);
-        }
-        let current: [T; LEG_COUNT] = std::array::from_fn(|k| y[CURRENTS + k]);
-        if let Some(drives) = form.drives() {
-            energy += drives.magnetic_energy(&current);
-        }
-        let (mut theta_b, mut theta_a) = ([T::zero(); LEG_COUNT], [T::zero(); LEG_COUNT]);
-        let has_mass = form.legs().has_mass();
-        for k in 0..LEG_COUNT {
-            if !(legs.length[k] > T::zero()) || (form.joint_limits().is_none() && !has_mass) {
-                continue;
-            }
-            let a_dot = state.v + state.body_vector_rate(&stand.platform_joints[k]);
-            let motion = LegMotion::new(&legs.leg[k], legs.length[k], &a_dot);
-            if has_mass {
-                energy += form.legs().energy(&motion, stand.base_joints[k].z, stand.gravity);
-            }
-            if let Some(limits) = form.joint_limits() {
-                theta_b[k] = angle(motion.n.dot(&lift(&limits.base_reference[k])));
-                theta_a[k] = angle(motion.n.dot(&state.body_vector(&limits.platform_reference[k])));
-                energy +=
-                    limits.potential(theta_b[k], limits.base_max) + limits.potential(theta_a[k], limits.platform_max);
-            }
-        }
+        let PoseOutputs { r, v, rotation, angles, w } = PoseOutputs::of(&state);
+        let LegLoadOutputs { energy, stop_force, theta_b, theta_a } = LegLoadOutputs::of(form, y, &state, &legs, &ldot);
+        let StateOutputs { constraint_error, work_of_forces, dissipated_energy } = StateOutputs::of(y);
         let (actuator_force, joint_force) = match u {
             Some(u) => {
                 let actuator = actuator_forces(form, y, u);
-                (actuator, form.joint_forces(body, &actuator))
+                (actuator, form.joint_forces(&body, &actuator))
             }
             None => ([T::constant(f64::NAN); LEG_COUNT], [Vector3::from_element(T::constant(f64::NAN)); LEG_COUNT]),
         };
-        let pa: [T; LEG_COUNT] = std::array::from_fn(|k| y[hydraulic::PA + k]);
-        let pb: [T; LEG_COUNT] = std::array::from_fn(|k| y[hydraulic::PB + k]);
-        let spool: [T; LEG_COUNT] = std::array::from_fn(|k| y[hydraulic::SPOOL + k]);
-        let supply_flow = match form.hydraulics() {
-            Some(h) => {
-                let flows: [T; LEG_COUNT] = std::array::from_fn(|k| {
-                    let chambers =
-                        Chambers { pa: pa[k], pb: pb[k], spool: spool[k], spool_rate: y[hydraulic::SPOOL_RATE + k] };
-                    h.legs.rate(&chambers, &h.piston(k, legs.length[k], ldot[k]), T::zero(), supply).supply_flow
-                });
-                sum_over_legs(&flows)
-            }
-            None => T::zero(),
-        };
+        let supply_flow = form.hydraulics().map_or(T::zero(), |h| supply_flow_of(h, y, &legs.length, &ldot, supply));
         PlatformOutputs {
-            r: state.r,
-            v: state.v,
+            r,
+            v,
             rotation,
-            angles: angles_from_rotation(&rotation),
-            w: state.angular_velocity_body(),
+            angles,
+            w,
             l: legs.length,
             ldot,
             energy,
-            constraint_error: state.constraint_residual(),
+            constraint_error,
             stop_force,
-            work_of_forces: y[quadrature::WORK_F],
-            dissipated_energy: y[quadrature::WORK_DISSIPATED],
+            work_of_forces,
+            dissipated_energy,
             theta_b,
             theta_a,
             joint_force,
             actuator_force,
-            current,
+            current: std::array::from_fn(|k| y[CURRENTS + k]),
             electric_work: y[quadrature::WORK_ELECTRIC],
-            pa,
-            pb,
-            spool,
+            pa: std::array::from_fn(|k| y[hydraulic::PA + k]),
+            pb: std::array::from_fn(|k| y[hydraulic::PB + k]),
+            spool: std::array::from_fn(|k| y[hydraulic::SPOOL + k]),
             supply_flow,
             hydraulic_work: y[quadrature::WORK_HYDRAULIC],
             compression_work: y[quadrature::WORK_COMPRESSION],
+            actuator_states: ActuatorStateOutputs::of(y).actuator_states,
         }
     }
 }

@@ -4,7 +4,9 @@ use crate::integration::{
     Crossing, CrossingLog, IntegrationError, Integrator, OdeSystem, SolverSettings, SwitchingSides,
 };
 use crate::physics::actuators::drives::ElectricDrives;
+use crate::physics::actuators::forces::ForceInputs;
 use crate::physics::actuators::hydraulics::HydraulicActuators;
+use crate::physics::actuators::{ActiveActuator, Actuator, with_actuator};
 use crate::physics::body::state::{BodyState, STATE_DIM};
 
 use crate::physics::actuators::LegForceLaw;
@@ -180,65 +182,55 @@ impl PlatformSimulation {
         Ok(self)
     }
 
+    /// The same simulation with the actuator `actuator` in the legs (validated), its states at
+    /// the start from its parameters ([`Actuator::initial_state`], checked against the initial
+    /// legs), the other actuators' states 0.
+    pub fn with_actuator(mut self, actuator: ActiveActuator) -> Result<Self, ParameterError> {
+        actuator.validate()?;
+        let mut state = self.state;
+        actuator.initial_state(&mut state);
+        let l = LegGeometry::new(self.stand(), &self.body_state()).length;
+        actuator.check_start(&state, &l)?;
+        let mut lowest = f64::INFINITY;
+        let x = state.get(actuator.kind().block()).unwrap_or(&[]);
+        // What the actuator tracks from the start (the lowest chamber pressure); its start was
+        // checked just above.
+        let _ = with_actuator!(&actuator, a => a.check(x, &l, &mut lowest));
+        self.lowest_pressure = lowest;
+        self.form = self.form.clone().with_actuator(actuator);
+        self.state = state;
+        Ok(self)
+    }
+
     /// The same simulation with electric drives in the legs (validated) and their initial
     /// armature currents `I0`, A (`None`: the leg forces are given).
     pub fn with_drives(
-        mut self,
+        self,
         drives: Option<ElectricDrives>,
         initial_currents: [f64; LEG_COUNT],
     ) -> Result<Self, ParameterError> {
-        if let Some(d) = &drives {
-            d.validate()?;
-            for (k, &i) in initial_currents.iter().enumerate() {
-                crate::physics::stand::check_finite(&format!("I0[{}]", k + 1), i)?;
-            }
+        match drives {
+            Some(d) => self.with_actuator(ActiveActuator::Electric(ElectricDrives { initial_currents, ..d })),
+            None if self.form.drives().is_some() => self.with_actuator(ActiveActuator::Forces(ForceInputs)),
+            None => Ok(self),
         }
-        self.form = self.form.clone().with_drives(drives);
-        for k in 0..LEG_COUNT {
-            self.state[CURRENTS + k] = if drives.is_some() { initial_currents[k] } else { 0.0 };
-        }
-        Ok(self)
     }
 
     /// The same simulation with hydraulic servo legs (validated) and their initial chamber
     /// pressures `p_A0`, `p_B0` (Pa; the spools start centred and at rest), or `None`.
     pub fn with_hydraulics(
-        mut self,
+        self,
         hydraulics: Option<HydraulicActuators>,
         initial_pa: [f64; LEG_COUNT],
         initial_pb: [f64; LEG_COUNT],
     ) -> Result<Self, ParameterError> {
-        if let Some(h) = &hydraulics {
-            h.validate()?;
-            let legs = LegGeometry::new(self.stand(), &self.body_state());
-            for k in 0..LEG_COUNT {
-                crate::physics::stand::check_finite(&format!("pA0[{}]", k + 1), initial_pa[k])?;
-                crate::physics::stand::check_finite(&format!("pB0[{}]", k + 1), initial_pb[k])?;
-                let (va, vb) = h.legs.volumes(&h.piston(k, legs.length[k], 0.0));
-                if !(va > 0.0 && vb > 0.0) {
-                    return Err(ParameterError::new(
-                        format!("lmin[{}]", k + 1),
-                        format!(
-                            "leg {} starts at {:e} m, where a hydraulic chamber has no volume (V_A = {va:e} m3, V_B = \
-                             {vb:e} m3): the initial pose must put every piston within its stroke's dead volumes",
-                            k + 1,
-                            legs.length[k]
-                        ),
-                    ));
-                }
+        match hydraulics {
+            Some(h) => {
+                self.with_actuator(ActiveActuator::Hydraulic(HydraulicActuators { initial_pa, initial_pb, ..h }))
             }
+            None if self.form.hydraulics().is_some() => self.with_actuator(ActiveActuator::Forces(ForceInputs)),
+            None => Ok(self),
         }
-        self.form = self.form.clone().with_hydraulics(hydraulics);
-        let on = hydraulics.is_some();
-        for k in 0..LEG_COUNT {
-            self.state[hydraulic::PA + k] = if on { initial_pa[k] } else { 0.0 };
-            self.state[hydraulic::PB + k] = if on { initial_pb[k] } else { 0.0 };
-            self.state[hydraulic::SPOOL + k] = 0.0;
-            self.state[hydraulic::SPOOL_RATE + k] = 0.0;
-        }
-        self.lowest_pressure =
-            if on { self.pressures().iter().flatten().fold(f64::INFINITY, |a, &b| a.min(b)) } else { f64::INFINITY };
-        Ok(self)
     }
 
     /// The chamber pressures `[p_A, p_B]`, Pa (0 without hydraulic legs).

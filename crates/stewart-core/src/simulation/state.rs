@@ -1,36 +1,31 @@
-//! The simulation state's layout (the body's 24 coordinates, then the quadratures, the drives'
-//! currents, the hydraulic states), its rate for every actuator, and the switching functions:
-//! what the integrators, the outputs and the models index the state by.
+//! The simulation state's layout (the body's 24 coordinates, the legs' two integrals, then each
+//! actuator's block: `crate::physics::actuators::layout`), its rate (one assembly for every
+//! actuator, which the definition and the steps' fast path run alike), and the switching
+//! functions: what the integrators, the outputs and the models index the state by.
 
-use crate::physics::actuators::drives::DriveRate;
-use crate::physics::actuators::hydraulics::{Chambers, HydraulicActuators};
+use crate::physics::actuators::hydraulics::HydraulicActuators;
+use crate::physics::actuators::{Actuator, ActuatorKind, BodyRate, InState, layout, with_actuator};
 use crate::physics::body::state::{BodyState, STATE_DIM, StateVector};
-use crate::physics::number::Real;
-
 use crate::physics::legs::geometry::LegGeometry;
-use crate::physics::special_form::{SpecialForm, sum_over_legs};
+use crate::physics::number::Real;
+use crate::physics::special_form::{Definition, SpecialForm};
 use crate::physics::stand::LEG_COUNT;
 
 /// Length of the simulation state: the 24 special-form coordinates, the work of the
 /// actuator forces and the energy dissipated (quadratures integrated with the motion, so that
-/// the energy balance holds to the integration tolerance), the drives' six armature currents
-/// and the electric energy supplied, then the hydraulic legs' 12 chamber pressures, 6 spool
-/// positions and rates and the hydraulic and compression work (each 0 and constant when its
-/// actuator is off).
-pub const SIMULATION_DIM: usize = STATE_DIM + 35;
-
-/// The length of the state without drives or hydraulics: the trailing components stay 0, and
-/// the methods step as they would without them ([`OdeSystem::active_dimension`]).
-pub(super) const WITHOUT_DRIVES: usize = STATE_DIM + 2;
-/// The length of the state with drives (the hydraulic components stay 0), and the length the
-/// integrators step without hydraulic legs ([`MECHANICAL_DIM`]).
-pub(super) const WITH_DRIVES: usize = STATE_DIM + 9;
+/// the energy balance holds to the integration tolerance), then each actuator's block (the
+/// drives' six armature currents and the electric energy supplied; the hydraulic legs' 12
+/// chamber pressures, 6 spool positions and rates and the hydraulic and compression work), 0
+/// and constant when its actuator is not the legs'.
+pub const SIMULATION_DIM: usize = layout::END;
 
 /// The leading part of a [`SimulationState`] the integrators step when the hydraulic legs are
-/// off (their components are then 0 and constant): the shorter arrays keep the force inputs'
-/// and the drives' steps as cheap as before the hydraulics
-/// ([`PlatformSimulation::advance`](super::PlatformSimulation::advance)).
-pub const MECHANICAL_DIM: usize = WITH_DRIVES;
+/// off (their components are then 0 and constant): up to the end of the drives' block. The
+/// shorter arrays keep the force inputs' and the drives' steps as cheap as before the
+/// hydraulics ([`PlatformSimulation::advance`](super::PlatformSimulation::advance)); within
+/// them the methods step up to the active actuator's block's end only
+/// (`OdeSystem::active_dimension`).
+pub const MECHANICAL_DIM: usize = layout::Electric.end;
 const _: () = assert!(MECHANICAL_DIM <= SIMULATION_DIM, "the leading part of the state");
 
 /// The simulation state, `r, v, e1, e2, e3, e1', e2', e3', W_F, W_d, I_1..I_6, W_e, p_A1..6,
@@ -39,111 +34,69 @@ pub type SimulationState = [f64; SIMULATION_DIM];
 
 /// Offsets of the quadratures in a [`SimulationState`].
 pub mod quadrature {
+    use crate::physics::actuators::hydraulics::block;
+    use crate::physics::actuators::layout;
     /// `work.F = integral of sum_k F_k ldot_k dt`, J.
     pub const WORK_F: usize = super::STATE_DIM;
     /// `work.dissipated = integral of P_d dt`, J.
     pub const WORK_DISSIPATED: usize = super::STATE_DIM + 1;
     /// `work.electric = integral of sum_k U_k I_k dt`, J.
-    pub const WORK_ELECTRIC: usize = super::STATE_DIM + 8;
+    pub const WORK_ELECTRIC: usize = layout::Electric.start + crate::physics::stand::LEG_COUNT;
     /// `work.hydraulic = integral of sum_k P_S,k dt`, J.
-    pub const WORK_HYDRAULIC: usize = super::STATE_DIM + 33;
+    pub const WORK_HYDRAULIC: usize = layout::Hydraulic.start + block::WORK_HYDRAULIC;
     /// `work.compression = integral of sum_k (p_A V_A p_A' + p_B V_B p_B') / beta dt`, J.
-    pub const WORK_COMPRESSION: usize = super::STATE_DIM + 34;
+    pub const WORK_COMPRESSION: usize = layout::Hydraulic.start + block::WORK_COMPRESSION;
 }
+const _: () = assert!(quadrature::WORK_DISSIPATED + 1 == layout::START, "the actuators' blocks follow");
 
 /// Offsets of the hydraulic legs' states in a [`SimulationState`]: `p_A`, `p_B` (Pa), the
 /// spools' positions `s` and rates `s'` (1/s), six each.
 pub mod hydraulic {
-    pub const PA: usize = super::STATE_DIM + 9;
-    pub const PB: usize = PA + 6;
-    pub const SPOOL: usize = PB + 6;
-    pub const SPOOL_RATE: usize = SPOOL + 6;
+    use crate::physics::actuators::hydraulics::block;
+    use crate::physics::actuators::layout;
+    pub const PA: usize = layout::Hydraulic.start + block::PA;
+    pub const PB: usize = layout::Hydraulic.start + block::PB;
+    pub const SPOOL: usize = layout::Hydraulic.start + block::SPOOL;
+    pub const SPOOL_RATE: usize = layout::Hydraulic.start + block::SPOOL_RATE;
 }
 
 /// Offset of the drives' armature currents `I_1..I_6` (A) in a [`SimulationState`].
-pub const CURRENTS: usize = STATE_DIM + 2;
+pub const CURRENTS: usize = layout::Electric.start;
 
-/// The drives' forces and rates at the simulation state `y` and voltages `inputs` (`None`
-/// without drives).
-fn drive_rates<T: Real>(
-    form: &SpecialForm,
-    y: &[T; SIMULATION_DIM],
-    inputs: &[T; LEG_COUNT],
-) -> Option<[DriveRate<T>; LEG_COUNT]> {
-    form.drives()?;
-    let zero = [T::zero(); STATE_DIM];
-    let currents: [T; LEG_COUNT] = std::array::from_fn(|k| y[CURRENTS + k]);
-    form.drive_rates(&BodyState::from_vector(y.first_chunk::<STATE_DIM>().unwrap_or(&zero)), &currents, inputs)
-}
-
-/// The axial forces the actuators exert at the simulation state `y` for the inputs: the
-/// inputs themselves (leg forces `F`), with drives the forces of their currents, with
-/// hydraulic legs those of their chamber pressures.
-pub fn actuator_forces<T: Real>(
-    form: &SpecialForm,
-    y: &[T; SIMULATION_DIM],
-    inputs: &[T; LEG_COUNT],
-) -> [T; LEG_COUNT] {
-    if let Some(h) = form.hydraulics() {
-        let (area_a, area_b) = h.legs.areas();
-        return std::array::from_fn(|k| y[hydraulic::PA + k] * area_a - y[hydraulic::PB + k] * area_b);
-    }
-    drive_rates(form, y, inputs).map_or(*inputs, |d| d.map(|k| k.force))
-}
-
-/// `Qsupply`, m³/s: the flow the six valves draw from the supply at the simulation state `y`
-/// (0 without hydraulic legs).
-pub fn supply_flow(form: &SpecialForm, y: &SimulationState) -> f64 {
-    let Some(h) = form.hydraulics() else { return 0.0 };
-    let state = BodyState::from_vector(body(y));
-    let legs = LegGeometry::new(&form.stand, &state);
-    let l_dot = legs.length_rates(&form.stand, &state);
-    let flows: [f64; LEG_COUNT] = std::array::from_fn(|k| {
-        let chambers = Chambers {
-            pa: y[hydraulic::PA + k],
-            pb: y[hydraulic::PB + k],
-            spool: y[hydraulic::SPOOL + k],
-            spool_rate: y[hydraulic::SPOOL_RATE + k],
-        };
-        h.legs.rate(&chambers, &h.piston(k, legs.length[k], l_dot[k]), 0.0, h.supply).supply_flow
-    });
-    sum_over_legs(&flows)
-}
-
-/// The hydraulic legs' rates at the simulation state `y` (legs of lengths `l`, rates `l_dot`)
-/// for the valve commands `valves` and the supply pressure `supply`, written into `dy`; returns
-/// the forces `u_k` and the sums of the supply power, the compression power and the losses.
+/// The rate of the state `y` (the whole simulation state, or its leading part holding the
+/// legs' actuator's block: `N`) into `dy`, through `body` (the definition or the fast path):
+/// the active actuator's rate ([`Actuator::rate`]: its block and the body's), the legs'
+/// integrals, and 0 for every other actuator's block. The one assembly of the whole state's
+/// rate, in any number type.
 #[inline(always)]
-pub(super) fn hydraulic_rates<T: Real>(
-    h: &HydraulicActuators,
-    y: &[T; SIMULATION_DIM],
-    l: &[T; LEG_COUNT],
-    l_dot: &[T; LEG_COUNT],
-    valves: &[T; LEG_COUNT],
-    supply: T,
-    dy: &mut [T; SIMULATION_DIM],
-) -> ([T; LEG_COUNT], [T; 3]) {
-    let mut u = [T::zero(); LEG_COUNT];
-    let mut powers = [[T::zero(); LEG_COUNT]; 3];
-    for k in 0..LEG_COUNT {
-        let chambers = Chambers {
-            pa: y[hydraulic::PA + k],
-            pb: y[hydraulic::PB + k],
-            spool: y[hydraulic::SPOOL + k],
-            spool_rate: y[hydraulic::SPOOL_RATE + k],
-        };
-        let command = valves[k].clamp_to(T::constant(-1.0), T::constant(1.0));
-        let r = h.legs.rate(&chambers, &h.piston(k, l[k], l_dot[k]), command, supply);
-        dy[hydraulic::PA + k] = r.pa_rate;
-        dy[hydraulic::PB + k] = r.pb_rate;
-        dy[hydraulic::SPOOL + k] = r.spool_rate;
-        dy[hydraulic::SPOOL_RATE + k] = r.spool_acceleration;
-        u[k] = r.force;
-        powers[0][k] = r.supply_power;
-        powers[1][k] = r.compression_power;
-        powers[2][k] = r.dissipation;
+pub fn rate_in<T: Real, B: BodyRate<T>, const N: usize>(form: &SpecialForm, body: &B, y: &[T; N], dy: &mut [T; N]) {
+    with_actuator!(form.actuator(), a => rate_of(a, body, y, dy));
+}
+
+/// [`rate_in`] for actuator `A`: its block's place known when compiled.
+#[inline(always)]
+fn rate_of<A: Actuator + InState, T: Real, B: BodyRate<T>, const N: usize>(
+    a: &A,
+    body: &B,
+    y: &[T; N],
+    dy: &mut [T; N],
+) {
+    if !A::HOT {
+        std::hint::cold_path();
     }
-    (u, powers.map(|p| sum_over_legs(&p)))
+    let Some((head, rest)) = dy.split_first_chunk_mut::<STATE_DIM>() else { return };
+    let (integrals, blocks) = rest.split_at_mut(rest.len().min(layout::START - STATE_DIM));
+    let (before, after) = blocks.split_at_mut(blocks.len().min(A::BLOCK.start - layout::START));
+    let (x_rate, after) = after.split_at_mut(after.len().min(A::BLOCK.len()));
+    let x = y.get(A::BLOCK).unwrap_or(&[]);
+    let power = Actuator::rate(a, body, x, head, x_rate);
+    if let [work, dissipated] = integrals {
+        (*work, *dissipated) = (power.actuator, power.dissipation);
+    }
+    // The other actuators' states stay as they are (0). (Two fills of lengths known when
+    // compiled; one loop over both took 50 instructions a right-hand side.)
+    before.fill(T::zero());
+    after.fill(T::zero());
 }
 
 /// The rate of a simulation state `y` for the inputs `inputs` (the leg forces `F`, N, with
@@ -170,42 +123,54 @@ pub fn state_rate_supplied<T: Real>(
     supply: T,
 ) -> [T; SIMULATION_DIM] {
     let zero = [T::zero(); STATE_DIM];
-    let b = y.first_chunk::<STATE_DIM>().unwrap_or(&zero);
+    let body = y.first_chunk::<STATE_DIM>().unwrap_or(&zero);
     let mut dy = [T::zero(); SIMULATION_DIM];
-    if let Some(h) = form.hydraulics() {
-        let state = BodyState::from_vector(b);
-        let legs = LegGeometry::new(&form.stand, &state);
-        let l_dot = legs.length_rates(&form.stand, &state);
-        let (u, [supplied, compression, losses]) = hydraulic_rates(h, y, &legs.length, &l_dot, inputs, supply, &mut dy);
-        let (rate, power) = form.rate(b, &u);
-        if let Some(head) = dy.first_chunk_mut::<STATE_DIM>() {
-            *head = rate;
-        }
-        dy[quadrature::WORK_DISSIPATED] = power.dissipation + losses;
-        dy[quadrature::WORK_HYDRAULIC] = supplied;
-        dy[quadrature::WORK_COMPRESSION] = compression;
-        return dy;
-    }
-    if form.drives().is_none() {
-        let (rate, power) = form.rate(b, inputs);
-        if let Some(head) = dy.first_chunk_mut::<STATE_DIM>() {
-            *head = rate;
-        }
-        dy[quadrature::WORK_F] = power.actuator;
-        dy[quadrature::WORK_DISSIPATED] = power.dissipation;
-        return dy;
-    }
-    let currents: [T; LEG_COUNT] = std::array::from_fn(|k| y[CURRENTS + k]);
-    let (rate, power, drives) = form.rate_driven(b, &currents, inputs);
-    if let Some(head) = dy.first_chunk_mut::<STATE_DIM>() {
-        *head = rate;
-    }
-    dy[quadrature::WORK_DISSIPATED] = power.dissipation + sum_over_legs(&drives.map(|d| d.dissipation));
-    dy[quadrature::WORK_ELECTRIC] = sum_over_legs(&drives.map(|d| d.electric_power));
-    for k in 0..LEG_COUNT {
-        dy[CURRENTS + k] = drives[k].current_rate;
-    }
+    rate_in(form, &Definition { form, body, inputs, supply }, y, &mut dy);
     dy
+}
+
+/// The axial forces the actuators exert at the simulation state `y` for the inputs: the
+/// inputs themselves (leg forces `F`), with drives the forces of their currents, with
+/// hydraulic legs those of their chamber pressures ([`Actuator::axial_forces`]).
+pub fn actuator_forces<T: Real>(
+    form: &SpecialForm,
+    y: &[T; SIMULATION_DIM],
+    inputs: &[T; LEG_COUNT],
+) -> [T; LEG_COUNT] {
+    if form.actuator().kind() == ActuatorKind::Forces {
+        return *inputs;
+    }
+    let zero = [T::zero(); STATE_DIM];
+    let state = BodyState::from_vector(y.first_chunk::<STATE_DIM>().unwrap_or(&zero));
+    let legs = LegGeometry::new(&form.stand, &state);
+    let x = y.get(form.actuator().kind().block()).unwrap_or(&[]);
+    with_actuator!(form.actuator(), a => a.axial_forces(&state, &legs, &form.stand.platform_joints, x, inputs))
+}
+
+/// `Qsupply`, m³/s: the flow the six valves draw from the supply at the simulation state `y`
+/// (0 without hydraulic legs).
+pub fn supply_flow(form: &SpecialForm, y: &SimulationState) -> f64 {
+    let Some(h) = form.hydraulics() else { return 0.0 };
+    let state = BodyState::from_vector(body(y));
+    let legs = LegGeometry::new(&form.stand, &state);
+    let l_dot = legs.length_rates(&form.stand, &state);
+    supply_flow_of(h, y, &legs.length, &l_dot, h.supply)
+}
+
+/// `Qsupply` of the hydraulic legs `h` at the simulation state `y` (legs of lengths `l`, rates
+/// `l_dot`) and the supply pressure `supply`, in any number type
+/// ([`HydraulicActuators::supply_flow`]).
+pub fn supply_flow_of<T: Real>(
+    h: &HydraulicActuators,
+    y: &[T; SIMULATION_DIM],
+    l: &[T; LEG_COUNT],
+    l_dot: &[T; LEG_COUNT],
+    supply: T,
+) -> T {
+    match y.get(layout::Hydraulic).and_then(|x| x.try_into().ok()) {
+        Some(x) => h.supply_flow(x, l, l_dot, supply),
+        None => T::zero(),
+    }
 }
 
 /// The switching functions of a platform: where the motion is not smooth or is worth

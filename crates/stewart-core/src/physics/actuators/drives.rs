@@ -19,7 +19,10 @@
 //! constant rate `-R/L`, which the fixed-step method integrates exactly
 //! (`crate::integration::LinearDecay`).
 
+use super::{Actuator, BodyRate, LegPower};
+use crate::physics::body::state::{BodyState, STATE_DIM};
 use crate::physics::error::ParameterError;
+use crate::physics::legs::geometry::{LegGeometry, joint_rate};
 use crate::physics::number::{Number, Real};
 use crate::physics::stand::{LEG_COUNT, check_finite};
 
@@ -64,6 +67,8 @@ pub struct ElectricDrives {
     pub gear_ratio: f64,
     /// `p`, m per screw turn.
     pub screw_lead: f64,
+    /// `I0`, A: the armature currents at the start.
+    pub initial_currents: [f64; LEG_COUNT],
 }
 
 impl Default for ElectricDrives {
@@ -77,6 +82,7 @@ impl Default for ElectricDrives {
             damping: DEFAULT_DAMPING,
             gear_ratio: DEFAULT_GEAR_RATIO,
             screw_lead: DEFAULT_SCREW_LEAD,
+            initial_currents: [0.0; LEG_COUNT],
         }
     }
 }
@@ -181,6 +187,86 @@ impl ElectricDrives {
             ));
         }
         Ok(())
+    }
+}
+
+/// The drives' states: the six armature currents, then `work.electric`.
+impl Actuator for ElectricDrives {
+    const NAME: &'static str = "electric drives";
+    const STATES: usize = LEG_COUNT + 1;
+    const AT_LEG_RATES: bool = true;
+    const INPUTS: &'static str = "voltages";
+    const INPUT_UNIT: &'static str = "V";
+
+    /// The body with the drive law at each leg's rate; the currents' rates and the electric
+    /// power; the drives' losses join the dissipation (their work is electric: `work.F` stays
+    /// 0).
+    #[inline(always)]
+    fn rate<T: Real, B: BodyRate<T>>(&self, body: &B, x: &[T], dy: &mut [T; STATE_DIM], dx: &mut [T]) -> LegPower<T> {
+        let (Some(currents), Some((rates, [electric]))) =
+            (x.first_chunk::<LEG_COUNT>(), dx.split_first_chunk_mut::<LEG_COUNT>())
+        else {
+            return LegPower { actuator: T::zero(), dissipation: T::zero() };
+        };
+        let r = body.driven(currents, dy);
+        (*rates, *electric) = (r.current_rate, r.electric_power);
+        LegPower { actuator: T::zero(), dissipation: r.power.dissipation + r.drive_dissipation }
+    }
+
+    /// Each drive's force at its current, the voltage `u_k` and the leg's rate
+    /// `l_k' = (a_k - B_k) . a_k' / l_k` (0 for a collapsed leg, which carries nothing).
+    fn axial_forces<T: Real>(
+        &self,
+        state: &BodyState<T>,
+        legs: &LegGeometry<T>,
+        platform_joints: &[nalgebra::Vector3<f64>; LEG_COUNT],
+        x: &[T],
+        u: &[T; LEG_COUNT],
+    ) -> [T; LEG_COUNT] {
+        std::array::from_fn(|k| {
+            let l = legs.length[k];
+            let l_dot = if l > T::zero() { joint_rate(state, &platform_joints[k], &legs.leg[k]).0 / l } else { T::zero() };
+            self.rate(u[k], x.get(k).copied().unwrap_or(T::zero()), l_dot).force
+        })
+    }
+
+    /// `1/2 L sum I_k²`.
+    fn stored_energy<T: Real>(&self, x: &[T]) -> Option<T> {
+        Some(self.magnetic_energy(&std::array::from_fn(|k| x.get(k).copied().unwrap_or(T::zero()))))
+    }
+
+    fn axial_mass(&self) -> f64 {
+        self.reflected_mass()
+    }
+
+    /// The currents decay at `R / L`.
+    fn linear_decay(&self) -> Option<(usize, usize, f64)> {
+        Some((0, LEG_COUNT, self.current_decay_rate()))
+    }
+
+    fn validate(&self) -> Result<(), ParameterError> {
+        ElectricDrives::validate(self)?;
+        for (k, &i) in self.initial_currents.iter().enumerate() {
+            check_finite(&format!("I0[{}]", k + 1), i)?;
+        }
+        Ok(())
+    }
+
+    fn initial_state(&self, x: &mut [f64]) {
+        if let Some(currents) = x.first_chunk_mut::<LEG_COUNT>() {
+            *currents = self.initial_currents;
+        }
+    }
+
+    fn describe(&self) -> String {
+        format!(
+            ", electric drives (voltage inputs U; N = {:.4} rad/m, rotor {:.1} kg along each leg, L/R = {:e} s, \
+             initial currents {:?} A)",
+            self.transmission(),
+            self.reflected_mass(),
+            1.0 / self.current_decay_rate(),
+            self.initial_currents
+        )
     }
 }
 

@@ -24,9 +24,12 @@
 //! The law is written once over [`Number`]: one leg in `f64` or [`crate::physics::number::Dual`]
 //! (values and exact derivatives), six side by side in vector registers.
 
+mod actuator;
+pub use actuator::{Block, HydraulicActuators, block, holding_pressures};
+
 use crate::physics::error::ParameterError;
 use crate::physics::number::Number;
-use crate::physics::stand::{LEG_COUNT, check_finite};
+use crate::physics::stand::check_finite;
 
 /// Default bore `D`, m: an ISO 63 mm cylinder. At the 16 MPa supply it pushes 50 kN, six and a
 /// half times the 7.7 kN the default heave programme's most loaded leg needs; so large because
@@ -122,53 +125,6 @@ impl Default for HydraulicLegs {
             valve_leakage: DEFAULT_VALVE_LEAKAGE,
             internal_leakage: DEFAULT_INTERNAL_LEAKAGE,
         }
-    }
-}
-
-/// The hydraulic legs of a stand: the law's parameters, each leg's stroke (from the end
-/// stops' `lmin`, `lmax`, whether the stops are on or not) and the supply pressure, an input
-/// held over each step.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct HydraulicActuators {
-    pub legs: HydraulicLegs,
-    /// `lmin_k`, m: where the piston's position `x_k = l_k - lmin_k` is 0.
-    pub lower: [f64; LEG_COUNT],
-    /// `L_s = lmax_k - lmin_k`, m.
-    pub stroke: [f64; LEG_COUNT],
-    /// `p_S`, Pa.
-    pub supply: f64,
-}
-
-impl HydraulicActuators {
-    /// The legs' law with the strokes `[lmin, lmax]` at the default supply pressure.
-    pub fn new(legs: HydraulicLegs, lower: [f64; LEG_COUNT], upper: [f64; LEG_COUNT]) -> Self {
-        HydraulicActuators {
-            legs,
-            lower,
-            stroke: std::array::from_fn(|k| upper[k] - lower[k]),
-            supply: DEFAULT_SUPPLY_PRESSURE,
-        }
-    }
-
-    /// The piston of leg `k` at length `l` and rate `l_dot`.
-    #[inline(always)]
-    pub fn piston<T: Number>(&self, k: usize, l: T, l_dot: T) -> Piston<T> {
-        Piston { position: l - self.lower[k], stroke: T::constant(self.stroke[k]), rate: l_dot }
-    }
-
-    /// Checks the law's parameters and the strokes.
-    pub fn validate(&self) -> Result<(), ParameterError> {
-        self.legs.validate()?;
-        check_finite("pS", self.supply)?;
-        for k in 0..LEG_COUNT {
-            if !(self.stroke[k] > 0.0) {
-                return Err(ParameterError::new(
-                    format!("lmax[{}]", k + 1),
-                    format!("the hydraulic leg's stroke lmax - lmin = {:e} m must be > 0", self.stroke[k]),
-                ));
-            }
-        }
-        Ok(())
     }
 }
 

@@ -8,8 +8,6 @@ use nalgebra::{Matrix3, Vector3};
 use crate::maths;
 use crate::physics::number::Real;
 
-use crate::physics::stand::{LEG_COUNT, Stand};
-
 /// `(sin x, cos x)`, at `x = ±0` the exact `(±0, 1)` without the library call: a programme's
 /// constant degrees of freedom and zero angles are most of the controller's sines (the same
 /// bits as `maths::sin_cos(x)` everywhere).
@@ -18,27 +16,37 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
     if x == 0.0 { (x, 1.0) } else { maths::sin_cos(x) }
 }
 
-/// Elementary rotation about x by `angle` (textbook `c1`).
-pub fn rotation_x(angle: f64) -> Matrix3<f64> {
-    let (s, c) = sin_cos(angle);
-    Matrix3::new(1.0, 0.0, 0.0, 0.0, c, -s, 0.0, s, c)
+/// Elementary rotation about x by the angle of sine `s` and cosine `c` (textbook `c1`).
+pub fn rotation_x<T: Real>(s: T, c: T) -> Matrix3<T> {
+    let (o, z) = (T::one(), T::zero());
+    Matrix3::new(o, z, z, z, c, -s, z, s, c)
 }
 
-/// Elementary rotation about y by `angle` (textbook `c2`).
-pub fn rotation_y(angle: f64) -> Matrix3<f64> {
-    let (s, c) = sin_cos(angle);
-    Matrix3::new(c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c)
+/// Elementary rotation about y (textbook `c2`).
+pub fn rotation_y<T: Real>(s: T, c: T) -> Matrix3<T> {
+    let (o, z) = (T::one(), T::zero());
+    Matrix3::new(c, z, s, z, o, z, -s, z, c)
 }
 
-/// Elementary rotation about z by `angle` (textbook `c3`).
-pub fn rotation_z(angle: f64) -> Matrix3<f64> {
-    let (s, c) = sin_cos(angle);
-    Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
+/// Elementary rotation about z (textbook `c3`).
+pub fn rotation_z<T: Real>(s: T, c: T) -> Matrix3<T> {
+    let (o, z) = (T::one(), T::zero());
+    Matrix3::new(c, -s, z, s, c, z, z, z, o)
+}
+
+/// Rotation body -> inertial `Rx(roll) Ry(pitch) Rz(yaw)` of the 1-2-3 angles whose sines
+/// `s` and cosines `c` are given (`[roll, pitch, yaw]`), in any number type: `f64`, duals, the
+/// washout's jets (`crate::physics::cueing::jet::Jet`, with `Trig::cos`). The elementary
+/// rotations' product, the one form of the 1-2-3 rotation (a product written out term by term
+/// gives the same numbers but for the sign of some zeros).
+pub fn rotation_from_sines_cosines<T: Real>(s: [T; 3], c: [T; 3]) -> Matrix3<T> {
+    rotation_x(s[0], c[0]) * rotation_y(s[1], c[1]) * rotation_z(s[2], c[2])
 }
 
 /// Rotation body -> inertial from `(roll, pitch, yaw)`, rad.
 pub fn rotation_from_angles(angles: &Vector3<f64>) -> Matrix3<f64> {
-    rotation_x(angles.x) * rotation_y(angles.y) * rotation_z(angles.z)
+    let [(s0, c0), (s1, c1), (s2, c2)] = [angles.x, angles.y, angles.z].map(sin_cos);
+    rotation_from_sines_cosines([s0, s1, s2], [c0, c1, c2])
 }
 
 /// `(roll, pitch, yaw)` of a rotation matrix, rad. Pitch lies in `[-pi/2, pi/2]`, roll and
@@ -129,24 +137,22 @@ pub fn body_rates_from_angle_rates(
     (w, w_dot)
 }
 
-/// Inverse kinematics: leg lengths `l_k = |r + R A_k - B_k|` and their rates for a pose.
-pub fn leg_lengths_and_rates(stand: &Stand, pose: &PoseTrajectoryPoint) -> ([f64; LEG_COUNT], [f64; LEG_COUNT]) {
-    let omega = pose.rotation * pose.w;
-    let mut lengths = [0.0; LEG_COUNT];
-    let mut rates = [0.0; LEG_COUNT];
-    for k in 0..LEG_COUNT {
-        let arm = pose.rotation * stand.platform_joints[k];
-        let d = pose.r + arm - stand.base_joints[k];
-        let l = d.norm();
-        lengths[k] = l;
-        rates[k] = if l > 0.0 { d.dot(&(pose.v + omega.cross(&arm))) / l } else { 0.0 };
-    }
-    (lengths, rates)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The washout's rotation, written out term by term over `Trig`, is this product's numbers
+    /// but for the signs of some zeros: the cueing can take the one form.
+    #[test]
+    fn the_washouts_rotation_is_the_product() {
+        use crate::physics::cueing::washout::rotation;
+        for a in [[0.3, -0.2, 1.1], [-2.5, 1.2, 3.0], [0.0, 0.4, 0.0], [1.5, -std::f64::consts::FRAC_PI_2, -0.7]] {
+            let product = rotation_from_sines_cosines(a.map(maths::sin), a.map(maths::cos));
+            for (x, y) in product.iter().zip(rotation(&a).iter()) {
+                assert!(x.to_bits() == y.to_bits() || (*x == 0.0 && *y == 0.0), "{a:?}: {x:e} against {y:e}");
+            }
+        }
+    }
 
     #[test]
     fn angles_round_trip() {

@@ -96,6 +96,17 @@ impl<T: Real> LegMotion<T> {
         let l_dot = n.dot(a_dot);
         LegMotion { l, n, l_dot, n_dot: (a_dot - n * l_dot) / l }
     }
+
+    /// The leg to platform joint `a` (body frame) of a body state: its vector `q` (length
+    /// `l > 0`), the joint's velocity and the length's rate by the one law of the legs
+    /// ([`crate::physics::legs::geometry::joint_rate`]; the direction `q / l`, divided, as the
+    /// legs as bodies always took it).
+    #[inline]
+    pub fn at(state: &crate::physics::body::state::BodyState<T>, a: &Vector3<f64>, q: &Vector3<T>, l: T) -> Self {
+        let n = q / l;
+        let (l_dot, a_dot) = crate::physics::legs::geometry::joint_rate(state, a, &n);
+        LegMotion { l, n, l_dot, n_dot: (a_dot - n * l_dot) / l }
+    }
 }
 
 /// A leg's inertia seen at the platform joint: `F = ... + bias - (along n n^T + across P) a''`.

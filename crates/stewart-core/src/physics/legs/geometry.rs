@@ -80,6 +80,16 @@ pub fn length_rate<T: Number>(v: &[T; 3], e_dot: &[[T; 3]; 3], a: &[T; 3], n: &[
     (n[0] * velocity[0] + n[1] * velocity[1] + n[2] * velocity[2], velocity)
 }
 
+/// [`length_rate`] of the leg from the body state `state` to platform joint `a` (body frame)
+/// along the direction `n` (or the leg vector, for the rate times the length): the rate and the
+/// joint's velocity `v + d(R a)/dt`, in any number type.
+#[inline(always)]
+pub fn joint_rate<T: Real>(state: &BodyState<T>, a: &Vector3<f64>, n: &Vector3<T>) -> (T, Vector3<T>) {
+    let (v, e_dot) = ([state.v.x, state.v.y, state.v.z], state.e_dot.map(|w| [w.x, w.y, w.z]));
+    let (rate, velocity) = length_rate(&v, &e_dot, &constants(a), &[n.x, n.y, n.z]);
+    (rate, Vector3::from(velocity))
+}
+
 /// A point's coordinates as constants of the number type.
 #[inline(always)]
 fn constants<T: Number>(p: &Vector3<f64>) -> [T; 3] {

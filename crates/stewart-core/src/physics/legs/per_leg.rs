@@ -32,6 +32,13 @@ macro_rules! components {
 }
 pub(crate) use components;
 
+/// The sum over the six legs in the fixed order `((x1 + x3) + x5) + ((x2 + x4) + x6)`, that of
+/// [`PerLeg::sum`], in any number type.
+#[inline(always)]
+pub fn sum_over_legs<T: Number>(x: &[T; LEG_COUNT]) -> T {
+    ((x[0] + x[2]) + x[4]) + ((x[1] + x[3]) + x[5])
+}
+
 /// One value per leg (legs 1..6), for arithmetic on all six at once. Every operation acts leg
 /// by leg with the rounding of the scalar operation.
 #[derive(Clone, Copy)]

@@ -159,7 +159,7 @@ impl SpecialForm {
         let inverse_length = PerLeg::splat(1.0) / length;
         let (n, l_dot, velocity) = self.joints.directions_rates_and_velocities(&state, &leg, length, inverse_length);
         // The actuators' axial forces: given, or the drive law's, six legs at once.
-        let (actuator, drive) = match (actuation, &self.drives) {
+        let (actuator, drive) = match (actuation, self.drives()) {
             (Actuation::Forces(u), _) => (PerLeg::<V>::new(u), None),
             (Actuation::Drives { currents, voltages }, Some(drives)) => {
                 let rate = drives.rate(PerLeg::<V>::new(voltages), PerLeg::new(currents), l_dot);
@@ -431,9 +431,13 @@ impl SpecialForm {
         for k in 0..LEG_COUNT {
             let (leg, l) = (legs.leg[k], legs.length[k]);
             if l > 0.0 {
-                let a_dot = state.v + state.body_vector_rate(&self.stand.platform_joints[k]);
                 let mut load = MachineLoad::none();
-                self.add_joint_limits(k, state, &LegMotion::new(&leg, l, &a_dot), &mut load);
+                self.add_joint_limits(
+                    k,
+                    state,
+                    &LegMotion::at(state, &self.stand.platform_joints[k], &leg, l),
+                    &mut load,
+                );
                 loads.add_machine(k, &load);
             }
         }

@@ -2,6 +2,7 @@
 //! the 6x6 solve heavy legs need: the definition's part of [`SpecialForm::rate`].
 
 use super::*;
+use crate::physics::legs::geometry::joint_rate;
 
 impl SpecialForm {
     /// Each leg's load on the platform, by cause, leg by leg. A collapsed (or non-finite) leg
@@ -11,7 +12,7 @@ impl SpecialForm {
         let mut loads = Loads::new(legs.arm);
         let mut inertia = [None; LEG_COUNT];
         let drives = match actuation {
-            Actuation::Drives { currents, voltages } => self.drives.map(|d| (d, currents, voltages)),
+            Actuation::Drives { currents, voltages } => self.drives().map(|d| (*d, currents, voltages)),
             Actuation::Forces(_) => None,
         };
         for k in 0..LEG_COUNT {
@@ -19,8 +20,8 @@ impl SpecialForm {
             if !(l > T::zero()) {
                 continue;
             }
-            let a_dot = || state.v + state.body_vector_rate(&self.stand.platform_joints[k]);
-            let motion = (!self.fast || self.joint_limits.is_some()).then(|| LegMotion::new(&leg, l, &a_dot()));
+            let joint = &self.stand.platform_joints[k];
+            let motion = (!self.fast || self.joint_limits.is_some()).then(|| LegMotion::at(state, joint, &leg, l));
             let u = match (actuation, &drives, &motion) {
                 (Actuation::Forces(u), _, _) => u[k],
                 (_, Some((d, currents, voltages)), Some(motion)) => {
@@ -34,7 +35,7 @@ impl SpecialForm {
                 && stops.is_outside(k, l.value())
             {
                 let n = leg * (T::one() / l);
-                let ldot = n.dot(&(state.v + state.body_vector_rate(&self.stand.platform_joints[k])));
+                let (ldot, _) = joint_rate(state, joint, &n);
                 let contact = stops.contact(k, l, ldot);
                 loads.stop[k] = n * contact.force;
                 loads.stop_dissipation[k] = contact.dissipation;

@@ -20,8 +20,11 @@
 //! (`derivative_machine_in`), pinned to the definition to round-off.
 //!
 //! Files: this one holds the definition and the types; `machine.rs` the machine's loads leg
-//! by leg and the heavy legs' 6x6 solve; `fast_path.rs` the lanes forms.
+//! by leg and the heavy legs' 6x6 solve; `fast_path.rs` the lanes forms; `body_rate.rs` the
+//! two ways an actuator's rate evaluates the body (the definition and the fast path:
+//! [`super::actuators::BodyRate`]).
 
+mod body_rate;
 mod fast_path;
 mod machine;
 #[cfg(test)]
@@ -29,9 +32,11 @@ mod tests;
 
 use nalgebra::Vector3;
 
-use super::actuators::LegForceLaw;
 use super::actuators::drives::{DriveRate, ElectricDrives};
+use super::actuators::forces::ForceInputs;
 use super::actuators::hydraulics::HydraulicActuators;
+use super::actuators::{ActiveActuator, LegForceLaw};
+pub use super::actuators::{DrivenRates, LegPower};
 use super::body::accelerations::RigidBody;
 use super::body::per_axis::AxisRows;
 use super::body::state::{BodyState, STATE_DIM, StateVector, axes_rates};
@@ -44,6 +49,7 @@ use super::legs::per_leg::{Lanes, Narrow, PerLeg, components};
 use super::number::{Dual, Number, Real};
 use super::stand::{LEG_COUNT, Stand};
 use crate::maths;
+pub use body_rate::{Definition, FastPath};
 
 /// A stand with its legs' end stops, and the coefficients a right-hand side needs.
 #[derive(Clone, Debug, PartialEq)]
@@ -65,11 +71,10 @@ pub struct SpecialForm {
     friction: Friction,
     /// The joint limits, or `None` (the paper's).
     joint_limits: Option<JointLimits>,
-    /// Electric drives in the legs, or `None`: the actuator forces are given (the paper's).
-    drives: Option<ElectricDrives>,
-    /// Hydraulic servo legs, or `None`. Their force comes from the chamber pressures (states
-    /// of the simulation, `crate::simulation::state`): to the body they are given forces.
-    hydraulics: Option<HydraulicActuators>,
+    /// The actuator in the legs (the paper's: the forces are given). The electric drives' law
+    /// runs at each leg's rate in the machine's path; the hydraulic legs' force comes from their
+    /// chambers' pressures (states), a given force to the body.
+    actuator: ActiveActuator,
     /// For the fast path's check and the switching functions of the joint limits: `n0_k` and
     /// `m0_k` as `[component][leg]`, and the reference pose's axes `e0_a`.
     base_reference: [[f64; LEG_COUNT]; 3],
@@ -86,12 +91,7 @@ pub struct SpecialForm {
     fast: bool,
 }
 
-/// The sum over the six legs in the fixed order `((x1 + x3) + x5) + ((x2 + x4) + x6)`, that of
-/// [`PerLeg::sum`].
-#[inline(always)]
-pub(crate) fn sum_over_legs<T: Real>(x: &[T; LEG_COUNT]) -> T {
-    ((x[0] + x[2]) + x[4]) + ((x[1] + x[3]) + x[5])
-}
+pub(crate) use super::legs::per_leg::sum_over_legs;
 
 /// [`sum_over_legs`] of each component.
 #[inline(always)]
@@ -111,8 +111,7 @@ impl SpecialForm {
             legs: LegBodies::default(),
             friction: Friction::default(),
             joint_limits: None,
-            drives: None,
-            hydraulics: None,
+            actuator: ActiveActuator::Forces(ForceInputs),
             base_reference: [[0.0; LEG_COUNT]; 3],
             platform_reference: [[0.0; LEG_COUNT]; 3],
             reference_axes: [Vector3::x(), Vector3::y(), Vector3::z()],
@@ -127,7 +126,7 @@ impl SpecialForm {
     /// The same form with the machine's legs: bodies, friction and joint limits (`None`:
     /// without).
     pub fn with_machine(mut self, legs: LegBodies, friction: Friction, joint_limits: Option<JointLimits>) -> Self {
-        // The drives' reflected rotor mass stays (set by `with_drives`).
+        // The actuator's axial mass (the drives' rotors) stays (set by `with_actuator`).
         self.legs = LegBodies { axial_mass: self.legs.axial_mass, ..legs };
         self.friction = friction;
         if let Some(j) = &joint_limits {
@@ -142,65 +141,73 @@ impl SpecialForm {
         self
     }
 
-    /// The same form with electric drives in the legs (`None`: the actuator forces are given);
-    /// their rotors join the legs' inertia.
-    pub fn with_drives(mut self, drives: Option<ElectricDrives>) -> Self {
-        self.legs.axial_mass = drives.map_or(0.0, |d| d.reflected_mass());
-        self.drives = drives;
+    /// The same form with the actuator `actuator` in the legs; a mass moving with the legs'
+    /// lengths (the drives' rotors) joins the legs' inertia.
+    pub fn with_actuator(mut self, actuator: ActiveActuator) -> Self {
+        self.legs.axial_mass = actuator.axial_mass();
+        self.actuator = actuator;
         self.fast = self.takes_fast_path();
         (self.legs_mass, self.legs_turn) = (self.legs.has_mass(), self.legs.has_transverse_inertia());
         self
     }
 
-    /// The electric drives, if on.
-    pub fn drives(&self) -> Option<&ElectricDrives> {
-        self.drives.as_ref()
+    /// The actuator in the legs.
+    pub fn actuator(&self) -> &ActiveActuator {
+        &self.actuator
     }
 
-    /// The same form with hydraulic servo legs (`None`: without).
-    pub fn with_hydraulics(mut self, hydraulics: Option<HydraulicActuators>) -> Self {
-        self.hydraulics = hydraulics;
-        self
+    /// The same form with electric drives in the legs (`None`: without them, the forces given).
+    pub fn with_drives(self, drives: Option<ElectricDrives>) -> Self {
+        match drives {
+            Some(d) => self.with_actuator(ActiveActuator::Electric(d)),
+            None if self.drives().is_some() => self.with_actuator(ActiveActuator::Forces(ForceInputs)),
+            None => self,
+        }
+    }
+
+    /// The electric drives, if on.
+    pub fn drives(&self) -> Option<&ElectricDrives> {
+        match &self.actuator {
+            ActiveActuator::Electric(d) => Some(d),
+            _ => None,
+        }
+    }
+
+    /// The same form with hydraulic servo legs (`None`: without them, the forces given).
+    pub fn with_hydraulics(self, hydraulics: Option<HydraulicActuators>) -> Self {
+        match hydraulics {
+            Some(h) => self.with_actuator(ActiveActuator::Hydraulic(h)),
+            None if self.hydraulics().is_some() => self.with_actuator(ActiveActuator::Forces(ForceInputs)),
+            None => self,
+        }
     }
 
     /// The hydraulic legs, if on.
     pub fn hydraulics(&self) -> Option<&HydraulicActuators> {
-        self.hydraulics.as_ref()
+        match &self.actuator {
+            ActiveActuator::Hydraulic(h) => Some(h),
+            _ => None,
+        }
     }
 
     /// Sets the supply pressure `p_S` (Pa) of the hydraulic legs, if on: an input held over a
     /// step.
     pub fn set_supply_pressure(&mut self, supply: f64) {
-        if let Some(h) = &mut self.hydraulics {
+        if let ActiveActuator::Hydraulic(h) = &mut self.actuator {
             h.supply = supply;
         }
     }
 
-    /// Whether the step's fast path applies: massless legs without friction, forces given.
-    fn takes_fast_path(&self) -> bool {
-        !self.legs.has_mass() && self.friction.is_zero() && self.drives.is_none()
+    /// The actuator takes the inputs its parameters hold (the hydraulic supply pressure) from
+    /// `from` ([`super::actuators::Actuator::take_inputs`]).
+    pub fn take_actuator_inputs(&mut self, from: &super::actuators::Actuators) {
+        self.actuator.take_inputs(from);
     }
 
-    /// The drives' axial forces and rates at a body state: each leg's rate `l'_k` from the
-    /// state, its current `I_k` and voltage `U_k` (docs/model.md §9). `None` without drives.
-    pub fn drive_rates<T: Real>(
-        &self,
-        state: &BodyState<T>,
-        currents: &[T; LEG_COUNT],
-        voltages: &[T; LEG_COUNT],
-    ) -> Option<[DriveRate<T>; LEG_COUNT]> {
-        let drives = self.drives.as_ref()?;
-        let legs = LegGeometry::new(&self.stand, state);
-        Some(std::array::from_fn(|k| {
-            let l = legs.length[k];
-            // A collapsed leg has no rate (it carries nothing either: see `loads`).
-            let l_dot = if l > T::zero() {
-                legs.leg[k].dot(&(state.v + state.body_vector_rate(&self.stand.platform_joints[k]))) / l
-            } else {
-                T::zero()
-            };
-            drives.rate(voltages[k], currents[k], l_dot)
-        }))
+    /// Whether the step's fast path applies: massless legs without friction, forces given (no
+    /// actuator whose law runs at each leg's rate).
+    fn takes_fast_path(&self) -> bool {
+        !self.legs.has_mass() && self.friction.is_zero() && !self.actuator.at_leg_rates()
     }
 
     /// The legs as bodies.
@@ -336,34 +343,13 @@ impl SpecialForm {
 }
 
 /// What [`SpecialForm::derivative_machine_in`] gives besides the body's rates.
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct MachineRates {
-    /// The legs' powers: of the given forces (0 with the drives, whose work is electric), and
-    /// the dissipation without the drives' losses.
-    pub power: LegPower,
-    /// `I_k'`, A/s (0 without drives).
-    pub current_rate: [f64; LEG_COUNT],
-    /// `sum U_k I_k`, W.
-    pub electric_power: f64,
-    /// The drives' losses, W.
-    pub drive_dissipation: f64,
-}
+pub(crate) type MachineRates = DrivenRates;
 
 /// What moves the legs: given forces, or the electric drives' currents and voltages.
 #[derive(Clone, Copy)]
 pub(crate) enum Actuation<'a, T> {
     Forces(&'a [T; LEG_COUNT]),
     Drives { currents: &'a [T; LEG_COUNT], voltages: &'a [T; LEG_COUNT] },
-}
-
-/// The powers of a right-hand-side evaluation (or their changes, from
-/// [`SpecialForm::derivative_tangent`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct LegPower<T = f64> {
-    /// Power of the actuator forces, `sum_k F_k ldot_k = F.v + L.omega`, W.
-    pub actuator: T,
-    /// Power taken by the end stops' and joint limits' damping and by friction, W (>= 0).
-    pub dissipation: T,
 }
 
 /// Resultant of the legs about the centre of mass: actuators, end stops and the machine
