@@ -231,11 +231,26 @@ def test_a_preview_of_the_drive_is_read_and_used(tmp_path):
 
 def test_model_exchange_refuses_predictive_cueing_with_a_reason():
     """Model Exchange with cueing.method = 1 ends at initialisation with a message that says
-    why and what to use."""
-    from fmpy import simulate_fmu
+    why and what to use. (Not through simulate_fmu's `logger`: FMPy keeps that callback in a
+    process-wide logging proxy, which then points at a freed callback for every later FMU.)"""
+    from fmpy import extract, read_model_description
+    from fmpy.fmi1 import FMICallException
+    from fmpy.fmi2 import FMU2Model
+
+    from stewart_fmu.core import recording_callbacks
+    md = read_model_description(str(CUEING_FMU))
     messages = []
-    with pytest.raises(Exception):
-        simulate_fmu(CUEING_FMU, fmi_type="ModelExchange", stop_time=0.1, start_values={"cueing.method": 1},
-                     logger=lambda *args: messages.append(args[-1].decode() if isinstance(args[-1], bytes) else
-                                                          str(args[-1])), debug_logging=True)
-    assert any("Co-Simulation only" in m for m in messages), messages
+    fmu = FMU2Model(guid=md.guid, unzipDirectory=extract(str(CUEING_FMU)), modelIdentifier=md.modelExchange.modelIdentifier,
+                    instanceName="refused")
+    fmu.instantiate(callbacks=recording_callbacks(messages), loggingOn=True)
+    try:
+        vr = next(v.valueReference for v in md.modelVariables if v.name == "cueing.method")
+        fmu.setupExperiment(startTime=0.0)
+        fmu.enterInitializationMode()
+        fmu.setInteger([vr], [1])
+        with pytest.raises(FMICallException):
+            fmu.exitInitializationMode()
+    finally:
+        fmu.freeInstance()
+    texts = [text for _, _, text in messages]
+    assert any("Co-Simulation only" in m for m in texts), texts
