@@ -115,7 +115,8 @@ impl<'a> ByteReader<'a> {
     }
     /// A text written by [`ByteWriter::str`].
     pub fn string(&mut self, what: &str) -> Result<String, SnapshotError> {
-        let len = usize::try_from(self.u64()?).map_err(|_| SnapshotError(format!("{what}: a length that does not fit")))?;
+        let len =
+            usize::try_from(self.u64()?).map_err(|_| SnapshotError(format!("{what}: a length that does not fit")))?;
         let bytes = self.take(len)?;
         String::from_utf8(bytes.to_vec()).map_err(|_| SnapshotError(format!("{what}: not UTF-8 text")))
     }

@@ -263,7 +263,13 @@ impl Default for CueingModel {
 
 impl CueingModel {
     /// The pose of the method in use, before the limiter.
-    pub fn pose(&self, x: &[f64; STATE_DIM], m: &VehicleMotion, modes: &TiltModes, motion: &CommandedMotion) -> WashoutPose {
+    pub fn pose(
+        &self,
+        x: &[f64; STATE_DIM],
+        m: &VehicleMotion,
+        modes: &TiltModes,
+        motion: &CommandedMotion,
+    ) -> WashoutPose {
         match self.parameters.method {
             Method::Classical => self.parameters.washout.pose(x, m, modes),
             Method::Predictive => stepping::predictive_pose(motion),
@@ -278,8 +284,7 @@ impl CueingModel {
         if self.outputs.is_none() {
             let command =
                 self.command(&self.state.to_vector(), &self.vehicle, &self.tilt_modes, &self.predictive_state.motion);
-            self.outputs =
-                Some(CueingOutputs::of(&command, &self.perception.vehicle(), &self.perception.simulator()));
+            self.outputs = Some(CueingOutputs::of(&command, &self.perception.vehicle(), &self.perception.simulator()));
         }
         match &self.outputs {
             Some(o) => o,
@@ -307,10 +312,9 @@ impl CueingModel {
     fn make_solver(&mut self) -> Result<(), String> {
         self.predictive = match self.parameters.method {
             Method::Classical => None,
-            Method::Predictive => Some(Box::new(PredictiveCueing::new(
-                self.parameters.predictive(),
-                self.parameters.predictive_stand(),
-            )?)),
+            Method::Predictive => {
+                Some(Box::new(PredictiveCueing::new(self.parameters.predictive(), self.parameters.predictive_stand())?))
+            }
         };
         Ok(())
     }
@@ -590,7 +594,8 @@ impl FmuModel for CueingModel {
         p.fallbacks = r.i32()?;
         p.falling_back = r.bool()?;
         for i in 0..2 {
-            model.tilt_modes[i] = TiltMode::from_code(r.u8()?).ok_or(SnapshotError("a tilt mode out of range".into()))?;
+            model.tilt_modes[i] =
+                TiltMode::from_code(r.u8()?).ok_or(SnapshotError("a tilt mode out of range".into()))?;
         }
         model.initialised = r.bool()?;
         model.preview = Preview::restore(r)?;
@@ -637,7 +642,9 @@ mod tests {
             let n = (h.abs() / 1e-3).ceil().max(1.0);
             for i in 0..n as usize {
                 let tau = i as f64 * h / n;
-                x = stepping::washout_rk4(&self.parameters.washout, &x, &self.tilt_modes, tau, h / n, &|_| self.vehicle);
+                x = stepping::washout_rk4(&self.parameters.washout, &x, &self.tilt_modes, tau, h / n, &|_| {
+                    self.vehicle
+                });
             }
             x
         }

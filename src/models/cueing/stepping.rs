@@ -66,11 +66,9 @@ impl Preview {
             let mut row = [0.0; 7];
             for (c, &at) in columns.iter().enumerate() {
                 let cell = cells.get(at).ok_or_else(|| format!("row {}: too few cells", n + 2))?;
-                row[c] = cell
-                    .parse::<f64>()
-                    .ok()
-                    .filter(|x| x.is_finite())
-                    .ok_or_else(|| format!("row {}: {:?} in column {} is not a finite number", n + 2, cell, NAMES[c]))?;
+                row[c] = cell.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| {
+                    format!("row {}: {:?} in column {} is not a finite number", n + 2, cell, NAMES[c])
+                })?;
             }
             if let Some(last) = rows.last().map(|r: &[f64; 7]| r[0])
                 && !(row[0] > last)
@@ -98,7 +96,9 @@ impl Preview {
     }
 
     /// The rows from an FMU state.
-    pub fn restore(r: &mut crate::models::snapshot::ByteReader) -> Result<Preview, crate::models::snapshot::SnapshotError> {
+    pub fn restore(
+        r: &mut crate::models::snapshot::ByteReader,
+    ) -> Result<Preview, crate::models::snapshot::SnapshotError> {
         let n = r.u64()?;
         if n > (r.remaining() / 56) as u64 {
             return Err(crate::models::snapshot::SnapshotError("the preview's rows: more than the state holds".into()));
@@ -330,8 +330,7 @@ pub fn step(m: &mut CueingModel, t: f64, h: f64) -> Result<After, StepError> {
         }
         if next > tau {
             let p = &m.parameters;
-            let piece =
-                advance_washout(&p.washout, &x, &modes, tau, next, &at, switches < MAX_SWITCHES_PER_SUB_STEP);
+            let piece = advance_washout(&p.washout, &x, &modes, tau, next, &at, switches < MAX_SWITCHES_PER_SUB_STEP);
             let dt = piece.reached - tau;
             predictive_state.motion.advance(&predictive_state.jerk, dt);
             let (from, to) = (at(tau), at(piece.reached));
@@ -381,9 +380,8 @@ fn solve(
     let Some(solver) = m.predictive.as_deref_mut() else { return };
     let now = at(tau);
     let times = *solver.grid_times();
-    let future: [VehicleMotion; GRID_STEPS + 1] = std::array::from_fn(|j| {
-        if m.preview.is_empty() || j == 0 { now } else { m.preview.at(tau + times[j]) }
-    });
+    let future: [VehicleMotion; GRID_STEPS + 1] =
+        std::array::from_fn(|j| if m.preview.is_empty() || j == 0 { now } else { m.preview.at(tau + times[j]) });
     let outcome = solver.solve(&state.motion, &state.plan, &future, felt_vehicle, felt_simulator);
     state.solves += 1;
     match outcome {
@@ -414,10 +412,7 @@ fn check(t: f64, h: f64, x: &[f64; STATE_DIM], p: &PredictiveState, method: Meth
         return Err(rolled_back(
             t,
             h,
-            format!(
-                "state {} of the washout is not finite (check the filters' parameters and the inputs)",
-                i + 1
-            ),
+            format!("state {} of the washout is not finite (check the filters' parameters and the inputs)", i + 1),
             false,
         ));
     }
@@ -426,4 +421,3 @@ fn check(t: f64, h: f64, x: &[f64; STATE_DIM], p: &PredictiveState, method: Meth
     }
     Ok(())
 }
-

@@ -143,7 +143,10 @@ impl DenseQp {
                 return QpOutcome::Solved { iterations: iteration - 1 };
             }
             if !self.factor(h, a) {
-                return QpOutcome::Failed { iterations: iteration, why: "the normal equations are not positive definite" };
+                return QpOutcome::Failed {
+                    iterations: iteration,
+                    why: "the normal equations are not positive definite",
+                };
             }
             // Predictor: the affine direction (r_c = s z).
             for i in 0..m {
@@ -330,7 +333,17 @@ mod tests {
             let a: Vec<f64> = (0..m * n).map(|_| next()).collect();
             let g: Vec<f64> = (0..n).map(|_| 10.0 * next()).collect();
             // Some cases with no active constraint, the others with many.
-            let b: Vec<f64> = (0..m).map(|i| if case % 4 == 0 { 1e3 } else if i % 3 == 0 { 0.1 } else { 2.0 }).collect();
+            let b: Vec<f64> = (0..m)
+                .map(|i| {
+                    if case % 4 == 0 {
+                        1e3
+                    } else if i % 3 == 0 {
+                        0.1
+                    } else {
+                        2.0
+                    }
+                })
+                .collect();
             let mut ours = vec![0.0; n];
             let outcome = DenseQp::new(n, m, QpSettings { max_iterations: 100, tolerance: 1e-10 })
                 .unwrap()

@@ -118,7 +118,8 @@ mod tests {
         let c = Cues::at(9.81, &a, &b, &w);
         let d = 1e-6;
         for i in 0..3 {
-            let bump = |x: &[f64; 3], s: f64| -> [f64; 3] { std::array::from_fn(|k| x[k] + if k == i { s } else { 0.0 }) };
+            let bump =
+                |x: &[f64; 3], s: f64| -> [f64; 3] { std::array::from_fn(|k| x[k] + if k == i { s } else { 0.0 }) };
             let (fa, fb) = (Cues::at(9.81, &bump(&a, d), &b, &w), Cues::at(9.81, &bump(&a, -d), &b, &w));
             let (ga, gb) = (Cues::at(9.81, &a, &bump(&b, d), &w), Cues::at(9.81, &a, &bump(&b, -d), &w));
             let (ha, hb) = (Cues::at(9.81, &a, &b, &bump(&w, d)), Cues::at(9.81, &a, &b, &bump(&w, -d)));

@@ -204,13 +204,19 @@ impl PredictiveCueing {
         perceived_simulator: &Perception,
     ) -> SolveOutcome {
         let nominal = self.problem.nominal_inputs(plan);
-        self.problem.build(&self.parameters, &self.stand, now, &nominal, vehicle, perceived_vehicle, perceived_simulator);
+        self.problem.build(
+            &self.parameters,
+            &self.stand,
+            now,
+            &nominal,
+            vehicle,
+            perceived_vehicle,
+            perceived_simulator,
+        );
         let p = &mut *self.problem;
         match self.qp.solve(&p.hessian, &p.gradient, &p.constraints, &p.bounds, &mut p.solution) {
             QpOutcome::Solved { iterations } => SolveOutcome::Planned { iterations, plan: p.plan(&nominal) },
-            QpOutcome::Failed { iterations, why } => {
-                SolveOutcome::Failed { iterations, why }
-            }
+            QpOutcome::Failed { iterations, why } => SolveOutcome::Failed { iterations, why },
         }
     }
 }

@@ -166,9 +166,7 @@ impl Problem {
     pub fn plan(&self, nominal: &[[f64; CHANNELS]; GRID_STEPS]) -> [[f64; CHANNELS]; GRID_STEPS] {
         std::array::from_fn(|j| {
             let b = self.block_of[j];
-            std::array::from_fn(|c| {
-                nominal[j][c] + self.solution[b * CHANNELS + c] / unknown_scale(self.gravity, c)
-            })
+            std::array::from_fn(|c| nominal[j][c] + self.solution[b * CHANNELS + c] / unknown_scale(self.gravity, c))
         })
     }
 
@@ -260,27 +258,16 @@ impl Problem {
             self.cue_rows[1] = self.cue_rows_at(j, &cues);
             let (v0, v1) = (&vehicle[j - 1], &vehicle[j]);
             let lag_steps = perception_steps(self.otolith_steps[j - 1], self.canal_steps[j - 1]);
-            vehicle_lags.advance(
-                &lag_steps,
-                &v0.f,
-                &v0.omega,
-                &v1.f,
-                &v1.omega,
-            );
-            simulator_lags.advance(
-                &lag_steps,
-                &before.fsim,
-                &before.omegasim,
-                &cues.fsim,
-                &cues.omegasim,
-            );
+            vehicle_lags.advance(&lag_steps, &v0.f, &v0.omega, &v1.f, &v1.omega);
+            simulator_lags.advance(&lag_steps, &before.fsim, &before.omegasim, &cues.fsim, &cues.omegasim);
             self.advance_lag_rows(j - 1);
             // The perceived errors.
             let (felt_vehicle_f, felt_vehicle_w) = vehicle_lags.perceived();
             let (felt_sim_f, felt_sim_w) = simulator_lags.perceived();
             let trust = maths::exp(-self.times[j] / p.trust);
             for o in 0..CUES {
-                let error = if o < 3 { felt_sim_f[o] - felt_vehicle_f[o] } else { felt_sim_w[o - 3] - felt_vehicle_w[o - 3] };
+                let error =
+                    if o < 3 { felt_sim_f[o] - felt_vehicle_f[o] } else { felt_sim_w[o - 3] - felt_vehicle_w[o - 3] };
                 let row = self.perceived_row(o);
                 self.add_residual(dt * trust * error_weight[o], error, &row);
             }

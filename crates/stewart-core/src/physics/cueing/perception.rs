@@ -32,11 +32,8 @@ pub const CANAL_ADAPTATION: f64 = 80.0;
 pub const THRESHOLD_F: [f64; 3] = [0.17, 0.17, 0.28];
 /// Thresholds of perception: angular velocity per cabin axis (roll, pitch, yaw), rad/s
 /// (3.0, 3.6, 2.6 deg/s).
-pub const THRESHOLD_OMEGA: [f64; 3] = [
-    3.0 * std::f64::consts::PI / 180.0,
-    3.6 * std::f64::consts::PI / 180.0,
-    2.6 * std::f64::consts::PI / 180.0,
-];
+pub const THRESHOLD_OMEGA: [f64; 3] =
+    [3.0 * std::f64::consts::PI / 180.0, 3.6 * std::f64::consts::PI / 180.0, 2.6 * std::f64::consts::PI / 180.0];
 
 /// A vestibular filter as `K` first-order lags with unit gain at rest (see the module).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -247,7 +244,10 @@ mod tests {
                 let (re, im) = if otolith { OTOLITH.response(omega) } else { CANAL.response(omega) };
                 let (sre, sim) = spec_response(otolith, omega);
                 let scale = (sre * sre + sim * sim).sqrt().max(1e-3);
-                assert!(((re - sre).abs() + (im - sim).abs()) / scale < 1e-12, "{omega}: {re} {im} against {sre} {sim}");
+                assert!(
+                    ((re - sre).abs() + (im - sim).abs()) / scale < 1e-12,
+                    "{omega}: {re} {im} against {sre} {sim}"
+                );
             }
         }
         assert!((OTOLITH.weights[0] + OTOLITH.weights[1] - 1.0).abs() < 1e-15);
