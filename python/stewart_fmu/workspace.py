@@ -16,12 +16,15 @@ job's demonstration (examples/workspace_scenarios.py).
 
 import math
 import re
+import shutil
 
 import numpy as np
-from fmpy import read_model_description, simulate_fmu
+from fmpy import extract, read_model_description, simulate_fmu
+from fmpy.fmi2 import FMU2Model
 
 from .cosim import closed_loop
-from .core import LEGS, PLATFORM_FMU, check_names, default_stand, equilibrium_force_si, fmu_file, open_loop
+from .core import (LEGS, PLATFORM_FMU, check_names, default_stand, equilibrium_force_si, fmu_file, open_loop,
+                   recording_callbacks)
 
 
 def start_values(names, fmu=PLATFORM_FMU):
@@ -166,12 +169,21 @@ def power_loss_model_exchange(t_cut=0.5, t_end=5.0):
     inputs = np.array([(0.0,) + (force,) * 6, (t_cut,) + (force,) * 6,
                        (t_cut,) + (0.0,) * 6, (t_end,) + (0.0,) * 6],
                       dtype=[("time", float)] + [(f"F[{k}]", float) for k in LEGS])
+    # The instance is made here with the package's recording callbacks, not through
+    # simulate_fmu's `logger`: FMPy keeps that one in a process-wide logging proxy, which then
+    # points at a freed callback for every FMU the process runs later (a crash).
     messages = []
-    result = simulate_fmu(str(PLATFORM_FMU), fmi_type="ModelExchange", solver="CVode", relative_tolerance=1e-8,
-                          input=inputs, stop_time=t_end, output_interval=1e-3, debug_logging=True,
-                          logger=lambda *args: messages.append(args),
-                          output=["r[1]", "r[2]", "r[3]", "v[3]", "E", "work.F", "work.dissipated"]
-                          + [f"Fstop[{k}]" for k in LEGS])
-    texts = [(a[2], "", (a[4].decode() if isinstance(a[4], bytes) else str(a[4])).replace("%%", "%"))
-             for a in messages if len(a) >= 5]
-    return result, contact_events(texts)
+    md = read_model_description(str(PLATFORM_FMU))
+    unzipped = extract(str(PLATFORM_FMU))
+    fmu = FMU2Model(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.modelExchange.modelIdentifier,
+                    instanceName="power_loss")
+    fmu.instantiate(callbacks=recording_callbacks(messages), loggingOn=True)
+    try:
+        result = simulate_fmu(unzipped, model_description=md, fmu_instance=fmu, solver="CVode",
+                              relative_tolerance=1e-8, input=inputs, stop_time=t_end, output_interval=1e-3,
+                              output=["r[1]", "r[2]", "r[3]", "v[3]", "E", "work.F", "work.dissipated"]
+                              + [f"Fstop[{k}]" for k in LEGS])
+    finally:
+        fmu.freeInstance()
+        shutil.rmtree(unzipped, ignore_errors=True)
+    return result, contact_events(messages)

@@ -13,6 +13,8 @@ import pytest
 
 from stewart_fmu import EQUILIBRIUM_FORCE, Platform, stand_parameters
 
+pytestmark = pytest.mark.quick
+
 P = stand_parameters(nondimensional=True)
 OUTPUTS = [f"r[{i}]" for i in (1, 2, 3)] + [f"R[{a},{b}]" for a in (1, 2, 3) for b in (1, 2, 3)] + \
           [f"l[{k}]" for k in range(1, 7)] + [f"ldot[{k}]" for k in range(1, 7)] + ["E", "constraintError"]
@@ -74,7 +76,6 @@ import numpy as np
 from stewart_fmu import Platform, stand_parameters
 from test_fmu_state import drive
 
-pytestmark = pytest.mark.quick
 pl = Platform(parameters=stand_parameters(nondimensional=True), name="fresh")
 state = pl.slave.deSerializeFMUstate(open({path!r}, "rb").read())
 pl.slave.setFMUstate(state)

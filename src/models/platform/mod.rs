@@ -4,14 +4,12 @@
 //!
 //! | module | what it holds |
 //! |---|---|
-//! | [`variables`] | every variable, declared once with where its value lives |
-//! | `dependencies.rs` | what the unknowns depend on: each concern's knowns once, the lists composed |
+//! | [`variables`] | every variable, declared once with where its value lives; `variables/dependencies.rs`: what the unknowns depend on, each concern's knowns once, the lists composed |
 //! | [`parameters`] | the parameters, their checks, the simulation they describe |
 //! | [`exchange`] | Model Exchange: states, derivatives, event indicators, directional derivatives |
 //! | `outputs.rs` | the outputs by cache block, each computed on its first read after a change |
 //! | `messages.rs` | what a failed step or an event is, in words |
 
-mod dependencies;
 pub mod exchange;
 mod messages;
 mod outputs;

@@ -4,7 +4,7 @@
 //! model's token (the digest hashes the knowns in order): a concern's list goes where its
 //! knowns stood.
 
-use super::variables::group;
+use super::group;
 use crate::models::machine;
 use crate::models::variables::Dependency::{self, All, Each};
 

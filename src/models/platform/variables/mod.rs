@@ -5,7 +5,8 @@ use crate::models::declare::declare_variables;
 use crate::models::machine;
 use crate::models::variables::Dependency::{All, SameIndex};
 
-use super::dependencies::*;
+mod dependencies;
+use dependencies::*;
 use crate::models::variables::VariableGroup as V;
 use crate::physics::actuators::PerActuator;
 use crate::simulation::PlatformOutputs;
