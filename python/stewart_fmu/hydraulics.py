@@ -86,26 +86,26 @@ def control_power_loss(t_loss=1.0, t_end=6.0):
     return closed_loop(t_end, hook=lose, controller={"programme": 2})
 
 
-def pump_failure(t_fail=1.0, t_end=4.0, events=None):
+def pump_failure(t_fail=1.0, t_end=4.0, events=None, platform=None):
     """Scenario 4: the heave programme; the supply pressure to 0 at `t_fail`, the controller
-    still commanding."""
+    still commanding (`platform`: parameters of the platform, e.g. `hydraulic.airFraction`)."""
     def fail(t, platform, valves):
         if t >= t_fail - 1e-12:
             platform.set_values(["pS"], [0.0])
         return valves
-    return closed_loop(t_end, hook=fail, events=events,
+    return closed_loop(t_end, hook=fail, events=events, platform=platform,
                        record=[f"jointForce[{k},{c}]" for k in LEGS for c in (1, 2, 3)])
 
 
-def stuck_valve(t_stick=1.0, t_end=6.0, leg=1, opening=0.2):
+def stuck_valve(t_stick=1.0, t_end=6.0, leg=1, opening=0.2, platform=None):
     """Scenario 5: leg `leg`'s valve sticks at `opening` from `t_stick` under feedback (the
-    controller does not know)."""
+    controller does not know; `platform`: parameters of the platform)."""
     def stick(t, _platform, valves):
         if t >= t_stick - 1e-12:
             valves = np.array(valves, dtype=float)
             valves[leg - 1] = opening
         return valves
-    return closed_loop(t_end, hook=stick, controller={"programme": 2},
+    return closed_loop(t_end, hook=stick, controller={"programme": 2}, platform=platform,
                        record=[f"jointForce[{k},{c}]" for k in LEGS for c in (1, 2, 3)]
                        + [f"thetaB[{k}]" for k in LEGS] + [f"thetaA[{k}]" for k in LEGS])
 

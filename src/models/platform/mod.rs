@@ -310,7 +310,10 @@ impl FmuModel for PlatformModel {
                 self.invalidate_outputs();
                 // The step computed the legs of its end state already.
                 self.legs = reached.legs;
-                let warning = (lowest < CAVITATION_PRESSURE && !self.cavitation_reported).then(|| {
+                // Oil with air cannot reach zero absolute (docs/model.md §10b): the warning is
+                // for oil without air, whose law has no pressure floor.
+                let without_air = self.parameters.actuators.hydraulic.legs.air_fraction == 0.0;
+                let warning = (without_air && lowest < CAVITATION_PRESSURE && !self.cavitation_reported).then(|| {
                     self.cavitation_reported = true;
                     format!(
                         "by t = {:?} a hydraulic chamber fell to {lowest:e} Pa, below -1 bar gauge: real oil would \

@@ -76,6 +76,8 @@ pub trait Real:
     fn atan2(self, x: Self) -> Self;
     fn exp(self) -> Self;
     fn tanh(self) -> Self;
+    /// `self` to the constant power `y` (`self > 0`).
+    fn powf(self, y: f64) -> Self;
 
     /// `self` limited to `[lower, upper]` by value (`lower <= upper`).
     #[inline(always)]
@@ -148,6 +150,10 @@ impl Real for f64 {
     #[inline(always)]
     fn tanh(self) -> Self {
         maths::tanh(self)
+    }
+    #[inline(always)]
+    fn powf(self, y: f64) -> Self {
+        maths::pow(self, y)
     }
 }
 
@@ -355,6 +361,12 @@ impl Real for Dual {
     fn tanh(self) -> Self {
         let t = maths::tanh(self.re);
         Dual::new(t, (1.0 - t * t) * self.eps)
+    }
+    #[inline(always)]
+    fn powf(self, y: f64) -> Self {
+        // d(x^y) = y x^(y - 1) dx = y x^y / x dx.
+        let p = maths::pow(self.re, y);
+        Dual::new(p, y * p / self.re * self.eps)
     }
 }
 

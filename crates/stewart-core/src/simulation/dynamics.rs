@@ -2,7 +2,7 @@
 //! quadratures, as an ODE system for the integrators; and the legs it measured last.
 
 use crate::integration::{LinearDecay, MAX_SWITCHING, OdeSystem, SwitchingKind};
-use crate::physics::actuators::{Actuator, InState, with_actuator};
+use crate::physics::actuators::{Actuator, InState, LegMotion, with_actuator};
 use crate::physics::body::state::{BodyState, STATE_DIM, StateVector, all_finite};
 use std::cell::Cell;
 
@@ -143,8 +143,15 @@ impl<'a, L: ?Sized, V: Lanes> PlatformDynamics<'a, L, V> {
             return f64::INFINITY;
         }
         std::hint::cold_path();
-        let lengths = || self.form.joints.kinematics_in::<Narrow>(&BodyState::from_vector(body(y))).lengths();
-        a.stable_step(y.get(A::BLOCK).unwrap_or(&[]), lengths)
+        let legs = || {
+            let state = BodyState::from_vector(body(y));
+            let kinematics = self.form.joints.kinematics_in::<Narrow>(&state);
+            LegMotion {
+                lengths: kinematics.lengths(),
+                rates: self.form.joints.length_rates_in::<Narrow>(&state, &kinematics),
+            }
+        };
+        a.stable_step(y.get(A::BLOCK).unwrap_or(&[]), legs)
     }
 
     fn tracks_singularities(&self) -> bool {

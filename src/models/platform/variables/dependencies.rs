@@ -55,6 +55,8 @@ const HYDRAULIC_LAW: &[Dependency] = &[
     All(group::VALVE_PCR),
     All(group::VALVE_LEAKAGE),
     All(group::INTERNAL_LEAKAGE),
+    All(group::AIR_FRACTION),
+    All(group::AIR_POLYTROPIC),
     All(group::PA0),
     All(group::PB0),
     All(group::PS),

@@ -501,6 +501,17 @@ declare_variables! {
             "hydraulic.internalLeakage", &[], 482, Some("m3/(s.Pa)"),
             "Internal leakage coefficient C_i across each piston: Q_i = C_i (p_A - p_B)",
         ); real(parameters.actuators.hydraulic.legs.internal_leakage),
+        AIR_FRACTION => V::parameter(
+            "hydraulic.airFraction", &[], 483, Some("1"),
+            "Volume fraction alpha0 of undissolved air in the oil at atmospheric pressure: each chamber's bulk \
+             modulus becomes beta_e(p) = beta (1 + theta) / (1 + theta beta / (n P)), theta = alpha0 / (1 - alpha0) \
+             (p_atm / P)^(1/n), P = p + 101325 Pa absolute, so no chamber reaches zero absolute; 0: oil without air \
+             (section 10's law, which has no pressure floor)",
+        ); real(parameters.actuators.hydraulic.legs.air_fraction),
+        AIR_POLYTROPIC => V::parameter(
+            "hydraulic.airPolytropic", &[], 484, Some("1"),
+            "Polytropic exponent n of the entrained air (1: isothermal)",
+        ); real(parameters.actuators.hydraulic.legs.air_polytropic),
         PA0 => V::parameter(
             "pA0", &[6], 490, Some("Pa"),
             "Initial cap-side pressure of leg k (default: what holds the default stand at rest in its neutral pose \

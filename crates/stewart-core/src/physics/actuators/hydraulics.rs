@@ -17,18 +17,32 @@
 //! with `phi(dp) = dp / (dp^2 + p_cr^2)^(1/4)` (the Modelica library's `regRoot`: `K phi(dp)`
 //! tends to `K sgn(dp) sqrt|dp|`), `K = Q_N / sqrt(dp_N / 2)` and `Q_i = C_i (p_A - p_B)`.
 //!
+//! Oil with entrained air (docs/model.md §10b): with the absolute pressure `P = p + p_atm`, the
+//! air's volume fraction `alpha0` at atmospheric pressure and its polytropic exponent `n`, each
+//! chamber's `beta` is
+//!
+//! ```text
+//! theta(P) = alpha0 / (1 - alpha0) (p_atm / P)^(1/n)
+//! beta_e(p) = beta (1 + theta) / (1 + theta beta / (n P))      (0 at and below zero absolute)
+//! ```
+//!
+//! which tends to `n P` as `P -> 0`: no chamber reaches zero absolute. With `alpha0 = 0` the oil
+//! has no air and the law is section 10's, to the bit ([`HydraulicLegs::air`] is `None`).
+//!
 //! Energy: the power drawn from the supply `P_S = p_S Q_S - p_T Q_T` splits exactly into the
 //! leg's power `u l'`, the lands' and leakages' losses (each `Q dp >= 0`) and the compression
-//! power `(p_A V_A p_A' + p_B V_B p_B') / beta` ([`HydraulicRate`]).
+//! power `p_A V_A p_A' / beta_e(p_A) + p_B V_B p_B' / beta_e(p_B)` ([`HydraulicRate`]; with air
+//! it is computed as `p_A q_A + p_B q_B`, the chambers' net inflows `q` times their pressures,
+//! which it equals, and which stays finite where `beta_e` is 0).
 //!
-//! The law is written once over [`Number`]: one leg in `f64` or [`crate::physics::number::Dual`]
+//! The law is written once over [`Real`]: one leg in `f64` or [`crate::physics::number::Dual`]
 //! (values and exact derivatives), six side by side in vector registers.
 
 mod actuator;
 pub use actuator::{Block, HydraulicActuators, block, holding_pressures};
 
 use crate::physics::error::ParameterError;
-use crate::physics::number::Number;
+use crate::physics::number::{Dual, Real};
 use crate::physics::stand::check_finite;
 
 /// Default bore `D`, m: an ISO 63 mm cylinder. At the 16 MPa supply it pushes 50 kN, six and a
@@ -73,8 +87,17 @@ pub const DEFAULT_VALVE_LEAKAGE: f64 = 5.0e-13;
 /// Default internal leakage `C_i` across the piston, m³/(s.Pa): 6 mL/min per MPa, a tight
 /// piston seal.
 pub const DEFAULT_INTERNAL_LEAKAGE: f64 = 1.0e-13;
-/// Chamber pressure below which the oil would cavitate and the model stops being valid, Pa
-/// (gauge): -1 bar.
+/// Default air volume fraction `alpha0` at atmospheric pressure: 0.5 %, undissolved air in a
+/// servo oil in service (0.1-1 %; Simscape Fluids' isothermal liquid takes the same default).
+/// At the default supply it softens the oil by 0.2 %, at tank pressure fifty times.
+pub const DEFAULT_AIR_FRACTION: f64 = 0.005;
+/// Default polytropic exponent `n` of the entrained air: 1, isothermal (small bubbles exchange
+/// heat with the oil faster than the pressure changes).
+pub const DEFAULT_AIR_POLYTROPIC: f64 = 1.0;
+/// Atmospheric pressure `p_atm`, Pa: zero gauge is this much above zero absolute.
+pub const ATMOSPHERIC_PRESSURE: f64 = 101_325.0;
+/// Chamber pressure below which oil without air (`alpha0 = 0`) would cavitate and the model
+/// stops being valid, Pa (gauge): -1 bar.
 pub const CAVITATION_PRESSURE: f64 = -1.0e5;
 
 /// The hydraulic legs' parameters (`hydraulic.*`, `valve.*`), the same for all six legs.
@@ -106,6 +129,21 @@ pub struct HydraulicLegs {
     pub valve_leakage: f64,
     /// `C_i`, m³/(s.Pa).
     pub internal_leakage: f64,
+    /// `alpha0`, the air's volume fraction at atmospheric pressure (0 = oil without air).
+    pub air_fraction: f64,
+    /// `n`, the air's polytropic exponent.
+    pub air_polytropic: f64,
+}
+
+/// The entrained air's constants of [`HydraulicLegs::effective_bulk_modulus`] (with air).
+#[derive(Clone, Copy, Debug)]
+pub struct EntrainedAir {
+    /// `alpha0 / (1 - alpha0)`.
+    ratio: f64,
+    /// `1 / n`.
+    inverse_polytropic: f64,
+    /// `beta / n`, Pa.
+    beta_over_n: f64,
 }
 
 impl Default for HydraulicLegs {
@@ -124,6 +162,8 @@ impl Default for HydraulicLegs {
             pcr: DEFAULT_PCR,
             valve_leakage: DEFAULT_VALVE_LEAKAGE,
             internal_leakage: DEFAULT_INTERNAL_LEAKAGE,
+            air_fraction: DEFAULT_AIR_FRACTION,
+            air_polytropic: DEFAULT_AIR_POLYTROPIC,
         }
     }
 }
@@ -162,8 +202,11 @@ pub struct HydraulicRate<T> {
     pub supply_flow: T,
     /// `P_S = p_S Q_S - p_T Q_T`, W.
     pub supply_power: T,
-    /// `(p_A V_A p_A' + p_B V_B p_B') / beta`, W.
+    /// `p_A V_A p_A' / beta_e(p_A) + p_B V_B p_B' / beta_e(p_B)`, W.
     pub compression_power: T,
+    /// The chambers' net inflows `q_A = Q_A - A_A l' - Q_i`, `q_B = Q_B + A_B l' + Q_i`, m³/s.
+    pub inflow_a: T,
+    pub inflow_b: T,
     /// The lands' throttling, the null leakage and the internal leakage, W (>= 0).
     pub dissipation: T,
 }
@@ -180,9 +223,36 @@ impl HydraulicLegs {
         self.rated_flow / (0.5 * self.rated_pressure_drop).sqrt()
     }
 
+    /// The entrained air's constants, `None` for oil without air (`alpha0 = 0`).
+    #[inline(always)]
+    pub fn air(&self) -> Option<EntrainedAir> {
+        (self.air_fraction != 0.0).then(|| EntrainedAir {
+            ratio: self.air_fraction / (1.0 - self.air_fraction),
+            inverse_polytropic: 1.0 / self.air_polytropic,
+            beta_over_n: self.bulk_modulus / self.air_polytropic,
+        })
+    }
+
+    /// `beta_e(p)`, Pa, of oil with entrained air at the gauge pressure `p`: `beta (1 + theta) /
+    /// (1 + theta beta / (n P))`, `theta = alpha0 / (1 - alpha0) (p_atm / P)^(1/n)`, `P = p +
+    /// p_atm`; 0 at and below zero absolute (its limit there: `beta_e -> n P`).
+    #[inline(always)]
+    pub fn effective_bulk_modulus<T: Real>(&self, air: &EntrainedAir, p: T) -> T {
+        let absolute = p + ATMOSPHERIC_PRESSURE;
+        let zero = T::constant(0.0);
+        if !absolute.greater(zero) {
+            return zero;
+        }
+        let expansion = T::constant(ATMOSPHERIC_PRESSURE) / absolute;
+        // (p_atm / P)^(1/n); n = 1 (the default) without a power function.
+        let expansion = if air.inverse_polytropic == 1.0 { expansion } else { expansion.powf(air.inverse_polytropic) };
+        let theta = expansion * air.ratio;
+        (theta + 1.0) * self.bulk_modulus / (theta * air.beta_over_n / absolute + 1.0)
+    }
+
     /// `(V_A, V_B)`, m³, at the piston position `x` in a stroke `L_s`.
     #[inline(always)]
-    pub fn volumes<T: Number>(&self, piston: &Piston<T>) -> (T, T) {
+    pub fn volumes<T: Real>(&self, piston: &Piston<T>) -> (T, T) {
         let (area_a, area_b) = self.areas();
         (piston.position * area_a + self.dead_volume_a, (piston.stroke - piston.position) * area_b + self.dead_volume_b)
     }
@@ -191,7 +261,7 @@ impl HydraulicLegs {
     /// state `chambers`, piston `piston`, saturated valve command `command` (in [-1, 1]) and
     /// supply pressure `supply`: the law.
     #[inline(always)]
-    pub fn rate<T: Number>(
+    pub fn rate<T: Real>(
         &self,
         chambers: &Chambers<T>,
         piston: &Piston<T>,
@@ -223,9 +293,23 @@ impl HydraulicLegs {
         let flow_a = (supply_a - a_tank) + (leak_sa - leak_at);
         let flow_b = (supply_b - b_tank) + (leak_sb - leak_bt);
         let (volume_a, volume_b) = self.volumes(piston);
-        let beta = self.bulk_modulus;
-        let pa_rate = (flow_a - piston.rate * area_a - internal) * beta / volume_a;
-        let pb_rate = (flow_b + piston.rate * area_b + internal) * beta / volume_b;
+        // The chambers' net inflows q_A, q_B and their rates beta_e q / V.
+        let inflow_a = flow_a - piston.rate * area_a - internal;
+        let inflow_b = flow_b + piston.rate * area_b + internal;
+        let (pa_rate, pb_rate, compression_power) = match self.air() {
+            // Oil without air: section 10's expressions, in their order (the same bits).
+            None => {
+                let beta = self.bulk_modulus;
+                let pa_rate = inflow_a * beta / volume_a;
+                let pb_rate = inflow_b * beta / volume_b;
+                (pa_rate, pb_rate, (pa * volume_a * pa_rate + pb * volume_b * pb_rate) / beta)
+            }
+            Some(air) => (
+                inflow_a * self.effective_bulk_modulus(&air, pa) / volume_a,
+                inflow_b * self.effective_bulk_modulus(&air, pb) / volume_b,
+                pa * inflow_a + pb * inflow_b,
+            ),
+        };
         let supply_flow = (supply_a + supply_b) + (leak_sa + leak_sb);
         let tank_flow = (a_tank + b_tank) + (leak_at + leak_bt);
         let w = self.valve_omega;
@@ -237,7 +321,9 @@ impl HydraulicLegs {
             spool_acceleration: (command - spool) * (w * w) - spool_rate * (2.0 * self.valve_damping * w),
             supply_flow,
             supply_power: supply * supply_flow - tank_flow * tank,
-            compression_power: (pa * volume_a * pa_rate + pb * volume_b * pb_rate) / beta,
+            compression_power,
+            inflow_a,
+            inflow_b,
             dissipation: ((supply_a * drop_sa + a_tank * drop_at) + (supply_b * drop_sb + b_tank * drop_bt))
                 + ((leak_sa * drop_sa + leak_at * drop_at) + (leak_sb * drop_sb + leak_bt * drop_bt))
                 + internal * (pa - pb),
@@ -246,7 +332,9 @@ impl HydraulicLegs {
 
     /// The largest rate (1/s) of the leg's fast linear modes at a state: each chamber's own
     /// `beta / V (K |s| phi'(dp) + 2 C_v + C_i)` (the orifice pole, up to `beta K / (V
-    /// sqrt(p_cr))` for an open land with little drop) and the spool's `|lambda| <= w_v max(1,
+    /// sqrt(p_cr))` for an open land with little drop; `beta >= beta_e` below 1 GPa absolute),
+    /// with air plus `|beta_e'(p) q| / V` (the oil's stiffening with pressure, large where it
+    /// turns soft: a chamber emptying towards vacuum), and the spool's `|lambda| <= w_v max(1,
     /// 2 zeta_v)`. An explicit method of stability interval `r` is stable for steps up to
     /// about `r / rate`.
     pub fn stiffness(&self, chambers: &Chambers<f64>, piston: &Piston<f64>, supply: f64) -> f64 {
@@ -265,8 +353,14 @@ impl HydraulicLegs {
         };
         let leak = 2.0 * self.valve_leakage + self.internal_leakage;
         let (va, vb) = self.volumes(piston);
-        let chamber_a = self.bulk_modulus / va * (k * s * (a_in + a_out) + leak);
-        let chamber_b = self.bulk_modulus / vb * (k * s * (b_in + b_out) + leak);
+        let mut chamber_a = self.bulk_modulus / va * (k * s * (a_in + a_out) + leak);
+        let mut chamber_b = self.bulk_modulus / vb * (k * s * (b_in + b_out) + leak);
+        if let Some(air) = self.air() {
+            let r = self.rate(chambers, piston, 0.0, supply);
+            let stiffening = |p: f64| self.effective_bulk_modulus(&air, Dual::new(p, 1.0)).eps.abs();
+            chamber_a += stiffening(chambers.pa) * r.inflow_a.abs() / va;
+            chamber_b += stiffening(chambers.pb) * r.inflow_b.abs() / vb;
+        }
         chamber_a.max(chamber_b).max(self.valve_omega * (2.0 * self.valve_damping).max(1.0))
     }
 
@@ -293,6 +387,8 @@ impl HydraulicLegs {
             ("valve.pcr", self.pcr, true),
             ("valve.leakage", self.valve_leakage, false),
             ("hydraulic.internalLeakage", self.internal_leakage, false),
+            ("hydraulic.airFraction", self.air_fraction, false),
+            ("hydraulic.airPolytropic", self.air_polytropic, true),
         ] {
             check_finite(name, value)?;
             if positive && !(value > 0.0) {
@@ -301,6 +397,12 @@ impl HydraulicLegs {
             if !positive && value < 0.0 && name != "hydraulic.tankPressure" {
                 return Err(ParameterError::new(name, format!("must be >= 0, got {value:e}")));
             }
+        }
+        if !(self.air_fraction < 1.0) {
+            return Err(ParameterError::new(
+                "hydraulic.airFraction",
+                format!("the air's volume fraction at atmospheric pressure must be in [0, 1), got {:e}", self.air_fraction),
+            ));
         }
         if !(self.rod < self.bore) {
             return Err(ParameterError::new(
@@ -350,6 +452,50 @@ mod tests {
             assert!(residual.abs() < 1e-9 * r.supply_power.abs().max(1.0), "spool {spool}: {residual:e} W");
             assert!(r.dissipation >= 0.0);
         }
+    }
+
+    /// With air the compression power `p q` is `p V p' / beta_e(p)` of each chamber, and the
+    /// balance closes as without air; at and below zero absolute a chamber's pressure stands.
+    #[test]
+    fn with_air_the_power_balance_closes_and_vacuum_is_a_floor() {
+        let h = HydraulicLegs::default();
+        let air = h.air().expect("the default oil carries air");
+        let (c, p) = leg();
+        for (pa, pb) in [(7.3e6, 8.1e6), (2e4, -9e4), (-1.0e5, 3e5)] {
+            let chambers = Chambers { pa, pb, ..c };
+            let r = h.rate(&chambers, &p, 0.5, 16e6);
+            let (va, vb) = h.volumes(&p);
+            let written = pa * va * r.pa_rate / h.effective_bulk_modulus(&air, pa)
+                + pb * vb * r.pb_rate / h.effective_bulk_modulus(&air, pb);
+            assert!((r.compression_power - written).abs() < 1e-12 * written.abs().max(1.0), "{pa:e} {pb:e}");
+            let residual = r.supply_power - (r.force * p.rate + r.dissipation + r.compression_power);
+            assert!(residual.abs() < 1e-9 * r.supply_power.abs().max(1.0), "{residual:e} W");
+        }
+        let below = Chambers { pa: -ATMOSPHERIC_PRESSURE, pb: -2.0e5, ..c };
+        let r = h.rate(&below, &p, 0.5, 16e6);
+        assert_eq!((r.pa_rate, r.pb_rate), (0.0, 0.0));
+    }
+
+    /// `beta_e`: `beta` without air, the liquid's `beta` (to 1 %) at the supply, `n P` near
+    /// zero absolute (for n = 1 and n = 1.4), and its derivative the central difference's.
+    #[test]
+    fn the_effective_bulk_modulus_has_its_limits_and_derivative() {
+        for n in [1.0, 1.4] {
+            let h = HydraulicLegs { air_polytropic: n, ..HydraulicLegs::default() };
+            let air = h.air().unwrap();
+            let at = |p: f64| h.effective_bulk_modulus(&air, p);
+            assert!((at(16e6) / h.bulk_modulus - 1.0).abs() < 1e-2, "{}", at(16e6));
+            let absolute = 1e-3;
+            assert!((at(absolute - ATMOSPHERIC_PRESSURE) / (n * absolute) - 1.0).abs() < 1e-3);
+            for p in [-9.0e4, 0.0, 5e5, 7e6] {
+                let d = 1e-3 * (p + ATMOSPHERIC_PRESSURE);
+                let central = (at(p + d) - at(p - d)) / (2.0 * d);
+                let exact = h.effective_bulk_modulus(&air, Dual::new(p, 1.0)).eps;
+                assert!((exact - central).abs() < 1e-5 * central.abs(), "n {n}, p {p:e}: {exact:e} {central:e}");
+            }
+        }
+        let without = HydraulicLegs { air_fraction: 0.0, ..HydraulicLegs::default() };
+        assert!(without.air().is_none());
     }
 
     /// At a large drop the regularised law is the square root: `Q = K s sqrt(dp)`, and the

@@ -288,8 +288,8 @@ pub trait Actuator: Copy + std::fmt::Debug + PartialEq {
     }
 
     /// The longest step the explicit fixed-step method is stable for at its states `x` and the
-    /// legs' lengths (computed when asked for) (`inf`: no bound).
-    fn stable_step(&self, _x: &[f64], _lengths: impl FnOnce() -> [f64; LEG_COUNT]) -> f64 {
+    /// legs' lengths and rates (computed when asked for) (`inf`: no bound).
+    fn stable_step(&self, _x: &[f64], _legs: impl FnOnce() -> LegMotion) -> f64 {
         f64::INFINITY
     }
 
@@ -344,6 +344,13 @@ pub trait BodyRate<T: Real> {
     /// The body's rate with the electric drives (which the body's form must have) at their
     /// currents, the inputs their voltages: the drives' law at each leg's rate.
     fn driven(&self, currents: &[T; LEG_COUNT], dy: &mut [T; STATE_DIM]) -> DrivenRates<T>;
+}
+
+/// The legs' lengths `l_k` (m) and rates `ldot_k` (m/s) at a state.
+#[derive(Clone, Copy, Debug)]
+pub struct LegMotion {
+    pub lengths: [f64; LEG_COUNT],
+    pub rates: [f64; LEG_COUNT],
 }
 
 /// The powers of a right-hand-side evaluation (or their changes, from

@@ -197,6 +197,12 @@ impl Real for Jet {
         let dt = 1.0 - t * t;
         self.compose(t, dt, -2.0 * t * dt)
     }
+    fn powf(self, y: f64) -> Self {
+        // f = x^y, f' = y x^(y-1), f'' = y (y - 1) x^(y-2).
+        let p = maths::pow(self.v, y);
+        let d = y * p / self.v;
+        self.compose(p, d, (y - 1.0) * d / self.v)
+    }
 }
 
 /// Trigonometry the cueing laws need on `f64` and on jets alike.

@@ -2,8 +2,8 @@
 //! stroke, with the supply pressure (an input) and the chambers' states in the simulation state
 //! ([`block`]), their rate, force, check and stability bound.
 
-use super::{Chambers, DEFAULT_SUPPLY_PRESSURE, HydraulicLegs, Piston};
-use crate::physics::actuators::{Actuator, BodyRate, LegPower};
+use super::{ATMOSPHERIC_PRESSURE, Chambers, DEFAULT_SUPPLY_PRESSURE, HydraulicLegs, Piston};
+use crate::physics::actuators::{Actuator, BodyRate, LegMotion, LegPower};
 use crate::physics::body::state::{BodyState, STATE_DIM};
 use crate::physics::error::{ParameterError, PhysicsFault};
 use crate::physics::legs::geometry::LegGeometry;
@@ -195,12 +195,13 @@ impl Actuator for HydraulicActuators {
 
     /// The legs' fast modes ([`HydraulicLegs::stiffness`]) against RK4's stability interval
     /// (2.78 on the negative real axis), with a margin for the rate's growth within the step.
-    fn stable_step(&self, x: &[f64], lengths: impl FnOnce() -> [f64; LEG_COUNT]) -> f64 {
+    fn stable_step(&self, x: &[f64], legs: impl FnOnce() -> LegMotion) -> f64 {
         let Ok(x) = <&Block<f64>>::try_from(x) else { return f64::INFINITY };
-        let l = lengths();
+        let LegMotion { lengths: l, rates: l_dot } = legs();
         let mut fastest = 0.0_f64;
         for k in 0..LEG_COUNT {
-            fastest = fastest.max(self.legs.stiffness(&Self::chambers(x, k), &self.piston(k, l[k], 0.0), self.supply));
+            fastest =
+                fastest.max(self.legs.stiffness(&Self::chambers(x, k), &self.piston(k, l[k], l_dot[k]), self.supply));
         }
         STABLE_STEP_FACTOR / fastest
     }
@@ -222,8 +223,20 @@ impl Actuator for HydraulicActuators {
     fn validate(&self) -> Result<(), ParameterError> {
         HydraulicActuators::validate(self)?;
         for k in 0..LEG_COUNT {
-            check_finite(&format!("pA0[{}]", k + 1), self.initial_pa[k])?;
-            check_finite(&format!("pB0[{}]", k + 1), self.initial_pb[k])?;
+            for (name, p) in [("pA0", self.initial_pa[k]), ("pB0", self.initial_pb[k])] {
+                let name = format!("{name}[{}]", k + 1);
+                check_finite(&name, p)?;
+                // Oil with air cannot be at or below zero absolute (its bulk modulus is 0 there).
+                if self.legs.air().is_some() && !(p > -ATMOSPHERIC_PRESSURE) {
+                    return Err(ParameterError::new(
+                        name,
+                        format!(
+                            "{p:e} Pa gauge is at or below zero absolute (-{ATMOSPHERIC_PRESSURE} Pa gauge), where oil \
+                             with air (hydraulic.airFraction > 0) cannot be"
+                        ),
+                    ));
+                }
+            }
         }
         Ok(())
     }
