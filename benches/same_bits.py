@@ -1,7 +1,8 @@
 """Two builds of the platform FMU, output by output and bit by bit: every Real output both
 declare, over 3000 steps of 1 ms through FMPy, with forces (legs with mass and friction; RK4;
-the paper's legs) and with electric drives (adaptive and RK4) under a leg feedback with a
-ripple. How a change that should not touch these modes is checked (benches/results/hydraulics.txt),
+the paper's legs), with electric drives (adaptive and RK4) under a leg feedback with a
+ripple, and with hydraulic legs of oil without air (adaptive and RK4; a valve ripple, the pump
+failing at 2 s). How a change that should not touch these modes is checked (benches/results/hydraulics.txt),
 and how far apart a change that moves them at round-off leaves them (benches/results/machine_lanes.txt).
 
     .venv/bin/python benches/same_bits.py OLD/StewartPlatform.fmu NEW/StewartPlatform.fmu
@@ -9,13 +10,15 @@ and how far apart a change that moves them at round-off leaves them (benches/res
 import numpy as np, math
 from fmpy import read_model_description, extract
 from fmpy.fmi2 import FMU2Slave
-def run(fmu, params, inputs_name, law, steps=3000, h=1e-3):
+def run(fmu, params, inputs_name, law, steps=3000, h=1e-3, scalars=None):
     md = read_model_description(fmu)
     vr = {v.name: v.valueReference for v in md.modelVariables}
     d = extract(fmu)
     s = FMU2Slave(guid=md.guid, unzipDirectory=d, modelIdentifier=md.coSimulation.modelIdentifier, instanceName="x")
     s.instantiate(); s.setupExperiment(startTime=0.0); s.enterInitializationMode()
     for k, v in params.items():
+        if k not in vr:  # a parameter the older build does not have (at its neutral value here)
+            continue
         if isinstance(v, int) and k in ("drive", "solver.method"): s.setInteger([vr[k]], [v])
         elif isinstance(v, bool): s.setBoolean([vr[k]], [v])
         else: s.setReal([vr[k]], [v])
@@ -25,6 +28,8 @@ def run(fmu, params, inputs_name, law, steps=3000, h=1e-3):
     for i in range(steps):
         l = np.array(s.getReal([vr[f"l[{k}]"] for k in range(1,7)])); ld = np.array(s.getReal([vr[f"ldot[{k}]"] for k in range(1,7)]))
         s.setReal([vr[f"{inputs_name}[{k}]"] for k in range(1,7)], list(law(t, l, ld)))
+        for name, value in (scalars(t) if scalars else {}).items():
+            s.setReal([vr[name]], [value])
         s.doStep(currentCommunicationPoint=t, communicationStepSize=h); t += h
         rows.append(s.getReal([vr[n] for n in names]))
     s.terminate(); s.freeInstance()
@@ -42,9 +47,16 @@ cases = [("forces, machine", {"leg.cylinderMass": 40.0, "leg.rodMass": 15.0, "fr
          ("forces, paper legs", {}, "F", force),
          ("drives", {"drive": 1, **{f"I0[{k}]": ihold for k in range(1,7)}}, "U", volts),
          ("drives, RK4", {"drive": 1, "solver.method": 2, **{f"I0[{k}]": ihold for k in range(1,7)}}, "U", volts)]
-for name, params, inp, law in cases:
-    a, names = run(old, {k: (int(v) if k in ("drive","solver.method") else v) for k,v in params.items()}, inp, law)
-    b, _ = run(new, {k: (int(v) if k in ("drive","solver.method") else v) for k,v in params.items()}, inp, law)
+# Hydraulic legs with oil without air (docs/model.md §10b: airFraction = 0 is §10's law to the
+# bit): a valve ripple with a position term, the pump failing at 2 s.
+valves = lambda t,l,ld: np.clip(0.3*(l0-l)/0.01 - 0.02*ld + 0.05*np.sin(3*t + np.arange(6)), -1, 1)
+pump = lambda t: {"pS": 16e6 if t < 2.0 else 0.0}
+no_air = {"drive": 2, "hydraulic.airFraction": 0.0}
+cases += [("hydraulics, no air", no_air, "valve", valves, pump),
+          ("hydraulics, no air, RK4", {**no_air, "solver.method": 2}, "valve", valves, pump)]
+for name, params, inp, law, *scalars in cases:
+    a, names = run(old, {k: (int(v) if k in ("drive","solver.method") else v) for k,v in params.items()}, inp, law, scalars=scalars[0] if scalars else None)
+    b, _ = run(new, {k: (int(v) if k in ("drive","solver.method") else v) for k,v in params.items()}, inp, law, scalars=scalars[0] if scalars else None)
     diff = np.argwhere(a.view(np.uint64) != b.view(np.uint64))
     print(f"{name}: {a.shape[1]} outputs x {a.shape[0]} steps; differing bits: {len(diff)}", [names[j] for j in sorted(set(diff[:,1]))][:5])
     if len(diff):

@@ -3,7 +3,8 @@ figures, holding under control, the heave programme in hydraulic mode, a loss of
 power (the legs lock and creep), a pump failure, a valve stuck open, and the work-precision
 figure of the integrators with hydraulics; through the packaged FMUs, SI units, default stand
 and legs. Writes hydraulic1_holding.csv .. hydraulic5_stuck_valve.csv, hydraulic_heave.png,
-hydraulic_failures.png, hydraulic_work_precision.png and hydraulic_summary.txt.
+hydraulic_failures.png, hydraulic_air.png (oil with and without entrained air),
+hydraulic_work_precision.png and hydraulic_summary.txt.
 
     python examples/hydraulic_scenarios.py [output-folder]   (default: output/)
 """
@@ -35,6 +36,7 @@ P = hy.hydraulic_parameters()
 AREA_A, AREA_B = oracle.areas(P)
 K = oracle.flow_coefficient(P)
 PERIOD = 2 * math.pi / 2.5573423705088842  # the default heave programme's
+ATMOSPHERE = 101325.0  # Pa: zero absolute is this far below zero gauge (§10b)
 
 
 def balance(c):
@@ -130,10 +132,13 @@ def heave(summary):
 def failures(summary):
     print("3-5 loss of control power, pump failure, a valve stuck open ...")
     lost, _, s3 = hy.control_power_loss(1.0, 6.0)
-    events = []
+    events, events_without_air = [], []
     pump, _, s4 = hy.pump_failure(1.0, 4.0, events=events)
+    without_air = {"hydraulic.airFraction": 0.0}
+    pump0, _, s40 = hy.pump_failure(1.0, 4.0, events=events_without_air, platform=without_air)
     stuck, stuck_errors, s5 = hy.stuck_valve(1.0, 6.0)
-    assert s3 == s4 == s5 == "ok", (s3, s4, s5)
+    stuck0, _, s50 = hy.stuck_valve(1.0, 6.0, platform=without_air)
+    assert s3 == s4 == s40 == s5 == s50 == "ok", (s3, s4, s40, s5, s50)
     t = lost["time"]
     window = (t >= 3.0) & (t <= 6.0)
     creep = np.polyfit(t[window], lost["l[1]"][window], 1)[0]
@@ -145,15 +150,24 @@ def failures(summary):
         f"and the legs lock on their oil; the leakage pulls both chambers towards pS/2, and the legs creep out at "
         f"{creep * 1e3:.4f} mm/s against {quasi * 1e3:.4f} mm/s quasi-static from the leakage flows and the load "
         f"pressures (heave {creep * oracle.heave_rate_of_leg_rate(lost['l[1]'][mid]) * 1e3:.4f} mm/s up)")
-    warning = next((m for s, _, m in events if s == 1 and "cavitate" in m), "none")
+    warnings = [m for s, _, m in events if s == 1 and "cavitate" in m]
+    warning = next((m for s, _, m in events_without_air if s == 1 and "cavitate" in m), "none")
     after = pump["time"] > 1.0
     write_columns(OUT / "hydraulic4_pump_failure.csv", columns(pump, ["r[3]", "der(v[3])", "pmin", "Qsupply"] + hy.L + hy.PA + hy.PB))
+    write_columns(OUT / "hydraulic4_pump_failure_without_air.csv",
+                  columns(pump0, ["r[3]", "der(v[3])", "pmin", "Qsupply"] + hy.L + hy.PA + hy.PB))
     summary.append(
         f"4 pump failure at t = 1 s (pS to 0, the controller still commanding): the platform settles through the "
         f"valves onto its lower stops (z {pump['r[3]'][0]:.3f} -> {pump['r[3]'][-1]:.3f} m, legs "
         f"{min(pump[n][-1] for n in hy.L):.4f} m); peak deceleration {np.max(pump['der(v[3])'][after]):.1f} m/s2 at "
-        f"the stops; lowest chamber pressure pmin {pump['pmin'][-1] / 1e5:.2f} bar; the FMU warned once: "
-        f"\"{warning[:90]}...\"")
+        f"the stops; lowest chamber pressure pmin {pump['pmin'][-1] / 1e5:.4f} bar gauge, "
+        f"{(pump['pmin'][-1] + ATMOSPHERE) / 1e5:.4f} bar absolute (oil with air, hydraulic.airFraction "
+        f"{P['hydraulic.airFraction']}); {len(warnings)} warnings")
+    summary.append(
+        f"4 the same without air (hydraulic.airFraction = 0, section 10's oil): peak deceleration "
+        f"{np.max(pump0['der(v[3])'][pump0['time'] > 1.0]):.1f} m/s2; pmin {pump0['pmin'][-1] / 1e5:.2f} bar gauge, "
+        f"{(pump0['pmin'][-1] + ATMOSPHERE) / 1e5:.2f} bar absolute, below zero absolute where no oil can be; the FMU "
+        f"warned once: \"{warning[:90]}...\"")
     joint = max(float(np.max(np.linalg.norm(np.array([stuck[f"jointForce[{k},{i}]"] for i in (1, 2, 3)]), axis=0)))
                 for k in LEGS)
     others = max(float(np.max(np.abs(stuck[f"l[{k}]"] - stuck[f"l[{k}]"][0]))) for k in LEGS[1:])
@@ -163,7 +177,11 @@ def failures(summary):
         f"({stuck['l[1]'][-1]:.4f} m, p_A {stuck['pA[1]'][-1] / 1e6:.2f} MPa); the other legs move up to "
         f"{others * 1e3:.0f} mm from their start holding the tilted platform (roll "
         f"{math.degrees(stuck['angles[1]'][-1]):.2f} deg, pitch {math.degrees(stuck['angles[2]'][-1]):.2f} deg); "
-        f"largest joint force {joint / 1e3:.1f} kN (holding: {EQUILIBRIUM_FORCE * MASS * GRAVITY / 1e3:.1f} kN)")
+        f"largest joint force {joint / 1e3:.1f} kN (holding: {EQUILIBRIUM_FORCE * MASS * GRAVITY / 1e3:.1f} kN); "
+        f"lowest chamber pressure {stuck['pmin'][-1] / 1e5:.3f} bar gauge (without air {stuck0['pmin'][-1] / 1e5:.3f}: "
+        f"no chamber comes near vacuum, the leg runs out at the supply; leg 1 at the end "
+        f"{stuck['l[1]'][-1]:.5f} m with air, {stuck0['l[1]'][-1]:.5f} m without)")
+    air_figure(pump, pump0, stuck, stuck0)
     fig, ax = plt.subplots(1, 3, figsize=(17, 4.4))
     ax[0].plot(t, (lost["l[1]"] - lost["l[1]"][0]) * 1e3, label="leg 1, simulated")
     ax[0].plot(t[window], (np.polyval(np.polyfit(t[window], lost["l[1]"][window], 1), t[window]) - lost["l[1]"][0]) * 1e3,
@@ -184,6 +202,31 @@ def failures(summary):
     ax[2].legend(fontsize=7, ncol=2)
     fig.tight_layout()
     fig.savefig(OUT / "hydraulic_failures.png", dpi=110)
+    plt.close(fig)
+
+
+def air_figure(pump, pump0, stuck, stuck0):
+    """Oil with and without entrained air (docs/model.md §10b) through the pump failure and the
+    stuck valve: absolute pressures, the platform's height."""
+    fig, ax = plt.subplots(1, 3, figsize=(17, 4.4))
+    for c, label, style in [(pump, f"with air (airFraction {P['hydraulic.airFraction']})", "-"),
+                            (pump0, "without air (section 10)", "--")]:
+        lowest = np.min([c[n] for n in hy.PA + hy.PB], axis=0)
+        ax[0].plot(c["time"], (lowest + ATMOSPHERE) / 1e5, style, label=label)
+        ax[1].plot(c["time"], c["r[3]"], style, label=label)
+    ax[0].axhline(0.0, color="r", lw=0.8, ls=":", label="zero absolute")
+    ax[0].set(title="Pump failure at 1 s: lowest chamber pressure", xlabel="t, s", ylabel="absolute pressure, bar",
+              ylim=(-10, 20))
+    ax[0].legend(fontsize=8)
+    ax[1].set(title="Pump failure at 1 s: settling onto the stops", xlabel="t, s", ylabel="centre of mass z, m")
+    ax[1].legend(fontsize=8)
+    for c, label, style in [(stuck, "with air", "-"), (stuck0, "without air", "--")]:
+        ax[2].plot(c["time"], (c["pB[1]"] + ATMOSPHERE) / 1e5, style, label=f"p_B[1], {label}")
+        ax[2].plot(c["time"], (c["pA[1]"] + ATMOSPHERE) / 1e5, style, label=f"p_A[1], {label}")
+    ax[2].set(title="Valve 1 stuck at +0.2 from 1 s: leg 1's chambers", xlabel="t, s", ylabel="absolute pressure, bar")
+    ax[2].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(OUT / "hydraulic_air.png", dpi=110)
     plt.close(fig)
 
 

@@ -22,7 +22,8 @@ from .cosim import COMMANDS, MEASURED, steps
 
 PARAMETERS = ("hydraulic.bore", "hydraulic.rod", "hydraulic.deadVolumeA", "hydraulic.deadVolumeB",
               "hydraulic.bulkModulus", "hydraulic.tankPressure", "valve.ratedFlow", "valve.ratedPressureDrop",
-              "valve.omega", "valve.damping", "valve.pcr", "valve.leakage", "hydraulic.internalLeakage", "pS")
+              "valve.omega", "valve.damping", "valve.pcr", "valve.leakage", "hydraulic.internalLeakage",
+              "hydraulic.airFraction", "hydraulic.airPolytropic", "pS")
 PA = [f"pA[{k}]" for k in LEGS]
 PB = [f"pB[{k}]" for k in LEGS]
 SPOOL = [f"spool[{k}]" for k in LEGS]
