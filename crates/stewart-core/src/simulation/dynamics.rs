@@ -143,13 +143,15 @@ impl<'a, L: ?Sized, V: Lanes> PlatformDynamics<'a, L, V> {
             return f64::INFINITY;
         }
         std::hint::cold_path();
-        let legs = || {
+        let legs = |with_rates: bool| {
             let state = BodyState::from_vector(body(y));
             let kinematics = self.form.joints.kinematics_in::<Narrow>(&state);
-            LegMotion {
-                lengths: kinematics.lengths(),
-                rates: self.form.joints.length_rates_in::<Narrow>(&state, &kinematics),
-            }
+            let rates = if with_rates {
+                self.form.joints.length_rates_in::<Narrow>(&state, &kinematics)
+            } else {
+                [0.0; LEG_COUNT]
+            };
+            LegMotion { lengths: kinematics.lengths(), rates }
         };
         a.stable_step(y.get(A::BLOCK).unwrap_or(&[]), legs)
     }

@@ -144,6 +144,10 @@ pub struct EntrainedAir {
     inverse_polytropic: f64,
     /// `beta / n`, Pa.
     beta_over_n: f64,
+    /// `a = alpha0 / (1 - alpha0) p_atm` (Pa) and `a beta / n` (Pa²): for `n = 1`, `theta =
+    /// a / P` and `beta_e = beta P (P + a) / (P^2 + a beta / n)`, one division.
+    air_pressure: f64,
+    isothermal_constant: f64,
 }
 
 impl Default for HydraulicLegs {
@@ -226,10 +230,16 @@ impl HydraulicLegs {
     /// The entrained air's constants, `None` for oil without air (`alpha0 = 0`).
     #[inline(always)]
     pub fn air(&self) -> Option<EntrainedAir> {
-        (self.air_fraction != 0.0).then(|| EntrainedAir {
-            ratio: self.air_fraction / (1.0 - self.air_fraction),
-            inverse_polytropic: 1.0 / self.air_polytropic,
-            beta_over_n: self.bulk_modulus / self.air_polytropic,
+        (self.air_fraction != 0.0).then(|| {
+            let ratio = self.air_fraction / (1.0 - self.air_fraction);
+            let beta_over_n = self.bulk_modulus / self.air_polytropic;
+            EntrainedAir {
+                ratio,
+                inverse_polytropic: 1.0 / self.air_polytropic,
+                beta_over_n,
+                air_pressure: ratio * ATMOSPHERIC_PRESSURE,
+                isothermal_constant: ratio * ATMOSPHERIC_PRESSURE * beta_over_n,
+            }
         })
     }
 
@@ -243,11 +253,29 @@ impl HydraulicLegs {
         if !absolute.greater(zero) {
             return zero;
         }
-        let expansion = T::constant(ATMOSPHERIC_PRESSURE) / absolute;
-        // (p_atm / P)^(1/n); n = 1 (the default) without a power function.
-        let expansion = if air.inverse_polytropic == 1.0 { expansion } else { expansion.powf(air.inverse_polytropic) };
-        let theta = expansion * air.ratio;
+        if air.inverse_polytropic == 1.0 {
+            // n = 1 (the default): theta = a / P, multiplied through by P^2.
+            return absolute * (absolute + air.air_pressure) * self.bulk_modulus
+                / (absolute * absolute + air.isothermal_constant);
+        }
+        let theta = (T::constant(ATMOSPHERIC_PRESSURE) / absolute).powf(air.inverse_polytropic) * air.ratio;
         (theta + 1.0) * self.bulk_modulus / (theta * air.beta_over_n / absolute + 1.0)
+    }
+
+    /// `beta_e'(p)`, the effective bulk modulus's rate of change with pressure (1): for `n = 1`
+    /// in closed form, `beta (2 P c - a P^2 + a c) / (P^2 + c)^2` with `c = a beta / n`;
+    /// otherwise through a dual number. 0 at and below zero absolute.
+    pub fn effective_bulk_modulus_slope(&self, air: &EntrainedAir, p: f64) -> f64 {
+        let absolute = p + ATMOSPHERIC_PRESSURE;
+        if !(absolute > 0.0) {
+            return 0.0;
+        }
+        if air.inverse_polytropic == 1.0 {
+            let (a, c) = (air.air_pressure, air.isothermal_constant);
+            let d = absolute * absolute + c;
+            return self.bulk_modulus * (2.0 * absolute * c - a * absolute * absolute + a * c) / (d * d);
+        }
+        self.effective_bulk_modulus(air, Dual::new(p, 1.0)).eps
     }
 
     /// `(V_A, V_B)`, m³, at the piston position `x` in a stroke `L_s`.
@@ -341,25 +369,35 @@ impl HydraulicLegs {
         let k = self.flow_coefficient();
         let pcr2 = self.pcr * self.pcr;
         // phi'(dp) = (dp^2 / 2 + p_cr^2) / (dp^2 + p_cr^2)^(5/4).
-        let slope = |dp: f64| {
+        // With |phi(dp)| = |dp| / (dp^2 + p_cr^2)^(1/4), the open land's flow per K |s|.
+        let land = |dp: f64| {
             let q = dp * dp + pcr2;
-            (0.5 * dp * dp + pcr2) / (q * q.sqrt().sqrt())
+            let root = q.sqrt().sqrt();
+            ((0.5 * dp * dp + pcr2) / (q * root), dp.abs() / root)
         };
         let s = chambers.spool.abs();
-        let (a_in, a_out, b_in, b_out) = if chambers.spool >= 0.0 {
-            (slope(supply - chambers.pa), 0.0, 0.0, slope(chambers.pb - self.tank_pressure))
-        } else {
-            (0.0, slope(chambers.pa - self.tank_pressure), slope(supply - chambers.pb), 0.0)
-        };
+        let (pa, pb, tank) = (chambers.pa, chambers.pb, self.tank_pressure);
+        let ((a_in, flow_a), (b_in, flow_b)) =
+            if chambers.spool >= 0.0 { (land(supply - pa), land(pb - tank)) } else { (land(pa - tank), land(supply - pb)) };
         let leak = 2.0 * self.valve_leakage + self.internal_leakage;
         let (va, vb) = self.volumes(piston);
-        let mut chamber_a = self.bulk_modulus / va * (k * s * (a_in + a_out) + leak);
-        let mut chamber_b = self.bulk_modulus / vb * (k * s * (b_in + b_out) + leak);
+        let mut chamber_a = self.bulk_modulus / va * (k * s * a_in + leak);
+        let mut chamber_b = self.bulk_modulus / vb * (k * s * b_in + leak);
         if let Some(air) = self.air() {
-            let r = self.rate(chambers, piston, 0.0, supply);
-            let stiffening = |p: f64| self.effective_bulk_modulus(&air, Dual::new(p, 1.0)).eps.abs();
-            chamber_a += stiffening(chambers.pa) * r.inflow_a.abs() / va;
-            chamber_b += stiffening(chambers.pb) * r.inflow_b.abs() / vb;
+            // |q| bounded by its terms: the open land, both lands' leakage, the piston, the
+            // internal leakage.
+            let (area_a, area_b) = self.areas();
+            let internal = self.internal_leakage * (pa - pb).abs();
+            let q_a = k * s * flow_a
+                + self.valve_leakage * ((supply - pa).abs() + (pa - tank).abs())
+                + area_a * piston.rate.abs()
+                + internal;
+            let q_b = k * s * flow_b
+                + self.valve_leakage * ((supply - pb).abs() + (pb - tank).abs())
+                + area_b * piston.rate.abs()
+                + internal;
+            chamber_a += self.effective_bulk_modulus_slope(&air, pa).abs() * q_a / va;
+            chamber_b += self.effective_bulk_modulus_slope(&air, pb).abs() * q_b / vb;
         }
         chamber_a.max(chamber_b).max(self.valve_omega * (2.0 * self.valve_damping).max(1.0))
     }
@@ -492,6 +530,8 @@ mod tests {
                 let central = (at(p + d) - at(p - d)) / (2.0 * d);
                 let exact = h.effective_bulk_modulus(&air, Dual::new(p, 1.0)).eps;
                 assert!((exact - central).abs() < 1e-5 * central.abs(), "n {n}, p {p:e}: {exact:e} {central:e}");
+                let closed = h.effective_bulk_modulus_slope(&air, p);
+                assert!((closed - central).abs() < 1e-5 * central.abs(), "n {n}, p {p:e}: {closed:e} {central:e}");
             }
         }
         let without = HydraulicLegs { air_fraction: 0.0, ..HydraulicLegs::default() };

@@ -288,8 +288,9 @@ pub trait Actuator: Copy + std::fmt::Debug + PartialEq {
     }
 
     /// The longest step the explicit fixed-step method is stable for at its states `x` and the
-    /// legs' lengths and rates (computed when asked for) (`inf`: no bound).
-    fn stable_step(&self, _x: &[f64], _legs: impl FnOnce() -> LegMotion) -> f64 {
+    /// legs' lengths (computed when asked for: `legs(with_rates)`, the rates too if asked, else
+    /// 0) (`inf`: no bound).
+    fn stable_step(&self, _x: &[f64], _legs: impl FnOnce(bool) -> LegMotion) -> f64 {
         f64::INFINITY
     }
 

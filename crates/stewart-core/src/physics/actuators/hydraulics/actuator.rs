@@ -195,9 +195,10 @@ impl Actuator for HydraulicActuators {
 
     /// The legs' fast modes ([`HydraulicLegs::stiffness`]) against RK4's stability interval
     /// (2.78 on the negative real axis), with a margin for the rate's growth within the step.
-    fn stable_step(&self, x: &[f64], legs: impl FnOnce() -> LegMotion) -> f64 {
+    fn stable_step(&self, x: &[f64], legs: impl FnOnce(bool) -> LegMotion) -> f64 {
         let Ok(x) = <&Block<f64>>::try_from(x) else { return f64::INFINITY };
-        let LegMotion { lengths: l, rates: l_dot } = legs();
+        // The rates bound the chambers' flows, which matter with air alone.
+        let LegMotion { lengths: l, rates: l_dot } = legs(self.legs.air().is_some());
         let mut fastest = 0.0_f64;
         for k in 0..LEG_COUNT {
             fastest =
