@@ -581,6 +581,9 @@ fn hydraulics() -> OracleHydraulics {
         internal_leakage: 1e-13,
         lmin: [1.45; 6],
         lmax: [2.05; 6],
+        air_fraction: 0.0,
+        air_polytropic: 1.0,
+        power_unit: None,
     }
 }
 
@@ -659,6 +662,8 @@ fn hydraulic_power_balance_per_leg_closes() {
             pb: std::array::from_fn(|_| uniform(&mut rng, -2e6, 2.2e7)),
             spool,
             spool_rate: std::array::from_fn(|_| uniform(&mut rng, -200.0, 200.0)),
+            supply_pressure: 0.0,
+            lowest_pressure: f64::INFINITY,
         };
         let ps = match case % 4 {
             0 => SUPPLY,
@@ -666,7 +671,7 @@ fn hydraulic_power_balance_per_leg_closes() {
             _ => uniform(&mut rng, 5e6, 2.1e7),
         };
         let valve = std::array::from_fn(|_| uniform(&mut rng, -1.5, 1.5));
-        let inputs = OracleInputs::Valves { valve, supply_pressure: ps };
+        let inputs = OracleInputs::Valves { valve, supply_pressure: ps, pump_speed: 1.0 };
 
         // The oracle's pieces.
         let (pa_dot, pb_dot) = m.hydraulic_rates(&s, &inputs);
@@ -746,7 +751,7 @@ fn hydraulic_run_setup(heave: f64) -> (OracleMachine, OracleState) {
 /// Valves moving (a different swing per leg) and the supply dropped to 0 after 1.2 s.
 fn hydraulic_profile(t: f64) -> OracleInputs {
     let valve = std::array::from_fn(|k| 0.6 * (2.0 * std::f64::consts::PI * t / 0.9 + 0.5 * k as f64).sin() + 0.1);
-    OracleInputs::Valves { valve, supply_pressure: if t < 1.2 { SUPPLY } else { 0.0 } }
+    OracleInputs::Valves { valve, supply_pressure: if t < 1.2 { SUPPLY } else { 0.0 }, pump_speed: 1.0 }
 }
 
 #[test]
@@ -842,7 +847,7 @@ fn holding_pressures_hold_the_stand() {
     h.valve_leakage = 0.0;
     h.internal_leakage = 0.0;
     m.hydraulics = Some(h);
-    let inputs = OracleInputs::Valves { valve: [0.0; 6], supply_pressure: SUPPLY };
+    let inputs = OracleInputs::Valves { valve: [0.0; 6], supply_pressure: SUPPLY, pump_speed: 1.0 };
     let mut worst = 0.0f64;
     for (name, r, rot) in [
         ("neutral", NEUTRAL_R, identity_rotation()),
