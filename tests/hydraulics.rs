@@ -43,6 +43,9 @@ fn oracle_hydraulics(h: &HydraulicLegs, stops: &EndStops) -> OracleHydraulics {
         internal_leakage: h.internal_leakage,
         lmin: stops.lower,
         lmax: stops.upper,
+        air_fraction: 0.0,
+        air_polytropic: 1.0,
+        power_unit: None,
     }
 }
 
@@ -79,6 +82,8 @@ fn oracle_state(s: &BodyState, pa: [f64; 6], pb: [f64; 6]) -> OracleState {
         pb,
         spool: [0.0; 6],
         spool_rate: [0.0; 6],
+        supply_pressure: DEFAULT_SUPPLY_PRESSURE,
+        lowest_pressure: f64::INFINITY,
     }
 }
 
@@ -153,7 +158,7 @@ fn hydraulics_agree_with_the_independent_formulation() {
         sim.advance(&HeldForces::constant(law(t, (&o.l, &o.ldot, &pa, &pb))), t + step).expect("steps");
         let (l, ldot) = (oracle.leg_lengths(&reference), oracle.leg_rates(&reference));
         let valve = law(t, (&l, &ldot, &reference.pa, &reference.pb));
-        let inputs = OracleInputs::Valves { valve, supply_pressure: DEFAULT_SUPPLY_PRESSURE };
+        let inputs = OracleInputs::Valves { valve, supply_pressure: DEFAULT_SUPPLY_PRESSURE, pump_speed: 1.0 };
         reference = oracle.simulate(&reference, step, 1, &|_| inputs)[1];
         let (l, p) = difference(&sim, &oracle, &reference);
         (legs, pressures) = (legs.max(l), pressures.max(p));

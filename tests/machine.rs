@@ -86,6 +86,8 @@ fn oracle_state(s: &BodyState) -> OracleState {
         pb: [0.0; 6],
         spool: [0.0; 6],
         spool_rate: [0.0; 6],
+        supply_pressure: 0.0,
+        lowest_pressure: f64::INFINITY,
     }
 }
 

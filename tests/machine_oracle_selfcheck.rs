@@ -2,14 +2,17 @@
 //! with the rigid-body Newton-Euler oracle for massless legs, energy conservation and the
 //! energy balance with drives, statics, the equations of motion against Lagrange's equations
 //! by finite differences of the energies, the joint forces against the platform's
-//! Newton-Euler balance, and the hydraulic servo legs of SPEC §10 (power balance per leg,
-//! energy balance over a run, holding pressures).
+//! Newton-Euler balance, the hydraulic servo legs of SPEC §10 (power balance per leg,
+//! energy balance over a run, holding pressures), and SPEC §10b's oil with air and power unit
+//! (section 10 to the bit without them, energy balances through a pump failure, no pressure
+//! below zero absolute, the accumulator's discharge and the oil's mass balance).
 
 use crate::common;
 
 use common::machine_oracle::{
-    EQUILIBRIUM_LEG_FORCE, NEUTRAL_R, OracleDrives, OracleFriction, OracleHydraulics, OracleInputs, OracleJoints,
-    OracleMachine, OracleState, OracleStops, identity_rotation, rotation_from_angles,
+    ATMOSPHERIC_PRESSURE, EQUILIBRIUM_LEG_FORCE, NEUTRAL_R, OracleDrives, OracleFriction, OracleHydraulics,
+    OracleInputs, OracleJoints, OracleMachine, OraclePowerUnit, OracleState, OracleStops, OracleWork,
+    identity_rotation, rotation_from_angles,
 };
 use common::newton_euler::{NeState, NewtonEuler};
 use common::rng::Rng;
@@ -581,6 +584,9 @@ fn hydraulics() -> OracleHydraulics {
         internal_leakage: 1e-13,
         lmin: [1.45; 6],
         lmax: [2.05; 6],
+        air_fraction: 0.0,
+        air_polytropic: 1.0,
+        power_unit: None,
     }
 }
 
@@ -659,6 +665,8 @@ fn hydraulic_power_balance_per_leg_closes() {
             pb: std::array::from_fn(|_| uniform(&mut rng, -2e6, 2.2e7)),
             spool,
             spool_rate: std::array::from_fn(|_| uniform(&mut rng, -200.0, 200.0)),
+            supply_pressure: 0.0,
+            lowest_pressure: f64::INFINITY,
         };
         let ps = match case % 4 {
             0 => SUPPLY,
@@ -666,7 +674,7 @@ fn hydraulic_power_balance_per_leg_closes() {
             _ => uniform(&mut rng, 5e6, 2.1e7),
         };
         let valve = std::array::from_fn(|_| uniform(&mut rng, -1.5, 1.5));
-        let inputs = OracleInputs::Valves { valve, supply_pressure: ps };
+        let inputs = OracleInputs::Valves { valve, supply_pressure: ps, pump_speed: 1.0 };
 
         // The oracle's pieces.
         let (pa_dot, pb_dot) = m.hydraulic_rates(&s, &inputs);
@@ -746,7 +754,7 @@ fn hydraulic_run_setup(heave: f64) -> (OracleMachine, OracleState) {
 /// Valves moving (a different swing per leg) and the supply dropped to 0 after 1.2 s.
 fn hydraulic_profile(t: f64) -> OracleInputs {
     let valve = std::array::from_fn(|k| 0.6 * (2.0 * std::f64::consts::PI * t / 0.9 + 0.5 * k as f64).sin() + 0.1);
-    OracleInputs::Valves { valve, supply_pressure: if t < 1.2 { SUPPLY } else { 0.0 } }
+    OracleInputs::Valves { valve, supply_pressure: if t < 1.2 { SUPPLY } else { 0.0 }, pump_speed: 1.0 }
 }
 
 #[test]
@@ -842,7 +850,7 @@ fn holding_pressures_hold_the_stand() {
     h.valve_leakage = 0.0;
     h.internal_leakage = 0.0;
     m.hydraulics = Some(h);
-    let inputs = OracleInputs::Valves { valve: [0.0; 6], supply_pressure: SUPPLY };
+    let inputs = OracleInputs::Valves { valve: [0.0; 6], supply_pressure: SUPPLY, pump_speed: 1.0 };
     let mut worst = 0.0f64;
     for (name, r, rot) in [
         ("neutral", NEUTRAL_R, identity_rotation()),
@@ -870,4 +878,331 @@ fn holding_pressures_hold_the_stand() {
         assert!(acc < 1e-9 && rates == 0.0 && du < 1e-8 && drift < 1e-9);
     }
     assert!(worst < 1e-9);
+}
+
+// ------------------------------------------------------------------------------------------
+// 8. Oil with entrained air and the power unit (SPEC §10b)
+// ------------------------------------------------------------------------------------------
+
+/// The power unit of the brief: pump 1.5 l/s set to 16 MPa with a 0.5 MPa band, relief at
+/// 17.5 MPa, a 10 l accumulator precharged to 9 MPa absolute, a 2 l supply line.
+fn power_unit() -> OraclePowerUnit {
+    OraclePowerUnit {
+        max_flow: 1.5e-3,
+        set_pressure: 16e6,
+        compensator_band: 0.5e6,
+        relief_pressure: 17.5e6,
+        relief_gain: 1e-9,
+        accumulator_volume: 10e-3,
+        precharge: 9e6,
+        accumulator_polytropic: 1.4,
+        supply_volume: 2e-3,
+    }
+}
+
+/// A typical servo oil: 0.5 % air, isothermal.
+const AIR: f64 = 0.005;
+
+/// `hydraulic_run_setup(0.2)` with air `alpha0` (`n = 1`) and, if given, the power unit.
+fn air_run_setup(alpha0: f64, unit: Option<OraclePowerUnit>) -> (OracleMachine, OracleState) {
+    let (mut m, start) = hydraulic_run_setup(0.2);
+    let h = m.hydraulics.as_mut().unwrap();
+    (h.air_fraction, h.air_polytropic, h.power_unit) = (alpha0, 1.0, unit);
+    (m, start)
+}
+
+/// SPEC §10b's `beta_e`, written out again from the text (not the oracle's function).
+fn spec_beta_e(beta: f64, alpha0: f64, n: f64, p: f64) -> f64 {
+    let big_p = p + 101325.0;
+    let theta = alpha0 / (1.0 - alpha0) * (101325.0 / big_p).powf(1.0 / n);
+    beta * (1.0 + theta) / (1.0 + theta * beta / (n * big_p))
+}
+
+/// FNV-1a over the bits of every state and work accumulator that section 10 has, at every
+/// communication point of a run.
+fn section_10_digest(run: &[(OracleState, OracleWork)]) -> u64 {
+    let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |x: f64| {
+        for b in x.to_bits().to_le_bytes() {
+            hash ^= b as u64;
+            hash = hash.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    };
+    for (s, w) in run {
+        s.r.iter().chain(s.rotation.iter().flatten()).chain(&s.v).chain(&s.w).for_each(|&x| eat(x));
+        s.currents.iter().chain(&s.pa).chain(&s.pb).chain(&s.spool).chain(&s.spool_rate).for_each(|&x| eat(x));
+        [w.forces, w.electric, w.dissipated, w.hydraulic, w.compression].into_iter().for_each(&mut eat);
+    }
+    hash
+}
+
+/// The digest of section 7b's run (1.6 s, valves swinging, `pS` dropped to 0 at 1.2 s, end
+/// stops reached, chambers down to -2.27 MPa), recorded from the oracle before §10b (commit
+/// 3d70871).
+const SECTION_10_DIGEST: u64 = 0x42ae_788d_0de5_5644;
+
+#[test]
+fn air_free_oil_without_the_power_unit_is_section_10_to_the_bit() {
+    let t0 = std::time::Instant::now();
+    let (m, start) = hydraulic_run_setup(0.2);
+    let run = m.simulate_with_work(&start, 1e-3, 1600, &hydraulic_profile);
+    let digest = section_10_digest(&run);
+    // The §10b parameters and states that air-free oil and the input supply leave unused: a
+    // polytropic exponent, a supply-line state and a stopped pump change nothing.
+    let (mut m2, mut start2) = (m.clone(), start);
+    m2.hydraulics.as_mut().unwrap().air_polytropic = 1.4;
+    start2.supply_pressure = 3e6;
+    let stopped = |t: f64| match hydraulic_profile(t) {
+        OracleInputs::Valves { valve, supply_pressure, .. } => {
+            OracleInputs::Valves { valve, supply_pressure, pump_speed: 0.0 }
+        }
+        other => other,
+    };
+    let run2 = m2.simulate_with_work(&start2, 1e-3, 1600, &stopped);
+    let digest2 = section_10_digest(&run2);
+    let (last, lw) = run2.last().unwrap();
+    let lowest = run.iter().flat_map(|(s, _)| s.pa.iter().chain(&s.pb)).fold(f64::MAX, |a, &p| a.min(p));
+    println!(
+        "[8a] section 7b's run: digest {digest:#018x}, with n = 1.4, p_S state 3e6 Pa and pump.speed 0 {digest2:#018x} \
+         (recorded before §10b {SECTION_10_DIGEST:#018x}); pmin {:.4e} Pa (lowest sample {lowest:.4e} Pa); {:.1} s",
+        last.lowest_pressure,
+        t0.elapsed().as_secs_f64()
+    );
+    assert_eq!(digest, SECTION_10_DIGEST, "air-free oil must be section 10 to the bit");
+    assert_eq!(digest2, SECTION_10_DIGEST);
+    assert_eq!((lw.pump, last.supply_pressure), (0.0, 3e6), "the power unit's state and work stay untouched");
+    let outputs = m2.power_unit_outputs(last, &stopped(1.5));
+    assert_eq!((outputs.supply_pressure, outputs.pump_flow, outputs.oil_volume), (0.0, 0.0, 0.0));
+    // pmin: at least as low as every sample, and no lower than the run's pressures allow.
+    assert!(last.lowest_pressure <= lowest && last.lowest_pressure > lowest - 1e5);
+}
+
+/// `E(t) - E(0)` against the works of a run, the largest residual and the largest work.
+fn balance(m: &OracleMachine, run: &[(OracleState, OracleWork)], with_pump: bool) -> (f64, f64) {
+    let e0 = m.energy(&run[0].0);
+    let (mut worst, mut scale) = (0.0f64, 0.0f64);
+    for (s, w) in run {
+        let supplied = if with_pump { w.pump } else { w.hydraulic };
+        let residual = m.energy(s) - e0 - (w.forces + w.electric + supplied - w.compression - w.dissipated);
+        worst = worst.max(residual.abs());
+        scale = scale.max(supplied.abs()).max(w.compression.abs()).max(w.dissipated.abs());
+    }
+    (worst, scale)
+}
+
+/// Section 7b's pump failure (`pS` to 0 at 1.2 s with the valves swinging) with air: section
+/// 10 alone takes the chambers below -1 bar gauge; with 0.5 % air no chamber reaches zero
+/// absolute, and section 10's energy balance (`work.hydraulic`) holds.
+#[test]
+fn air_keeps_every_chamber_above_zero_absolute() {
+    // beta_e: the oracle's against the text's, beta without air, n P near vacuum.
+    let h = air_run_setup(AIR, None).0.hydraulics.unwrap();
+    let mut worst_beta = 0.0f64;
+    for i in 0..=400 {
+        let p = -ATMOSPHERIC_PRESSURE + 10f64.powf(-2.0 + 0.025 * i as f64);
+        for n in [1.0, 1.4] {
+            let hn = OracleHydraulics { air_polytropic: n, ..h };
+            let spec = spec_beta_e(h.bulk_modulus, AIR, n, p);
+            worst_beta = worst_beta.max((hn.effective_bulk_modulus(p) / spec - 1.0).abs());
+        }
+    }
+    let near_vacuum = h.effective_bulk_modulus(-ATMOSPHERIC_PRESSURE + 1e-3) / 1e-3;
+    let free = OracleHydraulics { air_fraction: 0.0, ..h };
+    assert!(worst_beta < 1e-14, "beta_e {worst_beta:e}");
+    assert!((near_vacuum - 1.0).abs() < 1e-5, "beta_e / P at 1 mPa absolute: {near_vacuum}");
+    assert_eq!(free.effective_bulk_modulus(-5e6), free.bulk_modulus);
+
+    let (steps, dt) = (2500, 1e-3);
+    let mut lowest = vec![];
+    for alpha0 in [0.0, AIR] {
+        let (m, start) = air_run_setup(alpha0, None);
+        let t0 = std::time::Instant::now();
+        let run = m.simulate_with_work(&start, dt, steps, &hydraulic_profile);
+        let elapsed = t0.elapsed().as_secs_f64();
+        let (worst, scale) = balance(&m, &run, false);
+        let (last, lw) = run.last().unwrap();
+        let below = |limit: f64| run.iter().filter(|(s, _)| s.pa.iter().chain(&s.pb).any(|&p| p < limit)).count();
+        let (below_bar, below_vacuum) = (below(-1e5), below(-ATMOSPHERIC_PRESSURE));
+        // The substep against the decay rate near vacuum: h |p'| / P at every sample.
+        let mut decay = 0.0f64;
+        if alpha0 > 0.0 {
+            for (i, (s, _)) in run.iter().enumerate() {
+                let (pad, pbd) = m.hydraulic_rates(s, &hydraulic_profile(i as f64 * dt));
+                for (p, pd) in s.pa.iter().chain(&s.pb).zip(pad.iter().chain(&pbd)) {
+                    decay = decay.max(m.max_step * pd.abs() / (p + ATMOSPHERIC_PRESSURE));
+                }
+            }
+        }
+        println!(
+            "[8c] alpha0 = {alpha0}: {:.1} s in {elapsed:.1} s; lowest chamber pressure {:.4e} Pa gauge = {:.4e} Pa \
+             absolute; samples below -1 bar gauge {below_bar}, below zero absolute {below_vacuum}; largest h |p'| / P \
+             {decay:.3e}; max |E - E0 - W_h + W_c + W_d| = {worst:.3e} J = {:.3e} of the largest work ({scale:.4e} J); \
+             W_compression {:.1} J",
+            steps as f64 * dt,
+            last.lowest_pressure,
+            last.lowest_pressure + ATMOSPHERIC_PRESSURE,
+            worst / scale,
+            lw.compression
+        );
+        assert!(worst / scale < 1e-12, "energy balance {worst:e} J");
+        assert!(decay < 0.1, "h |p'| / P = {decay}");
+        lowest.push((last.lowest_pressure, below_bar, below_vacuum));
+        if alpha0 > 0.0 {
+            // The substep's error near vacuum: half the substep.
+            let mut fine = m.clone();
+            fine.max_step = 0.5 * m.max_step;
+            let run2 = fine.simulate_with_work(&start, dt, steps, &hydraulic_profile);
+            let (mut dp, mut dlog, mut dpose) = (0.0f64, 0.0f64, 0.0f64);
+            for ((a, _), (b, _)) in run.iter().zip(&run2) {
+                dpose = dpose.max((v3(a.r) - v3(b.r)).norm());
+                for (pa, pb) in a.pa.iter().chain(&a.pb).zip(b.pa.iter().chain(&b.pb)) {
+                    dp = dp.max((pa - pb).abs());
+                    let (qa, qb) = (pa + ATMOSPHERIC_PRESSURE, pb + ATMOSPHERIC_PRESSURE);
+                    dlog = dlog.max((qa / qb).ln().abs());
+                }
+            }
+            let (worst2, _) = balance(&fine, &run2, false);
+            println!(
+                "[8c] alpha0 = {alpha0}, substep {:e} s against {:e} s: pressures differ by {dp:.3e} Pa (relative, \
+                 absolute pressures: {dlog:.3e}), pose {dpose:.3e} m; balance {worst2:.3e} J; lowest {:.4e} Pa absolute",
+                fine.max_step,
+                m.max_step,
+                run2.last().unwrap().0.lowest_pressure + ATMOSPHERIC_PRESSURE
+            );
+            assert!(dp < 1.0 && dlog < 1e-6 && dpose < 1e-9);
+        }
+    }
+    let ((dry, dry_bar, dry_vacuum), (airy, _, airy_vacuum)) = (lowest[0], lowest[1]);
+    assert!(dry < -1e5 && dry_bar > 100 && dry_vacuum > 100, "section 10 alone goes below -1 bar gauge ({dry:e} Pa)");
+    assert!(airy + ATMOSPHERIC_PRESSURE > 0.0 && airy_vacuum == 0, "with air: {airy:e} Pa gauge");
+    assert!(airy + ATMOSPHERIC_PRESSURE < 1e4, "the chambers come near vacuum ({airy:e} Pa gauge)");
+}
+
+/// Valves swinging (section 7b's profile), the pump on until 1.2 s, then stopped.
+fn pump_failure(t: f64) -> OracleInputs {
+    match hydraulic_profile(t) {
+        OracleInputs::Valves { valve, .. } => {
+            OracleInputs::Valves { valve, supply_pressure: SUPPLY, pump_speed: if t < 1.2 { 1.0 } else { 0.0 } }
+        }
+        other => other,
+    }
+}
+
+/// The power unit through a pump failure: `E(t) - E(0) = work.pump - work.compression -
+/// work.dissipated` with `E_acc` in `E`, from a start above the relief pressure (relief open,
+/// pump at no delivery), through the pump's regulation, the accumulator's discharge, its
+/// emptying and the chambers' fall to vacuum; without and with air.
+#[test]
+fn power_unit_energy_balance_through_a_pump_failure() {
+    let (steps, dt) = (4000, 1e-3);
+    for alpha0 in [0.0, AIR] {
+        let (m, mut start) = air_run_setup(alpha0, Some(power_unit()));
+        start.supply_pressure = 18e6;
+        let pu = power_unit();
+        let t0 = std::time::Instant::now();
+        let run = m.simulate_with_work(&start, dt, steps, &pump_failure);
+        let elapsed = t0.elapsed().as_secs_f64();
+        let (worst, scale) = balance(&m, &run, true);
+        let (mut relief, mut pump_max, mut charged, mut empty, mut ps_lo, mut ps_hi) =
+            (0.0f64, 0.0f64, 0, 0, f64::MAX, f64::MIN);
+        for (i, (s, _)) in run.iter().enumerate() {
+            let o = m.power_unit_outputs(s, &pump_failure(i as f64 * dt));
+            assert_eq!(o.supply_pressure, s.supply_pressure);
+            relief = relief.max(o.relief_flow);
+            pump_max = pump_max.max(o.pump_flow);
+            (ps_lo, ps_hi) = (ps_lo.min(s.supply_pressure), ps_hi.max(s.supply_pressure));
+            if o.oil_volume > 0.0 {
+                charged += 1;
+            } else {
+                empty += 1;
+            }
+        }
+        let (last, lw) = run.last().unwrap();
+        let e_acc0 = pu.gas_energy(start.supply_pressure);
+        println!(
+            "[8b] power unit, alpha0 = {alpha0}: {:.1} s in {elapsed:.1} s; max |E - E0 - W_pump + W_c + W_d| = \
+             {worst:.3e} J = {:.3e} of the largest work ({scale:.4e} J); W_pump {:.1} J, W_hydraulic {:.1} J, \
+             W_compression {:.1} J, W_dissipated {:.1} J, E_acc(0) {e_acc0:.1} J; p_S {ps_lo:.4e}..{ps_hi:.4e} Pa; \
+             largest relief flow {relief:.3e} m3/s, pump flow {pump_max:.3e} m3/s; accumulator charged in {charged}, \
+             empty in {empty} samples; lowest chamber pressure {:.4e} Pa gauge",
+            steps as f64 * dt,
+            worst / scale,
+            lw.pump,
+            lw.hydraulic,
+            lw.compression,
+            lw.dissipated,
+            last.lowest_pressure
+        );
+        assert!(worst / scale < 1e-12, "energy balance {worst:e} J");
+        assert!(relief > 1e-4 && pump_max == pu.max_flow, "the relief opened and the pump delivered full flow");
+        assert!(charged > 100 && empty > 100, "the accumulator emptied ({charged}, {empty})");
+        if alpha0 > 0.0 {
+            assert!(last.lowest_pressure + ATMOSPHERIC_PRESSURE > 0.0);
+            assert!(last.lowest_pressure + ATMOSPHERIC_PRESSURE < 1e4, "near vacuum");
+            assert!(ps_lo + ATMOSPHERIC_PRESSURE > 0.0);
+        } else {
+            assert!(last.lowest_pressure < -1e5);
+        }
+    }
+}
+
+/// The accumulator with the pump stopped and the valves almost closed: its oil volume falls
+/// as the valves draw on the supply, it is SPEC's `V_0 (1 - (P_0 / P_S)^(1/n_a))` of the state
+/// (0 once `P_S <= P_0`), and the oil's mass balance of the supply side holds:
+/// `V_oil(t) - V_oil(0) + V_s integral dp / beta_e(p) = -integral Q_S dt`.
+#[test]
+fn the_accumulator_discharges_as_the_supply_is_drawn() {
+    let pu = power_unit();
+    let (m, start) = air_run_setup(AIR, Some(pu));
+    let h = m.hydraulics.unwrap();
+    let closed_ish = |t: f64| OracleInputs::Valves {
+        valve: std::array::from_fn(|k| 0.08 * (2.0 * std::f64::consts::PI * t / 0.5 + k as f64).sin()),
+        supply_pressure: SUPPLY,
+        pump_speed: 0.0,
+    };
+    let (steps, dt) = (3000, 1e-3);
+    let t0 = std::time::Instant::now();
+    let run = m.simulate_with_work(&start, dt, steps, &closed_ish);
+    let elapsed = t0.elapsed().as_secs_f64();
+    let spec_oil = |ps: f64| {
+        let big_p = ps + 101325.0;
+        if big_p > 9e6 { 10e-3 * (1.0 - (9e6 / big_p).powf(1.0 / 1.4)) } else { 0.0 }
+    };
+    // integral of V_s / beta_e from p0 to p1, composite Simpson.
+    let line = |p0: f64, p1: f64| {
+        let n = 2000;
+        let dp = (p1 - p0) / n as f64;
+        let f = |p: f64| 2e-3 / spec_beta_e(h.bulk_modulus, AIR, 1.0, p);
+        (0..n).map(|i| p0 + i as f64 * dp).map(|a| dp / 6.0 * (f(a) + 4.0 * f(a + 0.5 * dp) + f(a + dp))).sum::<f64>()
+    };
+    let (v0, p0) = (spec_oil(start.supply_pressure), start.supply_pressure);
+    let (mut formula, mut mass, mut rises, mut mass_scale) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    let mut previous = v0;
+    for (i, (s, w)) in run.iter().enumerate() {
+        let o = m.power_unit_outputs(s, &closed_ish(i as f64 * dt));
+        assert_eq!((o.pump_flow, o.relief_flow), (0.0, 0.0));
+        formula = formula.max((o.oil_volume - spec_oil(s.supply_pressure)).abs());
+        rises = rises.max(o.oil_volume - previous);
+        previous = o.oil_volume;
+        let stored = o.oil_volume - v0 + line(p0, s.supply_pressure);
+        mass = mass.max((stored + w.supply_volume).abs());
+        mass_scale = mass_scale.max(w.supply_volume.abs());
+    }
+    let (last, lw) = run.last().unwrap();
+    let v_end = spec_oil(last.supply_pressure);
+    let samples_empty = run.iter().filter(|(s, _)| spec_oil(s.supply_pressure) == 0.0).count();
+    println!(
+        "[8d] pump stopped, valves within 0.08: {:.1} s in {elapsed:.1} s; p_S {:.4e} -> {:.4e} Pa, oil volume \
+         {v0:.4e} -> {v_end:.4e} m3 ({samples_empty} samples empty); drawn {:.4e} m3; largest rise between samples \
+         {rises:.3e} m3; |V_oil - formula| <= {formula:.3e} m3; mass balance {mass:.3e} m3 = {:.3e} of the draw",
+        steps as f64 * dt,
+        p0,
+        last.supply_pressure,
+        lw.supply_volume,
+        mass / mass_scale
+    );
+    assert!(v0 - v_end > 1e-3, "the accumulator discharged");
+    assert!(rises <= 0.0, "the oil volume never rises with the pump stopped ({rises:e} m3)");
+    assert!(formula == 0.0);
+    assert!(mass < 1e-9 * mass_scale, "mass balance {mass:e} m3");
 }

@@ -1,7 +1,7 @@
 //! An independent reference formulation ("oracle") of the whole machine of SPEC §1, §6, §8,
-//! §9 and §10: the loaded platform on six legs that are two bodies each (cylinder and rod),
-//! with end stops, joint limits, cylinder friction and optional DC drives or hydraulic servo
-//! legs.
+//! §9, §10 and §10b: the loaded platform on six legs that are two bodies each (cylinder and
+//! rod), with end stops, joint limits, cylinder friction and optional DC drives or hydraulic
+//! servo legs (oil with entrained air, and a power unit).
 //!
 //! Formulation: Kane's equations (d'Alembert's principle in generalised speeds) with the
 //! generalised speeds `nu = (v, w)`: `v` the centre-of-mass velocity (inertial components),
@@ -73,6 +73,43 @@
 //!   supply port a second tank at 0 gauge (the formulas unchanged);
 //! - `work.compression` integrates `sum (p_A V_A p_A' + p_B V_B p_B') / beta` with the
 //!   current volumes; `energy` holds no hydraulic energy.
+//!
+//! Oil with entrained air and the power unit (SPEC §10b, `OracleHydraulics::air_fraction`,
+//! `air_polytropic`, `power_unit`; input `pump_speed` of `Valves`):
+//! - every chamber's `beta` (its pressure equation and its compression power) is
+//!   `beta_e(p)` of its own pressure (`effective_bulk_modulus`), and so is the supply line's.
+//!   With `air_fraction == 0` the code takes section 10's path: `beta_e` returns `beta`
+//!   itself and the compression power keeps section 10's expression, so every result is the
+//!   same to the bit (the self-check compares a digest of a whole run with one recorded from
+//!   the code before §10b);
+//! - near vacuum: the pressure equations stay in the plain form `p' = beta_e(p) / V (...)`.
+//!   The relative rate is `|p'| / P = (beta_e / P) |Q| / V` (`Q` the chamber's net inflow
+//!   less its volume rate) and `beta_e / P` is bounded: it tends to `n` at zero absolute
+//!   (`beta_e -> n P`) and peaks at about `sqrt(beta / (4 c))` near `P = sqrt(c beta)` (`c =
+//!   alpha0 / (1 - alpha0) p_atm`, `n = 1`): about 700 at `alpha0 = 0.005`. With the stand's
+//!   `|Q| / V` of a few per second, `h |p'| / P` stays below about 0.1 at the default 10 µs
+//!   substep: the pressure decays exponentially and RK4's stages cannot cross zero absolute,
+//!   so no change of variables is needed. `effective_bulk_modulus` panics if a pressure at or
+//!   below zero absolute ever reaches it with air, so a violation cannot pass silently;
+//! - the power unit: the supply line's pressure `p_S` is a state (`OracleState::
+//!   supply_pressure`), `(V_s / beta_e(p_S) + dV_oil/dp_S) p_S' = Q_pump - Q_S - Q_relief` with
+//!   `Q_S` the six valves' draw (leakage included); the input `supply_pressure` is then
+//!   ignored; with `power_unit = None` the state is ignored (held) and `p_S` is the input;
+//! - the kinks of the supply's right-hand side are located like the contacts: the
+//!   compensator's two corners (`p_S = p_set`, `p_S = p_set + dp_c`), the relief's opening
+//!   (`p_S = p_relief`) and the accumulator's switch between empty and charged (`P_S = P_0`,
+//!   where `dV_oil/dp_S` jumps); at `P_S = P_0` exactly the accumulator counts as empty.
+//!   The accumulator's state is held over each RK4 step (a discrete state, decided at the
+//!   step's start; the charged formula continues smoothly past the precharge), so that the
+//!   step that ends just past the located switch does not mix the jump into its last stage;
+//! - energy: `work.pump = integral (p_S Q_pump - p_T (Q_T + Q_relief))`, `Q_T` the six
+//!   valves' return; the supply line's `p_S V_s p_S' / beta_e(p_S)` joins `work.compression`,
+//!   the relief's `(p_S - p_T) Q_relief` joins `work.dissipated`, and `energy` adds the
+//!   accumulator's gas energy `E_acc`; `work.hydraulic` stays the valves' draw;
+//! - `OracleWork::supply_volume` integrates the valves' total draw `Q_S` (a diagnostic for
+//!   the oil's mass balance); `OracleState::lowest_pressure` is the lowest chamber gauge
+//!   pressure at the start and at the end of every substep (SPEC's `pmin`), carried along
+//!   with the state.
 
 use nalgebra::{Matrix3, Matrix6, Rotation3, UnitQuaternion, Vector3, Vector6};
 use std::ops::{Add, Mul, Neg, Sub};
@@ -164,6 +201,92 @@ pub struct OracleHydraulics {
     pub internal_leakage: f64,
     pub lmin: [f64; 6],
     pub lmax: [f64; 6],
+    /// SPEC §10b `alpha0`: the air's volume fraction at atmospheric pressure. 0 (air-free
+    /// oil) is section 10 to the bit.
+    pub air_fraction: f64,
+    /// SPEC §10b `n`: the air's polytropic exponent (not used when `air_fraction` is 0).
+    pub air_polytropic: f64,
+    /// SPEC §10b power unit (`hydraulic.supply = 1`); `None` (`hydraulic.supply = 0`): the
+    /// supply pressure is the input.
+    pub power_unit: Option<OraclePowerUnit>,
+}
+
+/// SPEC §10b: the atmospheric pressure `p_atm`, Pa.
+pub const ATMOSPHERIC_PRESSURE: f64 = 101325.0;
+/// SPEC §10: the start value of the input `pS` (and so of the power unit's `p_S`), Pa.
+pub const RATED_SUPPLY_PRESSURE: f64 = 16e6;
+
+/// SPEC §10b: the power unit, a supply line fed by a pressure-compensated pump, backed by a
+/// gas-charged accumulator and protected by a relief valve. Pressures gauge unless said.
+#[derive(Clone, Copy, Debug)]
+pub struct OraclePowerUnit {
+    /// `Q_max`, m3/s.
+    pub max_flow: f64,
+    /// `p_set`, Pa: full flow up to here.
+    pub set_pressure: f64,
+    /// `dp_c`, Pa: no flow from `p_set + dp_c` on.
+    pub compensator_band: f64,
+    /// `p_relief`, Pa.
+    pub relief_pressure: f64,
+    /// `K_r`, m3/(s.Pa).
+    pub relief_gain: f64,
+    /// `V_0`, m3: the accumulator's gas volume when empty.
+    pub accumulator_volume: f64,
+    /// `P_0`, Pa absolute.
+    pub precharge: f64,
+    /// `n_a`.
+    pub accumulator_polytropic: f64,
+    /// `V_s`, m3.
+    pub supply_volume: f64,
+}
+
+impl OraclePowerUnit {
+    /// `Q_pump = speed Q_max clamp((p_set + dp_c - p_S) / dp_c, 0, 1)`, speed clamped to [0, 1].
+    pub fn pump_flow(&self, speed: f64, ps: f64) -> f64 {
+        let delivery = clamp((self.set_pressure + self.compensator_band - ps) / self.compensator_band, 0.0, 1.0);
+        clamp(speed, 0.0, 1.0) * self.max_flow * delivery
+    }
+    /// `Q_relief = K_r max(0, p_S - p_relief)`.
+    pub fn relief_flow(&self, ps: f64) -> f64 {
+        self.relief_gain * (ps - self.relief_pressure).max(0.0)
+    }
+    /// The accumulator charged (gas compressed) at this supply pressure: `P_S > P_0`.
+    pub fn charged(&self, ps: f64) -> bool {
+        ps + ATMOSPHERIC_PRESSURE > self.precharge
+    }
+    /// `V_oil = V_0 (1 - (P_0 / P_S)^(1/n_a))` when charged, else 0.
+    pub fn oil_volume(&self, ps: f64) -> f64 {
+        if self.charged(ps) {
+            let pabs = ps + ATMOSPHERIC_PRESSURE;
+            self.accumulator_volume * (1.0 - (self.precharge / pabs).powf(1.0 / self.accumulator_polytropic))
+        } else {
+            0.0
+        }
+    }
+    /// `dV_oil/dp_S = V_0 / (n_a P_S) (P_0 / P_S)^(1/n_a)` when `charged`, else 0. The
+    /// charged formula continues smoothly below the precharge, so that an RK4 step that holds
+    /// the accumulator's state (see `rk4`) integrates a smooth right-hand side up to the event.
+    pub fn oil_volume_slope(&self, ps: f64, charged: bool) -> f64 {
+        if charged {
+            let (pabs, na) = (ps + ATMOSPHERIC_PRESSURE, self.accumulator_polytropic);
+            self.accumulator_volume / (na * pabs) * (self.precharge / pabs).powf(1.0 / na)
+        } else {
+            0.0
+        }
+    }
+    /// The gas energy `E_acc = (P_g V_g - P_0 V_0) / (n_a - 1) - p_atm (V_0 - V_g)` (for
+    /// `n_a = 1`: `P_0 V_0 ln(V_0 / V_g) - p_atm (V_0 - V_g)`), `V_g = V_0 - V_oil`,
+    /// `P_g = max(P_S, P_0)`; zero while empty.
+    pub fn gas_energy(&self, ps: f64) -> f64 {
+        if !self.charged(ps) {
+            return 0.0;
+        }
+        let (v0, p0, na) = (self.accumulator_volume, self.precharge, self.accumulator_polytropic);
+        let vg = v0 - self.oil_volume(ps);
+        let pg = ps + ATMOSPHERIC_PRESSURE;
+        let gas = if na == 1.0 { p0 * v0 * (v0 / vg).ln() } else { (pg * vg - p0 * v0) / (na - 1.0) };
+        gas - ATMOSPHERIC_PRESSURE * (v0 - vg)
+    }
 }
 
 impl OracleHydraulics {
@@ -178,6 +301,19 @@ impl OracleHydraulics {
     /// Flow gain `K = Q_N / sqrt(dp_N / 2)`.
     pub fn gain(&self) -> f64 {
         self.rated_flow / (0.5 * self.rated_pressure_drop).sqrt()
+    }
+    /// SPEC §10b `beta_e(p) = beta (1 + theta) / (1 + theta beta / (n P))`, `theta =
+    /// alpha0 / (1 - alpha0) (p_atm / P)^(1/n)`, `P = p + p_atm`; exactly `beta` without air
+    /// (`alpha0 = 0`, where the formula is undefined at and below zero absolute).
+    pub fn effective_bulk_modulus(&self, p: f64) -> f64 {
+        if self.air_fraction == 0.0 {
+            return self.bulk_modulus;
+        }
+        let pabs = p + ATMOSPHERIC_PRESSURE;
+        assert!(pabs > 0.0, "oil with air at {pabs} Pa absolute: the substep is too long for the decay towards vacuum");
+        let (a, n, beta) = (self.air_fraction, self.air_polytropic, self.bulk_modulus);
+        let theta = a / (1.0 - a) * (ATMOSPHERIC_PRESSURE / pabs).powf(1.0 / n);
+        beta * (1.0 + theta) / (1.0 + theta * beta / (n * pabs))
     }
     /// The regularised square root `phi(dp) = dp / (dp^2 + p_cr^2)^(1/4)`.
     pub fn phi(&self, dp: f64) -> f64 {
@@ -285,6 +421,12 @@ pub struct OracleState {
     /// Spool positions (normalised) and their rates (1/s), hydraulics only.
     pub spool: [f64; 6],
     pub spool_rate: [f64; 6],
+    /// The supply line's pressure `p_S` (Pa, gauge), a state with the power unit only (SPEC
+    /// §10b; with the accumulator charged to it).
+    pub supply_pressure: f64,
+    /// The lowest chamber gauge pressure seen since the start (Pa), SPEC's `pmin`: updated
+    /// from the start and at the end of every substep (hydraulics only).
+    pub lowest_pressure: f64,
 }
 
 impl OracleState {
@@ -299,11 +441,13 @@ impl OracleState {
             pb: [0.0; 6],
             spool: [0.0; 6],
             spool_rate: [0.0; 6],
+            supply_pressure: RATED_SUPPLY_PRESSURE,
+            lowest_pressure: f64::INFINITY,
         }
     }
 }
 
-/// The states besides the platform's: currents, chamber pressures, spools.
+/// The states besides the platform's: currents, chamber pressures, spools, supply line.
 #[derive(Clone, Copy, Debug, Default)]
 struct Internal {
     currents: [f64; 6],
@@ -311,11 +455,22 @@ struct Internal {
     pb: [f64; 6],
     spool: [f64; 6],
     spool_rate: [f64; 6],
+    supply_pressure: f64,
+    /// The accumulator's state held over an RK4 step (`None`: from `supply_pressure`).
+    charged: Option<bool>,
 }
 
 impl Internal {
     fn of(s: &OracleState) -> Internal {
-        Internal { currents: s.currents, pa: s.pa, pb: s.pb, spool: s.spool, spool_rate: s.spool_rate }
+        Internal {
+            currents: s.currents,
+            pa: s.pa,
+            pb: s.pb,
+            spool: s.spool,
+            spool_rate: s.spool_rate,
+            supply_pressure: s.supply_pressure,
+            charged: None,
+        }
     }
 }
 
@@ -328,9 +483,10 @@ pub enum OracleInputs {
     /// Linear springs `u_k = -stiffness (l_k - rest_k)` evaluated inside the right-hand side
     /// (a conservative leg law for the energy checks), no drives.
     Springs { stiffness: f64, rest: [f64; 6] },
-    /// Servo valve commands (saturated to [-1, 1] inside) and the supply pressure `p_S` (Pa),
-    /// hydraulics required.
-    Valves { valve: [f64; 6], supply_pressure: f64 },
+    /// Servo valve commands (saturated to [-1, 1] inside), the supply pressure `p_S` (Pa; used
+    /// without the power unit) and `pump.speed` (clamped to [0, 1] inside; used with the
+    /// power unit), hydraulics required.
+    Valves { valve: [f64; 6], supply_pressure: f64, pump_speed: f64 },
 }
 
 /// Work accumulated since the start of a run (J).
@@ -346,8 +502,28 @@ pub struct OracleWork {
     pub dissipated: f64,
     /// Hydraulic energy drawn from the supply, `integral sum_k (p_S Q_S - p_T Q_T)`.
     pub hydraulic: f64,
-    /// The oil's compression energy, `integral sum_k (p_A V_A p_A' + p_B V_B p_B') / beta`.
+    /// The oil's compression energy, `integral sum_k (p_A V_A p_A' + p_B V_B p_B') / beta`
+    /// (`beta_e` of each pressure with air; plus the supply line's with the power unit).
     pub compression: f64,
+    /// SPEC §10b `work.pump`, `integral (p_S Q_pump - p_T (Q_T + Q_relief))` (power unit only).
+    pub pump: f64,
+    /// The oil volume the six valves drew from the supply line, `integral Q_S` (m3; hydraulics).
+    pub supply_volume: f64,
+}
+
+/// The power unit's outputs at an instant (SPEC §10b); with the power unit off the supply
+/// pressure is the input and the rest is 0.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct OraclePowerUnitOutputs {
+    /// `supply.pressure`, Pa gauge.
+    pub supply_pressure: f64,
+    /// `supply.pumpFlow`, `supply.reliefFlow`, m3/s.
+    pub pump_flow: f64,
+    pub relief_flow: f64,
+    /// `accumulator.oilVolume`, m3.
+    pub oil_volume: f64,
+    /// `E_acc`, J (part of `energy`).
+    pub gas_energy: f64,
 }
 
 /// The axial forces and joint-limit moments of one evaluation (diagnostics).
@@ -589,7 +765,7 @@ fn quat_to_mat(q: &[f64]) -> Matrix3<f64> {
 }
 
 /// Layout of the integrated vector.
-const NX: usize = 48;
+const NX: usize = 52;
 const IR: usize = 0; // r: 3
 const IQ: usize = 3; // quaternion: 4
 const IV: usize = 7; // v: 3
@@ -604,8 +780,13 @@ const IWE: usize = 44; // electric work
 const IWD: usize = 45; // dissipated
 const IWH: usize = 46; // hydraulic work
 const IWC: usize = 47; // compression work
-/// Number of switching functions: 10 per leg (stops, joint limits), then one per spool.
-const NSW: usize = 66;
+const IPS: usize = 48; // supply line pressure p_S (power unit)
+const IWP: usize = 49; // pump work
+const IVS: usize = 50; // volume drawn by the valves
+const IPMIN: usize = 51; // lowest chamber pressure (not integrated: set after every substep)
+/// Number of switching functions: 10 per leg (stops, joint limits), one per spool, then the
+/// power unit's four (compensator corners, relief, accumulator).
+const NSW: usize = 70;
 
 type Unpacked = (Vector3<f64>, Matrix3<f64>, Vector3<f64>, Vector3<f64>, Internal);
 
@@ -623,6 +804,12 @@ struct Dynamics {
     power_dissipated: f64,
     power_hydraulic: f64,
     power_compression: f64,
+    /// Power unit: `p_S'`, `p_S Q_pump - p_T (Q_T + Q_relief)`.
+    supply_dot: f64,
+    power_pump: f64,
+    /// The six valves' draw from the supply line, `Q_S` (m3/s).
+    supply_draw: f64,
+    power_unit: OraclePowerUnitOutputs,
 }
 
 // ------------------------------------------------------------------------------------------
@@ -780,6 +967,8 @@ impl OracleMachine {
         let (mut pa_dot, mut pb_dot, mut spool_acc) = ([0.0; 6], [0.0; 6], [0.0; 6]);
         let mut hyd = OracleHydraulicPowers::default();
         let (mut p_hydraulic, mut p_compression) = (0.0, 0.0);
+        let (mut supply_dot, mut p_pump, mut supply_draw) = (0.0, 0.0, 0.0);
+        let mut power_unit = OraclePowerUnitOutputs::default();
         let ld: [f64; 6] = std::array::from_fn(|k| legs0[k].l.d);
         let l: [f64; 6] = std::array::from_fn(|k| legs0[k].l.v);
 
@@ -795,9 +984,12 @@ impl OracleMachine {
                     p_forces += f.actuator[k] * ld[k];
                 }
             }
-            (OracleInputs::Valves { valve, supply_pressure }, None, Some(h)) => {
+            (OracleInputs::Valves { valve, supply_pressure, pump_speed }, None, Some(h)) => {
                 let (aa, ab, beta) = (h.area_a(), h.area_b(), h.bulk_modulus);
-                let (ps, pt) = (*supply_pressure, h.tank_pressure);
+                // SPEC §10b: with the power unit p_S is the supply line's state.
+                let ps = if h.power_unit.is_some() { ex.supply_pressure } else { *supply_pressure };
+                let pt = h.tank_pressure;
+                let mut q_tank = 0.0;
                 for k in 0..6 {
                     let (pa, pb, sp) = (ex.pa[k], ex.pb[k], ex.spool[k]);
                     let c = clamp(valve[k], -1.0, 1.0);
@@ -805,16 +997,41 @@ impl OracleMachine {
                     let q = h.valve(sp, pa, pb, ps);
                     let (va, vb) = h.volumes(k, l[k]);
                     let qi = h.internal_leakage * (pa - pb);
-                    pa_dot[k] = beta / va * (q.q_a - aa * ld[k] - qi);
-                    pb_dot[k] = beta / vb * (q.q_b + ab * ld[k] + qi);
+                    let (beta_a, beta_b) = (h.effective_bulk_modulus(pa), h.effective_bulk_modulus(pb));
+                    pa_dot[k] = beta_a / va * (q.q_a - aa * ld[k] - qi);
+                    pb_dot[k] = beta_b / vb * (q.q_b + ab * ld[k] + qi);
                     f.actuator[k] = pa * aa - pb * ab;
                     hyd.supply[k] = ps * q.q_supply - pt * q.q_tank;
                     hyd.leg[k] = f.actuator[k] * ld[k];
                     hyd.losses[k] = q.throttling + q.leakage + qi * (pa - pb);
-                    hyd.compression[k] = (pa * va * pa_dot[k] + pb * vb * pb_dot[k]) / beta;
+                    hyd.compression[k] = if h.air_fraction == 0.0 {
+                        // Section 10's expression, so that air-free oil gives its results to the bit.
+                        (pa * va * pa_dot[k] + pb * vb * pb_dot[k]) / beta
+                    } else {
+                        pa * va * pa_dot[k] / beta_a + pb * vb * pb_dot[k] / beta_b
+                    };
                     p_hydraulic += hyd.supply[k];
                     p_compression += hyd.compression[k];
                     p_diss += hyd.losses[k];
+                    supply_draw += q.q_supply;
+                    q_tank += q.q_tank;
+                }
+                power_unit.supply_pressure = ps;
+                if let Some(pu) = &h.power_unit {
+                    // (V_s / beta_e(p_S) + dV_oil/dp_S) p_S' = Q_pump - Q_S - Q_relief.
+                    let q_pump = pu.pump_flow(*pump_speed, ps);
+                    let q_relief = pu.relief_flow(ps);
+                    let beta_s = h.effective_bulk_modulus(ps);
+                    let charged = ex.charged.unwrap_or_else(|| pu.charged(ps));
+                    let capacitance = pu.supply_volume / beta_s + pu.oil_volume_slope(ps, charged);
+                    supply_dot = (q_pump - supply_draw - q_relief) / capacitance;
+                    p_pump = ps * q_pump - pt * (q_tank + q_relief);
+                    p_compression += ps * pu.supply_volume * supply_dot / beta_s;
+                    p_diss += (ps - pt) * q_relief;
+                    power_unit.pump_flow = q_pump;
+                    power_unit.relief_flow = q_relief;
+                    power_unit.oil_volume = pu.oil_volume(ps);
+                    power_unit.gas_energy = pu.gas_energy(ps);
                 }
             }
             (OracleInputs::Voltages(u), Some(d), None) => {
@@ -939,6 +1156,10 @@ impl OracleMachine {
             power_dissipated: p_diss,
             power_hydraulic: p_hydraulic,
             power_compression: p_compression,
+            supply_dot,
+            power_pump: p_pump,
+            supply_draw,
+            power_unit,
         }
     }
 
@@ -955,6 +1176,8 @@ impl OracleMachine {
                 pb: std::array::from_fn(|k| x[IPB + k]),
                 spool: std::array::from_fn(|k| x[IS + k]),
                 spool_rate: std::array::from_fn(|k| x[ISD + k]),
+                supply_pressure: x[IPS],
+                charged: None,
             },
         )
     }
@@ -972,6 +1195,8 @@ impl OracleMachine {
         x[IPB..IPB + 6].copy_from_slice(&s.pb);
         x[IS..IS + 6].copy_from_slice(&s.spool);
         x[ISD..ISD + 6].copy_from_slice(&s.spool_rate);
+        x[IPS] = s.supply_pressure;
+        x[IPMIN] = s.lowest_pressure;
         x
     }
 
@@ -987,11 +1212,15 @@ impl OracleMachine {
             pb: ex.pb,
             spool: ex.spool,
             spool_rate: ex.spool_rate,
+            supply_pressure: ex.supply_pressure,
+            lowest_pressure: x[IPMIN],
         }
     }
 
-    fn derivative(&self, x: &[f64; NX], inputs: &OracleInputs) -> [f64; NX] {
-        let (r, rot, v, w, ex) = Self::unpack(x);
+    /// `charged`: the accumulator's state to hold (`None`: from the state's `p_S`).
+    fn derivative(&self, x: &[f64; NX], inputs: &OracleInputs, charged: Option<bool>) -> [f64; NX] {
+        let (r, rot, v, w, mut ex) = Self::unpack(x);
+        ex.charged = charged;
         let dy = self.dynamics(&r, &rot, &v, &w, &ex, inputs);
         let mut dx = [0.0; NX];
         dx[IR..IR + 3].copy_from_slice(v.as_slice());
@@ -1014,15 +1243,22 @@ impl OracleMachine {
         dx[IWD] = dy.power_dissipated;
         dx[IWH] = dy.power_hydraulic;
         dx[IWC] = dy.power_compression;
+        dx[IPS] = dy.supply_dot;
+        dx[IWP] = dy.power_pump;
+        dx[IVS] = dy.supply_draw;
         dx
     }
 
+    /// One RK4 step. The accumulator's state (charged or empty) is held over the step as a
+    /// discrete state: at its switch `p_S'` jumps (not a mere kink), and a stage evaluated just
+    /// past the located crossing would otherwise mix the two sides (an O(h) error).
     fn rk4(&self, x: &mut [f64; NX], h: f64, inputs: &OracleInputs) {
         let stage = |x: &[f64; NX], k: &[f64; NX], a: f64| -> [f64; NX] { std::array::from_fn(|i| x[i] + a * k[i]) };
-        let k1 = self.derivative(x, inputs);
-        let k2 = self.derivative(&stage(x, &k1, h / 2.0), inputs);
-        let k3 = self.derivative(&stage(x, &k2, h / 2.0), inputs);
-        let k4 = self.derivative(&stage(x, &k3, h), inputs);
+        let charged = self.hydraulics.and_then(|hy| hy.power_unit).map(|pu| pu.charged(x[IPS]));
+        let k1 = self.derivative(x, inputs, charged);
+        let k2 = self.derivative(&stage(x, &k1, h / 2.0), inputs, charged);
+        let k3 = self.derivative(&stage(x, &k2, h / 2.0), inputs, charged);
+        let k4 = self.derivative(&stage(x, &k3, h), inputs, charged);
         for i in 0..NX {
             x[i] += h / 6.0 * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
         }
@@ -1035,13 +1271,22 @@ impl OracleMachine {
     /// The switching functions of the non-smooth terms (positive where a term is on): per leg
     /// the lower and upper end-stop contact, the saturation of the stop damping's clamp at
     /// its upper and lower bound, and the same three for the base and the platform joint
-    /// limit; then, with hydraulics, the spool positions (the flow law's kink at `s = 0`).
+    /// limit; then, with hydraulics, the spool positions (the flow law's kink at `s = 0`) and,
+    /// with the power unit, `p_S` against the compensator's corners, the relief's opening and
+    /// the accumulator's precharge (where `dV_oil/dp_S` jumps).
     /// The right-hand side is smooth (and the forces continuous) between sign changes.
     fn switches(&self, x: &[f64; NX]) -> [f64; NSW] {
         let (r, rot, v, w, ex) = Self::unpack(x);
         let mut out = [-1.0; NSW];
-        if self.hydraulics.is_some() {
+        if let Some(h) = &self.hydraulics {
             out[60..66].copy_from_slice(&ex.spool);
+            if let Some(pu) = &h.power_unit {
+                let ps = ex.supply_pressure;
+                out[66] = ps - pu.set_pressure;
+                out[67] = ps - (pu.set_pressure + pu.compensator_band);
+                out[68] = ps - pu.relief_pressure;
+                out[69] = ps + ATMOSPHERIC_PRESSURE - pu.precharge;
+            }
         }
         // The clamp's switches: `c pen' - k pen` and `-c pen' - k pen` while in contact.
         let clamp_switches = |pen: f64, rate: f64, k: f64, c: f64| -> (f64, f64) {
@@ -1185,15 +1430,24 @@ impl OracleMachine {
             dissipated: x[IWD],
             hydraulic: x[IWH],
             compression: x[IWC],
+            pump: x[IWP],
+            supply_volume: x[IVS],
         };
         // The start as given (not through the quaternion), so that out[0] == start.
         let mut out = vec![(*start, work(&x))];
         let sub = ((h / self.max_step) * (1.0 - 1e-12)).ceil().max(1.0) as usize;
         let hs = h / sub as f64;
+        let lowest = |x: &mut [f64; NX]| {
+            if self.hydraulics.is_some() {
+                x[IPMIN] = x[IPA..IPB + 6].iter().fold(x[IPMIN], |m, &p| m.min(p));
+            }
+        };
+        lowest(&mut x);
         for i in 0..steps {
             let u = inputs(i as f64 * h);
             for _ in 0..sub {
                 self.advance(&mut x, hs, &u);
+                lowest(&mut x);
             }
             out.push((Self::state_of(&x), work(&x)));
         }
@@ -1234,11 +1488,24 @@ impl OracleMachine {
         (va, vb)
     }
 
-    /// Total flow drawn from the supply (m3/s), all six valves, leakage included (`Qsupply`).
+    /// Total flow drawn from the supply (m3/s), all six valves, leakage included (`Qsupply`),
+    /// at the input `pS` or, with the power unit, at the state's `p_S`.
     pub fn supply_flow(&self, s: &OracleState, inputs: &OracleInputs) -> f64 {
         let h = self.hydraulics();
         let OracleInputs::Valves { supply_pressure, .. } = inputs else { panic!("valve inputs required") };
-        (0..6).map(|k| h.valve(s.spool[k], s.pa[k], s.pb[k], *supply_pressure).q_supply).sum()
+        let ps = if h.power_unit.is_some() { s.supply_pressure } else { *supply_pressure };
+        (0..6).map(|k| h.valve(s.spool[k], s.pa[k], s.pb[k], ps).q_supply).sum()
+    }
+
+    /// SPEC §10b's outputs of the power unit at a state under the inputs: `supply.pressure`,
+    /// `supply.pumpFlow`, `supply.reliefFlow`, `accumulator.oilVolume` and `E_acc`.
+    pub fn power_unit_outputs(&self, s: &OracleState, inputs: &OracleInputs) -> OraclePowerUnitOutputs {
+        self.dynamics(&v3(s.r), &to_mat(&s.rotation), &v3(s.v), &v3(s.w), &Internal::of(s), inputs).power_unit
+    }
+
+    /// The supply line's pressure rate `p_S'` (Pa/s; 0 without the power unit).
+    pub fn supply_pressure_rate(&self, s: &OracleState, inputs: &OracleInputs) -> f64 {
+        self.dynamics(&v3(s.r), &to_mat(&s.rotation), &v3(s.v), &v3(s.w), &Internal::of(s), inputs).supply_dot
     }
 
     /// The chamber pressures' rates `(p_A', p_B')` (Pa/s).
@@ -1367,11 +1634,15 @@ impl OracleMachine {
     }
 
     /// Total energy: kinetic (platform, legs, rotors) + gravity + stops + joint limits +
-    /// magnetic `1/2 L I^2`. No hydraulic stored energy (SPEC §10: the oil's is
-    /// `work.compression`).
+    /// magnetic `1/2 L I^2` + the accumulator's gas energy `E_acc` (power unit, SPEC §10b).
+    /// No other hydraulic stored energy (SPEC §10: the oil's is `work.compression`).
     pub fn energy(&self, s: &OracleState) -> f64 {
         let magnetic = self.drives.map_or(0.0, |d| 0.5 * d.inductance * s.currents.iter().map(|i| i * i).sum::<f64>());
-        self.kinetic_energy(s.r, s.rotation, s.v, s.w) + self.potential_energy(s.r, s.rotation) + magnetic
+        let e = self.kinetic_energy(s.r, s.rotation, s.v, s.w) + self.potential_energy(s.r, s.rotation) + magnetic;
+        match self.hydraulics.and_then(|h| h.power_unit) {
+            Some(pu) => e + pu.gas_energy(s.supply_pressure),
+            None => e,
+        }
     }
 
     // --- joint forces and statics --------------------------------------------------------
