@@ -43,8 +43,8 @@ fn oracle_hydraulics(h: &HydraulicLegs, stops: &EndStops) -> OracleHydraulics {
         internal_leakage: h.internal_leakage,
         lmin: stops.lower,
         lmax: stops.upper,
-        air_fraction: 0.0,
-        air_polytropic: 1.0,
+        air_fraction: h.air_fraction,
+        air_polytropic: h.air_polytropic,
         power_unit: None,
     }
 }
@@ -132,11 +132,28 @@ fn difference(sim: &PlatformSimulation, oracle: &OracleMachine, o: &OracleState)
 }
 
 /// Hydraulic legs on a moving stand: valve commands from a force loop held over 1 ms steps,
-/// a ripple of 0.3 of full opening, 3 s. The FMU's legs and pressures agree with the oracle's
-/// (targets: 1e-8 m, 1e-3 of the supply).
+/// a ripple of 0.3 of full opening, 3 s, with section 10's oil (no air). The FMU's legs and
+/// pressures agree with the oracle's (targets: 1e-8 m, 1e-3 of the supply).
 #[test]
 fn hydraulics_agree_with_the_independent_formulation() {
-    let h = without_air();
+    agree_with_the_oracle(without_air(), None);
+}
+
+/// The same with the default oil (entrained air, §10b).
+#[test]
+fn with_air_hydraulics_agree_with_the_independent_formulation() {
+    agree_with_the_oracle(HydraulicLegs::default(), None);
+}
+
+/// With air and a pump failure at 2 s (`pS` to 0, the force loop still commanding): the
+/// emptying chambers approach zero absolute, where the oil is soft; the FMU's legs and
+/// pressures agree with the oracle's there too, and neither goes below zero absolute.
+#[test]
+fn with_air_a_pump_failure_agrees_with_the_independent_formulation() {
+    agree_with_the_oracle(HydraulicLegs::default(), Some(2.0));
+}
+
+fn agree_with_the_oracle(h: HydraulicLegs, pump_fails_at: Option<f64>) {
     let stops = EndStops::default();
     let oracle = OracleMachine {
         hydraulics: Some(oracle_hydraulics(&h, &stops)),
@@ -151,27 +168,40 @@ fn hydraulics_agree_with_the_independent_formulation() {
     let mut reference = oracle_state(&start, pa0, pb0);
     let (step, steps) = (1e-3, 3000);
     let (mut legs, mut pressures, mut moved, mut opening): (f64, f64, f64, f64) = (0.0, 0.0, 0.0, 0.0);
+    let mut lowest = f64::INFINITY;
     for i in 0..steps {
         let t = i as f64 * step;
+        let supply = if pump_fails_at.is_some_and(|at| t >= at) { 0.0 } else { DEFAULT_SUPPLY_PRESSURE };
+        sim.form.set_supply_pressure(supply);
         let o = LegOutputs::compute(&sim.form, &sim.state);
         let [pa, pb] = sim.pressures();
         sim.advance(&HeldForces::constant(law(t, (&o.l, &o.ldot, &pa, &pb))), t + step).expect("steps");
         let (l, ldot) = (oracle.leg_lengths(&reference), oracle.leg_rates(&reference));
         let valve = law(t, (&l, &ldot, &reference.pa, &reference.pb));
-        let inputs = OracleInputs::Valves { valve, supply_pressure: DEFAULT_SUPPLY_PRESSURE, pump_speed: 1.0 };
+        let inputs = OracleInputs::Valves { valve, supply_pressure: supply, pump_speed: 1.0 };
         reference = oracle.simulate(&reference, step, 1, &|_| inputs)[1];
         let (l, p) = difference(&sim, &oracle, &reference);
         (legs, pressures) = (legs.max(l), pressures.max(p));
         moved = moved.max((sim.body_state().r - start.r).norm());
         opening = sim.spools().iter().fold(opening, |m, s| m.max(s.abs()));
+        let [pa, pb] = sim.pressures();
+        lowest = pa.iter().chain(&pb).fold(lowest, |m, &p| m.min(p));
     }
     println!(
-        "hydraulics, 3 s at 1 ms: largest difference from the oracle {legs:.2e} m in the legs, {pressures:.2e} of the \
-         supply in the pressures; moved up to {moved:.3} m, spools open up to {opening:.3}"
+        "hydraulics (air fraction {}, pump failing at {pump_fails_at:?} s), 3 s at 1 ms: largest difference from the \
+         oracle {legs:.2e} m in the legs, {pressures:.2e} of the supply in the pressures; moved up to {moved:.3} m, \
+         spools open up to {opening:.3}; lowest pressure {:.4e} Pa absolute (the oracle's {:.4e})",
+        h.air_fraction,
+        lowest + ATMOSPHERIC_PRESSURE,
+        reference.lowest_pressure + ATMOSPHERIC_PRESSURE
     );
     assert!(legs < 1e-8, "legs: {legs:e} m");
     assert!(pressures < 1e-3, "pressures: {pressures:e}");
     assert!(moved > 0.01 && opening > 0.1, "the stand moved ({moved} m) and the valves opened ({opening})");
+    if pump_fails_at.is_some() {
+        assert!(lowest + ATMOSPHERIC_PRESSURE < 1e4, "the chambers came near vacuum ({lowest:e} Pa gauge)");
+        assert!(lowest > -ATMOSPHERIC_PRESSURE && reference.lowest_pressure > -ATMOSPHERIC_PRESSURE);
+    }
 }
 
 /// `E(t) - E(0) = work.hydraulic - work.compression - work.dissipated` through end-stop
