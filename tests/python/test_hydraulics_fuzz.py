@@ -72,7 +72,8 @@ def fuzzed(tmp_path_factory):
     address, _ = next(cluster)
     try:
         with Client(address, timeout=60) as client:
-            results = client.gather(client.map(fuzzed_run, range(RUNS), pure=False))
+            # A lambda: Dask pickles a module-level function by name, which the workers cannot import.
+            results = client.gather(client.map(lambda seed: fuzzed_run(seed), range(RUNS), pure=False))
     finally:
         next(cluster, None)
     refused = [r for r in results if r["status"] != "ok"]

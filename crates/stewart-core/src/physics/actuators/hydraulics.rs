@@ -362,8 +362,9 @@ impl HydraulicLegs {
     /// `beta / V (K |s| phi'(dp) + 2 C_v + C_i)` (the orifice pole, up to `beta K / (V
     /// sqrt(p_cr))` for an open land with little drop; `beta >= beta_e` below 1 GPa absolute),
     /// with air plus `|beta_e'(p) q| / V` (the oil's stiffening with pressure, large where it
-    /// turns soft: a chamber emptying towards vacuum), and the spool's `|lambda| <= w_v max(1,
-    /// 2 zeta_v)`. An explicit method of stability interval `r` is stable for steps up to
+    /// turns soft: a chamber emptying towards vacuum) and at least `4 beta_e |q| / (V P)` (so
+    /// that a step loses at most half of a chamber's absolute pressure `P`), and the spool's
+    /// `|lambda| <= w_v max(1, 2 zeta_v)`. An explicit method of stability interval `r` is stable for steps up to
     /// about `r / rate`.
     pub fn stiffness(&self, chambers: &Chambers<f64>, piston: &Piston<f64>, supply: f64) -> f64 {
         let k = self.flow_coefficient();
@@ -398,6 +399,15 @@ impl HydraulicLegs {
                 + internal;
             chamber_a += self.effective_bulk_modulus_slope(&air, pa).abs() * q_a / va;
             chamber_b += self.effective_bulk_modulus_slope(&air, pb).abs() * q_b / vb;
+            // No chamber may lose more than half its absolute pressure in a step (2 / rate):
+            // from high pressure an emptying chamber falls almost linearly, and one step past
+            // zero absolute would leave it there (beta_e = 0).
+            let emptying = |p: f64, q: f64, v: f64| {
+                let absolute = p + ATMOSPHERIC_PRESSURE;
+                if absolute > 0.0 { 4.0 * self.effective_bulk_modulus(&air, p) * q / (v * absolute) } else { 0.0 }
+            };
+            chamber_a = chamber_a.max(emptying(pa, q_a, va));
+            chamber_b = chamber_b.max(emptying(pb, q_b, vb));
         }
         chamber_a.max(chamber_b).max(self.valve_omega * (2.0 * self.valve_damping).max(1.0))
     }
