@@ -9,6 +9,7 @@
 
 mod outputs;
 pub mod parameters;
+mod states;
 mod stepping;
 pub mod variables;
 
@@ -16,14 +17,16 @@ use super::declare::{Binding, Variables, cache_block_of};
 use super::snapshot::{ByteReader, ByteWriter, SnapshotError};
 use super::variables::VariableRef;
 use super::{Capabilities, DefaultExperiment, FmuModel, Initialised, ModelInfo, StepError, StepReport};
-use crate::control::predictive_cueing::motion::{CHANNELS, CommandedMotion};
-use crate::control::predictive_cueing::{GRID_STEPS, PredictiveCueing};
+use crate::control::predictive_cueing::motion::CommandedMotion;
+use crate::control::predictive_cueing::PredictiveCueing;
 use crate::physics::cueing::perception::Perception;
 use crate::physics::cueing::washout::{
-    STATE_DIM, TILT_MODE_SWITCHES, TiltMode, TiltModes, VehicleMotion, WashoutPose, layout,
+    STATE_DIM, TILT_MODE_SWITCHES, TiltMode, TiltModes, VehicleMotion, WashoutPose,
 };
 pub use outputs::{Command, CueingOutputs};
 pub use parameters::{CueingParameters, Method};
+pub use states::{CueingStates, PerceptionStates, PredictiveState};
+use states::perception_at_rest;
 pub use stepping::Preview;
 use variables::BINDINGS;
 
@@ -57,138 +60,6 @@ pub static INFO: ModelInfo = ModelInfo {
 /// singular at 90 deg, so a washout that gets there (a slow rotational high-pass with a large
 /// `omegamax`) stops with a message instead.
 pub const MAX_PITCH: f64 = 1.396;
-
-/// The washout's states by name (the FMU's state variables `washout.*`).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct CueingStates {
-    pub q: [f64; 3],
-    pub r: [f64; 3],
-    pub v: [f64; 3],
-    pub fl: [f64; 2],
-    pub fl_rate: [f64; 2],
-    pub tilt: [f64; 2],
-    pub z: [f64; 3],
-    pub angles: [f64; 3],
-}
-
-impl CueingStates {
-    pub fn to_vector(&self) -> [f64; STATE_DIM] {
-        let mut x = [0.0; STATE_DIM];
-        x[layout::TRANSLATION_Q..][..3].copy_from_slice(&self.q);
-        x[layout::HEAD_R..][..3].copy_from_slice(&self.r);
-        x[layout::HEAD_V..][..3].copy_from_slice(&self.v);
-        x[layout::TILT_F..][..2].copy_from_slice(&self.fl);
-        x[layout::TILT_FDOT..][..2].copy_from_slice(&self.fl_rate);
-        x[layout::TILT_ANGLES..][..2].copy_from_slice(&self.tilt);
-        x[layout::ROTATION_Q..][..3].copy_from_slice(&self.z);
-        x[layout::ROTATION_ANGLES..][..3].copy_from_slice(&self.angles);
-        x
-    }
-
-    pub fn from_vector(x: &[f64; STATE_DIM]) -> Self {
-        let take = |at: usize| -> [f64; 3] { [x[at], x[at + 1], x[at + 2]] };
-        let pair = |at: usize| -> [f64; 2] { [x[at], x[at + 1]] };
-        CueingStates {
-            q: take(layout::TRANSLATION_Q),
-            r: take(layout::HEAD_R),
-            v: take(layout::HEAD_V),
-            fl: pair(layout::TILT_F),
-            fl_rate: pair(layout::TILT_FDOT),
-            tilt: pair(layout::TILT_ANGLES),
-            z: take(layout::ROTATION_Q),
-            angles: take(layout::ROTATION_ANGLES),
-        }
-    }
-}
-
-/// The perception's 30 lags (the FMU's states `perception.*`): for the vehicle's motion and for
-/// the simulator's, the otoliths' two lags per axis and the canals' three.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PerceptionStates {
-    pub vehicle_otolith: [f64; 6],
-    pub vehicle_canal: [f64; 9],
-    pub simulator_otolith: [f64; 6],
-    pub simulator_canal: [f64; 9],
-}
-
-/// Both perceptions at rest under gravity `g`.
-fn perception_at_rest(g: f64) -> PerceptionStates {
-    let rest = Perception::at_rest([0.0, 0.0, g]);
-    let mut p = PerceptionStates {
-        vehicle_otolith: [0.0; 6],
-        vehicle_canal: [0.0; 9],
-        simulator_otolith: [0.0; 6],
-        simulator_canal: [0.0; 9],
-    };
-    p.set(&rest, &rest);
-    p
-}
-
-impl PerceptionStates {
-    pub fn vehicle(&self) -> Perception {
-        Self::perception(&self.vehicle_otolith, &self.vehicle_canal)
-    }
-
-    pub fn simulator(&self) -> Perception {
-        Self::perception(&self.simulator_otolith, &self.simulator_canal)
-    }
-
-    fn perception(otolith: &[f64; 6], canal: &[f64; 9]) -> Perception {
-        let mut x = [0.0; 15];
-        x[..6].copy_from_slice(otolith);
-        x[6..].copy_from_slice(canal);
-        Perception::from_array(&x)
-    }
-
-    pub fn set(&mut self, vehicle: &Perception, simulator: &Perception) {
-        let (v, s) = (vehicle.to_array(), simulator.to_array());
-        self.vehicle_otolith.copy_from_slice(&v[..6]);
-        self.vehicle_canal.copy_from_slice(&v[6..]);
-        self.simulator_otolith.copy_from_slice(&s[..6]);
-        self.simulator_canal.copy_from_slice(&s[6..]);
-    }
-
-    /// The 30 lags in the state vector's order.
-    pub fn to_array(&self) -> [f64; 30] {
-        let mut x = [0.0; 30];
-        x[..6].copy_from_slice(&self.vehicle_otolith);
-        x[6..15].copy_from_slice(&self.vehicle_canal);
-        x[15..21].copy_from_slice(&self.simulator_otolith);
-        x[21..].copy_from_slice(&self.simulator_canal);
-        x
-    }
-
-    pub fn from_array(x: &[f64; 30]) -> Self {
-        fn part<const N: usize>(x: &[f64; 30], at: usize) -> [f64; N] {
-            std::array::from_fn(|i| x[at + i])
-        }
-        PerceptionStates {
-            vehicle_otolith: part(x, 0),
-            vehicle_canal: part(x, 6),
-            simulator_otolith: part(x, 15),
-            simulator_canal: part(x, 21),
-        }
-    }
-}
-
-/// The predictive method's state between steps (saved with the FMU state).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct PredictiveState {
-    /// The commanded head motion and attitude.
-    pub motion: CommandedMotion,
-    /// The last plan's jerks per grid step (what the next solve linearises about).
-    pub plan: [[f64; CHANNELS]; GRID_STEPS],
-    /// The jerks held until the next solve.
-    pub jerk: [f64; CHANNELS],
-    /// Solves done since the start: the next is at `start + solves mpc.period`.
-    pub solves: u64,
-    /// `mpc.iterations`: the last solve's.
-    pub iterations: i32,
-    /// `mpc.fallbacks`: failed solves since the start.
-    pub fallbacks: i32,
-    /// Whether the current period is the classical washout's (the last solve failed).
-    pub falling_back: bool,
-}
 
 /// Number of the model's continuous states (Model Exchange): the washout's and the lags.
 pub const CONTINUOUS_STATES: usize = STATE_DIM + 30;
@@ -607,105 +478,4 @@ impl FmuModel for CueingModel {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::physics::stand::LEG_COUNT;
-
-    /// The default washout after 1.5 s of braking in a left curve, or (`limited`) one that
-    /// leaves the workspace on a sustained braking in a left curve (full scale,
-    /// a slow return), so that the limiter acts.
-    fn moving_model(limited: bool) -> CueingModel {
-        let mut m = CueingModel::default();
-        if limited {
-            let w = &mut m.parameters.washout;
-            w.scale_f = [1.0; 3];
-            w.scale_omega = [1.0; 3];
-            w.hp_f_break = [0.1; 3];
-            w.hp_f_omega = [1.0, 1.0, 2.0];
-        }
-        m.vehicle = if limited {
-            VehicleMotion { f: [-4.0, 3.0, 11.0], omega: [0.05, -0.04, 0.3] }
-        } else {
-            VehicleMotion { f: [-1.5, 1.0, 10.3], omega: [0.05, -0.04, 0.3] }
-        };
-        m.parameters.validate().unwrap();
-        for _ in 0..150 {
-            m.state = CueingStates::from_vector(&m.integrate(0.01));
-        }
-        m
-    }
-
-    impl CueingModel {
-        /// The washout's states `h` (either sign) ahead, the inputs held.
-        fn integrate(&self, h: f64) -> [f64; STATE_DIM] {
-            let mut x = self.state.to_vector();
-            let n = (h.abs() / 1e-3).ceil().max(1.0);
-            for i in 0..n as usize {
-                let tau = i as f64 * h / n;
-                x = stepping::washout_rk4(&self.parameters.washout, &x, &self.tilt_modes, tau, h / n, &|_| {
-                    self.vehicle
-                });
-            }
-            x
-        }
-
-        fn outputs_at(&self, x: &[f64; STATE_DIM]) -> CueingOutputs {
-            let c = self.command(x, &self.vehicle, &self.tilt_modes, &self.predictive_state.motion);
-            CueingOutputs::of(&c, &self.perception.vehicle(), &self.perception.simulator())
-        }
-    }
-
-    /// The pose command's velocity and acceleration (through the washout's jets and the
-    /// limiter's Newton steps on jets) against central differences of the command along the
-    /// motion, the inputs held: the limiter acting, and not.
-    #[test]
-    fn the_command_carries_its_exact_derivatives() {
-        for limited in [true, false] {
-            let m = moving_model(limited);
-            let now = m.outputs_at(&m.state.to_vector());
-            assert_eq!(now.limited, limited, "usage {}", now.usage);
-            let d = 1e-4;
-            let at = |h: f64| m.outputs_at(&m.integrate(h));
-            let (ahead, behind) = (at(d), at(-d));
-            for i in 0..3 {
-                let v = (ahead.r[i] - behind.r[i]) / (2.0 * d);
-                let a = (ahead.r[i] - 2.0 * now.r[i] + behind.r[i]) / (d * d);
-                let rate = (ahead.angles[i] - behind.angles[i]) / (2.0 * d);
-                let accel = (ahead.angles[i] - 2.0 * now.angles[i] + behind.angles[i]) / (d * d);
-                assert!((now.v[i] - v).abs() < 1e-7, "limited {limited}: v[{i}] {} against {v}", now.v[i]);
-                assert!((now.a[i] - a).abs() < 1e-3, "limited {limited}: a[{i}] {} against {a}", now.a[i]);
-                assert!(
-                    (now.angle_rates[i] - rate).abs() < 1e-8,
-                    "angleRates[{i}] {} against {rate}",
-                    now.angle_rates[i]
-                );
-                assert!(
-                    (now.angle_accelerations[i] - accel).abs() < 1e-4,
-                    "angleAccelerations[{i}] {} against {accel}",
-                    now.angle_accelerations[i]
-                );
-            }
-        }
-    }
-
-    /// Every leg of the limited command stays inside `[lmin + margin, lmax - margin]` while
-    /// the washout's own pose would leave it.
-    #[test]
-    fn the_limited_command_keeps_the_legs_inside_their_margins() {
-        let m = moving_model(true);
-        let o = m.outputs_at(&m.state.to_vector());
-        assert!(o.usage > 1.0, "the washout's own pose leaves the workspace (usage {})", o.usage);
-        let ws = m.parameters.workspace();
-        let dr = [0, 1, 2].map(|i| o.r[i] - m.parameters.neutral[i]);
-        for k in 0..LEG_COUNT {
-            let l = ws.leg_length(k, &dr, &o.angles);
-            assert!(
-                l > ws.lower[k] && l < ws.upper[k],
-                "leg {}: {l} outside [{}, {}]",
-                k + 1,
-                ws.lower[k],
-                ws.upper[k]
-            );
-        }
-    }
-}
+mod tests;
