@@ -113,7 +113,9 @@ macro_rules! actuators {
             }
         }
 
-        /// The actuator in the legs, with its parameters.
+        /// The actuator in the legs, with its parameters. Held by value: the simulation copies
+        /// it and the step allocates nothing, so the hydraulic legs' parameters make it large.
+        #[allow(clippy::large_enum_variant)]
         #[derive(Clone, Copy, Debug, PartialEq)]
         pub enum ActiveActuator {
             $($kind($module::$actuator),)*
