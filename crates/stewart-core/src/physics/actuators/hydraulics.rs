@@ -88,7 +88,7 @@ pub const DEFAULT_VALVE_LEAKAGE: f64 = 5.0e-13;
 /// piston seal.
 pub const DEFAULT_INTERNAL_LEAKAGE: f64 = 1.0e-13;
 /// Default air volume fraction `alpha0` at atmospheric pressure: 0.5 %, undissolved air in a
-/// servo oil in service (0.1-1 %; Simscape Fluids' isothermal liquid takes the same default).
+/// servo oil in service (0.1-1 %), the middle of that range.
 /// At the default supply it softens the oil by 0.2 %, at tank pressure fifty times.
 pub const DEFAULT_AIR_FRACTION: f64 = 0.005;
 /// Default polytropic exponent `n` of the entrained air: 1, isothermal (small bubbles exchange
@@ -208,9 +208,6 @@ pub struct HydraulicRate<T> {
     pub supply_power: T,
     /// `p_A V_A p_A' / beta_e(p_A) + p_B V_B p_B' / beta_e(p_B)`, W.
     pub compression_power: T,
-    /// The chambers' net inflows `q_A = Q_A - A_A l' - Q_i`, `q_B = Q_B + A_B l' + Q_i`, m³/s.
-    pub inflow_a: T,
-    pub inflow_b: T,
     /// The lands' throttling, the null leakage and the internal leakage, W (>= 0).
     pub dissipation: T,
 }
@@ -350,8 +347,6 @@ impl HydraulicLegs {
             supply_flow,
             supply_power: supply * supply_flow - tank_flow * tank,
             compression_power,
-            inflow_a,
-            inflow_b,
             dissipation: ((supply_a * drop_sa + a_tank * drop_at) + (supply_b * drop_sb + b_tank * drop_bt))
                 + ((leak_sa * drop_sa + leak_at * drop_at) + (leak_sb * drop_sb + leak_bt * drop_bt))
                 + internal * (pa - pb),
