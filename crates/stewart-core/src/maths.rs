@@ -73,6 +73,12 @@ pub fn pow(x: f64, y: f64) -> f64 {
     libm::pow(x, y)
 }
 
+/// The natural logarithm.
+#[inline]
+pub fn ln(x: f64) -> f64 {
+    libm::log(x)
+}
+
 #[inline]
 pub fn log2(x: f64) -> f64 {
     libm::log2(x)

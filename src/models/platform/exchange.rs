@@ -10,13 +10,15 @@ use crate::models::EventUpdate;
 use crate::models::declare::Binding;
 use crate::models::machine::Drive;
 use crate::models::variables::VariableRef;
-use crate::physics::actuators::HeldForces;
+use crate::physics::actuators::{HeldForces, Supply};
 use crate::physics::configuration::ConfigurationGuard;
 use crate::physics::number::{Dual, Number};
 use crate::physics::special_form::SpecialForm;
 use crate::physics::stand::LEG_COUNT;
 use crate::simulation::outputs::condition_number_tangent;
-use crate::simulation::state::{SIMULATION_DIM, SimulationState, body, state_rate, state_rate_supplied, switching};
+use crate::simulation::state::{
+    SIMULATION_DIM, SimulationState, accumulator_switching, body, state_rate, state_rate_supplied, switching,
+};
 use crate::simulation::{PlatformDynamics, PlatformOutputs, Stabilisation};
 
 impl PlatformModel {
@@ -36,9 +38,13 @@ impl PlatformModel {
         self.with_current(|form, y| state_rate(form, y, &inputs).get(i).copied())
     }
 
-    /// The event indicators (the switching functions): stroke margins and the determinant.
+    /// The event indicators (the switching functions): stroke margins, the determinant, the
+    /// joints' limits and the accumulator's precharge.
     pub(super) fn switching_values(&self, z: &mut [f64]) {
         let law = HeldForces::constant(self.inputs());
+        if let Some(slot) = z.get_mut(switching::ACCUMULATOR) {
+            *slot = self.with_current(accumulator_switching);
+        }
         match self.sim() {
             Some(sim) => sim.switching_values(&law, z),
             None => {
@@ -90,10 +96,14 @@ impl PlatformModel {
     ) -> Result<(), String> {
         let mut dy = [0.0; SIMULATION_DIM];
         let mut du = [0.0; LEG_COUNT];
-        let mut d_supply = 0.0;
+        let (mut d_supply, mut d_speed) = (0.0, 0.0);
         for (k, &seed) in knowns.iter().zip(seeds) {
             if k.group == group::PS {
                 d_supply += seed;
+                continue;
+            }
+            if k.group == group::PUMP_SPEED {
+                d_speed += seed;
                 continue;
             }
             let input = *ACTUATOR_INPUTS.get(self.parameters.drive);
@@ -108,7 +118,7 @@ impl PlatformModel {
                 return Err(format!(
                     "known {} is neither a state nor an input (derivatives are with respect to r, v, R, der(R), \
                      work.F, work.dissipated, I, work.electric, pA, pB, spool, der(spool), work.hydraulic, \
-                     work.compression and the inputs F, U or valve and pS)",
+                     work.compression, supply.linePressure, work.pump and the inputs F, U or valve, pS and pump.speed)",
                     element_name(*k)
                 ));
             };
@@ -118,7 +128,11 @@ impl PlatformModel {
         let needs_kappa = unknowns.iter().any(|u| u.group == group::KAPPA);
         let (rate, outputs, dkappa) = self.with_current(|form, y| {
             let (yd, ud) = (Dual::seeded(y, &dy), Dual::seeded(&inputs, &du));
-            let supply = Dual::new(form.hydraulics().map_or(0.0, |h| h.supply), d_supply);
+            let held = form.supply::<f64>();
+            let supply = Supply {
+                pressure: Dual::new(held.pressure, d_supply),
+                pump_speed: Dual::new(held.pump_speed, d_speed),
+            };
             let rate = state_rate_supplied(form, &yd, &ud, supply);
             let dkappa = if needs_kappa { condition_number_tangent(&form.stand, y, &dy) } else { 0.0 };
             (rate, PlatformOutputs::<Dual>::compute_supplied(form, &yd, Some(&ud), supply), dkappa)

@@ -54,7 +54,7 @@ pub static INFO: ModelInfo = ModelInfo {
         adjoint_derivatives: true,
         can_interpolate_inputs: true,
         max_output_derivative_order: 1,
-        event_indicators: switching::COUNT,
+        event_indicators: switching::EVENT_INDICATORS,
     },
 };
 
@@ -182,7 +182,7 @@ impl FmuModel for PlatformModel {
                     }
                 },
                 _ => {
-                    let mut z = [0.0; switching::COUNT];
+                    let mut z = [0.0; switching::EVENT_INDICATORS];
                     self.event_indicators(&mut z);
                     z.get(var.index).copied().unwrap_or(f64::NAN)
                 }

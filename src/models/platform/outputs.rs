@@ -8,7 +8,7 @@ use crate::physics::stand::LEG_COUNT;
 use crate::simulation::outputs::{
     ActuatorStateOutputs, LegLoadOutputs, PoseOutputs, StateOutputs, condition_number,
 };
-use crate::simulation::state::{actuator_forces, body, supply_flow};
+use crate::simulation::state::{actuator_forces, body, power_unit_outputs, supply_flow};
 use crate::simulation::{LegOutputs, SimulationState};
 
 /// `f()`, computed out of line: a block's values, whose accessor stays small enough to inline
@@ -32,6 +32,9 @@ pub struct InputDependentOutputs {
     pub actuator_force: [f64; LEG_COUNT],
     /// `Qsupply` (it depends on the input `pS`).
     pub supply_flow: f64,
+    /// `supply.pressure`, `supply.pumpFlow`, `supply.reliefFlow`, `accumulator.oilVolume` (they
+    /// depend on the inputs `pS` and `pump.speed`).
+    pub power_unit: [f64; 4],
 }
 
 impl PlatformModel {
@@ -79,6 +82,7 @@ impl PlatformModel {
                     joint_force: form.joint_forces(body(y), &actuator_force),
                     actuator_force,
                     supply_flow: supply_flow(form, y),
+                    power_unit: power_unit_outputs(form, y, form.supply()),
                 }
             };
             match simulation {

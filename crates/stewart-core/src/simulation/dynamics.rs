@@ -234,9 +234,10 @@ impl<L: LegForceLaw + ?Sized, V: Lanes, const N: usize> OdeSystem<N> for Platfor
         rate_in(self.form, &body, y, dy);
     }
 
-    /// Up to the end of the actuator's block: the later blocks stay 0 and constant.
+    /// Up to the end of the actuator's active states: the rest stay as they are (the later
+    /// blocks 0; the power unit's states without it).
     fn active_dimension(&self) -> usize {
-        self.form.actuator().kind().block().end.min(N)
+        self.form.actuator().active_end().min(N)
     }
 
     /// The actuator's bound ([`Actuator::stable_step`]: the hydraulic legs' fast modes), at the

@@ -5,9 +5,10 @@
 use nalgebra::{Matrix3, Matrix6, Scalar, Vector3};
 
 use super::state::{
-    CURRENTS, SIMULATION_DIM, SimulationState, actuator_forces, body, hydraulic, quadrature, supply_flow_of,
+    CURRENTS, SIMULATION_DIM, SimulationState, actuator_forces, body, hydraulic, power_unit_outputs, quadrature,
+    supply_flow_of,
 };
-use crate::physics::actuators::{Actuator, layout, with_actuator};
+use crate::physics::actuators::{Actuator, Supply, layout, with_actuator};
 use crate::physics::body::invariants::mechanical_energy;
 use crate::physics::body::kinematics::angles_from_rotation;
 use crate::physics::body::state::{BodyState, STATE_DIM};
@@ -133,6 +134,9 @@ pub struct PlatformOutputs<T> {
     /// `work.hydraulic`, `work.compression`, J.
     pub hydraulic_work: T,
     pub compression_work: T,
+    /// `supply.pressure` (Pa), `supply.pumpFlow`, `supply.reliefFlow` (m³/s),
+    /// `accumulator.oilVolume` (m³): the power unit's (the pressure is the input `pS` without it).
+    pub power_unit: [T; 4],
     /// The actuators' part of the state (every actuator's block, [`actuator_state`]): an
     /// actuator's states and integrals are outputs read off it.
     pub actuator_states: [T; ACTUATOR_STATES],
@@ -276,17 +280,17 @@ impl<T: Real> PlatformOutputs<T> {
     /// drives voltages), the actuators' and the joints' forces too (they depend on them), else
     /// those are not numbers.
     pub fn compute(form: &SpecialForm, y: &[T; SIMULATION_DIM], u: Option<&[T; LEG_COUNT]>) -> Self {
-        let supply = T::constant(form.hydraulics().map_or(0.0, |h| h.supply));
-        Self::compute_supplied(form, y, u, supply)
+        Self::compute_supplied(form, y, u, form.supply())
     }
 
-    /// [`PlatformOutputs::compute`] with the hydraulic supply pressure in the number type (for
-    /// derivatives with respect to `pS`): every group of outputs, the legs computed once.
+    /// [`PlatformOutputs::compute`] with the hydraulic supply's inputs in the number type (for
+    /// derivatives with respect to `pS` and `pump.speed`): every group of outputs, the legs
+    /// computed once.
     pub fn compute_supplied(
         form: &SpecialForm,
         y: &[T; SIMULATION_DIM],
         u: Option<&[T; LEG_COUNT]>,
-        supply: T,
+        supply: Supply<T>,
     ) -> Self {
         let stand = &form.stand;
         let body = body_of(y);
@@ -303,7 +307,8 @@ impl<T: Real> PlatformOutputs<T> {
             }
             None => ([T::constant(f64::NAN); LEG_COUNT], [Vector3::from_element(T::constant(f64::NAN)); LEG_COUNT]),
         };
-        let supply_flow = form.hydraulics().map_or(T::zero(), |h| supply_flow_of(h, y, &legs.length, &ldot, supply));
+        let supply_flow =
+            form.hydraulics().map_or(T::zero(), |h| supply_flow_of(h, y, &legs.length, &ldot, supply.pressure));
         PlatformOutputs {
             r,
             v,
@@ -329,6 +334,7 @@ impl<T: Real> PlatformOutputs<T> {
             supply_flow,
             hydraulic_work: y[quadrature::WORK_HYDRAULIC],
             compression_work: y[quadrature::WORK_COMPRESSION],
+            power_unit: power_unit_outputs(form, y, supply),
             actuator_states: ActuatorStateOutputs::of(y).actuator_states,
         }
     }

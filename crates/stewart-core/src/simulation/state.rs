@@ -4,7 +4,7 @@
 //! functions: what the integrators, the outputs and the models index the state by.
 
 use crate::physics::actuators::hydraulics::HydraulicActuators;
-use crate::physics::actuators::{Actuator, ActuatorKind, BodyRate, InState, layout, with_actuator};
+use crate::physics::actuators::{Actuator, ActuatorKind, BodyRate, InState, Supply, layout, with_actuator};
 use crate::physics::body::state::{BodyState, STATE_DIM, StateVector};
 use crate::physics::legs::geometry::LegGeometry;
 use crate::physics::number::Real;
@@ -15,7 +15,8 @@ use crate::physics::stand::LEG_COUNT;
 /// actuator forces and the energy dissipated (quadratures integrated with the motion, so that
 /// the energy balance holds to the integration tolerance), then each actuator's block (the
 /// drives' six armature currents and the electric energy supplied; the hydraulic legs' 12
-/// chamber pressures, 6 spool positions and rates and the hydraulic and compression work), 0
+/// chamber pressures, 6 spool positions and rates, the hydraulic and compression work, the
+/// power unit's supply pressure and pump work), 0
 /// and constant when its actuator is not the legs'.
 pub const SIMULATION_DIM: usize = layout::END;
 
@@ -29,7 +30,7 @@ pub const MECHANICAL_DIM: usize = layout::Electric.end;
 const _: () = assert!(MECHANICAL_DIM <= SIMULATION_DIM, "the leading part of the state");
 
 /// The simulation state, `r, v, e1, e2, e3, e1', e2', e3', W_F, W_d, I_1..I_6, W_e, p_A1..6,
-/// p_B1..6, s_1..6, s_1'..6', W_h, W_c`.
+/// p_B1..6, s_1..6, s_1'..6', W_h, W_c, p_S, W_p`.
 pub type SimulationState = [f64; SIMULATION_DIM];
 
 /// Offsets of the quadratures in a [`SimulationState`].
@@ -46,6 +47,8 @@ pub mod quadrature {
     pub const WORK_HYDRAULIC: usize = layout::Hydraulic.start + block::WORK_HYDRAULIC;
     /// `work.compression = integral of sum_k (p_A V_A p_A' + p_B V_B p_B') / beta dt`, J.
     pub const WORK_COMPRESSION: usize = layout::Hydraulic.start + block::WORK_COMPRESSION;
+    /// `work.pump = integral of (p_S Q_pump - p_T (Q_T + Q_relief)) dt`, J (the power unit).
+    pub const WORK_PUMP: usize = layout::Hydraulic.start + block::WORK_PUMP;
 }
 const _: () = assert!(quadrature::WORK_DISSIPATED + 1 == layout::START, "the actuators' blocks follow");
 
@@ -58,6 +61,8 @@ pub mod hydraulic {
     pub const PB: usize = layout::Hydraulic.start + block::PB;
     pub const SPOOL: usize = layout::Hydraulic.start + block::SPOOL;
     pub const SPOOL_RATE: usize = layout::Hydraulic.start + block::SPOOL_RATE;
+    /// The power unit's supply line pressure `p_S`, Pa.
+    pub const SUPPLY_PRESSURE: usize = layout::Hydraulic.start + block::SUPPLY_PRESSURE;
 }
 
 /// Offset of the drives' armature currents `I_1..I_6` (A) in a [`SimulationState`].
@@ -110,17 +115,16 @@ pub fn state_rate<T: Real>(
     y: &[T; SIMULATION_DIM],
     inputs: &[T; LEG_COUNT],
 ) -> [T; SIMULATION_DIM] {
-    let supply = T::constant(form.hydraulics().map_or(0.0, |h| h.supply));
-    state_rate_supplied(form, y, inputs, supply)
+    state_rate_supplied(form, y, inputs, form.supply())
 }
 
-/// [`state_rate`] with the hydraulic supply pressure `supply` (Pa) in the number type (for
-/// derivatives with respect to `pS`); without hydraulics it is not used.
+/// [`state_rate`] with the hydraulic supply's inputs `supply` (`pS`, Pa, and `pump.speed`) in
+/// the number type (for derivatives with respect to them); without hydraulics they are not used.
 pub fn state_rate_supplied<T: Real>(
     form: &SpecialForm,
     y: &[T; SIMULATION_DIM],
     inputs: &[T; LEG_COUNT],
-    supply: T,
+    supply: Supply<T>,
 ) -> [T; SIMULATION_DIM] {
     let zero = [T::zero(); STATE_DIM];
     let body = y.first_chunk::<STATE_DIM>().unwrap_or(&zero);
@@ -157,9 +161,19 @@ pub fn supply_flow(form: &SpecialForm, y: &SimulationState) -> f64 {
     supply_flow_of(h, y, &legs.length, &l_dot, h.supply)
 }
 
+/// The power unit's outputs `[supply.pressure, supply.pumpFlow, supply.reliefFlow,
+/// accumulator.oilVolume]` at the simulation state `y` for the supply's inputs `supply`
+/// ([`HydraulicActuators::power_unit_outputs`]; 0 without hydraulic legs).
+pub fn power_unit_outputs<T: Real>(form: &SpecialForm, y: &[T; SIMULATION_DIM], supply: Supply<T>) -> [T; 4] {
+    match (form.hydraulics(), y.get(layout::Hydraulic).and_then(|x| x.try_into().ok())) {
+        (Some(h), Some(x)) => h.power_unit_outputs(x, supply),
+        _ => [T::zero(); 4],
+    }
+}
+
 /// `Qsupply` of the hydraulic legs `h` at the simulation state `y` (legs of lengths `l`, rates
-/// `l_dot`) and the supply pressure `supply`, in any number type
-/// ([`HydraulicActuators::supply_flow`]).
+/// `l_dot`) and the input `pS` `supply` (with the power unit its line's pressure instead), in
+/// any number type ([`HydraulicActuators::supply_flow`]).
 pub fn supply_flow_of<T: Real>(
     h: &HydraulicActuators,
     y: &[T; SIMULATION_DIM],
@@ -168,7 +182,7 @@ pub fn supply_flow_of<T: Real>(
     supply: T,
 ) -> T {
     match y.get(layout::Hydraulic).and_then(|x| x.try_into().ok()) {
-        Some(x) => h.supply_flow(x, l, l_dot, supply),
+        Some(x) => h.supply_flow(x, l, l_dot, h.supply_pressure(x, supply)),
         None => T::zero(),
     }
 }
@@ -189,6 +203,21 @@ pub mod switching {
     /// `cos thetaA_k - cos thetaMax_A`, k = 0..5 (the platform joints).
     pub const PLATFORM_JOINT: usize = 19;
     pub const COUNT: usize = 25;
+    /// Model Exchange only, after the others: `p_S - (P_0 - p_atm)`, the power unit's supply
+    /// pressure over the accumulator's precharge (a sign change is the accumulator emptying
+    /// or charging again, where `dV_oil/dp_S` jumps); 1 without the power unit. The steps
+    /// integrate through it (their stages take the accumulator's side at their own pressure).
+    pub const ACCUMULATOR: usize = COUNT;
+    /// How many event indicators Model Exchange has.
+    pub const EVENT_INDICATORS: usize = COUNT + 1;
+}
+
+/// The accumulator's event indicator ([`switching::ACCUMULATOR`]) at the simulation state `y`.
+pub fn accumulator_switching(form: &SpecialForm, y: &SimulationState) -> f64 {
+    match form.hydraulics() {
+        Some(h) if h.powered => y[hydraulic::SUPPLY_PRESSURE] - h.power_unit.precharge_gauge(),
+        _ => 1.0,
+    }
 }
 
 /// The special-form body coordinates of a simulation state.

@@ -60,12 +60,33 @@ const HYDRAULIC_LAW: &[Dependency] = &[
     All(group::PA0),
     All(group::PB0),
     All(group::PS),
+    All(group::SUPPLY_MODE),
+    Each(POWER_UNIT_LAW),
 ];
+/// The power unit's law (§10b).
+const POWER_UNIT_LAW: &[Dependency] = &[
+    All(group::PUMP_MAX_FLOW),
+    All(group::PUMP_SET_PRESSURE),
+    All(group::PUMP_BAND),
+    All(group::RELIEF_PRESSURE),
+    All(group::RELIEF_GAIN),
+    All(group::ACCUMULATOR_VOLUME),
+    All(group::ACCUMULATOR_PRECHARGE),
+    All(group::ACCUMULATOR_POLYTROPIC),
+    All(group::SUPPLY_VOLUME),
+];
+/// What the supply line's pressure starts at: the mode and `pS`'s start value.
+pub const POWER_UNIT_START: &[Dependency] = &[All(group::DRIVE), All(group::SUPPLY_MODE), All(group::PS)];
+/// The power unit's parameters (the hydraulic legs' with it: the valves drain the line).
+pub const POWER_UNIT_PARAMETERS: &[Dependency] = HYDRAULIC_PARAMETERS;
+/// The knowns of the power unit's rates and outputs: the legs' and the pump's speed.
+pub const POWER_UNIT_KNOWNS: &[Dependency] = &[Each(HYDRAULIC_KNOWNS), All(group::PUMP_SPEED)];
 /// The hydraulic legs' parameters (with the strokes their chambers span).
 pub const HYDRAULIC_PARAMETERS: &[Dependency] =
     &[All(group::DRIVE), All(group::LMIN), All(group::LMAX), Each(HYDRAULIC_LAW)];
 /// The hydraulic legs' states and input besides the body's.
-const HYDRAULIC_STATES: &[Dependency] = &[All(group::PA), All(group::PB), All(group::SPOOL), All(group::PS)];
+const HYDRAULIC_STATES: &[Dependency] =
+    &[All(group::PA), All(group::PB), All(group::SPOOL), All(group::PS), All(group::LINE_PRESSURE)];
 /// The knowns of the hydraulic legs' rates and powers: the body state (the legs' lengths and
 /// rates), the pressures, the spools and the supply pressure.
 pub const HYDRAULIC_KNOWNS: &[Dependency] = &[Each(BODY_STATES), Each(HYDRAULIC_STATES)];

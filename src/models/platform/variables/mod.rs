@@ -6,6 +6,7 @@ use crate::models::machine;
 use crate::models::variables::Dependency::{All, SameIndex};
 
 mod dependencies;
+mod power_unit;
 use dependencies::*;
 use crate::models::variables::VariableGroup as V;
 use crate::physics::actuators::PerActuator;
@@ -590,6 +591,30 @@ declare_variables! {
             HYDRAULIC_PARAMETERS,
         )
         .derivative("work.compression", "work.compression", 1, HYDRAULIC_KNOWNS); derivative,
+        // The power unit (§10b, hydraulic.supply = 1).
+        SUPPLY_MODE => power_unit::supply_mode(570); integer(parameters.actuators.hydraulic.powered),
+        PUMP_SPEED => power_unit::pump_speed(571); real(parameters.actuators.hydraulic.pump_speed),
+        PUMP_MAX_FLOW => power_unit::max_flow(572); real(parameters.actuators.hydraulic.power_unit.max_flow),
+        PUMP_SET_PRESSURE => power_unit::set_pressure(573); real(parameters.actuators.hydraulic.power_unit.set_pressure),
+        PUMP_BAND => power_unit::compensator_band(574); real(parameters.actuators.hydraulic.power_unit.compensator_band),
+        RELIEF_PRESSURE => power_unit::relief_pressure(575); real(parameters.actuators.hydraulic.power_unit.relief_pressure),
+        RELIEF_GAIN => power_unit::relief_gain(576); real(parameters.actuators.hydraulic.power_unit.relief_gain),
+        ACCUMULATOR_VOLUME => power_unit::accumulator_volume(577); real(parameters.actuators.hydraulic.power_unit.accumulator_volume),
+        ACCUMULATOR_PRECHARGE => power_unit::precharge(578); real(parameters.actuators.hydraulic.power_unit.precharge),
+        ACCUMULATOR_POLYTROPIC => power_unit::accumulator_polytropic(579); real(parameters.actuators.hydraulic.power_unit.accumulator_polytropic),
+        SUPPLY_VOLUME => power_unit::supply_volume(580); real(parameters.actuators.hydraulic.power_unit.supply_volume),
+        SUPPLY_PRESSURE => power_unit::supply_pressure(581, POWER_UNIT_PARAMETERS)
+            .depends_on(POWER_UNIT_KNOWNS); cached_at(input_dependent_outputs.power_unit, 0),
+        PUMP_FLOW => power_unit::pump_flow(582, POWER_UNIT_PARAMETERS)
+            .depends_on(POWER_UNIT_KNOWNS); cached_at(input_dependent_outputs.power_unit, 1),
+        RELIEF_FLOW => power_unit::relief_flow(583, POWER_UNIT_PARAMETERS)
+            .depends_on(POWER_UNIT_KNOWNS); cached_at(input_dependent_outputs.power_unit, 2),
+        OIL_VOLUME => power_unit::oil_volume(584, POWER_UNIT_PARAMETERS)
+            .depends_on(POWER_UNIT_KNOWNS); cached_at(input_dependent_outputs.power_unit, 3),
+        WORK_PUMP => power_unit::pump_work(585); cached_at(actuators.actuator_states, actuator_state(quadrature::WORK_PUMP)),
+        LINE_PRESSURE => power_unit::line_pressure(586, POWER_UNIT_START); cached_at(actuators.actuator_states, actuator_state(hydraulic::SUPPLY_PRESSURE)),
+        DER_LINE_PRESSURE => power_unit::line_pressure_rate(587, POWER_UNIT_PARAMETERS, POWER_UNIT_KNOWNS); derivative,
+        DER_WORK_PUMP => power_unit::pump_power(588, POWER_UNIT_PARAMETERS, POWER_UNIT_KNOWNS); derivative,
     }
 }
 

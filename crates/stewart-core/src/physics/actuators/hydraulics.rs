@@ -39,6 +39,7 @@
 //! (values and exact derivatives), six side by side in vector registers.
 
 mod actuator;
+pub mod power_unit;
 pub use actuator::{Block, HydraulicActuators, block, holding_pressures};
 
 use crate::physics::error::ParameterError;
@@ -363,14 +364,7 @@ impl HydraulicLegs {
     /// about `r / rate`.
     pub fn stiffness(&self, chambers: &Chambers<f64>, piston: &Piston<f64>, supply: f64) -> f64 {
         let k = self.flow_coefficient();
-        let pcr2 = self.pcr * self.pcr;
-        // phi'(dp) = (dp^2 / 2 + p_cr^2) / (dp^2 + p_cr^2)^(5/4).
-        // With |phi(dp)| = |dp| / (dp^2 + p_cr^2)^(1/4), the open land's flow per K |s|.
-        let land = |dp: f64| {
-            let q = dp * dp + pcr2;
-            let root = q.sqrt().sqrt();
-            ((0.5 * dp * dp + pcr2) / (q * root), dp.abs() / root)
-        };
+        let land = |dp: f64| self.land(dp);
         let s = chambers.spool.abs();
         let (pa, pb, tank) = (chambers.pa, chambers.pb, self.tank_pressure);
         let ((a_in, flow_a), (b_in, flow_b)) =
@@ -405,6 +399,14 @@ impl HydraulicLegs {
             chamber_b = chamber_b.max(emptying(pb, q_b, vb));
         }
         chamber_a.max(chamber_b).max(self.valve_omega * (2.0 * self.valve_damping).max(1.0))
+    }
+
+    /// An open land's `(phi'(dp), |phi(dp)|)` at the drop `dp`: its flow's slope and its flow
+    /// per `K |s|`. `phi'(dp) = (dp^2 / 2 + p_cr^2) / (dp^2 + p_cr^2)^(5/4)`.
+    pub fn land(&self, dp: f64) -> (f64, f64) {
+        let q = dp * dp + self.pcr * self.pcr;
+        let root = q.sqrt().sqrt();
+        ((0.5 * dp * dp + self.pcr * self.pcr) / (q * root), dp.abs() / root)
     }
 
     /// The cap-side pressure `p_A` (Pa) at which the leg pushes with `force` (N) for the rod-side

@@ -216,6 +216,11 @@ impl ActiveActuator {
         }
     }
 
+    /// Where its active states end in the simulation state ([`Actuator::active_states`]).
+    pub fn active_end(&self) -> usize {
+        self.kind().block().start + with_actuator!(self, a => a.active_states())
+    }
+
     /// [`Actuator::describe`].
     pub fn describe(&self) -> String {
         with_actuator!(self, a => a.describe())
@@ -272,6 +277,12 @@ pub trait Actuator: Copy + std::fmt::Debug + PartialEq {
         x: &[T],
         u: &[T; LEG_COUNT],
     ) -> [T; LEG_COUNT];
+
+    /// How many of its states move with its parameters (the leading part of its block; the
+    /// rest stay as they are, and the integrators' error norms leave them out).
+    fn active_states(&self) -> usize {
+        Self::STATES
+    }
 
     /// The energy its states store (in `E`), if any.
     fn stored_energy<T: Real>(&self, _x: &[T]) -> Option<T> {
@@ -336,8 +347,8 @@ pub trait Actuator: Copy + std::fmt::Debug + PartialEq {
 pub trait BodyRate<T: Real> {
     /// The inputs (the leg forces, voltages or valve commands).
     fn inputs(&self) -> [T; LEG_COUNT];
-    /// The hydraulic supply pressure `p_S` (an input held over a step), Pa.
-    fn supply(&self) -> T;
+    /// The hydraulic supply's inputs held over a step: the pressure `pS` and `pump.speed`.
+    fn supply(&self) -> Supply<T>;
     /// The legs' lengths and rates.
     fn legs(&self) -> ([T; LEG_COUNT], [T; LEG_COUNT]);
     /// The body's rate (into `dy`) under the inputs as axial forces, and the legs' powers.
@@ -347,6 +358,14 @@ pub trait BodyRate<T: Real> {
     /// The body's rate with the electric drives (which the body's form must have) at their
     /// currents, the inputs their voltages: the drives' law at each leg's rate.
     fn driven(&self, currents: &[T; LEG_COUNT], dy: &mut [T; STATE_DIM]) -> DrivenRates<T>;
+}
+
+/// The hydraulic supply's inputs, held over a step: the supply pressure `pS` (Pa; the legs'
+/// supply without the power unit) and the power unit's `pump.speed` (1).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Supply<T = f64> {
+    pub pressure: T,
+    pub pump_speed: T,
 }
 
 /// The legs' lengths `l_k` (m) and rates `ldot_k` (m/s) at a state.

@@ -7,7 +7,7 @@
 use std::marker::PhantomData;
 
 use super::{Actuation, SpecialForm, sum_over_legs};
-use crate::physics::actuators::{BodyRate, DrivenRates, HeldForces, LegForceLaw, LegPower};
+use crate::physics::actuators::{BodyRate, DrivenRates, HeldForces, LegForceLaw, LegPower, Supply};
 use crate::physics::body::state::{BodyState, STATE_DIM, StateVector};
 use crate::physics::legs::geometry::LegGeometry;
 use crate::physics::legs::per_leg::Lanes;
@@ -21,7 +21,7 @@ pub struct Definition<'a, T: Real> {
     pub form: &'a SpecialForm,
     pub body: &'a [T; STATE_DIM],
     pub inputs: &'a [T; LEG_COUNT],
-    pub supply: T,
+    pub supply: Supply<T>,
 }
 
 impl<T: Real> BodyRate<T> for Definition<'_, T> {
@@ -29,7 +29,7 @@ impl<T: Real> BodyRate<T> for Definition<'_, T> {
         *self.inputs
     }
 
-    fn supply(&self) -> T {
+    fn supply(&self) -> Supply<T> {
         self.supply
     }
 
@@ -83,8 +83,8 @@ impl<L: LegForceLaw + ?Sized, V: Lanes> BodyRate<f64> for FastPath<'_, L, V> {
     }
 
     #[inline(always)]
-    fn supply(&self) -> f64 {
-        self.form.hydraulics().map_or(0.0, |h| h.supply)
+    fn supply(&self) -> Supply {
+        self.form.supply()
     }
 
     /// In the checks' lanes of `V` (`JointArrays::kinematics_in`): the definition's bits.

@@ -190,6 +190,22 @@ impl SpecialForm {
         }
     }
 
+    /// The hydraulic supply's inputs held over a step (`pS`, `pump.speed`; 0 without hydraulic
+    /// legs), in the number type `T`.
+    #[inline(always)]
+    pub fn supply<T: crate::physics::number::Real>(&self) -> crate::physics::actuators::Supply<T> {
+        let (pressure, pump_speed) = self.hydraulics().map_or((0.0, 0.0), |h| (h.supply, h.pump_speed));
+        crate::physics::actuators::Supply { pressure: T::constant(pressure), pump_speed: T::constant(pump_speed) }
+    }
+
+    /// Sets the power unit's `pump.speed` (1) of the hydraulic legs, if on: an input held over a
+    /// step.
+    pub fn set_pump_speed(&mut self, speed: f64) {
+        if let ActiveActuator::Hydraulic(h) = &mut self.actuator {
+            h.pump_speed = speed;
+        }
+    }
+
     /// Sets the supply pressure `p_S` (Pa) of the hydraulic legs, if on: an input held over a
     /// step.
     pub fn set_supply_pressure(&mut self, supply: f64) {

@@ -2,8 +2,9 @@
 //! stroke, with the supply pressure (an input) and the chambers' states in the simulation state
 //! ([`block`]), their rate, force, check and stability bound.
 
+use super::power_unit::{PowerUnit, PowerUnitRate};
 use super::{ATMOSPHERIC_PRESSURE, Chambers, DEFAULT_SUPPLY_PRESSURE, HydraulicLegs, Piston};
-use crate::physics::actuators::{Actuator, BodyRate, LegMotion, LegPower};
+use crate::physics::actuators::{Actuator, BodyRate, LegMotion, LegPower, Supply};
 use crate::physics::body::state::{BodyState, STATE_DIM};
 use crate::physics::error::{ParameterError, PhysicsFault};
 use crate::physics::legs::geometry::LegGeometry;
@@ -12,8 +13,9 @@ use crate::physics::number::{Number, Real};
 use crate::physics::stand::{LEG_COUNT, check_finite};
 
 /// The hydraulic legs of a stand: the law's parameters, each leg's stroke (from the end
-/// stops' `lmin`, `lmax`, whether the stops are on or not), the supply pressure (an input held
-/// over each step) and the chambers' pressures at the start.
+/// stops' `lmin`, `lmax`, whether the stops are on or not), the supply pressure and the pump's
+/// speed (inputs held over each step), the chambers' pressures at the start, and the power
+/// unit (docs/model.md §10b) when it feeds them.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HydraulicActuators {
     pub legs: HydraulicLegs,
@@ -21,8 +23,15 @@ pub struct HydraulicActuators {
     pub lower: [f64; LEG_COUNT],
     /// `L_s = lmax_k - lmin_k`, m.
     pub stroke: [f64; LEG_COUNT],
-    /// `p_S`, Pa.
+    /// `p_S`, Pa: the input `pS` (without the power unit; with it, the supply line's pressure
+    /// at the start).
     pub supply: f64,
+    /// `pump.speed`, 1 (the power unit's input).
+    pub pump_speed: f64,
+    /// The power unit's parameters, and whether it feeds the legs (`hydraulic.supply = 1`; else
+    /// the supply pressure is the input `pS`).
+    pub power_unit: PowerUnit,
+    pub powered: bool,
     /// `pA0`, `pB0`, Pa.
     pub initial_pa: [f64; LEG_COUNT],
     pub initial_pb: [f64; LEG_COUNT],
@@ -47,8 +56,13 @@ pub mod block {
     /// `work.hydraulic`, `work.compression`.
     pub const WORK_HYDRAULIC: usize = 4 * LEG_COUNT;
     pub const WORK_COMPRESSION: usize = 4 * LEG_COUNT + 1;
-    /// The block's length.
-    pub const LEN: usize = 4 * LEG_COUNT + 2;
+    /// The power unit's: the supply line's pressure `p_S` and `work.pump` (last, so that without
+    /// the power unit the legs' states are a leading part of the block).
+    pub const SUPPLY_PRESSURE: usize = 4 * LEG_COUNT + 2;
+    pub const WORK_PUMP: usize = 4 * LEG_COUNT + 3;
+    /// The block's length, and that of its leading part without the power unit.
+    pub const LEN: usize = 4 * LEG_COUNT + 4;
+    pub const LEGS: usize = 4 * LEG_COUNT + 2;
 }
 
 /// The hydraulic legs' block of the simulation state, in the number type `T`.
@@ -64,6 +78,9 @@ impl HydraulicActuators {
             lower,
             stroke: std::array::from_fn(|k| upper[k] - lower[k]),
             supply: DEFAULT_SUPPLY_PRESSURE,
+            pump_speed: 1.0,
+            power_unit: PowerUnit::default(),
+            powered: false,
             initial_pa: [pa; LEG_COUNT],
             initial_pb: [pb; LEG_COUNT],
         }
@@ -77,8 +94,8 @@ impl HydraulicActuators {
 
     /// The legs' rates at their block `x` (legs of lengths `l`, rates `l_dot`) for the valve
     /// commands `valves` and the supply pressure `supply`, written into `dx`; returns the forces
-    /// `u_k` and the sums over the legs of the supply power, the compression power and the
-    /// losses. Leg by leg, in any number type.
+    /// `u_k` and the sums over the legs of the supply power, the compression power, the losses
+    /// and the supply flow `Q_S`. Leg by leg, in any number type.
     #[inline(always)]
     pub fn leg_rates<T: Real>(
         &self,
@@ -88,9 +105,9 @@ impl HydraulicActuators {
         valves: &[T; LEG_COUNT],
         supply: T,
         dx: &mut Block<T>,
-    ) -> ([T; LEG_COUNT], [T; 3]) {
+    ) -> ([T; LEG_COUNT], [T; 4]) {
         let mut u = [T::zero(); LEG_COUNT];
-        let mut powers = [[T::zero(); LEG_COUNT]; 3];
+        let mut powers = [[T::zero(); LEG_COUNT]; 4];
         for k in 0..LEG_COUNT {
             let command = valves[k].clamp_to(T::constant(-1.0), T::constant(1.0));
             let r = self.legs.rate(&Self::chambers(x, k), &self.piston(k, l[k], l_dot[k]), command, supply);
@@ -102,6 +119,7 @@ impl HydraulicActuators {
             powers[0][k] = r.supply_power;
             powers[1][k] = r.compression_power;
             powers[2][k] = r.dissipation;
+            powers[3][k] = r.supply_flow;
         }
         (u, powers.map(|p| sum_over_legs(&p)))
     }
@@ -113,6 +131,86 @@ impl HydraulicActuators {
             self.legs.rate(&Self::chambers(x, k), &self.piston(k, l[k], l_dot[k]), T::zero(), supply).supply_flow
         });
         sum_over_legs(&flows)
+    }
+
+    /// The supply pressure the valves see at the legs' block `x`: the power unit's line, or
+    /// the input.
+    #[inline(always)]
+    pub fn supply_pressure<T: Real>(&self, x: &Block<T>, input: T) -> T {
+        if self.powered { x[block::SUPPLY_PRESSURE] } else { input }
+    }
+
+    /// The power unit's rates at the supply pressure `p` for the pump's speed `speed`, the
+    /// valves' draw `drawn` (`Q_S`, m³/s) and their power `valves` (`p_S Q_S - p_T Q_T`, W):
+    /// `(V_s / beta_e(p_S) + dV_oil/dp_S) p_S' = Q_pump - Q_S - Q_relief`, written as `p_S' =
+    /// beta_e q / (V_s + beta_e dV_oil/dp_S)` (finite, 0, where `beta_e` is 0), and the line's
+    /// compression power as `p_S` times the net inflow into its own oil.
+    #[inline(always)]
+    pub fn power_unit_rate<T: Real>(&self, p: T, speed: T, drawn: T, valves: T) -> PowerUnitRate<T> {
+        let unit = &self.power_unit;
+        let (pump, relief) = (unit.pump_flow(speed, p), unit.relief_flow(p));
+        let beta = match self.legs.air() {
+            None => T::constant(self.legs.bulk_modulus),
+            Some(air) => self.legs.effective_bulk_modulus(&air, p),
+        };
+        let slope = unit.oil_volume_slope(p);
+        let net = pump - drawn - relief;
+        let pressure_rate = net * beta / (beta * slope + unit.supply_volume);
+        let tank = self.legs.tank_pressure;
+        PowerUnitRate {
+            pressure_rate,
+            pump_power: p * pump - relief * tank - (p * drawn - valves),
+            compression_power: p * (net - slope * pressure_rate),
+            dissipation: (p - tank) * relief,
+        }
+    }
+
+    /// The power unit's outputs at the simulation's hydraulic block `x` and the inputs
+    /// `supply`: `supply.pressure` (the input `pS` without the power unit), `supply.pumpFlow`,
+    /// `supply.reliefFlow`, `accumulator.oilVolume` (0 without it).
+    pub fn power_unit_outputs<T: Real>(&self, x: &Block<T>, supply: Supply<T>) -> [T; 4] {
+        let p = self.supply_pressure(x, supply.pressure);
+        if !self.powered {
+            return [p, T::zero(), T::zero(), T::zero()];
+        }
+        let unit = &self.power_unit;
+        // V_oil's value, and its change through its slope (exact to first order: duals).
+        let at = p.value();
+        let oil = T::constant(unit.oil_volume(at)) + (p - at) * unit.oil_volume_slope(at);
+        [p, unit.pump_flow(supply.pump_speed, p), unit.relief_flow(p), oil]
+    }
+
+    /// The largest rate (1/s) of the supply line's pressure with the power unit at the legs'
+    /// block `x` and the line's pressure `p`: the conductance seen from the line (the pump's
+    /// compensator `Q_max / dp_c`, the relief `K_r`, each valve's open land from the supply `K
+    /// |s| phi'` and its leakage) over its capacitance `V_s / beta_e + dV_oil/dp_S`; with air as
+    /// the chambers' bound ([`HydraulicLegs::stiffness`]): the oil's stiffening with pressure,
+    /// and at most half the line's absolute pressure lost in a step.
+    fn supply_line_stiffness(&self, x: &Block<f64>, p: f64) -> f64 {
+        let (unit, legs) = (&self.power_unit, &self.legs);
+        let k = legs.flow_coefficient();
+        let speed = self.pump_speed.clamp(0.0, 1.0);
+        let mut conductance = speed * unit.max_flow / unit.compensator_band + unit.relief_gain;
+        let mut flow = speed * unit.max_flow + unit.relief_flow(p);
+        for leg in 0..LEG_COUNT {
+            let c = Self::chambers(x, leg);
+            let drop = if c.spool >= 0.0 { p - c.pa } else { p - c.pb };
+            let (slope, per_opening) = legs.land(drop);
+            conductance += k * c.spool.abs() * slope + 2.0 * legs.valve_leakage;
+            flow += k * c.spool.abs() * per_opening + legs.valve_leakage * ((p - c.pa).abs() + (p - c.pb).abs());
+        }
+        let slope = unit.oil_volume_slope(p);
+        let Some(air) = legs.air() else {
+            return conductance * legs.bulk_modulus / (unit.supply_volume + legs.bulk_modulus * slope);
+        };
+        let beta = legs.effective_bulk_modulus(&air, p);
+        let mut rate = conductance * beta / (unit.supply_volume + beta * slope)
+            + legs.effective_bulk_modulus_slope(&air, p).abs() * flow / unit.supply_volume;
+        let absolute = p + ATMOSPHERIC_PRESSURE;
+        if absolute > 0.0 {
+            rate = rate.max(4.0 * beta * flow / (unit.supply_volume * absolute));
+        }
+        rate
     }
 
     /// The piston of leg `k` at length `l` and rate `l_dot`.
@@ -155,7 +253,7 @@ const STABLE_STEP_FACTOR: f64 = 2.0;
 /// then `work.hydraulic`, `work.compression` ([`block`]).
 impl Actuator for HydraulicActuators {
     const NAME: &'static str = "hydraulic servo legs";
-    const STATES: usize = 4 * LEG_COUNT + 2;
+    const STATES: usize = block::LEN;
     const CHECKS: bool = true;
     const BOUNDED: bool = true;
     const INPUTS: &'static str = "valve commands";
@@ -172,11 +270,22 @@ impl Actuator for HydraulicActuators {
         };
         let valves = body.inputs();
         let (l, l_dot) = body.legs();
-        let (u, [supplied, compression, losses]) = self.leg_rates(x, &l, &l_dot, &valves, body.supply(), dx);
+        let inputs = body.supply();
+        let supply = self.supply_pressure(x, inputs.pressure);
+        let (u, [supplied, compression, losses, drawn]) = self.leg_rates(x, &l, &l_dot, &valves, supply, dx);
         let power = body.under_forces(&u, dy);
         dx[block::WORK_HYDRAULIC] = supplied;
-        dx[block::WORK_COMPRESSION] = compression;
-        LegPower { actuator: T::zero(), dissipation: power.dissipation + losses }
+        if !self.powered {
+            dx[block::WORK_COMPRESSION] = compression;
+            dx[block::SUPPLY_PRESSURE] = T::zero();
+            dx[block::WORK_PUMP] = T::zero();
+            return LegPower { actuator: T::zero(), dissipation: power.dissipation + losses };
+        }
+        let unit = self.power_unit_rate(supply, inputs.pump_speed, drawn, supplied);
+        dx[block::WORK_COMPRESSION] = compression + unit.compression_power;
+        dx[block::SUPPLY_PRESSURE] = unit.pressure_rate;
+        dx[block::WORK_PUMP] = unit.pump_power;
+        LegPower { actuator: T::zero(), dissipation: power.dissipation + (losses + unit.dissipation) }
     }
 
     /// `u_k = p_A A_A - p_B A_B`.
@@ -199,10 +308,14 @@ impl Actuator for HydraulicActuators {
         let Ok(x) = <&Block<f64>>::try_from(x) else { return f64::INFINITY };
         // The rates bound the chambers' flows, which matter with air alone.
         let LegMotion { lengths: l, rates: l_dot } = legs(self.legs.air().is_some());
+        let supply = self.supply_pressure(x, self.supply);
         let mut fastest = 0.0_f64;
         for k in 0..LEG_COUNT {
             fastest =
-                fastest.max(self.legs.stiffness(&Self::chambers(x, k), &self.piston(k, l[k], l_dot[k]), self.supply));
+                fastest.max(self.legs.stiffness(&Self::chambers(x, k), &self.piston(k, l[k], l_dot[k]), supply));
+        }
+        if self.powered {
+            fastest = fastest.max(self.supply_line_stiffness(x, supply));
         }
         STABLE_STEP_FACTOR / fastest
     }
@@ -221,8 +334,37 @@ impl Actuator for HydraulicActuators {
         Ok(())
     }
 
+    fn active_states(&self) -> usize {
+        if self.powered { block::LEN } else { block::LEGS }
+    }
+
+    /// The accumulator's gas energy `E_acc` (with the power unit): its value, and its change
+    /// through `dE_acc/dp_S = p_S dV_oil/dp_S` (exact to first order: duals).
+    fn stored_energy<T: Real>(&self, x: &[T]) -> Option<T> {
+        if !self.powered {
+            return None;
+        }
+        let p = *x.get(block::SUPPLY_PRESSURE)?;
+        let at = p.value();
+        let unit = &self.power_unit;
+        Some(T::constant(unit.gas_energy(at)) + (p - at) * (at * unit.oil_volume_slope(at)))
+    }
+
     fn validate(&self) -> Result<(), ParameterError> {
         HydraulicActuators::validate(self)?;
+        if self.powered {
+            self.power_unit.validate()?;
+            if self.legs.air().is_some() && !(self.supply > -ATMOSPHERIC_PRESSURE) {
+                return Err(ParameterError::new(
+                    "pS",
+                    format!(
+                        "the power unit's supply line starts at pS = {:e} Pa gauge, at or below zero absolute, where \
+                         oil with air (hydraulic.airFraction > 0) cannot be",
+                        self.supply
+                    ),
+                ));
+            }
+        }
         for k in 0..LEG_COUNT {
             for (name, p) in [("pA0", self.initial_pa[k]), ("pB0", self.initial_pb[k])] {
                 let name = format!("{name}[{}]", k + 1);
@@ -242,8 +384,12 @@ impl Actuator for HydraulicActuators {
         Ok(())
     }
 
-    /// The chambers at `pA0`, `pB0`; the spools centred and at rest.
+    /// The chambers at `pA0`, `pB0`; the spools centred and at rest; the supply line at the
+    /// input `pS`'s value (with the power unit; the accumulator charged to it).
     fn initial_state(&self, x: &mut [f64]) {
+        if let Some(slot) = x.get_mut(block::SUPPLY_PRESSURE) {
+            *slot = self.supply;
+        }
         for k in 0..LEG_COUNT {
             for (i, p) in [(block::PA, self.initial_pa[k]), (block::PB, self.initial_pb[k])] {
                 if let Some(slot) = x.get_mut(i + k) {
@@ -278,6 +424,7 @@ impl Actuator for HydraulicActuators {
 
     fn take_inputs(&mut self, from: &Self) {
         self.supply = from.supply;
+        self.pump_speed = from.pump_speed;
     }
 
     fn describe(&self) -> String {
