@@ -203,7 +203,7 @@ mod tests {
                 let d = 1e3;
                 let slope = (u.oil_volume(p + d) - u.oil_volume(p - d)) / (2.0 * d);
                 assert!((u.oil_volume_slope(p) - slope).abs() < 1e-7 * slope, "n_a {na}, p {p:e}");
-                let dual = u.oil_volume_slope(Dual::new(p, 1.0)).value;
+                let dual = u.oil_volume_slope(Dual::new(p, 1.0)).re;
                 assert_eq!(dual, u.oil_volume_slope(p));
                 let de = (u.gas_energy(p + d) - u.gas_energy(p - d)) / (2.0 * d);
                 assert!((de - p * slope).abs() < 1e-7 * de, "n_a {na}, p {p:e}: {de:e} {:e}", p * slope);
