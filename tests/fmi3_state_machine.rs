@@ -124,7 +124,7 @@ fn functions() -> Vec<&'static str> {
 
 /// Continuous states of the platform and its event indicators (Model Exchange).
 const NX: usize = stewart_fmu::simulation::SIMULATION_DIM;
-const NZ: usize = stewart_fmu::simulation::state::switching::COUNT;
+const NZ: usize = stewart_fmu::simulation::state::switching::EVENT_INDICATORS;
 
 /// A fresh instance driven into `state` (Co-Simulation instances use Event Mode).
 fn instance_in(state: &str, kind: Kind) -> Host3 {

@@ -55,7 +55,7 @@ fn functions() -> impl Iterator<Item = &'static str> {
 /// Continuous states of the platform (24 special-form coordinates, work.F, work.dissipated).
 const NX: usize = stewart_fmu::simulation::SIMULATION_DIM;
 /// Event indicators: twelve stroke limits and the force/moment determinant.
-const NZ: usize = stewart_fmu::simulation::state::switching::COUNT;
+const NZ: usize = stewart_fmu::simulation::state::switching::EVENT_INDICATORS;
 
 /// A fresh instance driven into `state`.
 fn instance_in(state: &str) -> Host {

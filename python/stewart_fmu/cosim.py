@@ -31,7 +31,7 @@ PA = [f"pA[{k}]" for k in LEGS]
 PB = [f"pB[{k}]" for k in LEGS]
 #: What the controller gets from the platform and what it sends back, by `drive` (0 forces,
 #: 1 electric drives, 2 hydraulic legs).
-MEASURED = {0: L + LDOT, 1: L + LDOT, 2: L + LDOT + PA + PB}
+MEASURED = {0: L + LDOT, 1: L + LDOT, 2: L + LDOT + PA + PB + ["supply.pressure"]}
 COMMANDS = {0: F, 1: U, 2: VALVE}
 LP = [f"lp[{k}]" for k in LEGS]
 

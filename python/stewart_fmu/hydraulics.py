@@ -7,7 +7,11 @@ job's demonstration (examples/hydraulic_scenarios.py).
 2. the paper's heave programme in closed loop, hydraulic mode;
 3. loss of control power: every valve command to 0, the legs lock and creep on the leakage;
 4. pump failure: `pS` to 0 with the controller still commanding;
-5. one valve stuck open under feedback.
+5. one valve stuck open under feedback;
+
+and with the power unit (`hydraulic.supply = 1`, docs/model.md §10b): the heave programme fed
+by the pump and the accumulator, and a pump stop that the accumulator and the controller's safe
+landing answer.
 
 The parameters are the FMU's (its model description's start values). What the tests and the
 demonstration compare the runs with (the holding pressures, the creep rate, the valve flows) is
@@ -96,6 +100,27 @@ def pump_failure(t_fail=1.0, t_end=4.0, events=None, platform=None):
         return valves
     return closed_loop(t_end, hook=fail, events=events, platform=platform,
                        record=[f"jointForce[{k},{c}]" for k in LEGS for c in (1, 2, 3)])
+
+
+POWER_UNIT = ["supply.pressure", "supply.pumpFlow", "supply.reliefFlow", "accumulator.oilVolume", "work.pump"]
+
+
+def power_unit_heave(t_end=10.0, platform=None):
+    """The heave programme with the power unit feeding the valves (`hydraulic.supply = 1`)."""
+    return closed_loop(t_end, platform={"hydraulic.supply": 1, **(platform or {})}, record=POWER_UNIT)
+
+
+def pump_stop_landing(t_stop, t_end, landing_pressure, platform=None, controller=None):
+    """The heave programme with the power unit; the pump stops at `t_stop` (`pump.speed` 0),
+    the accumulator feeds the valves, and the controller starts its safe landing when the
+    measured supply pressure falls below `landing_pressure` (`landing.pressure`)."""
+    def stop(t, platform, valves):
+        if abs(t - t_stop) < 1e-9:
+            platform.set_values(["pump.speed"], [0.0])
+        return valves
+    return closed_loop(t_end, hook=stop, platform={"hydraulic.supply": 1, **(platform or {})},
+                       controller={"landing.pressure": landing_pressure, **(controller or {})},
+                       record=POWER_UNIT)
 
 
 def stuck_valve(t_stick=1.0, t_end=6.0, leg=1, opening=0.2, platform=None):

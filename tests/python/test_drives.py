@@ -169,7 +169,7 @@ def test_fmi3_equals_fmi2_with_drives_bit_for_bit():
 
 
 def test_model_exchange_with_drives_matches_co_simulation():
-    """FMPy's CVODE over the 59 Model Exchange states (the currents among them), braking from
+    """FMPy's CVODE over the 61 Model Exchange states (the currents among them), braking from
     the start (U = 0, I0 the holding current): the heave after 3 s equals Co-Simulation's."""
     start = {**dr.drive_start(I_HOLD), "stops": False}
     outputs = ["r[3]", "I[1]"]
@@ -198,7 +198,7 @@ def test_directional_derivatives_with_drives_match_central_differences():
     worst = 0.0
     for _ in range(3):
         x = x0 + np.concatenate([rng.normal(0, 0.02, 6), rng.normal(0, 0.02, 9), rng.normal(0, 0.3, 9), [0.0, 0.0],
-                                 rng.normal(0, 3.0, 6), [0.0], np.zeros(26)])
+                                 rng.normal(0, 3.0, 6), [0.0], np.zeros(28)])
         u = U_HOLD + rng.normal(0, 20.0, 6)
         m.set_states(x)
         m.fmu.setReal(u_vrs, list(u))

@@ -113,9 +113,10 @@ def test_fmi3_fmus_validate_clean():
     md = read_model_description(str(PLATFORM3))
     shapes = {v.name: tuple(int(d.start) for d in v.dimensions) for v in md.modelVariables}
     assert shapes["F"] == (6,) and shapes["R"] == (3, 3) and shapes["B"] == (6, 3) and shapes["l"] == (6,)
-    # 24 special-form states, work.F, work.dissipated, six drive currents, work.electric; 12
-    # stroke margins, the determinant, 12 joint-limit margins
-    assert md.numberOfContinuousStates == 59 and md.numberOfEventIndicators == 25
+    # 24 special-form states, work.F, work.dissipated, six drive currents, work.electric, the
+    # hydraulic legs' 26 and the power unit's 2; 12 stroke margins, the determinant, 12
+    # joint-limit margins, the accumulator's precharge
+    assert md.numberOfContinuousStates == 61 and md.numberOfEventIndicators == 26
     assert md.coSimulation.hasEventMode and md.coSimulation.canReturnEarlyAfterIntermediateUpdate
 
 

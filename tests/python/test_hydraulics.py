@@ -211,7 +211,7 @@ def test_fmi3_equals_fmi2_with_hydraulics_bit_for_bit():
 
 
 def test_model_exchange_with_hydraulics_matches_co_simulation():
-    """FMPy's CVODE over the 59 Model Exchange states (pressures and spools among them), the
+    """FMPy's CVODE over the 61 Model Exchange states (pressures and spools among them), the
     valves at 0.05 from the start: the heave and a cap pressure after 1 s equal Co-Simulation's."""
     start = {"drive": 2, "stops": False, **{f"valve[{k}]": 0.05 for k in LEGS}}
     outputs = ["r[3]", "pA[1]", "spool[1]"]
@@ -231,50 +231,62 @@ def test_directional_derivatives_with_hydraulics_match_central_differences():
     """d(derivatives)/d(states) (pressures and spools among them), d(derivatives)/d(valve, pS)
     and d(Qsupply)/d(...) from fmi2GetDirectionalDerivative against central differences of
     fmi2GetDerivatives and fmi2GetReal: relative error <= 1e-6, at pressure and with chambers
-    near vacuum, where the oil's air makes it soft and beta_e changes fastest (§10b)."""
+    near vacuum, where the oil's air makes it soft and beta_e changes fastest (§10b); and with
+    the power unit (hydraulic.supply = 1): the supply line's pressure a state (in the pump's
+    compensator band, and above the relief's cracking pressure), pump.speed an input, its
+    outputs supply.pressure, supply.pumpFlow, supply.reliefFlow, accumulator.oilVolume."""
     from stewart_fmu.linearise import PlatformModel
-    m = PlatformModel({"drive": 2}, [0.0] * 6)
-    u_vrs = [m.vr[f"valve[{k}]"] for k in LEGS] + [m.vr["pS"]]
-    out_vrs = [m.vr["Qsupply"], m.vr["actuatorForce[2]"]]
-    rng = np.random.default_rng(7)
-    x0 = m.states()
     worst = 0.0
-    for case in range(3):
-        x = x0 + np.concatenate([rng.normal(0, 0.01, 6), rng.normal(0, 0.01, 9), rng.normal(0, 0.1, 9), np.zeros(9),
-                                 rng.normal(0, 3e5, 12), rng.uniform(-0.5, 0.5, 6), rng.normal(0, 5.0, 6), [0.0, 0.0]])
-        if case == 2:
-            # Chambers near vacuum (absolute 1.3, 6.3, 51 kPa; 4 and 8 bar, where beta_e is steepest).
-            x[33:39] = [-1.0e5, -9.5e4, -5.0e4, 3.0e5, 7.0e5, 2.0e6]
-            x[39:45] = [7.0e5, -1.0e5, 3.0e5, -9.9e4, 1.0e6, 2.0e6]
-        u = np.concatenate([rng.uniform(-0.5, 0.5, 6), [P["pS"] * 0.9]])
-        m.set_states(x)
-        m.fmu.setReal(u_vrs, list(u))
-        scale = np.concatenate([np.full(24, 1e-6), np.full(9, 1e-6), np.full(12, 10.0), np.full(12, 1e-6), [1e-6, 1e-6]])
-        for known_set, knowns in (("states", m.all_state_vrs), ("inputs", u_vrs)):
-            exact = m.jacobian(m.all_derivative_vrs, knowns)
-            exact_out = m.jacobian(out_vrs, knowns)
-            fd, fd_out = np.zeros_like(exact), np.zeros_like(exact_out)
-            for j in range(len(knowns)):
-                values = []
-                h = scale[j] if known_set == "states" else (1e-6 if j < 6 else 10.0)
-                for sign in (1, -1):
-                    if known_set == "states":
-                        xs = x.copy()
-                        xs[j] += sign * h
-                        m.set_states(xs)
-                    else:
-                        us = u.copy()
-                        us[j] += sign * h
-                        m.fmu.setReal(u_vrs, list(us))
-                    values.append((m.derivatives(), np.array(m.fmu.getReal(out_vrs))))
-                m.set_states(x)
-                m.fmu.setReal(u_vrs, list(u))
-                fd[:, j] = (values[0][0] - values[1][0]) / (2 * h)
-                fd_out[:, j] = (values[0][1] - values[1][1]) / (2 * h)
-            for a, b in ((exact, fd), (exact_out, fd_out)):
-                rows = np.max(np.abs(a), axis=1, keepdims=True)
-                worst = max(worst, float(np.max(np.abs(a - b) / np.maximum(rows, 1e-12))))
-    m.free()
+    for powered in (False, True):
+        m = PlatformModel({"drive": 2, "hydraulic.supply": int(powered)}, [0.0] * 6)
+        u_vrs = [m.vr[f"valve[{k}]"] for k in LEGS] + [m.vr["pump.speed" if powered else "pS"]]
+        out_vrs = [m.vr["Qsupply"], m.vr["actuatorForce[2]"]]
+        if powered:
+            out_vrs += [m.vr[n] for n in ("supply.pressure", "supply.pumpFlow", "supply.reliefFlow",
+                                          "accumulator.oilVolume")]
+        rng = np.random.default_rng(7)
+        x0 = m.states()
+        for case in range(3):
+            x = x0 + np.concatenate([rng.normal(0, 0.01, 6), rng.normal(0, 0.01, 9), rng.normal(0, 0.1, 9),
+                                     np.zeros(9), rng.normal(0, 3e5, 12), rng.uniform(-0.5, 0.5, 6),
+                                     rng.normal(0, 5.0, 6), [0.0, 0.0, 0.0, 0.0]])
+            if case == 2:
+                # Chambers near vacuum (absolute 1.3, 6.3, 51 kPa; 4 and 8 bar, where beta_e is steepest).
+                x[33:39] = [-1.0e5, -9.5e4, -5.0e4, 3.0e5, 7.0e5, 2.0e6]
+                x[39:45] = [7.0e5, -1.0e5, 3.0e5, -9.9e4, 1.0e6, 2.0e6]
+            if powered:
+                # The line in the compensator's band, below the set pressure, above the relief.
+                x[59] = (16.2e6, 12.0e6, 18.4e6)[case]
+            u = np.concatenate([rng.uniform(-0.5, 0.5, 6), [0.7 if powered else P["pS"] * 0.9]])
+            m.set_states(x)
+            m.fmu.setReal(u_vrs, list(u))
+            scale = np.concatenate([np.full(24, 1e-6), np.full(9, 1e-6), np.full(12, 10.0), np.full(12, 1e-6),
+                                    [1e-6, 1e-6, 10.0, 1e-6]])
+            for known_set, knowns in (("states", m.all_state_vrs), ("inputs", u_vrs)):
+                exact = m.jacobian(m.all_derivative_vrs, knowns)
+                exact_out = m.jacobian(out_vrs, knowns)
+                fd, fd_out = np.zeros_like(exact), np.zeros_like(exact_out)
+                for j in range(len(knowns)):
+                    values = []
+                    h = scale[j] if known_set == "states" else (1e-6 if j < 6 or powered else 10.0)
+                    for sign in (1, -1):
+                        if known_set == "states":
+                            xs = x.copy()
+                            xs[j] += sign * h
+                            m.set_states(xs)
+                        else:
+                            us = u.copy()
+                            us[j] += sign * h
+                            m.fmu.setReal(u_vrs, list(us))
+                        values.append((m.derivatives(), np.array(m.fmu.getReal(out_vrs))))
+                    m.set_states(x)
+                    m.fmu.setReal(u_vrs, list(u))
+                    fd[:, j] = (values[0][0] - values[1][0]) / (2 * h)
+                    fd_out[:, j] = (values[0][1] - values[1][1]) / (2 * h)
+                for a, b in ((exact, fd), (exact_out, fd_out)):
+                    rows = np.max(np.abs(a), axis=1, keepdims=True)
+                    worst = max(worst, float(np.max(np.abs(a - b) / np.maximum(rows, 1e-12))))
+        m.free()
     print(f"directional derivatives with hydraulics vs central differences: max relative error (per row) {worst:.1e}")
     assert worst <= 1e-6
 

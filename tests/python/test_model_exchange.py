@@ -107,21 +107,23 @@ def test_model_exchange_with_exact_forces_matches_co_simulation():
 @pytest.mark.quick
 def test_baumgarte_keeps_the_constraints_and_none_does_not():
     """A body turning freely about its centre of mass (g = 0, no leg forces), CVODE at rtol
-    1e-6 for 10 time units: with the Baumgarte terms (rate 10) the residual stays at the
-    integration error's level; without them it accumulates."""
+    1e-6 for 30 time units: with the Baumgarte terms (rate 10) the residual stays at the
+    integration error's level; without them it accumulates, at the end ten times beyond the
+    largest the Baumgarte terms let through (the final values alone are the integrator's
+    noise: they move with the length of its state vector)."""
     start = dict(P, **{"g": 0.0, "w0[1]": 0.1, "w0[2]": -0.1, "w0[3]": 0.1})
     residual = {}
     for stabilisation in (2, 1):
         r = simulate_fmu(str(PLATFORM_FMU), fmi_type="ModelExchange", solver="CVode", relative_tolerance=1e-6,
-                         start_values=dict(start, **{"solver.stabilisation": stabilisation}), stop_time=10.0,
-                         input=force_table(lambda t: 0.0, 10.0), output=["constraintError"])
-        assert r["time"][-1] == pytest.approx(10.0)
+                         start_values=dict(start, **{"solver.stabilisation": stabilisation}), stop_time=30.0,
+                         input=force_table(lambda t: 0.0, 30.0), output=["constraintError"])
+        assert r["time"][-1] == pytest.approx(30.0)
         residual[stabilisation] = (np.max(r["constraintError"]), r["constraintError"][-1])
-    print(f"ME, CVODE rtol 1e-6, free body turning, 10 time units: constraint residual max {residual[2][0]:.1e} "
+    print(f"ME, CVODE rtol 1e-6, free body turning, 30 time units: constraint residual max {residual[2][0]:.1e} "
           f"(final {residual[2][1]:.1e}) with Baumgarte terms, max {residual[1][0]:.1e} (final {residual[1][1]:.1e}) "
           "without")
-    assert residual[2][0] < 1e-5 and residual[2][1] < 1e-6
-    assert residual[1][1] > 10 * residual[2][1]
+    assert residual[2][0] < 1e-5
+    assert residual[1][1] > 10 * residual[2][0]
 
 
 @pytest.mark.quick

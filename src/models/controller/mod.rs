@@ -26,7 +26,7 @@ use super::variables::VariableRef;
 use super::{DefaultExperiment, FmuModel, ModelInfo, StepError, StepReport};
 use crate::physics::body::kinematics::{PoseTrajectoryPoint, angles_from_rotation};
 use crate::physics::direct_problem::{DirectProblemSolution, solve_direct_problem};
-use crate::physics::programme::{PoseProgramme, SoftStartSinusoid, StartUp};
+use crate::physics::programme::{PoseProgramme, SafeLanding, SoftStartSinusoid, StartUp};
 use crate::physics::stand::{LEG_COUNT, MAX_COORDINATE};
 pub use parameters::*;
 use variables::BINDINGS;
@@ -107,6 +107,7 @@ impl ProgrammeOutputs {
     }
 }
 
+
 impl ProgrammeAngles {
     const UNDEFINED: ProgrammeAngles = ProgrammeAngles { anglesp: NAN3 };
 }
@@ -120,6 +121,13 @@ pub struct ControllerModel {
     /// The measured chamber pressures `pA`, `pB`, Pa (inputs when `drive = 2`).
     pub pa: [f64; LEG_COUNT],
     pub pb: [f64; LEG_COUNT],
+    /// The measured supply pressure `supply.pressure`, Pa (input when `drive = 2`).
+    pub supply_pressure: f64,
+    /// The input `landing.command` (1: land now).
+    pub landing_command: f64,
+    /// The safe landing under way: when it started and the programme point it started from
+    /// (programme 5 from the start; any programme on a trigger).
+    pub landing: Option<(f64, PoseTrajectoryPoint)>,
     /// Inputs `pose.*`.
     pub pose: ExternalPose,
     pub time: f64,
@@ -149,6 +157,9 @@ impl Default for ControllerModel {
             ldot: [0.0; LEG_COUNT],
             pa: [crate::models::platform::holding_pressures().0; LEG_COUNT],
             pb: [crate::models::platform::holding_pressures().1; LEG_COUNT],
+            supply_pressure: crate::physics::actuators::hydraulics::DEFAULT_SUPPLY_PRESSURE,
+            landing_command: 0.0,
+            landing: None,
             pose: ExternalPose { r: [centre.x, centre.y, centre.z], ..Default::default() },
             time: 0.0,
             commands: None,
@@ -163,8 +174,15 @@ impl ControllerModel {
     /// The programme pose with its derivatives at time `t`.
     pub fn programme_point(&self, t: f64) -> PoseTrajectoryPoint {
         let p = &self.parameters;
+        let landing = |from| SafeLanding { from, speed: p.landing.speed, floor: p.landing.floor };
+        if let Some((start, from)) = self.landing {
+            return landing(from).point(t - start);
+        }
         let heave = PoseProgramme::heave(p.heave_centre, p.heave.amplitude, p.heave.frequency, p.heave.time_constant);
         match p.programme {
+            ProgrammeKind::Landing => {
+                landing(PoseTrajectoryPoint::at_rest(p.heave_centre, nalgebra::Matrix3::identity())).point(t)
+            }
             ProgrammeKind::Heave => heave.point(t),
             ProgrammeKind::StartUp => {
                 StartUp { from: p.startup_position, to: p.heave_centre, duration: p.startup_duration, then: heave }
@@ -210,6 +228,10 @@ impl ControllerModel {
         }
         let p = &self.parameters;
         let source = match p.programme {
+            _ if self.landing.is_some() || p.programme == ProgrammeKind::Landing => format!(
+                "the safe landing (landing.speed {:?} m/s, landing.floor {:?} m)",
+                p.landing.speed, p.landing.floor
+            ),
             ProgrammeKind::Heave | ProgrammeKind::StartUp => format!(
                 "the parameters heave.* (heave.centre {:?} m, heave.amplitude {:?} m, heave.frequency {:?} rad/s, \
                  heave.timeConstant {:?} s){}",
@@ -227,7 +249,7 @@ impl ControllerModel {
                 "the parameters sine.* (amplitudes {:?} m, {:?} rad, frequencies {:?} rad/s)",
                 p.sine.amplitude, p.sine.angle_amplitude, p.sine.frequency
             ),
-            ProgrammeKind::External => format!(
+            ProgrammeKind::External | ProgrammeKind::Landing => format!(
                 "the inputs pose.* (pose.r {:?} m, pose.v {:?} m/s, pose.a {:?} m/s2, pose.angles {:?} rad)",
                 self.pose.r, self.pose.v, self.pose.a, self.pose.angles
             ),
@@ -289,7 +311,8 @@ impl ControllerModel {
         };
         let valve = if p.drive == Drive::Hydraulic {
             std::array::from_fn(|k| {
-                p.hydraulic.valve(f[k], self.pa[k], self.pb[k], solution.rates[k], solution.lengths[k] - self.l[k])
+                let error = solution.lengths[k] - self.l[k];
+                p.hydraulic.valve(f[k], self.pa[k], self.pb[k], self.supply_pressure, solution.rates[k], error)
             })
         } else {
             [0.0; LEG_COUNT]
@@ -328,6 +351,32 @@ impl ControllerModel {
         self.angles.as_ref().unwrap_or(&ProgrammeAngles::UNDEFINED)
     }
 
+    /// The safe landing at the start of a step at time `t`: the one under way, or one that
+    /// starts now from the programme's point (the input `landing.command` at 1, or the measured
+    /// supply pressure below `landing.pressure`), with the message that says so.
+    fn landing_trigger(&self, t: f64) -> (Option<(f64, PoseTrajectoryPoint)>, Option<String>) {
+        let p = &self.parameters;
+        if self.landing.is_some() || p.programme == ProgrammeKind::Landing {
+            return (self.landing, None);
+        }
+        let why = if self.landing_command >= 0.5 {
+            "landing.command is 1".to_string()
+        } else if p.drive == Drive::Hydraulic && self.supply_pressure < p.landing.pressure {
+            format!(
+                "the supply pressure {:.4e} Pa fell below landing.pressure = {:.4e} Pa",
+                self.supply_pressure, p.landing.pressure
+            )
+        } else {
+            return (None, None);
+        };
+        let from = self.programme_point(t);
+        let message = format!(
+            "t = {t:?}: safe landing started ({why}): descending at {} m/s from z = {:.4} m to landing.floor = {} m",
+            p.landing.speed, from.r.z, p.landing.floor
+        );
+        (Some((t, from)), Some(message))
+    }
+
     /// The time, a parameter or a `pose.*` input changed: the programme and every output
     /// follow.
     fn programme_changed(&mut self) {
@@ -357,6 +406,14 @@ impl ControllerModel {
         ] {
             if value < 0.0 {
                 return Err(format!("parameter {name}: must be >= 0 s (0 = no soft start), got {value:?}"));
+            }
+        }
+        if !(p.landing.speed > 0.0 && p.landing.speed.is_finite()) {
+            return Err(format!("parameter landing.speed: must be a positive number of m/s, got {:e}", p.landing.speed));
+        }
+        for (name, value) in [("landing.floor", p.landing.floor), ("landing.pressure", p.landing.pressure)] {
+            if !value.is_finite() {
+                return Err(format!("parameter {name}: must be a number, got {value:e}"));
             }
         }
         if p.programme == ProgrammeKind::StartUp && !(p.startup_duration > 0.0) {
@@ -398,8 +455,15 @@ impl FmuModel for ControllerModel {
 
     fn set_real(&mut self, var: VariableRef, value: f64) -> Result<(), String> {
         *self.real_slot(var).ok_or("not a settable Real variable")? = value;
-        if [variables::group::L, variables::group::LDOT, variables::group::PA, variables::group::PB]
-            .contains(&var.group)
+        if [
+            variables::group::L,
+            variables::group::LDOT,
+            variables::group::PA,
+            variables::group::PB,
+            variables::group::SUPPLY_PRESSURE,
+            variables::group::LANDING_COMMAND,
+        ]
+        .contains(&var.group)
         {
             self.commands = None;
         } else {
@@ -478,15 +542,20 @@ impl FmuModel for ControllerModel {
         // taken; the feedback waits for the outputs' first read (a closed loop sets the
         // measured legs first).
         let time = t + h;
+        let (landing, started) = self.landing_trigger(t);
+        let before = std::mem::replace(&mut self.landing, landing);
         match self.direct_problem(time) {
             Ok(programme) => {
                 self.time = time;
                 self.programme_changed();
                 self.programme = Some(programme);
-                Ok(StepReport { reached: time, event: false, warning: None })
+                Ok(StepReport { reached: time, event: false, warning: started })
             }
             Err(message) => Err(StepError {
-                message: format!("step from t = {t:?} to {time:?} rolled back: {message}"),
+                message: {
+                    self.landing = before;
+                    format!("step from t = {t:?} to {time:?} rolled back: {message}")
+                },
                 retry_shorter: false,
             }),
         }
@@ -505,16 +574,42 @@ impl FmuModel for ControllerModel {
         self.compute().err()
     }
 
-    /// The stored variables (declaration order) and the time.
+    /// The stored variables (declaration order), the time and the safe landing under way.
     fn save(&self, w: &mut ByteWriter) {
         self.save_variables(w);
         w.f64(self.time);
+        match &self.landing {
+            None => w.f64(f64::NAN),
+            Some((start, from)) => {
+                w.f64(*start);
+                for x in from.r.iter().chain(&from.v).chain(&from.a).chain(from.rotation.iter()) {
+                    w.f64(*x);
+                }
+            }
+        }
     }
 
     fn restore(r: &mut ByteReader) -> Result<Self, SnapshotError> {
         let mut model = ControllerModel::default();
         model.restore_variables(r)?;
         model.time = r.finite("time")?;
+        let start = r.f64()?;
+        if !start.is_nan() {
+            let mut values = [0.0; 18];
+            for x in values.iter_mut() {
+                *x = r.finite("landing")?;
+            }
+            let v = |i: usize| Vector3::new(values[i], values[i + 1], values[i + 2]);
+            let from = PoseTrajectoryPoint {
+                r: v(0),
+                v: v(3),
+                a: v(6),
+                rotation: nalgebra::Matrix3::from_column_slice(&values[9..18]),
+                w: Vector3::zeros(),
+                w_dot: Vector3::zeros(),
+            };
+            model.landing = Some((start, from));
+        }
         model.programme_changed();
         Ok(model)
     }

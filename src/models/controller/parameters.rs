@@ -27,6 +27,12 @@ pub const DEFAULT_FORCE_LIMIT: f64 = 3.0e4;
 pub const DEFAULT_VOLTAGE_LIMIT: f64 = 300.0;
 /// Default lift duration of the start-up programme, s.
 pub const DEFAULT_STARTUP_DURATION: f64 = 3.0;
+/// Default descent speed of the safe landing, m/s: 0.1, a sixth of the heave programme's
+/// fastest leg, so that the valves draw under 40 L/min while the accumulator feeds them.
+pub const DEFAULT_LANDING_SPEED: f64 = 0.1;
+/// How far above its rest on the lower stops the safe landing ends, m: 5 mm, so that the
+/// legs stop under control just before the stops take the weight.
+pub const LANDING_CLEARANCE: f64 = 0.005;
 
 /// Which programme motion the controller follows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -35,6 +41,7 @@ pub enum ProgrammeKind {
     Sinusoid = 2,
     External = 3,
     StartUp = 4,
+    Landing = 5,
 }
 
 impl ProgrammeKind {
@@ -44,6 +51,7 @@ impl ProgrammeKind {
             2 => Some(ProgrammeKind::Sinusoid),
             3 => Some(ProgrammeKind::External),
             4 => Some(ProgrammeKind::StartUp),
+            5 => Some(ProgrammeKind::Landing),
             _ => None,
         }
     }
@@ -80,6 +88,22 @@ pub struct ControllerParameters {
     pub u_max: f64,
     /// The hydraulic loop (`drive = 2`).
     pub hydraulic: HydraulicLoop,
+    /// The safe landing (programme 5, or on its triggers).
+    pub landing: Landing,
+}
+
+/// The safe landing (`landing.*`): a vertical descent at `speed` to the height `floor`
+/// ([`crate::physics::programme::SafeLanding`]), programme 5 from `heave.centre` at the start,
+/// or from wherever any programme is when the input `landing.command` is 1 or the measured
+/// `supply.pressure` falls below `pressure` (0: no threshold).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Landing {
+    /// `landing.speed`, m/s.
+    pub speed: f64,
+    /// `landing.floor`, m.
+    pub floor: f64,
+    /// `landing.pressure`, Pa.
+    pub pressure: f64,
 }
 
 impl ControllerParameters {
@@ -146,11 +170,11 @@ impl Default for HydraulicLoop {
 
 impl HydraulicLoop {
     /// The valve command for the force command `force` (N), the measured pressures `pa`, `pb`
-    /// (Pa) and the programme's leg rate `rate` (m/s): `c = kF (F - (p_A A_A - p_B A_B)) + ff`,
-    /// `ff = A ldot^p / (K sqrt(dp))` with the area and the supply land's drop of the side the
-    /// leg fills (`A_A`, `p_S - p_A` extending; `A_B`, `p_S - p_B` retracting; the drop at least
-    /// `p_S / 20`), saturated to [-1, 1].
-    pub fn valve(&self, force: f64, pa: f64, pb: f64, rate: f64, length_error: f64) -> f64 {
+    /// (Pa), the measured supply pressure `supply` (Pa) and the programme's leg rate `rate`
+    /// (m/s): `c = kF (F - (p_A A_A - p_B A_B)) + ff`, `ff = A ldot^p / (K sqrt(dp))` with the
+    /// area and the supply land's drop of the side the leg fills (`A_A`, `p_S - p_A` extending;
+    /// `A_B`, `p_S - p_B` retracting; the drop at least the rated `pS / 20`), saturated to [-1, 1].
+    pub fn valve(&self, force: f64, pa: f64, pb: f64, supply: f64, rate: f64, length_error: f64) -> f64 {
         let rate = rate + self.position_gain * length_error;
         let legs = HydraulicLegs {
             bore: self.bore,
@@ -161,7 +185,7 @@ impl HydraulicLoop {
         };
         let (area_a, area_b) = legs.areas();
         let k = legs.flow_coefficient();
-        let (area, drop) = if rate >= 0.0 { (area_a, self.supply - pa) } else { (area_b, self.supply - pb) };
+        let (area, drop) = if rate >= 0.0 { (area_a, supply - pa) } else { (area_b, supply - pb) };
         let feedforward = self.flow_feedforward * area * rate / (k * drop.max(0.05 * self.supply).sqrt());
         let measured = pa * area_a - pb * area_b;
         (self.force_gain * (force - measured) + feedforward).clamp(-1.0, 1.0)
@@ -254,6 +278,11 @@ impl Default for ControllerParameters {
             drives: ElectricDrives::default(),
             u_max: DEFAULT_VOLTAGE_LIMIT,
             hydraulic: HydraulicLoop::default(),
+            landing: Landing {
+                speed: DEFAULT_LANDING_SPEED,
+                floor: EndStops::default().level_rest_height(&stand).unwrap_or(centre.z) + LANDING_CLEARANCE,
+                pressure: 0.0,
+            },
             stand,
         }
     }
@@ -276,7 +305,7 @@ impl IntegerStorage for ProgrammeKind {
     }
     fn set_code(&mut self, code: i32) -> Result<(), String> {
         *self = ProgrammeKind::from_code(code).ok_or_else(|| {
-            format!("{code} is not a programme (1 = heave, 2 = sinusoid, 3 = external, 4 = start-up)")
+            format!("{code} is not a programme (1 = heave, 2 = sinusoid, 3 = external, 4 = start-up, 5 = safe landing)")
         })?;
         Ok(())
     }

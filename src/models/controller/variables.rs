@@ -20,8 +20,13 @@ const MEASURED_LEGS: &[Dependency] = &[SameIndex(group::L), SameIndex(group::LDO
 /// The force and voltage commands: the measured legs and the programme.
 const FORCE_DEPENDENCIES: &[Dependency] = &[Each(MEASURED_LEGS), Each(POSE_INPUTS)];
 /// The valve commands: the measured legs and pressures and the programme.
-const HYDRAULIC_DEPENDENCIES: &[Dependency] =
-    &[Each(MEASURED_LEGS), SameIndex(group::PA), SameIndex(group::PB), Each(POSE_INPUTS)];
+const HYDRAULIC_DEPENDENCIES: &[Dependency] = &[
+    Each(MEASURED_LEGS),
+    SameIndex(group::PA),
+    SameIndex(group::PB),
+    All(group::SUPPLY_PRESSURE),
+    Each(POSE_INPUTS),
+];
 const LENGTH_DEPENDENCIES: &[Dependency] =
     &[All(group::POSE_R), All(group::POSE_V), All(group::POSE_ANGLES), All(group::POSE_ANGLE_RATES)];
 /// The stand, as the platform's parameters of the same names.
@@ -45,6 +50,8 @@ const PROGRAMMES: &[Dependency] = &[
     All(group::DISTURBANCE_TIME_CONSTANT),
     All(group::STARTUP_POSITION),
     All(group::STARTUP_DURATION),
+    All(group::LANDING_SPEED),
+    All(group::LANDING_FLOOR),
 ];
 /// The legs as bodies, whose weight and inertia the programme forces carry.
 const LEG_BODIES: &[Dependency] = machine::leg_body_knowns!();
@@ -109,9 +116,11 @@ declare_variables! {
             "Programme motion: 1 = the paper's heave z = z0 + a sin(Omega t)(1 - exp(-t/T))^2 above heave.centre; \
              2 = a sinusoid with soft start in each of the six degrees of freedom (sine.*); 3 = the pose and its \
              derivatives from the inputs pose.*; 4 = start-up: a rest-to-rest lift from startup.position to \
-             heave.centre in startup.duration, then programme 1",
+             heave.centre in startup.duration, then programme 1; 5 = safe landing from heave.centre at the start: \
+             a vertical descent at landing.speed to landing.floor (the same landing any programme turns into when \
+             landing.command is 1 or supply.pressure falls below landing.pressure)",
         )
-        .integer(1, 4); integer(parameters.programme),
+        .integer(1, 5); integer(parameters.programme),
         HEAVE_CENTRE => V::parameter("heave.centre", &[3], 94, Some("m"), "Programme 1: centre of mass about which the platform heaves"); real(parameters.heave_centre),
         HEAVE_AMPLITUDE => V::parameter("heave.amplitude", &[], 97, Some("m"), "Programme 1: heave amplitude a"); real(parameters.heave.amplitude),
         HEAVE_FREQUENCY => V::parameter("heave.frequency", &[], 98, Some("rad/s"), "Programme 1: heave circular frequency Omega"); real(parameters.heave.frequency),
@@ -256,5 +265,29 @@ declare_variables! {
             ALL_KNOWNS,
         )
         .depends_on(HYDRAULIC_DEPENDENCIES); cached(commands.valve),
+        SUPPLY_PRESSURE => V::input(
+            "supply.pressure", &[], 246, Some("Pa"),
+            "Measured supply pressure (from the platform's output supply.pressure; drive = 2): the flow feed-forward's \
+             drops, and the safe landing's trigger (landing.pressure)",
+        ); real(supply_pressure),
+        LANDING_COMMAND => V::input(
+            "landing.command", &[], 247, Some("1"),
+            "1 (>= 0.5) starts the safe landing at the next step from wherever the programme is (latched: the landing \
+             goes on whatever the input does after); 0 = no",
+        ); real(landing_command),
+        LANDING_PRESSURE => V::parameter(
+            "landing.pressure", &[], 248, Some("Pa"),
+            "The safe landing starts at the next step when supply.pressure is below this (drive = 2; 0 = never: only \
+             landing.command or programme 5 start it)",
+        ); real(parameters.landing.pressure),
+        LANDING_SPEED => V::parameter(
+            "landing.speed", &[], 249, Some("m/s"),
+            "Descent speed of the safe landing (reached within 0.5 s from the programme's motion, quintic)",
+        ); real(parameters.landing.speed),
+        LANDING_FLOOR => V::parameter(
+            "landing.floor", &[], 250, Some("m"),
+            "Height of the centre of mass where the safe landing stops (0.5 s to rest); default 5 mm above the \
+             default stand resting level on its lower stops",
+        ); real(parameters.landing.floor),
     }
 }

@@ -123,9 +123,117 @@ impl StartUp {
     }
 }
 
+/// How long a safe landing takes to reach its descent speed from the programme's motion, and
+/// to stop at its floor, s: long enough for the heave programme's fastest motion (0.64 m/s) to
+/// turn into a descent at under 3 m/s² and to stop without a jolt.
+pub const LANDING_BLEND: f64 = 0.5;
+
+/// A safe landing: from the programme point `from` at the landing's start (time 0 here), the
+/// centre of mass brought into a vertical descent at `speed` over [`LANDING_BLEND`] (quintic:
+/// position, velocity and acceleration continuous, the horizontal motion brought to rest), down
+/// at `speed` until it stops at the height `floor` over [`LANDING_BLEND`]; the attitude held as
+/// it was at the start (no rotation). What a stand does when its supply fails: land on its
+/// lower stops under control while the accumulator still feeds the valves.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SafeLanding {
+    pub from: PoseTrajectoryPoint,
+    /// Descent speed, m/s (> 0).
+    pub speed: f64,
+    /// Height of the centre of mass at the end, m.
+    pub floor: f64,
+}
+
+/// The quintic from `(p0, v0, a0)` to `(p1, v1, 0)` over `duration` at `t` (clamped to it):
+/// position, velocity, acceleration.
+fn quintic(start: (f64, f64, f64), end: (f64, f64), duration: f64, t: f64) -> (f64, f64, f64) {
+    let (p0, v0, a0) = start;
+    let (p1, v1) = end;
+    let t = t.clamp(0.0, duration);
+    let d = duration;
+    // p(t) = p0 + v0 t + a0 t²/2 + c3 t³ + c4 t⁴ + c5 t⁵ with p(d) = p1, p'(d) = v1, p''(d) = 0.
+    let dp = p1 - p0 - v0 * d - 0.5 * a0 * d * d;
+    let dv = v1 - v0 - a0 * d;
+    let da = -a0;
+    let c3 = (10.0 * dp - 4.0 * dv * d + 0.5 * da * d * d) / (d * d * d);
+    let c4 = (-15.0 * dp + 7.0 * dv * d - da * d * d) / (d * d * d * d);
+    let c5 = (6.0 * dp - 3.0 * dv * d + 0.5 * da * d * d) / (d * d * d * d * d);
+    let p = p0 + t * (v0 + t * (0.5 * a0 + t * (c3 + t * (c4 + t * c5))));
+    let v = v0 + t * (a0 + t * (3.0 * c3 + t * (4.0 * c4 + t * 5.0 * c5)));
+    let a = a0 + t * (6.0 * c3 + t * (12.0 * c4 + t * 20.0 * c5));
+    (p, v, a)
+}
+
+impl SafeLanding {
+    /// The landing's point `t` after its start.
+    pub fn point(&self, t: f64) -> PoseTrajectoryPoint {
+        let (from, blend) = (&self.from, LANDING_BLEND);
+        let t = t.max(0.0);
+        // Horizontally: to rest, covering what the motion carries over the blend.
+        let horizontal = |i: usize| {
+            let (p, v, a) = (from.r[i], from.v[i], from.a[i]);
+            quintic((p, v, a), (p + 0.5 * v * blend, 0.0), blend, t)
+        };
+        let (x, y) = (horizontal(0), horizontal(1));
+        // Vertically: into the descent, down at `speed`, then to rest at the floor.
+        let (z0, vz0, az0) = (from.r.z, from.v.z, from.a.z);
+        let z1 = z0 + 0.5 * (vz0 - self.speed) * blend;
+        let stopping = 0.5 * self.speed * blend;
+        let cruise = ((z1 - stopping - self.floor) / self.speed).max(0.0);
+        let z = if t < blend {
+            quintic((z0, vz0, az0), (z1, -self.speed), blend, t)
+        } else if t < blend + cruise {
+            (z1 - self.speed * (t - blend), -self.speed, 0.0)
+        } else {
+            let z2 = z1 - self.speed * cruise;
+            quintic((z2, -self.speed, 0.0), (self.floor, 0.0), blend, t - blend - cruise)
+        };
+        PoseTrajectoryPoint {
+            r: Vector3::new(x.0, y.0, z.0),
+            v: Vector3::new(x.1, y.1, z.1),
+            a: Vector3::new(x.2, y.2, z.2),
+            rotation: from.rotation,
+            w: Vector3::zeros(),
+            w_dot: Vector3::zeros(),
+        }
+    }
+
+    /// When the landing ends (at rest on its floor), s after its start.
+    pub fn duration(&self) -> f64 {
+        let z1 = self.from.r.z + 0.5 * (self.from.v.z - self.speed) * LANDING_BLEND;
+        let cruise = ((z1 - 0.5 * self.speed * LANDING_BLEND - self.floor) / self.speed).max(0.0);
+        2.0 * LANDING_BLEND + cruise
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The landing starts where the programme was (position, velocity, acceleration), descends
+    /// at its speed, ends at rest on its floor; its derivatives are the finite differences'.
+    #[test]
+    fn a_safe_landing_is_smooth_and_ends_at_rest_on_its_floor() {
+        let heave = PoseProgramme::heave(Vector3::new(0.0, 0.0, 1.96), 0.3, 2.0, 1.0);
+        for t0 in [2.0, 3.1, 4.4] {
+            let from = heave.point(t0);
+            let landing = SafeLanding { from, speed: 0.1, floor: 1.58 };
+            let p0 = landing.point(0.0);
+            assert!((p0.r - from.r).norm() < 1e-15 && (p0.v - from.v).norm() < 1e-15 && (p0.a - from.a).norm() < 1e-12);
+            let mid = landing.point(LANDING_BLEND + 0.5);
+            assert_eq!((mid.v.x, mid.v.y, mid.v.z), (0.0, 0.0, -0.1));
+            let end = landing.point(landing.duration());
+            assert!((end.r.z - 1.58).abs() < 1e-12 && end.v.norm() < 1e-12 && end.a.norm() < 1e-9, "{end:?}");
+            assert_eq!(landing.point(landing.duration() + 10.0).r, end.r);
+            let h = 1e-6;
+            let mut t = 0.05;
+            while t < landing.duration() {
+                let (a, b, c) = (landing.point(t - h), landing.point(t), landing.point(t + h));
+                assert!(((c.r - a.r) / (2.0 * h) - b.v).norm() < 1e-6, "t0 {t0}, t {t}");
+                assert!(((c.v - a.v) / (2.0 * h) - b.a).norm() < 1e-5, "t0 {t0}, t {t}");
+                t += 0.0371;
+            }
+        }
+    }
 
     #[test]
     fn start_up_is_smooth_and_hands_over_to_the_programme() {

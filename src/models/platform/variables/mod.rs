@@ -301,14 +301,16 @@ declare_variables! {
         .derivative("work.dissipated", "work.dissipated", 1, DISSIPATION_KNOWNS); derivative,
         EVENT_INDICATORS => V::local(
             "eventIndicators",
-            &[25],
+            &[crate::simulation::state::switching::EVENT_INDICATORS],
             220,
             Some("1"),
             "Event indicators (FMI 3 Model Exchange): l_k - lmin_k (k = 1..6, m), lmax_k - l_k (m), the determinant of \
              the leg force/moment matrix (moment rows divided by the stand's characteristic length), cos thetaB_k - \
              cos(joints.baseMaxAngle) and cos thetaA_k - cos(joints.platformMaxAngle); a sign change is a contact onset \
-             or release, a passage through a singular leg arrangement, or a joint reaching or leaving its limit. \
-             Constant 1 for the stroke limits when the end stops are off, and for the joints when the joint limits are off",
+             or release, a passage through a singular leg arrangement, or a joint reaching or leaving its limit; then \
+             supply.linePressure - (accumulator.precharge - 101325 Pa), a sign change the accumulator emptying or \
+             charging again. Constant 1 for the stroke limits when the end stops are off, for the joints when the joint \
+             limits are off, and for the accumulator without the power unit (hydraulic.supply = 0)",
             &[],
         )
         .fmi3_only(); computed,

@@ -205,6 +205,8 @@ pub struct HydraulicRate<T> {
     pub spool_acceleration: T,
     /// `Q_S`, m³/s: drawn from the supply (leakage included).
     pub supply_flow: T,
+    /// `Q_T`, m³/s: returned to the tank (leakage included).
+    pub tank_flow: T,
     /// `P_S = p_S Q_S - p_T Q_T`, W.
     pub supply_power: T,
     /// `p_A V_A p_A' / beta_e(p_A) + p_B V_B p_B' / beta_e(p_B)`, W.
@@ -347,6 +349,7 @@ impl HydraulicLegs {
             spool_acceleration: (command - spool) * (w * w) - spool_rate * (2.0 * self.valve_damping * w),
             supply_flow,
             supply_power: supply * supply_flow - tank_flow * tank,
+            tank_flow,
             compression_power,
             dissipation: ((supply_a * drop_sa + a_tank * drop_at) + (supply_b * drop_sb + b_tank * drop_bt))
                 + ((leak_sa * drop_sa + leak_at * drop_at) + (leak_sb * drop_sb + leak_bt * drop_bt))

@@ -94,8 +94,8 @@ impl HydraulicActuators {
 
     /// The legs' rates at their block `x` (legs of lengths `l`, rates `l_dot`) for the valve
     /// commands `valves` and the supply pressure `supply`, written into `dx`; returns the forces
-    /// `u_k` and the sums over the legs of the supply power, the compression power, the losses
-    /// and the supply flow `Q_S`. Leg by leg, in any number type.
+    /// `u_k` and the sums over the legs of the supply power, the compression power, the losses,
+    /// the supply flow `Q_S` and the tank flow `Q_T`. Leg by leg, in any number type.
     #[inline(always)]
     pub fn leg_rates<T: Real>(
         &self,
@@ -105,9 +105,9 @@ impl HydraulicActuators {
         valves: &[T; LEG_COUNT],
         supply: T,
         dx: &mut Block<T>,
-    ) -> ([T; LEG_COUNT], [T; 4]) {
+    ) -> ([T; LEG_COUNT], [T; 5]) {
         let mut u = [T::zero(); LEG_COUNT];
-        let mut powers = [[T::zero(); LEG_COUNT]; 4];
+        let mut powers = [[T::zero(); LEG_COUNT]; 5];
         for k in 0..LEG_COUNT {
             let command = valves[k].clamp_to(T::constant(-1.0), T::constant(1.0));
             let r = self.legs.rate(&Self::chambers(x, k), &self.piston(k, l[k], l_dot[k]), command, supply);
@@ -120,6 +120,7 @@ impl HydraulicActuators {
             powers[1][k] = r.compression_power;
             powers[2][k] = r.dissipation;
             powers[3][k] = r.supply_flow;
+            powers[4][k] = r.tank_flow;
         }
         (u, powers.map(|p| sum_over_legs(&p)))
     }
@@ -141,12 +142,12 @@ impl HydraulicActuators {
     }
 
     /// The power unit's rates at the supply pressure `p` for the pump's speed `speed`, the
-    /// valves' draw `drawn` (`Q_S`, m³/s) and their power `valves` (`p_S Q_S - p_T Q_T`, W):
+    /// valves' draw `drawn` (`Q_S`, m³/s) and return to the tank `returned` (`Q_T`, m³/s):
     /// `(V_s / beta_e(p_S) + dV_oil/dp_S) p_S' = Q_pump - Q_S - Q_relief`, written as `p_S' =
     /// beta_e q / (V_s + beta_e dV_oil/dp_S)` (finite, 0, where `beta_e` is 0), and the line's
     /// compression power as `p_S` times the net inflow into its own oil.
     #[inline(always)]
-    pub fn power_unit_rate<T: Real>(&self, p: T, speed: T, drawn: T, valves: T) -> PowerUnitRate<T> {
+    pub fn power_unit_rate<T: Real>(&self, p: T, speed: T, drawn: T, returned: T) -> PowerUnitRate<T> {
         let unit = &self.power_unit;
         let (pump, relief) = (unit.pump_flow(speed, p), unit.relief_flow(p));
         let beta = match self.legs.air() {
@@ -159,7 +160,7 @@ impl HydraulicActuators {
         let tank = self.legs.tank_pressure;
         PowerUnitRate {
             pressure_rate,
-            pump_power: p * pump - relief * tank - (p * drawn - valves),
+            pump_power: p * pump - (returned + relief) * tank,
             compression_power: p * (net - slope * pressure_rate),
             dissipation: (p - tank) * relief,
         }
@@ -272,7 +273,7 @@ impl Actuator for HydraulicActuators {
         let (l, l_dot) = body.legs();
         let inputs = body.supply();
         let supply = self.supply_pressure(x, inputs.pressure);
-        let (u, [supplied, compression, losses, drawn]) = self.leg_rates(x, &l, &l_dot, &valves, supply, dx);
+        let (u, [supplied, compression, losses, drawn, returned]) = self.leg_rates(x, &l, &l_dot, &valves, supply, dx);
         let power = body.under_forces(&u, dy);
         dx[block::WORK_HYDRAULIC] = supplied;
         if !self.powered {
@@ -281,7 +282,7 @@ impl Actuator for HydraulicActuators {
             dx[block::WORK_PUMP] = T::zero();
             return LegPower { actuator: T::zero(), dissipation: power.dissipation + losses };
         }
-        let unit = self.power_unit_rate(supply, inputs.pump_speed, drawn, supplied);
+        let unit = self.power_unit_rate(supply, inputs.pump_speed, drawn, returned);
         dx[block::WORK_COMPRESSION] = compression + unit.compression_power;
         dx[block::SUPPLY_PRESSURE] = unit.pressure_rate;
         dx[block::WORK_PUMP] = unit.pump_power;
