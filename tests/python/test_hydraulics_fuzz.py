@@ -1,7 +1,10 @@
 """Fuzzed hydraulic legs on a Dask cluster on loopback (docs/model.md §10b): random valve
 commands (beyond saturation too), pump stops and restarts, random air fractions and polytropic
-exponents, both integrators. No run gives a NaN, no chamber of oil with air goes to or below
-zero absolute, and every step the FMU refuses comes with a message that names why."""
+exponents, both integrators; half the runs with the power unit (`hydraulic.supply = 1`, §10b:
+`pump.speed` stopping and restarting, beyond [0, 1] too, random accumulator volumes and
+precharges, down to ones that empty). No run gives a NaN, no chamber and no supply line of oil
+with air goes to or below zero absolute, and every step the FMU refuses comes with a message
+that names why."""
 
 import sys
 
@@ -30,7 +33,10 @@ def fuzzed_run(seed):
     rng = np.random.default_rng(seed)
     air = float(rng.uniform(0.001, 0.02))
     parameters = {"hydraulic.airFraction": air, "hydraulic.airPolytropic": float(rng.choice([1.0, 1.2, 1.4]))}
-    integers = {"drive": 2, "solver.method": int(rng.choice([1, 2]))}
+    integers = {"drive": 2, "solver.method": int(rng.choice([1, 2])), "hydraulic.supply": seed % 2}
+    if seed % 2:
+        parameters.update({"accumulator.volume": float(rng.uniform(1e-3, 60e-3)),
+                           "accumulator.precharge": float(rng.uniform(2e6, 15e6))})
     steps = int(round(DURATION / STEP))
     valves = np.zeros((steps, 6))
     for k in range(6):
@@ -43,18 +49,25 @@ def fuzzed_run(seed):
     restart = float(rng.uniform(stop, 2.5))
     events = []
     pl = Platform(parameters=parameters, integers=integers, events=events, name=f"fuzz{seed}")
-    names = [f"l[{k}]" for k in LEGS] + [f"pA[{k}]" for k in LEGS] + [f"pB[{k}]" for k in LEGS]
+    names = ([f"l[{k}]" for k in LEGS] + [f"pA[{k}]" for k in LEGS] + [f"pB[{k}]" for k in LEGS]
+             + ["supply.pressure"])
+    running = float(rng.uniform(0.5, 1.5))
     valve_vrs = [pl.vr[f"valve[{k}]"] for k in LEGS]
-    lowest, nan, status = np.inf, False, "ok"
+    lowest, lowest_supply, nan, status = np.inf, np.inf, False, "ok"
     try:
         for i in range(steps):
             t = i * STEP
             pl.slave.setReal(valve_vrs, [float(v) for v in valves[i]])
-            pl.slave.setReal([pl.vr["pS"]], [SUPPLY if t < stop or t >= restart else 0.0])
+            on = t < stop or t >= restart
+            if seed % 2:
+                pl.slave.setReal([pl.vr["pump.speed"]], [running if on else float(rng.uniform(-0.5, 0.0))])
+            else:
+                pl.slave.setReal([pl.vr["pS"]], [SUPPLY if on else 0.0])
             pl.step(STEP)
             values = np.array(pl.get(*names))
             nan |= bool(np.any(~np.isfinite(values)))
-            lowest = min(lowest, float(np.min(values[6:])))
+            lowest = min(lowest, float(np.min(values[6:18])))
+            lowest_supply = min(lowest_supply, float(values[18]))
         pmin = pl.get("pmin")[0]
     except FMICallException:
         status = pl.last_problem() or ""
@@ -62,7 +75,8 @@ def fuzzed_run(seed):
     finally:
         pl.free()
     return {"seed": seed, "air": air, "lowest": lowest, "pmin": pmin, "nan": nan, "status": status,
-            "method": integers["solver.method"]}
+            "method": integers["solver.method"], "power_unit": bool(seed % 2),
+            "lowest_supply": lowest_supply}
 
 
 @pytest.fixture(scope="module")
@@ -78,10 +92,13 @@ def fuzzed(tmp_path_factory):
         next(cluster, None)
     refused = [r for r in results if r["status"] != "ok"]
     closest = min(results, key=lambda r: r["lowest"])
+    line = min((r for r in results if r["power_unit"]), key=lambda r: r["lowest_supply"])
     print(f"{RUNS} fuzzed hydraulic runs on Dask ({DURATION} s at {STEP * 1e3:.0f} ms, valve commands in [-1.5, 1.5], "
           f"pump stops, air 0.1-2 %): {len(refused)} refused steps; lowest chamber pressure "
           f"{closest['lowest']:.4e} Pa gauge = {closest['lowest'] + ATMOSPHERE:.4e} Pa absolute (seed {closest['seed']}, "
-          f"air {closest['air']:.4f}); refusals: {sorted(set(r['status'][:100] for r in refused))[:5]}")
+          f"air {closest['air']:.4f}, power unit {closest['power_unit']}); refusals: "
+          f"{sorted(set(r['status'][:100] for r in refused))[:5]}; lowest supply line (power unit) "
+          f"{line['lowest_supply'] + ATMOSPHERE:.4e} Pa absolute (seed {line['seed']})")
     return results
 
 
@@ -89,6 +106,7 @@ def test_no_fuzzed_run_gives_a_nan_or_a_pressure_at_or_below_zero_absolute(fuzze
     for r in fuzzed:
         assert not r["nan"], r
         assert r["lowest"] > -ATMOSPHERE, r
+        assert r["lowest_supply"] > -ATMOSPHERE, r
         if r["status"] == "ok":
             assert -ATMOSPHERE < r["pmin"] <= r["lowest"], r
 

@@ -22,8 +22,8 @@ pub struct Variable {
     pub value_reference: u32,
     pub kind: Type,
     pub causality: String,
-    /// Outputs: whether the value depends directly on an input.
-    pub feedthrough: bool,
+    /// Outputs: the value references of the inputs the value depends on directly (empty: none).
+    pub feeds_from: Vec<u32>,
 }
 
 #[derive(Clone, Debug)]
@@ -73,11 +73,11 @@ impl ModelDescription {
                 other => return Err(format!("{name}: unknown type element {other:?}")),
             };
             let causality = v.attribute("causality").unwrap_or("local").to_string();
-            variables.push(Variable { name, value_reference, kind, causality, feedthrough: false });
+            variables.push(Variable { name, value_reference, kind, causality, feeds_from: vec![] });
         }
         // ModelStructure/Outputs: `dependencies` lists 1-based indices of the variables an
         // output depends on; without the attribute it may depend on all of them (FMI 2, 3.2.2.1).
-        let any_input = variables.iter().any(|v| v.causality == "input");
+        let inputs: Vec<u32> = variables.iter().filter(|v| v.causality == "input").map(|v| v.value_reference).collect();
         for u in root
             .child("ModelStructure")
             .and_then(|s| s.child("Outputs"))
@@ -88,15 +88,18 @@ impl ModelDescription {
             let Some(index) = u.attribute("index").and_then(|s| s.parse::<usize>().ok()).filter(|&i| i >= 1) else {
                 continue;
             };
-            let feedthrough = match u.attribute("dependencies") {
-                None => any_input,
+            let feeds_from = match u.attribute("dependencies") {
+                None => inputs.clone(),
                 Some(list) => list
                     .split_whitespace()
                     .filter_map(|s| s.parse::<usize>().ok())
-                    .any(|d| d >= 1 && variables.get(d - 1).is_some_and(|v| v.causality == "input")),
+                    .filter_map(|d| d.checked_sub(1).and_then(|d| variables.get(d)))
+                    .filter(|v| v.causality == "input")
+                    .map(|v| v.value_reference)
+                    .collect(),
             };
             if let Some(v) = variables.get_mut(index - 1) {
-                v.feedthrough = feedthrough;
+                v.feeds_from = feeds_from;
             }
         }
         let index = variables.iter().enumerate().map(|(i, v)| (v.name.clone(), i)).collect();

@@ -84,11 +84,12 @@ impl System {
                 instantiate_error: String::new(),
             });
         }
+        let mut feeds = vec![];
         for connection in description.map(|d| d.connections.as_slice()).unwrap_or_default() {
             let index =
                 |element: &str| components.iter().position(|c| c.name == element).expect("checked by the SSD parser");
             let (from, to) = (index(&connection.start_element), index(&connection.end_element));
-            let variable = |c: usize, name: &str, causality: &str| -> Result<(u32, bool), String> {
+            let variable = |c: usize, name: &str, causality: &str| -> Result<(u32, Vec<u32>), String> {
                 let v = components[c]
                     .fmu
                     .description
@@ -106,9 +107,9 @@ impl System {
                         components[c].name, v.causality
                     ));
                 }
-                Ok((v.value_reference, v.feedthrough))
+                Ok((v.value_reference, v.feeds_from.clone()))
             };
-            let (out_vr, feedthrough) = variable(from, &connection.start_connector, "output")?;
+            let (out_vr, feeds_from) = variable(from, &connection.start_connector, "output")?;
             let (in_vr, _) = variable(to, &connection.end_connector, "input")?;
             let slot = match components[from].sources.iter().position(|&vr| vr == out_vr) {
                 Some(slot) => slot,
@@ -117,7 +118,7 @@ impl System {
                     components[from].sources.len() - 1
                 }
             };
-            components[from].feedthrough |= feedthrough;
+            feeds.push((from, feeds_from));
             if components[to].inputs.iter().any(|&(vr, _, _)| vr == in_vr) {
                 return Err(format!(
                     "{}.{} has more than one connection into it",
@@ -125,6 +126,14 @@ impl System {
                 ));
             }
             components[to].inputs.push((in_vr, from, slot));
+        }
+        // A component feeds through where a connected output depends directly on a connected
+        // input: an output that depends only on inputs no connection drives (held from
+        // outside, say) closes no loop.
+        for (from, feeds_from) in feeds {
+            let inputs = &components[from].inputs;
+            components[from].feedthrough |=
+                feeds_from.iter().any(|vr| inputs.iter().any(|&(input, _, _)| input == *vr));
         }
         let order = gauss_seidel_order(&components)?;
         let name = description.map(|d| d.name.clone()).unwrap_or_else(|| names.join("+"));
