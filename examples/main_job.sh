@@ -26,6 +26,8 @@ step "the drive scenarios: holding, dynamic braking, voltage commands, a failed 
 .venv/bin/python examples/drive_scenarios.py "$OUT"
 step "the hydraulic scenarios: holding, heave, loss of control power, pump failure, a stuck valve"
 .venv/bin/python examples/hydraulic_scenarios.py "$OUT"
+step "the power unit: the heave on pump and accumulator, pump stops with the safe landing, an accumulator design study on a local Dask cluster (under a minute)"
+.venv/bin/python examples/power_unit_scenarios.py "$OUT"
 step "motion cueing: the truck's manoeuvres, the motion system, the harsh manoeuvres, the OMCT (about a minute)"
 .venv/bin/python examples/cueing_scenarios.py "$OUT"
 step "the linearisation about the neutral pose"

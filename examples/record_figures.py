@@ -20,6 +20,7 @@ SOURCES = [("summary.txt", "examples/paper_experiments.py", None),
            ("machine_summary.txt", "examples/machine_scenarios.py", None),
            # Not its work-precision line: wall-clock times.
            ("hydraulic_summary.txt", "examples/hydraulic_scenarios.py", ("hydraulic legs", "1 ", "2 ", "3 ", "4 ", "5 ")),
+           ("hydraulic_power_unit_summary.txt", "examples/power_unit_scenarios.py", None),
            ("cueing_summary.txt", "examples/cueing_scenarios.py", ("braking through StewartMotionSystem.ssp",))]
 
 

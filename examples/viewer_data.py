@@ -65,8 +65,9 @@ def main():
          controller_integers={"programme": 4})
     loop("heavy_legs", "heavy legs (40 kg cylinders, 15 kg rods), heave programme (SI)", t_end=10.0, h=1e-3,
          platform_reals=HEAVY, controller_reals=HEAVY)
-    loop("hydraulic_heave", "hydraulic servo legs, heave programme: cylinders coloured by load pressure (SI)",
-         record=RECORD + HYDRAULIC_VIEW_OUTPUTS, t_end=10.0, h=1e-3, platform_reals={"drive": 2},
+    loop("hydraulic_heave", "hydraulic servo legs fed by the power unit, heave programme: cylinders coloured by load "
+         "pressure, the supply pressure and the accumulator's oil plotted (SI)",
+         record=RECORD + HYDRAULIC_VIEW_OUTPUTS, t_end=10.0, h=1e-3, platform_reals={"drive": 2, "hydraulic.supply": 1},
          controller_integers={"drive": 2})
     braking = cueing.motion_system(vehicle.brake(), record=tuple(RECORD))
     # Every tenth row (100 per second) keeps the file small.

@@ -30,6 +30,7 @@
  * defaults, the valve commands of the controller's hydraulic mode from the same feedback: a
  * force loop on the measured pA, pB and the leg error through the flow; the host gets the 12
  * leg values and the 12 pressures),
+ * powerunit (hydraulics with the power unit feeding the valves: hydraulic.supply = 1),
  * logevents (FMI 2: hover with a logger that drops messages and logEvents on, so that the FMU
  * tracks passages through singular arrangements, which it skips when nobody can be told),
  * pose (hover; the host also gets the pose: r, R and angles, 15 values besides the 12 leg values).
@@ -92,6 +93,9 @@ static const unsigned LEG_MASS_VRS[2] = {300, 301};
  * R / (N k_t) = 0.4 / (2 pi / 0.02). */
 static int drives_on = 0;
 static const unsigned DRIVE_VR = 400, I0_VRS[6] = {410, 411, 412, 413, 414, 415};
+/* hydraulic.supply: 1 feeds the hydraulic legs from the power unit (powerunit scenario). */
+static const unsigned SUPPLY_MODE_VR = 570;
+static int power_unit_on = 0;
 static const unsigned VOLTAGES2[6] = {420, 421, 422, 423, 424, 425};
 static const unsigned VOLTAGES3[1] = {420};
 static const double HOLDING_CURRENT = 18.782559200529864, VOLTS_PER_NEWTON = 1.2732395447351628e-3;
@@ -134,6 +138,7 @@ static Instance make(void) {
                             HOLDING_CURRENT};
             fmi3SetInt32(c, &DRIVE_VR, 1, &drives_on, 1);
             if (drives_on == 1) fmi3SetFloat64(c, I0_VRS, 1, i0, 6);
+            if (power_unit_on) fmi3SetInt32(c, &SUPPLY_MODE_VR, 1, &power_unit_on, 1);
         }
         if (fmi3ExitInitializationMode(c)) exit(3);
     } else {
@@ -154,6 +159,7 @@ static Instance make(void) {
                             HOLDING_CURRENT};
             fmi2SetInteger(c, &DRIVE_VR, 1, &drives_on);
             if (drives_on == 1) fmi2SetReal(c, I0_VRS, 6, i0);
+            if (power_unit_on) fmi2SetInteger(c, &SUPPLY_MODE_VR, 1, &power_unit_on);
         }
         if (fmi2ExitInitializationMode(c)) exit(3);
     }
@@ -286,9 +292,10 @@ int main(int argc, char **argv) {
         U0 = HOLDING_CURRENT * 0.4;
         G *= VOLTS_PER_NEWTON;
         D *= VOLTS_PER_NEWTON;
-    } else if (scenario && strcmp(scenario, "hydraulics") == 0) {
+    } else if (scenario && (strcmp(scenario, "hydraulics") == 0 || strcmp(scenario, "powerunit") == 0)) {
         drives_on = 2;
         hydraulic_on = 1;
+        power_unit_on = strcmp(scenario, "powerunit") == 0;
         inputs2 = VALVES2;
         inputs3 = VALVES3;
     } else if (scenario && strcmp(scenario, "pose") == 0) {
@@ -298,7 +305,7 @@ int main(int argc, char **argv) {
         log_events = 1;
     } else if (scenario && strcmp(scenario, "hover") != 0) {
         fprintf(stderr, "CYCLE_SCENARIO must be hover, contact, nostops, nojoints, heavylegs, drives, hydraulics, "
-                        "pose or logevents\n");
+                        "powerunit, pose or logevents\n");
         return 2;
     }
     if (fmi3) {

@@ -7,7 +7,8 @@ A result is what `fmpy.simulate_fmu` returns (a structured array) or a dict of c
 the joint angles `thetaB[k]`, `thetaA[k]` colour the legs and joints and feed the plots when
 present (`VIEW_OUTPUTS` lists them all for `simulate_fmu(..., output=VIEW_OUTPUTS)`); with
 hydraulic legs the pressures `pA[k]`, `pB[k]` colour the cylinders by the load pressure and,
-with `spool[k]`, feed two more plots (`HYDRAULIC_VIEW_OUTPUTS`).
+with `spool[k]`, feed two more plots, and `supply.pressure` with `accumulator.oilVolume` a third
+(the power unit's, docs/model.md §10b; `HYDRAULIC_VIEW_OUTPUTS`).
 """
 
 import json
@@ -27,8 +28,10 @@ VIEW_OUTPUTS = ([f"r[{i}]" for i in (1, 2, 3)] + [f"R[{a},{b}]" for a in (1, 2, 
                 + [f"angles[{i}]" for i in (1, 2, 3)] + [f"l[{k}]" for k in LEGS] + [f"F[{k}]" for k in LEGS]
                 + [f"Fstop[{k}]" for k in LEGS] + [f"thetaB[{k}]" for k in LEGS] + [f"thetaA[{k}]" for k in LEGS])
 # With hydraulic legs (drive = 2): the chamber pressures colour the cylinders by the load
-# pressure and feed a plot, as the spools do theirs.
-HYDRAULIC_VIEW_OUTPUTS = [f"{n}[{k}]" for n in ("pA", "pB", "spool") for k in LEGS]
+# pressure and feed a plot, as the spools do theirs; the supply pressure and the accumulator's
+# oil (the power unit, hydraulic.supply = 1) feed a third.
+HYDRAULIC_VIEW_OUTPUTS = ([f"{n}[{k}]" for n in ("pA", "pB", "spool") for k in LEGS]
+                          + ["supply.pressure", "accumulator.oilVolume"])
 # The scalar parameters the viewer draws with: the legs' bodies (docs/model.md §8) and the
 # joint limits (a joint beyond its limit is drawn red).
 STAND_SCALARS = ("leg.cylinderMass", "leg.rodMass", "leg.cylinderCoM", "leg.rodCoM", "joints.baseMaxAngle",

@@ -240,14 +240,14 @@ def test_the_viewers_default_stand_is_the_fmus():
 
 
 def test_a_hydraulic_result_colours_the_cylinders_by_load_pressure(tmp_path):
-    """Hydraulic legs on the heave programme (drive = 2): the page colours the cylinders by the
-    load pressure pA - (A_B/A_A) pB, its scale the 98th percentile of |p_L| in MPa as numpy
-    computes it from the CSV and the stand's bore and rod; the pressure and spool plots span the
-    CSV's values."""
+    """Hydraulic legs fed by the power unit on the heave programme (drive = 2, hydraulic.supply =
+    1): the page colours the cylinders by the load pressure pA - (A_B/A_A) pB, its scale the 98th
+    percentile of |p_L| in MPa as numpy computes it from the CSV and the stand's bore and rod; the
+    pressure, spool and power unit plots span the CSV's values."""
     from stewart_fmu.viewer import HYDRAULIC_VIEW_OUTPUTS
     record = tuple(VIEW_OUTPUTS + HYDRAULIC_VIEW_OUTPUTS)
-    t, rows, _, status = closed_loop(3.0, 1e-3, platform_reals={"drive": 2}, controller_integers={"drive": 2},
-                                     record=record)
+    t, rows, _, status = closed_loop(3.0, 1e-3, platform_reals={"drive": 2, "hydraulic.supply": 1},
+                                     controller_integers={"drive": 2}, record=record)
     assert status == "ok"
     result = dict(time=t, **{n: rows[:, j] for j, n in enumerate(record)})
     folder = tmp_path / "hydraulic"
@@ -271,6 +271,11 @@ def test_a_hydraulic_result_colours_the_cylinders_by_load_pressure(tmp_path):
     assert plots["plot-valves"]["lo"] == pytest.approx(spools_drawn.min(), abs=1e-12)
     assert plots["plot-valves"]["hi"] == pytest.approx(spools_drawn.max(), abs=1e-12)
     assert plots["plot-valves"]["key"] == ["1", "2", "3", "4", "5", "6"]
+    supply_drawn = np.array([result["supply.pressure"] / 1e6, result["accumulator.oilVolume"] * 1e3])[:, ::stride]
+    print(f"power unit plot [{plots['plot-supply']['lo']:.3f}, {plots['plot-supply']['hi']:.3f}]")
+    assert plots["plot-supply"]["lo"] == pytest.approx(supply_drawn.min(), abs=1e-12)
+    assert plots["plot-supply"]["hi"] == pytest.approx(supply_drawn.max(), abs=1e-12)
+    assert plots["plot-supply"]["key"] == ["supply pressure, MPa", "accumulator oil, L"]
 
 
 def test_a_cueing_result_plots_the_vehicles_and_the_simulators_cues(tmp_path):

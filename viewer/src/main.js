@@ -208,6 +208,7 @@ const PLOTS = {
   "plot-joints": { key: ["thetaB (largest)", "thetaA (largest)", "base limit", "platform limit"], minSpan: 0.1 },
   "plot-pressures": { key: ["1", "2", "3", "4", "5", "6"], minSpan: 1e-3 },
   "plot-valves": { key: ["1", "2", "3", "4", "5", "6"], minSpan: 1e-3 },
+  "plot-supply": { key: ["supply pressure, MPa", "accumulator oil, L"], minSpan: 1e-3 },
   // Pairs: the vehicle solid, the simulator dashed, in one colour per axis.
   "plot-force-cues": { key: ["vehicle x", "simulator x", "vehicle y", "simulator y", "vehicle z - g", "simulator z - g"], minSpan: 1e-3, pairs: true },
   "plot-rate-cues": { key: ["vehicle x", "simulator x", "vehicle y", "simulator y", "vehicle z", "simulator z"], minSpan: 1e-4, pairs: true },
@@ -238,7 +239,8 @@ function preparePlots(result) {
   const valves = result.spools ? result.spools.map((s) => idx.map((i) => s[i])) : null;
   const sampled = (all) => (all ? all.map((s) => idx.map((i) => s[i])) : null);
   plotSeries = { times, "plot-heave": heave, "plot-angles": angles, "plot-legs": legs, "plot-joints": joints,
-    "plot-pressures": pressures, "plot-valves": valves, "plot-force-cues": sampled(result.forceCues),
+    "plot-pressures": pressures, "plot-valves": valves, "plot-supply": sampled(result.supply),
+    "plot-force-cues": sampled(result.forceCues),
     "plot-rate-cues": sampled(result.rateCues) };
   for (const [id, plot] of Object.entries(PLOTS)) {
     const series = plotSeries[id];

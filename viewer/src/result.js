@@ -161,6 +161,10 @@ export class Result {
       ? LEGS.map((k) => Float64Array.from(col(`pA[${k}]`), (pa, i) => (pa - this.areaRatio * col(`pB[${k}]`)[i]) / 1e6))
       : null;
     this.spools = all("spool") ? LEGS.map((k) => col(`spool[${k}]`)) : null;
+    // The power unit (§10b): the supply pressure (MPa) and the accumulator's oil (L).
+    this.supply = "supply.pressure" in csv.columns && "accumulator.oilVolume" in csv.columns
+      ? [Float64Array.from(col("supply.pressure"), (p) => p / 1e6), Float64Array.from(col("accumulator.oilVolume"), (v) => v * 1e3)]
+      : null;
     // Motion cueing (docs/cueing.md): the vehicle's and the simulator's specific force (gravity's
     // g taken off the vertical) and angular velocity, pair by pair (x, y, z).
     const all3 = (name) => [1, 2, 3].every((k) => `${name}[${k}]` in csv.columns);

@@ -34,12 +34,15 @@ pub const DEFAULT_RELIEF_PRESSURE: f64 = 18.0e6;
 /// Default relief gain `K_r`, m³/(s.Pa): the pump's full flow through the relief at 1 MPa over
 /// its cracking pressure.
 pub const DEFAULT_RELIEF_GAIN: f64 = DEFAULT_PUMP_MAX_FLOW / 1.0e6;
-/// Default accumulator gas volume `V_0`, m³ (50 L): sized to land the default stand after a pump
-/// failure from the top of its stroke (docs/model.md §10b, "sizing the accumulator").
-pub const DEFAULT_ACCUMULATOR_VOLUME: f64 = 50.0e-3;
-/// Default precharge `P_0`, Pa absolute: 9 MPa, 90 % of the lowest working pressure (10 MPa
-/// absolute) as accumulator makers advise, so that the bladder never closes while in use.
-pub const DEFAULT_ACCUMULATOR_PRECHARGE: f64 = 9.0e6;
+/// Default accumulator gas volume `V_0`, m³ (40 L): with [`DEFAULT_ACCUMULATOR_PRECHARGE`] it
+/// holds 12.9 L between a safe landing's 12 MPa trigger and 6.7 MPa absolute, against the 7.0 L a
+/// landing from the top of the default heave fills the rod sides with; checked by simulation over
+/// a heave cycle's pump stops and a design study (docs/model.md §10b, "sizing the accumulator").
+pub const DEFAULT_ACCUMULATOR_VOLUME: f64 = 40.0e-3;
+/// Default precharge `P_0`, Pa absolute: 6 MPa, 90 % of the lowest pressure the landing works
+/// down to (6.7 MPa absolute) as accumulator makers advise; a higher precharge gives more oil
+/// above the trigger but empties the accumulator during the landing (the design study's map).
+pub const DEFAULT_ACCUMULATOR_PRECHARGE: f64 = 6.0e6;
 /// Default polytropic exponent `n_a` of the accumulator's gas: 1.4, adiabatic nitrogen (a
 /// discharge over seconds exchanges little heat), the conservative choice for sizing.
 pub const DEFAULT_ACCUMULATOR_POLYTROPIC: f64 = 1.4;
