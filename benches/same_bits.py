@@ -1,8 +1,8 @@
 """Two builds of the platform FMU, output by output and bit by bit: every Real output both
 declare, over 3000 steps of 1 ms through FMPy, with forces (legs with mass and friction; RK4;
 the paper's legs), with electric drives (adaptive and RK4) under a leg feedback with a
-ripple, and with hydraulic legs of oil without air (adaptive and RK4; a valve ripple, the pump
-failing at 2 s). How a change that should not touch these modes is checked (benches/results/hydraulics.txt),
+ripple, and with hydraulic legs of oil without air and with the default air, the ideal supply (adaptive and
+RK4; a valve ripple, the pump failing at 2 s). How a change that should not touch these modes is checked (benches/results/hydraulics.txt),
 and how far apart a change that moves them at round-off leaves them (benches/results/machine_lanes.txt).
 
     .venv/bin/python benches/same_bits.py OLD/StewartPlatform.fmu NEW/StewartPlatform.fmu
@@ -53,7 +53,11 @@ valves = lambda t,l,ld: np.clip(0.3*(l0-l)/0.01 - 0.02*ld + 0.05*np.sin(3*t + np
 pump = lambda t: {"pS": 16e6 if t < 2.0 else 0.0}
 no_air = {"drive": 2, "hydraulic.airFraction": 0.0}
 cases += [("hydraulics, no air", no_air, "valve", valves, pump),
-          ("hydraulics, no air, RK4", {**no_air, "solver.method": 2}, "valve", valves, pump)]
+          ("hydraulics, no air, RK4", {**no_air, "solver.method": 2}, "valve", valves, pump),
+          # The default oil (with air) and the ideal supply (hydraulic.supply = 0): what the power
+          # unit of §10b leaves as it was.
+          ("hydraulics, air", {"drive": 2}, "valve", valves, pump),
+          ("hydraulics, air, RK4", {"drive": 2, "solver.method": 2}, "valve", valves, pump)]
 for name, params, inp, law, *scalars in cases:
     a, names = run(old, {k: (int(v) if k in ("drive","solver.method") else v) for k,v in params.items()}, inp, law, scalars=scalars[0] if scalars else None)
     b, _ = run(new, {k: (int(v) if k in ("drive","solver.method") else v) for k,v in params.items()}, inp, law, scalars=scalars[0] if scalars else None)

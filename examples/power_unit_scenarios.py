@@ -65,6 +65,7 @@ def landing_figures(c, t_stop):
         "final_speed": float(abs(c["v[3]"][-1])),
         "shortest_leg": float(legs[:, after].min()),
         "stop_force": float(max(np.abs(c[f"Fstop[{k}]"]).max() for k in LEGS)),
+        "pmin": float(c["pmin"][-1]),
         "balance": float(np.abs(balance(c)).max()),
     }
 
@@ -93,7 +94,8 @@ def heave(summary):
         f"{c['supply.pumpFlow'][last].min() * 6e4:.0f} .. {c['supply.pumpFlow'][last].max() * 6e4:.0f} L/min, valves "
         f"draw up to {c['Qsupply'][last].max() * 6e4:.0f} L/min, the accumulator's oil "
         f"{c['accumulator.oilVolume'][last].min() * 1e3:.2f} .. {c['accumulator.oilVolume'][last].max() * 1e3:.2f} L, "
-        f"relief flow up to {c['supply.reliefFlow'].max() * 6e4:.2f} L/min; pump work {c['work.pump'][-1] / 1e3:.0f} kJ; "
+        f"relief flow up to {c['supply.reliefFlow'].max() * 6e4:.2f} L/min; lowest chamber pressure (pmin) "
+        f"{(c['pmin'][-1] + 101325.0) / 1e6:.3f} MPa absolute; pump work {c['work.pump'][-1] / 1e3:.0f} kJ; "
         f"energy balance residual {np.abs(balance(c)).max():.1e} J of {c['work.dissipated'][-1] / 1e3:.0f} kJ "
         f"dissipated")
     fig, ax = plt.subplots(2, 2, figsize=(14, 8))
@@ -140,7 +142,8 @@ def landing(summary):
         f"{f['lowest_supply'] / 1e6:.2f} MPa, the accumulator's oil down to {f['least_oil'] * 1e3:.2f} L, descent after "
         f"the stop at most {f['fastest_descent']:.3f} m/s, vertical acceleration after the stop at most "
         f"{f['peak_acceleration']:.2f} m/s2, shortest leg {f['shortest_leg']:.4f} m (lmin "
-        f"{UNIT['lmin[1]']:.4f} m), at rest at z = {f['final_z']:.4f} m; energy balance residual {f['balance']:.1e} J "
+        f"{UNIT['lmin[1]']:.4f} m), at rest at z = {f['final_z']:.4f} m; lowest chamber pressure (pmin) "
+        f"{(f['pmin'] + 101325.0) / 1e6:.3f} MPa absolute; energy balance residual {f['balance']:.1e} J "
         f"(pump work {c['work.pump'][-1] / 1e3:.0f} kJ)")
     fig, ax = plt.subplots(2, 2, figsize=(14, 8))
     ax[0, 0].plot(t, c["r[3]"], label="z")

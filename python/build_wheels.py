@@ -45,7 +45,7 @@ VIEWER = ROOT / "viewer" / "dist"
 WHEELS = ROOT / "target" / "wheels"
 STAGE = ROOT / "target" / "wheel-stage"
 PACKAGED = ["StewartPlatform.fmu", "StewartController.fmu", "StewartCueing.fmu", "StewartSystem.ssp",
-            "StewartSystemDrives.ssp", "StewartSystemHydraulic.ssp", "StewartMotionSystem.ssp",
+            "StewartSystemDrives.ssp", "StewartSystemHydraulic.ssp", "StewartSystemPowerUnit.ssp", "StewartMotionSystem.ssp",
             "fmi3/StewartPlatform.fmu", "fmi3/StewartController.fmu", "fmi3/StewartCueing.fmu"]
 
 # platform (build-fmu's names): Rust's target triple, maturin's --compatibility, the wheel's

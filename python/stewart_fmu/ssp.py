@@ -16,6 +16,9 @@ SYSTEM_SSP = Path(PLATFORM_FMU).parent / "StewartSystem.ssp"
 SYSTEM_DRIVES_SSP = Path(PLATFORM_FMU).parent / "StewartSystemDrives.ssp"
 # The closed loop with hydraulic servo legs (docs/model.md §10): parameter bindings set drive = 2.
 SYSTEM_HYDRAULIC_SSP = Path(PLATFORM_FMU).parent / "StewartSystemHydraulic.ssp"
+# The same fed by the power unit (docs/model.md §10b): hydraulic.supply = 1, the controller's
+# safe landing below landing.pressure = 12 MPa; the platform's pump.speed left to the host.
+SYSTEM_POWER_UNIT_SSP = Path(PLATFORM_FMU).parent / "StewartSystemPowerUnit.ssp"
 # The whole motion system (docs/cueing.md): vehicle -> StewartCueing -> StewartController
 # (programme = 3, a parameter binding) -> StewartPlatform.
 MOTION_SYSTEM_SSP = Path(PLATFORM_FMU).parent / "StewartMotionSystem.ssp"

@@ -16,6 +16,7 @@ from fmpy import simulate_fmu
 from stewart_fmu import CONTROLLER_FMU, PLATFORM_FMU, Platform
 from stewart_fmu import hydraulics as hy
 from stewart_fmu.core import LEGS, Component
+from stewart_fmu.ssp import SYSTEM_POWER_UNIT_SSP
 from test_fmi3 import PLATFORM3, Fmu3
 from oracles.stand import EQUILIBRIUM_FORCE, GRAVITY, MASS
 
@@ -183,3 +184,26 @@ def test_fmu_states_with_the_power_unit_and_the_landing_continue_bit_for_bit():
           f"over the next 0.5 s; identical: {np.array_equal(reference, restored)}")
     assert descent > 0.03, "the landing is under way"
     assert np.array_equal(reference, restored)
+
+
+def test_the_power_unit_ssp_in_the_compiled_master_lands_as_the_python_master_does():
+    """StewartSystemPowerUnit.ssp (its bindings: hydraulic.supply = 1, landing.pressure = 12 MPa)
+    in the compiled master, the pump stopped at the heave's highest point by an override of
+    pump.speed: the same heave and supply pressure as the package's Python master to the bit,
+    and the stand at rest on landing.floor."""
+    from stewart_fmu import master
+    t_stop = round(2.25 * PERIOD, 3)
+    t_end = t_stop + 8.0
+    system = master.from_ssp(SYSTEM_POWER_UNIT_SSP)
+    times, rows, status, message = master.run(system, t_end, 1e-3, record=["platform.r[3]", "platform.supply.pressure"],
+                                              overrides=[("platform.pump.speed", 0.0, t_stop)])
+    system.close()
+    assert status == "ok", message
+    c, _, py_status = hy.pump_stop_landing(t_stop, t_end, 12e6)
+    assert py_status == "ok"
+    n = min(len(times), len(c["time"]) - 1)
+    same = np.array_equal(rows[-n:, 0], c["r[3]"][-n:]) and np.array_equal(rows[-n:, 1], c["supply.pressure"][-n:])
+    print(f"StewartSystemPowerUnit.ssp, compiled master, pump stop at {t_stop} s: at rest at z = {rows[-1, 0]:.4f} m, "
+          f"supply {rows[-1, 1] / 1e6:.3f} MPa; the Python master's bits over {n} steps: {same}")
+    assert same
+    assert abs(rows[-1, 0] - c["r[3]"][-1]) == 0.0 and abs(rows[-1, 0] - 1.5768) < 2e-3

@@ -112,8 +112,15 @@ fn run() -> Result<(), String> {
     interface_tables(&root.join("docs").join("model.md"), update)?;
 
     // The closed loop with force commands, with electric drives (voltage commands) and with
-    // hydraulic servo legs (valve commands); the whole motion system with the cueing FMU.
-    for system in ["StewartSystem", "StewartSystemDrives", "StewartSystemHydraulic", "StewartMotionSystem"] {
+    // hydraulic servo legs (valve commands), the same fed by the power unit with the safe
+    // landing; the whole motion system with the cueing FMU.
+    for system in [
+        "StewartSystem",
+        "StewartSystemDrives",
+        "StewartSystemHydraulic",
+        "StewartSystemPowerUnit",
+        "StewartMotionSystem",
+    ] {
         let ssd_path = root.join("modelDescription").join(format!("{system}.ssd"));
         let ssd = std::fs::read_to_string(&ssd_path).map_err(|e| format!("cannot read {}: {e}", ssd_path.display()))?;
         let sources = ssd_check::check(&ssd).map_err(|e| format!("{}: {e}", ssd_path.display()))?;

@@ -113,7 +113,7 @@ pub const fn line_pressure(vr: u32, dependencies: &'static [Dependency]) -> V {
     V::local(
         "supply.linePressure", &[], vr, Some("Pa"),
         "The power unit's supply line pressure p_S, gauge (Model Exchange state; starts at pS's start value with the \
-         accumulator charged to it; constant unless hydraulic.supply = 1)",
+         accumulator charged to it; 0 and constant unless hydraulic.supply = 1)",
         dependencies,
     )
 }

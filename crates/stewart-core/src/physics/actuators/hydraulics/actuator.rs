@@ -385,11 +385,13 @@ impl Actuator for HydraulicActuators {
         Ok(())
     }
 
-    /// The chambers at `pA0`, `pB0`; the spools centred and at rest; the supply line at the
-    /// input `pS`'s value (with the power unit; the accumulator charged to it).
+    /// The chambers at `pA0`, `pB0`; the spools centred and at rest; with the power unit the
+    /// supply line at the input `pS`'s value (the accumulator charged to it), else 0 (a state
+    /// the integrators leave as it is, and whose value would move the adaptive method's first
+    /// step through its norm).
     fn initial_state(&self, x: &mut [f64]) {
         if let Some(slot) = x.get_mut(block::SUPPLY_PRESSURE) {
-            *slot = self.supply;
+            *slot = if self.powered { self.supply } else { 0.0 };
         }
         for k in 0..LEG_COUNT {
             for (i, p) in [(block::PA, self.initial_pa[k]), (block::PB, self.initial_pb[k])] {
