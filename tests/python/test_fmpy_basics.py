@@ -32,12 +32,13 @@ def test_model_description_declares_the_capabilities(platform_fmu):
     # Pose and leg lengths have no direct feed-through from the forces: they depend on states
     # only (declared for Model Exchange), never on an input; only the joints' forces (the force
     # a leg passes on includes its actuator's) and the actuators' forces do, and the hydraulic
-    # supply flow and the power unit's outputs, through the supply pressure pS and pump.speed.
+    # supply flow, through the supply pressure pS, and the power unit's supply pressure (pS without
+    # it) and pump flow (pump.speed).
     inputs = {v.name for v in md.modelVariables if v.causality == "input"}
     through = {o.variable.name for o in md.outputs if any(d.name in inputs for d in o.dependencies)}
     assert through == ({f"jointForce[{k},{c}]" for k in range(1, 7) for c in range(1, 4)}
                        | {f"actuatorForce[{k}]" for k in range(1, 7)} | {"Qsupply"}
-                       | {"supply.pressure", "supply.pumpFlow", "supply.reliefFlow", "accumulator.oilVolume"}), sorted(through)
+                       | {"supply.pressure", "supply.pumpFlow"}), sorted(through)
     assert any(o.dependencies for o in md.outputs)  # derived outputs list their states
 
 

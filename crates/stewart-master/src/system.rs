@@ -35,7 +35,12 @@ struct Component {
     sources: Vec<u32>,
     /// Real inputs fed by connections: (value reference, source component, index in its `sources`).
     inputs: Vec<(u32, usize, usize)>,
-    /// Whether an output in `sources` depends directly on an input.
+    /// The inputs (value references) each output of `sources` depends on directly.
+    source_feeds: Vec<Vec<u32>>,
+    /// Whether an output in `sources` depends directly on an input a connection drives.
+    connected_feedthrough: bool,
+    /// The same in the current run: also through the inputs its tables and overrides drive
+    /// ([`System::run`]).
     feedthrough: bool,
     /// Why the last `fmi2Instantiate` failed.
     instantiate_error: String,
@@ -80,6 +85,8 @@ impl System {
                 bindings,
                 sources: vec![],
                 inputs: vec![],
+                source_feeds: vec![],
+                connected_feedthrough: false,
                 feedthrough: false,
                 instantiate_error: String::new(),
             });
@@ -115,6 +122,7 @@ impl System {
                 Some(slot) => slot,
                 None => {
                     components[from].sources.push(out_vr);
+                    components[from].source_feeds.push(feeds_from.clone());
                     components[from].sources.len() - 1
                 }
             };
@@ -132,10 +140,14 @@ impl System {
         // outside, say) closes no loop.
         for (from, feeds_from) in feeds {
             let inputs = &components[from].inputs;
-            components[from].feedthrough |=
+            components[from].connected_feedthrough |=
                 feeds_from.iter().any(|vr| inputs.iter().any(|&(input, _, _)| input == *vr));
         }
-        let order = gauss_seidel_order(&components)?;
+        for c in &mut components {
+            c.feedthrough = c.connected_feedthrough;
+        }
+        let flags: Vec<bool> = components.iter().map(|c| c.feedthrough).collect();
+        let order = gauss_seidel_order(&components, &flags)?;
         let name = description.map(|d| d.name.clone()).unwrap_or_else(|| names.join("+"));
         Ok(System { components, order, name })
     }
@@ -285,13 +297,44 @@ impl System {
             return Outcome { steps: 0, time: spec.start_time, failure: Some(self.failure(k, error, true)) };
         }
         let jacobi = spec.scheme == Scheme::Jacobi;
+        // Direct feed-through in this run: through the inputs connections drive, and those this
+        // run's tables and overrides drive (set at each point before the outputs are read).
+        let feedthrough: Vec<bool> = (0..n)
+            .map(|k| {
+                let c = &self.components[k];
+                let driven = |vr: &u32| {
+                    spec.tables.iter().any(|t| t.component == k && t.value_references.contains(vr))
+                        || spec.overrides.iter().any(|o| o.component == k && o.value_reference == *vr)
+                };
+                c.connected_feedthrough || c.source_feeds.iter().any(|feeds| feeds.iter().any(driven))
+            })
+            .collect();
+        for (c, &f) in self.components.iter_mut().zip(&feedthrough) {
+            c.feedthrough = f;
+        }
+        match gauss_seidel_order(&self.components, &feedthrough) {
+            Ok(order) => self.order = order,
+            Err(message) => {
+                // A loop this run's tables or overrides close: named as the first component's
+                // problem, before any step.
+                let mut failure = self.failure(
+                    0,
+                    CallError { function: "the Gauss-Seidel order of the components", status: 3 },
+                    true,
+                );
+                if let Some(problem) = failure.problems.first_mut() {
+                    *problem = message;
+                }
+                return Outcome { steps: 0, time: spec.start_time, failure: Some(failure) };
+            }
+        }
         // After a step each component reads, in one call: its connection sources (unless it
         // has direct feed-through under Gauss-Seidel: those are read after its inputs are
         // set), then what the observer watches.
         let mut post: Vec<Vec<u32>> = vec![];
         let mut offsets = vec![];
         for (k, c) in self.components.iter().enumerate() {
-            let mut vrs = if jacobi || !c.feedthrough { c.sources.clone() } else { vec![] };
+            let mut vrs = if jacobi || !feedthrough[k] { c.sources.clone() } else { vec![] };
             offsets.push(vrs.len());
             vrs.extend(watched.get(k).cloned().unwrap_or_default());
             post.push(vrs);
@@ -533,19 +576,15 @@ impl System {
 /// The Gauss-Seidel order: a component gets its inputs once every component it reads from
 /// either has no direct feed-through (its outputs are known at the communication point) or has
 /// had its inputs already. A cycle of feed-through components (an algebraic loop) is refused.
-fn gauss_seidel_order(components: &[Component]) -> Result<Vec<usize>, String> {
+fn gauss_seidel_order(components: &[Component], feedthrough: &[bool]) -> Result<Vec<usize>, String> {
     let mut order = vec![];
     let mut done = vec![false; components.len()];
     while order.len() < components.len() {
         let ready = (0..components.len()).find(|&k| {
-            !done[k]
-                && components[k]
-                    .inputs
-                    .iter()
-                    .all(|&(_, from, _)| !components[from].feedthrough || done[from] || from == k)
+            !done[k] && components[k].inputs.iter().all(|&(_, from, _)| !feedthrough[from] || done[from] || from == k)
         });
         match ready {
-            Some(k) if components[k].feedthrough && components[k].inputs.iter().any(|&(_, from, _)| from == k) => {
+            Some(k) if feedthrough[k] && components[k].inputs.iter().any(|&(_, from, _)| from == k) => {
                 return Err(format!("{} feeds its own input through directly: an algebraic loop", components[k].name));
             }
             Some(k) => {

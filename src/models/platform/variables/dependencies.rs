@@ -79,8 +79,15 @@ const POWER_UNIT_LAW: &[Dependency] = &[
 pub const POWER_UNIT_START: &[Dependency] = &[All(group::DRIVE), All(group::SUPPLY_MODE), All(group::PS)];
 /// The power unit's parameters (the hydraulic legs' with it: the valves drain the line).
 pub const POWER_UNIT_PARAMETERS: &[Dependency] = HYDRAULIC_PARAMETERS;
-/// The knowns of the power unit's rates and outputs: the legs' and the pump's speed.
+/// The knowns of the power unit's rates: the legs' and the pump's speed.
 pub const POWER_UNIT_KNOWNS: &[Dependency] = &[Each(HYDRAULIC_KNOWNS), All(group::PUMP_SPEED)];
+/// The power unit's outputs, each on what it reads: the supply pressure the input `pS` or the
+/// line's state; the pump's flow the line and the pump's speed; the relief and the accumulator
+/// the line alone. (A master orders its components by these: `supply.pressure` does not feed
+/// `pump.speed` through.)
+pub const SUPPLY_PRESSURE_KNOWNS: &[Dependency] = &[All(group::PS), All(group::LINE_PRESSURE)];
+pub const PUMP_FLOW_KNOWNS: &[Dependency] = &[All(group::LINE_PRESSURE), All(group::PUMP_SPEED)];
+pub const LINE_KNOWNS: &[Dependency] = &[All(group::LINE_PRESSURE)];
 /// The hydraulic legs' parameters (with the strokes their chambers span).
 pub const HYDRAULIC_PARAMETERS: &[Dependency] =
     &[All(group::DRIVE), All(group::LMIN), All(group::LMAX), Each(HYDRAULIC_LAW)];

@@ -606,13 +606,13 @@ declare_variables! {
         ACCUMULATOR_POLYTROPIC => power_unit::accumulator_polytropic(579); real(parameters.actuators.hydraulic.power_unit.accumulator_polytropic),
         SUPPLY_VOLUME => power_unit::supply_volume(580); real(parameters.actuators.hydraulic.power_unit.supply_volume),
         SUPPLY_PRESSURE => power_unit::supply_pressure(581, POWER_UNIT_PARAMETERS)
-            .depends_on(POWER_UNIT_KNOWNS); cached_at(input_dependent_outputs.power_unit, 0),
+            .depends_on(SUPPLY_PRESSURE_KNOWNS); cached_at(input_dependent_outputs.power_unit, 0),
         PUMP_FLOW => power_unit::pump_flow(582, POWER_UNIT_PARAMETERS)
-            .depends_on(POWER_UNIT_KNOWNS); cached_at(input_dependent_outputs.power_unit, 1),
+            .depends_on(PUMP_FLOW_KNOWNS); cached_at(input_dependent_outputs.power_unit, 1),
         RELIEF_FLOW => power_unit::relief_flow(583, POWER_UNIT_PARAMETERS)
-            .depends_on(POWER_UNIT_KNOWNS); cached_at(input_dependent_outputs.power_unit, 2),
+            .depends_on(LINE_KNOWNS); cached_at(input_dependent_outputs.power_unit, 2),
         OIL_VOLUME => power_unit::oil_volume(584, POWER_UNIT_PARAMETERS)
-            .depends_on(POWER_UNIT_KNOWNS); cached_at(input_dependent_outputs.power_unit, 3),
+            .depends_on(LINE_KNOWNS); cached_at(input_dependent_outputs.power_unit, 3),
         WORK_PUMP => power_unit::pump_work(585); cached_at(actuators.actuator_states, actuator_state(quadrature::WORK_PUMP)),
         LINE_PRESSURE => power_unit::line_pressure(586, POWER_UNIT_START); cached_at(actuators.actuator_states, actuator_state(hydraulic::SUPPLY_PRESSURE)),
         DER_LINE_PRESSURE => power_unit::line_pressure_rate(587, POWER_UNIT_PARAMETERS, POWER_UNIT_KNOWNS); derivative,
