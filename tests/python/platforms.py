@@ -7,6 +7,8 @@ line by line (test_platforms.py).
 The toolchains come from Debian 12's packages (tests/setup_cross.sh installs them).
 """
 
+import contextlib
+import fcntl
 import os
 import re
 import shutil
@@ -214,9 +216,29 @@ ARM64_DEBS = ["python3.11-minimal", "libpython3.11-minimal", "libpython3.11-stdl
 ARM64_WHEELS = ["fmpy==0.3.32", "numpy==2.4.6", "lxml==6.1.3", "attrs==26.1.0"]
 
 
+@contextlib.contextmanager
+def made_once(name):
+    """Holds target/NAME.lock while something shared is made or checked: the test workers
+    (pytest-xdist) start together, and one must not remove or rewrite a folder another is
+    running from."""
+    lock = ROOT / "target" / f"{name}.lock"
+    lock.parent.mkdir(parents=True, exist_ok=True)
+    with open(lock, "a") as f:
+        fcntl.flock(f, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(f, fcntl.LOCK_UN)
+
+
 def arm64_python(pip_python):
     """The command that runs the arm64 Python under qemu, and its site folder (made once:
     about 12 MB of Debian packages and 40 MB of wheels, seconds)."""
+    with made_once("arm64-python"):
+        return _arm64_python(pip_python)
+
+
+def _arm64_python(pip_python):
     root, site, stamp = ARM64_PYTHON / "root", ARM64_PYTHON / "site", ARM64_PYTHON / "ready"
     wanted = " ".join(ARM64_DEBS + ARM64_WHEELS)
     if not stamp.exists() or stamp.read_text() != wanted:

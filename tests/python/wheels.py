@@ -35,15 +35,27 @@ _BUILT = {}
 
 
 def wheels():
-    """{platform: wheel} for the three platforms, built once in this test process."""
+    """{platform: wheel} for the three platforms, built once per test run."""
     if not _BUILT:
+        with P.made_once("wheels"):
+            _build_wheels()
+    return dict(_BUILT)
+
+
+def _build_wheels():
+    """python/build_wheels.py, under the lock, once per test run: the other test worker
+    (pytest-xdist, the same PYTEST_XDIST_TESTRUNUID) may have built them and be reading them."""
+    run_id = os.environ.get("PYTEST_XDIST_TESTRUNUID", f"pid {os.getpid()}")
+    stamp = WHEELS / "built-for-test-run"
+    version = build_wheels.version()
+    paths = {p: WHEELS / build_wheels.wheel_name(p, version) for p in build_wheels.PLATFORMS}
+    if not (stamp.exists() and stamp.read_text() == run_id and all(w.exists() for w in paths.values())):
         run = subprocess.run([sys.executable, str(ROOT / "python" / "build_wheels.py")], cwd=ROOT, capture_output=True,
                              text=True)
         assert run.returncode == 0, (run.stdout + run.stderr)[-4000:]
         print("\n".join(line for line in run.stdout.splitlines() if line.startswith("build_wheels:")))
-        version = build_wheels.version()
-        _BUILT.update({p: WHEELS / build_wheels.wheel_name(p, version) for p in build_wheels.PLATFORMS})
-    return dict(_BUILT)
+        stamp.write_text(run_id)
+    _BUILT.update(paths)
 
 
 def constraints(folder):
@@ -90,6 +102,11 @@ ARM64_PIP = "pip==24.3.1"
 def arm64_venv():
     """The arm64 environment's `bin` folder (made once: Debian's arm64 CPython, pip, and the
     package's dependencies from PyPI's aarch64 wheels, about 200 MB)."""
+    with P.made_once("arm64-venv"):
+        return _arm64_venv()
+
+
+def _arm64_venv():
     P.arm64_python(sys.executable)  # Debian's arm64 packages unpacked into target/arm64-python/root
     root = P.ARM64_PYTHON / "root"
     stamp = ARM64_VENV / "ready"
