@@ -159,10 +159,6 @@ def test_the_commands_keep_every_leg_inside_its_margins_on_fuzzed_drives(fuzzed)
     assert fuzzed["closest"] > -1e-9, fuzzed
 
 
-@pytest.mark.xfail(strict=True, reason="known defect, issue 46 open: on the fuzzed drives (up to 8 m/s2) "
-                   "about a fifth of the solves fail (the QP's one slack grows where the horizon's end "
-                   "cannot be kept inside the bounds, and the interior point runs out of iterations); the "
-                   "fallback and the net then jump the command (a Hermite residual of up to 10 m/s over a step)")
 def test_the_solves_succeed_and_the_command_is_smooth_on_fuzzed_drives(fuzzed):
     """The failed solves are below 1 % of the solves, and the command's velocity and
     acceleration give its position's change over each step by the Hermite rule: the plans'

@@ -14,10 +14,12 @@ the margins are printed), so the QP's solution is the unconstrained minimiser.
 
 Tolerance, from the FMU's solver tolerance: the FMU's interior-point method stops at a relative
 tolerance of 1e-8, so its correction du may differ from the exact minimiser by H^-1 r for a
-stationarity residual r of up to 1e-8 |grad| (H, grad: the QP's Hessian and gradient at
-du = 0). The test measures what that does to the outputs: it runs the oracle a second time with
-such a residual at every solve (a seeded random direction of norm 1e-8 |grad|) and takes, per
-output group, the largest change over the run as the tolerance. The vehicle's perceived cues do
+stationarity residual r of up to 1e-8 max|grad| in each component (H, grad: the QP's Hessian
+and gradient at du = 0; the solver's own bound is looser, 1e-8 (1 + max|g|) with the slack's
+weight 1e4 in g, and it stops well inside it). The test measures what that does to the
+outputs: it runs the oracle a second time with such a residual at every solve (each component
+at the bound, seeded random signs) and takes, per output group, the largest change over the run
+as the tolerance. The vehicle's perceived cues do
 not depend on the solves: they are the lags of the inputs, exact on the chords; their tolerance
 is 1e-10 (rounding over the run: 1e-13 of g was measured).
 """
@@ -44,9 +46,9 @@ RECORD = [f"{g}[{k}]" for g in GROUPS for k in (1, 2, 3)] + ["workspace.scale"]
 VEHICLE_GROUPS, VEHICLE_TOLERANCE = ("perceived.f", "perceived.omega"), 1e-10
 #: The gentle manoeuvres: a braking (surge and pitch), a lane change (sway, roll, yaw) and a
 #: fuzzed motion on all six axes (heave and the head's lever arm included), with the default
-#: parameters; and the fuzzed motion with mpc.period = 50 ms. At the default 10 ms every grid
-#: step (h_0 = 34.9 ms and up) is longer than the period, so tau_j + period stays in step j and
-#: the nominal plan is the last plan itself; 50 ms > h_0 makes the shift move the plan.
+#: parameters; and the fuzzed motion with mpc.period = 30 ms (each step's nominal jerk the mean
+#: of the last plan's over the step a period later: with the longer period more of each step
+#: comes from the next one).
 CASES = {
     "brake": (lambda: vehicle.brake(duration=4.0, deceleration=0.2, speed=2.0, start=0.5), {}),
     "lane_change": (lambda: vehicle.lane_change(duration=4.5, speed=10.0, lateral=0.25, peak=0.15, start=0.5), {}),
@@ -102,12 +104,12 @@ def group_difference(a, b, group):
 
 
 def stationarity_residual(seed):
-    """A perturbation of each solve: du + H^-1 r, r of norm 1e-8 |grad| in a random direction."""
+    """A perturbation of each solve: du + H^-1 r, every component of r 1e-8 max|grad| with a
+    random sign (the solver's bound per component)."""
     rng = np.random.default_rng(seed)
 
     def perturb(_, info):
-        r = rng.standard_normal(predictive.N_UNKNOWNS)
-        r *= 1e-8 * np.linalg.norm(info["gradient"]) / np.linalg.norm(r)
+        r = rng.choice([-1.0, 1.0], predictive.N_UNKNOWNS) * 1e-8 * np.max(np.abs(info["gradient"]))
         return info["du"] + np.linalg.solve(info["hessian"], r).reshape(info["du"].shape)
     return perturb
 

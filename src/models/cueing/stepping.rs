@@ -382,7 +382,8 @@ fn solve(
     let times = *solver.grid_times();
     let future: [VehicleMotion; GRID_STEPS + 1] =
         std::array::from_fn(|j| if m.preview.is_empty() || j == 0 { now } else { m.preview.at(tau + times[j]) });
-    let outcome = solver.solve(&state.motion, &state.plan, &future, felt_vehicle, felt_simulator);
+    let last_plan = if state.falling_back { None } else { Some(&state.plan) };
+    let outcome = solver.solve(&state.motion, last_plan, &future, felt_vehicle, felt_simulator);
     state.solves += 1;
     match outcome {
         SolveOutcome::Planned { iterations, plan } => {

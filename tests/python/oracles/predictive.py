@@ -32,12 +32,10 @@ w_body = E(beta) beta'; the perception model of §12 as in `oracles.perception`)
      tau_j = h_0 + ... + h_{j-1};
   2. the unknowns: a jerk correction du[b][c] per block b (steps {0}, {1, 2}, {3..6},
      {7..19}) and channel c: 24;
-  3. the nominal plan: step j takes the last plan's jerk of the step that holds
-     tau_j + mpc.period on the last grid (0 beyond the horizon; all 0 at the first solve);
-     the plan after the solve is the nominal jerk plus the step's block's correction; the
-     command moves with the plan's step 0 until the next solve (when every step is longer
-     than the period, as at the defaults, tau_j + period stays in step j: the nominal plan is
-     the last plan);
+  3. the nominal plan: step j takes the mean of the last plan's jerks over
+     [tau_j, tau_{j+1}] + mpc.period on the last grid (0 beyond the horizon; all 0 at the
+     first solve); the plan after the solve is the nominal jerk plus the step's block's
+     correction; the command moves with the plan's step 0 until the next solve;
   4. the prediction: the nominal motion integrated exactly over the grid from the command now;
      at each point the cues linearised about it, y_j = y(nominal_j) + J_j (motion_j -
      nominal_j), the deviation linear in du (each block's unit jerk propagated over the grid);
@@ -277,13 +275,14 @@ class Predictive:
 
     # -- one solve -----------------------------------------------------------------------------
     def nominal(self, plan):
-        """The last plan (steps x channels) shifted by the period; zeros for none."""
+        """The last plan (steps x channels) shifted by the period, each step the mean of the
+        last plan's jerks over it; zeros for none."""
         out = np.zeros((STEPS, N_CHANNELS))
         if plan is not None:
             for j in range(STEPS):
-                s = self.tau[j] + self.period
-                if s < self.tau[-1]:
-                    out[j] = plan[int(np.searchsorted(self.tau, s, side="right")) - 1]
+                a, b = self.tau[j] + self.period, self.tau[j + 1] + self.period
+                overlap = np.clip(np.minimum(b, self.tau[1:]) - np.maximum(a, self.tau[:-1]), 0.0, None)
+                out[j] = overlap @ plan / (self.tau[j + 1] - self.tau[j])
         return out
 
     def solve(self, x, sim_lags, vehicle_lags, f, omega, plan=None):

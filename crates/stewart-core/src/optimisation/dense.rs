@@ -20,6 +20,9 @@
 pub enum QpOutcome {
     /// Solved: the residuals and the duality gap within the tolerance.
     Solved { iterations: u32 },
+    /// Out of iterations, or broken down, after an iterate within the acceptable tolerance:
+    /// that iterate (the last such).
+    Acceptable { iterations: u32 },
     /// No usable solution: out of iterations (infeasible, or too hard for the budget), or a
     /// factorisation that broke down.
     Failed { iterations: u32, why: &'static str },
@@ -32,6 +35,10 @@ pub struct QpSettings {
     pub max_iterations: u32,
     /// Relative tolerance of the residuals and of the complementarity gap.
     pub tolerance: f64,
+    /// A looser one: a solve that cannot reach `tolerance` within its iterations (the normal
+    /// equations' round-off grows as the active rows' weights do) returns its last iterate
+    /// within this (IPOPT's "acceptable level"; Clarabel's "almost solved").
+    pub acceptable_tolerance: f64,
 }
 
 /// A dense QP of fixed sizes and the solver's buffers.
@@ -41,6 +48,9 @@ pub struct DenseQp {
     m: usize,
     settings: QpSettings,
     x: Vec<f64>,
+    /// The last iterate within the acceptable tolerance, and its iteration.
+    x_acceptable: Vec<f64>,
+    acceptable: Option<u32>,
     s: Vec<f64>,
     z: Vec<f64>,
     /// The normal matrix and its Cholesky factor (lower, row-major).
@@ -67,12 +77,17 @@ impl DenseQp {
         if !(settings.tolerance > 0.0 && settings.max_iterations > 0) {
             return Err("a QP solver needs a positive tolerance and at least one iteration".into());
         }
+        if !(settings.acceptable_tolerance >= settings.tolerance) {
+            return Err("a QP solver's acceptable tolerance must be at least its tolerance".into());
+        }
         let v = |k: usize| vec![0.0; k];
         Ok(DenseQp {
             n,
             m,
             settings,
             x: v(n),
+            x_acceptable: v(n),
+            acceptable: None,
             s: v(m),
             z: v(m),
             normal: v(n * n),
@@ -108,6 +123,7 @@ impl DenseQp {
         // Start: x = 0, each slack its bound's value but at least 1 (an infeasible start is
         // fine: the primal residual closes along the way), each dual 1.
         self.x.fill(0.0);
+        self.acceptable = None;
         for i in 0..m {
             self.s[i] = b[i].max(1.0);
             self.z[i] = 1.0;
@@ -135,18 +151,21 @@ impl DenseQp {
                 atz_x += self.z[i] * self.ax[i];
             }
             objective -= 0.5 * atz_x;
-            if max_abs(&self.r_dual) <= tol * scale_d
-                && max_abs(&self.r_primal) <= tol * scale_p
-                && gap <= tol * objective.abs().max(1.0)
-            {
+            let within = |tol: f64| {
+                max_abs(&self.r_dual) <= tol * scale_d
+                    && max_abs(&self.r_primal) <= tol * scale_p
+                    && gap <= tol * objective.abs().max(1.0)
+            };
+            if within(tol) {
                 x.copy_from_slice(&self.x);
                 return QpOutcome::Solved { iterations: iteration - 1 };
             }
+            if within(self.settings.acceptable_tolerance) {
+                self.x_acceptable.copy_from_slice(&self.x);
+                self.acceptable = Some(iteration - 1);
+            }
             if !self.factor(h, a) {
-                return QpOutcome::Failed {
-                    iterations: iteration,
-                    why: "the normal equations are not positive definite",
-                };
+                return self.give_up(x, iteration, "the normal equations are not positive definite");
             }
             // Predictor: the affine direction (r_c = s z).
             for i in 0..m {
@@ -177,10 +196,22 @@ impl DenseQp {
                 self.z[i] += alpha * self.dz[i];
             }
             if !self.x.iter().all(|v| v.is_finite()) {
-                return QpOutcome::Failed { iterations: iteration, why: "the iterates are not finite" };
+                return self.give_up(x, iteration, "the iterates are not finite");
             }
         }
-        QpOutcome::Failed { iterations: self.settings.max_iterations, why: "out of iterations" }
+        self.give_up(x, self.settings.max_iterations, "out of iterations")
+    }
+
+    /// The end of a solve that did not reach the tolerance: its last acceptable iterate to
+    /// `x`, or a failure (`x` unchanged).
+    fn give_up(&self, x: &mut [f64], iterations: u32, why: &'static str) -> QpOutcome {
+        match self.acceptable {
+            Some(_) => {
+                x.copy_from_slice(&self.x_acceptable);
+                QpOutcome::Acceptable { iterations }
+            }
+            None => QpOutcome::Failed { iterations, why },
+        }
     }
 
     /// The normal matrix `H + A^T (Z/S) A` and its Cholesky factor in `normal` (lower
@@ -295,16 +326,38 @@ mod tests {
     /// infeasible one.
     #[test]
     fn a_projection_onto_a_half_plane_and_an_infeasible_problem() {
-        let mut qp = DenseQp::new(2, 1, QpSettings { max_iterations: 50, tolerance: 1e-10 }).unwrap();
+        let mut qp =
+            DenseQp::new(2, 1, QpSettings { max_iterations: 50, tolerance: 1e-10, acceptable_tolerance: 1e-10 })
+                .unwrap();
         let mut x = [0.0; 2];
         let outcome = qp.solve(&[2.0, 0.0, 0.0, 2.0], &[-2.0, -4.0], &[1.0, 1.0], &[2.0], &mut x);
         assert!(matches!(outcome, QpOutcome::Solved { .. }), "{outcome:?}");
         assert!((x[0] - 0.5).abs() < 1e-9 && (x[1] - 1.5).abs() < 1e-9, "{x:?}");
-        let mut qp = DenseQp::new(1, 2, QpSettings { max_iterations: 50, tolerance: 1e-10 }).unwrap();
+        let mut qp =
+            DenseQp::new(1, 2, QpSettings { max_iterations: 50, tolerance: 1e-10, acceptable_tolerance: 1e-10 })
+                .unwrap();
         let mut x = [7.0];
         let outcome = qp.solve(&[1.0], &[0.0], &[1.0, -1.0], &[-1.0, -1.0], &mut x);
         assert!(matches!(outcome, QpOutcome::Failed { .. }), "{outcome:?}");
         assert_eq!(x, [7.0], "a failed solve leaves x as it was");
+    }
+
+    /// A solve that cannot reach its tolerance (1e-300) returns its last iterate within the
+    /// acceptable one, which is the projection to that accuracy; with no acceptable level
+    /// (equal to the tolerance) the same solve fails and leaves `x` as it was.
+    #[test]
+    fn an_unreachable_tolerance_ends_at_the_acceptable_iterate() {
+        let (h, g, a, b) = ([2.0, 0.0, 0.0, 2.0], [-2.0, -4.0], [1.0, 1.0], [2.0]);
+        let settings = QpSettings { max_iterations: 40, tolerance: 1e-300, acceptable_tolerance: 1e-6 };
+        let mut x = [0.0; 2];
+        let outcome = DenseQp::new(2, 1, settings).unwrap().solve(&h, &g, &a, &b, &mut x);
+        assert!(matches!(outcome, QpOutcome::Acceptable { iterations: 40 }), "{outcome:?}");
+        assert!((x[0] - 0.5).abs() < 1e-5 && (x[1] - 1.5).abs() < 1e-5, "{x:?}");
+        let settings = QpSettings { acceptable_tolerance: 1e-300, ..settings };
+        let mut x = [7.0, 7.0];
+        let outcome = DenseQp::new(2, 1, settings).unwrap().solve(&h, &g, &a, &b, &mut x);
+        assert!(matches!(outcome, QpOutcome::Failed { .. }), "{outcome:?}");
+        assert_eq!(x, [7.0, 7.0]);
     }
 
     /// Random dense QPs of the cueing's size against Clarabel (the crate the tests hold the
@@ -345,9 +398,10 @@ mod tests {
                 })
                 .collect();
             let mut ours = vec![0.0; n];
-            let outcome = DenseQp::new(n, m, QpSettings { max_iterations: 100, tolerance: 1e-10 })
-                .unwrap()
-                .solve(&h, &g, &a, &b, &mut ours);
+            let outcome =
+                DenseQp::new(n, m, QpSettings { max_iterations: 100, tolerance: 1e-10, acceptable_tolerance: 1e-10 })
+                    .unwrap()
+                    .solve(&h, &g, &a, &b, &mut ours);
             assert!(matches!(outcome, QpOutcome::Solved { .. }), "case {case}: {outcome:?}");
             let (mut colptr, mut rowval, mut nzval) = (vec![0], vec![], vec![]);
             for j in 0..n {

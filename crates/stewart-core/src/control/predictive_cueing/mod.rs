@@ -97,6 +97,10 @@ const GRID_GROWTH_TEXT: &str = "a factor 1.1";
 
 /// The QP solver's relative tolerance (residuals and complementarity).
 pub const QP_TOLERANCE: f64 = 1e-8;
+/// The tolerance a solve that runs out of iterations is still used at: a hundredth of a
+/// per cent of the plan's size, far below what a driver feels, and re-planned a period
+/// later (docs/cueing.md, "A failed solve").
+pub const QP_ACCEPTABLE_TOLERANCE: f64 = 1e-6;
 
 impl PredictiveParameters {
     /// Why the parameters cannot be used, naming the parameter.
@@ -180,7 +184,11 @@ impl PredictiveCueing {
         let qp = DenseQp::new(
             QP_UNKNOWNS,
             QP_ROWS,
-            QpSettings { max_iterations: parameters.max_iterations, tolerance: QP_TOLERANCE },
+            QpSettings {
+                max_iterations: parameters.max_iterations,
+                tolerance: QP_TOLERANCE,
+                acceptable_tolerance: QP_ACCEPTABLE_TOLERANCE,
+            },
         )?;
         let problem = Box::new(Problem::new(&parameters, &stand));
         Ok(PredictiveCueing { parameters, stand, qp, problem })
@@ -192,18 +200,22 @@ impl PredictiveCueing {
     }
 
     /// Plans from the commanded motion `now` and the last plan (what this solve linearises
-    /// about, shifted by the period), with the vehicle's motion at the grid's points
+    /// about, shifted by the period; `None` after a failed solve: a return to neutral from
+    /// `now`, [`Problem::returning_inputs`]), with the vehicle's motion at the grid's points
     /// (`vehicle[j]` at `j` grid steps ahead, `vehicle[0]` now) and the lags of both
     /// perceptions now.
     pub fn solve(
         &mut self,
         now: &CommandedMotion,
-        plan: &[[f64; CHANNELS]; GRID_STEPS],
+        plan: Option<&[[f64; CHANNELS]; GRID_STEPS]>,
         vehicle: &[VehicleMotion; GRID_STEPS + 1],
         perceived_vehicle: &Perception,
         perceived_simulator: &Perception,
     ) -> SolveOutcome {
-        let nominal = self.problem.nominal_inputs(plan);
+        let nominal = match plan {
+            Some(plan) => self.problem.nominal_inputs(plan),
+            None => self.problem.returning_inputs(now),
+        };
         self.problem.build(
             &self.parameters,
             &self.stand,
@@ -215,7 +227,9 @@ impl PredictiveCueing {
         );
         let p = &mut *self.problem;
         match self.qp.solve(&p.hessian, &p.gradient, &p.constraints, &p.bounds, &mut p.solution) {
-            QpOutcome::Solved { iterations } => SolveOutcome::Planned { iterations, plan: p.plan(&nominal) },
+            QpOutcome::Solved { iterations } | QpOutcome::Acceptable { iterations } => {
+                SolveOutcome::Planned { iterations, plan: p.plan(&nominal) }
+            }
             QpOutcome::Failed { iterations, why } => SolveOutcome::Failed { iterations, why },
         }
     }

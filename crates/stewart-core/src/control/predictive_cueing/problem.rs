@@ -53,6 +53,10 @@ pub const NEUTRAL_TIME: f64 = 1.0;
 /// ends far from neutral, or moving, costs; a sustained force is then the tilt's, as in the
 /// classical washout's split.
 pub const TERMINAL_WEIGHT: f64 = 10.0;
+/// The triple pole, 1/s, of the nominal plan's return to neutral after a failed solve
+/// ([`Problem::returning_inputs`]): slow against the grid's longest step (0.24 s at the
+/// default horizon), so the held jerks stay a stable approximation of the feedback.
+pub const RETURN_RATE: f64 = 3.0;
 /// A row over the unknowns.
 type Row = [f64; UNKNOWNS];
 
@@ -140,15 +144,24 @@ impl Problem {
         }
     }
 
-    /// The nominal jerks per grid step: the last plan `period` later (step `j` takes the last
-    /// plan's jerk at the time `times[j] + period` after the last solve), 0 beyond it.
+    /// The nominal jerks per grid step: the last plan `period` later, step `j` taking the
+    /// mean of the last plan's jerks over `[times[j], times[j + 1]] + period` (0 beyond its
+    /// horizon). The mean keeps the last plan's acceleration at every grid point and its rate
+    /// and position to second order; taking the jerk at one instant of the step instead moved
+    /// each block's edge by the period at every solve, and a jump of 100 m/s³ between blocks
+    /// then put the nominal motion a metre off the last plan's 2 s ahead, more at each solve.
     pub fn nominal_inputs(&self, plan: &[[f64; CHANNELS]; GRID_STEPS]) -> [[f64; CHANNELS]; GRID_STEPS] {
-        std::array::from_fn(|j| {
-            let t = self.times[j] + self.period;
-            // The step of the last plan that holds t (times are increasing).
-            let k = self.times[1..].partition_point(|&end| end <= t * (1.0 + 1e-12));
-            plan.get(k).copied().unwrap_or([0.0; CHANNELS])
-        })
+        shifted_plan(&self.times, self.period, plan)
+    }
+
+    /// The nominal jerks when there is no last plan to follow (the last solve failed and the
+    /// classical washout moved the command): the command brought back to neutral by a triple
+    /// pole at RETURN_RATE, the jerk held over each grid step. Zero jerks instead would carry
+    /// the washout's last acceleration through the whole horizon (tens of rad/s of tilt rate
+    /// 2 s ahead), and the constraints linearised about that were violated by thousands of
+    /// their units: the QP's plans then followed them out.
+    pub fn returning_inputs(&self, now: &CommandedMotion) -> [[f64; CHANNELS]; GRID_STEPS] {
+        returning_plan(&self.steps, now)
     }
 
     /// The grid's points, s from the solve.
@@ -422,6 +435,41 @@ impl Problem {
     }
 }
 
+/// [`Problem::nominal_inputs`] on the grid `times`.
+fn shifted_plan(
+    times: &[f64; GRID_STEPS + 1],
+    period: f64,
+    plan: &[[f64; CHANNELS]; GRID_STEPS],
+) -> [[f64; CHANNELS]; GRID_STEPS] {
+    std::array::from_fn(|j| {
+        let (from, to) = (times[j] + period, times[j + 1] + period);
+        let mut sum = [0.0; CHANNELS];
+        for k in 0..GRID_STEPS {
+            let overlap = to.min(times[k + 1]) - from.max(times[k]);
+            if overlap > 0.0 {
+                for c in 0..CHANNELS {
+                    sum[c] += overlap * plan[k][c];
+                }
+            }
+        }
+        std::array::from_fn(|c| sum[c] / (times[j + 1] - times[j]))
+    })
+}
+
+/// [`Problem::returning_inputs`] over the grid's `steps`.
+fn returning_plan(steps: &[f64; GRID_STEPS], now: &CommandedMotion) -> [[f64; CHANNELS]; GRID_STEPS] {
+    let l = RETURN_RATE;
+    let mut motion = *now;
+    let mut nominal = [[0.0; CHANNELS]; GRID_STEPS];
+    for (j, jerk) in nominal.iter_mut().enumerate() {
+        *jerk = std::array::from_fn(|c| {
+            -(l * l * l * motion.position[c] + 3.0 * l * l * motion.rate[c] + 3.0 * l * motion.acceleration[c])
+        });
+        motion.advance(jerk, steps[j]);
+    }
+    nominal
+}
+
 fn perception_steps(otolith: [LagStep; 2], canal: [LagStep; 3]) -> crate::physics::cueing::perception::PerceptionSteps {
     crate::physics::cueing::perception::PerceptionSteps { otolith, canal }
 }
@@ -429,4 +477,107 @@ fn perception_steps(otolith: [LagStep; 2], canal: [LagStep; 3]) -> crate::physic
 /// The head point as a vector (for callers building a [`PredictiveStand`]).
 pub fn head_vector(head: &[f64; 3]) -> Vector3<f64> {
     Vector3::new(head[0], head[1], head[2])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::DEFAULT_PREDICTIVE;
+    use super::*;
+
+    fn grid() -> ([f64; GRID_STEPS], [f64; GRID_STEPS + 1]) {
+        let first = DEFAULT_PREDICTIVE.first_grid_step();
+        let steps: [f64; GRID_STEPS] = std::array::from_fn(|j| first * maths::pow(GRID_GROWTH, j as f64));
+        let mut times = [0.0; GRID_STEPS + 1];
+        for j in 0..GRID_STEPS {
+            times[j + 1] = times[j] + steps[j];
+        }
+        (steps, times)
+    }
+
+    /// The motion of `plan` (jerks per step of the grid `times`) from `start`, `t` later.
+    fn motion_at(
+        start: &CommandedMotion,
+        times: &[f64; GRID_STEPS + 1],
+        plan: &[[f64; CHANNELS]; GRID_STEPS],
+        t: f64,
+    ) -> CommandedMotion {
+        let mut m = *start;
+        for k in 0..GRID_STEPS {
+            if t <= times[k] {
+                break;
+            }
+            m.advance(&plan[k], t.min(times[k + 1]) - times[k]);
+        }
+        if t > times[GRID_STEPS] {
+            m.advance(&[0.0; CHANNELS], t - times[GRID_STEPS]);
+        }
+        m
+    }
+
+    /// The nominal plan a period later follows the last plan: the same acceleration at every
+    /// grid point (to round-off), the position within 5 cm over the 2 s horizon with jumps
+    /// of 200 m/s³ at every step (3.4 cm measured); the rule it replaced (each step the jerk
+    /// at one instant) put it 2 m off.
+    #[test]
+    fn the_shifted_plan_follows_the_last_plan() {
+        let (_, times) = grid();
+        let period = DEFAULT_PREDICTIVE.period;
+        let plan: [[f64; CHANNELS]; GRID_STEPS] =
+            std::array::from_fn(|k| std::array::from_fn(|c| if (k + c) % 2 == 0 { 100.0 } else { -100.0 }));
+        let start =
+            CommandedMotion { position: [0.1; CHANNELS], rate: [-0.2; CHANNELS], acceleration: [0.5; CHANNELS] };
+        let later = motion_at(&start, &times, &plan, period);
+        let nominal = shifted_plan(&times, period, &plan);
+        let (mut worst_a, mut worst_p) = (0.0f64, 0.0f64);
+        let mut m = later;
+        for j in 0..GRID_STEPS {
+            m.advance(&nominal[j], times[j + 1] - times[j]);
+            let want = motion_at(&start, &times, &plan, times[j + 1] + period);
+            for c in 0..CHANNELS {
+                worst_a = worst_a.max((m.acceleration[c] - want.acceleration[c]).abs());
+                worst_p = worst_p.max((m.position[c] - want.position[c]).abs());
+            }
+        }
+        // The point rule, for contrast.
+        let point: [[f64; CHANNELS]; GRID_STEPS] = std::array::from_fn(|j| {
+            let t = times[j] + period;
+            plan[times[1..].partition_point(|&end| end <= t)]
+        });
+        let mut m = later;
+        let mut point_p = 0.0f64;
+        for j in 0..GRID_STEPS {
+            m.advance(&point[j], times[j + 1] - times[j]);
+            let want = motion_at(&start, &times, &plan, times[j + 1] + period);
+            point_p = point_p.max((m.position[0] - want.position[0]).abs());
+        }
+        println!(
+            "2 s ahead: the mean rule {worst_p:.2e} m off the last plan (acceleration {worst_a:.1e}), the point rule {point_p:.2e} m"
+        );
+        assert!(worst_a < 1e-10, "acceleration off by {worst_a:e}");
+        assert!(worst_p < 0.05, "position off by {worst_p:e} m");
+        assert!(point_p > 20.0 * worst_p);
+    }
+
+    /// After a failed solve the nominal plan brings the command back to neutral: from a
+    /// washout's motion (0.1, 0.5 /s, 5 /s² in every channel) the largest excursion over the
+    /// horizon is under 5 % of the zero jerks' (which hold the acceleration: 11.1 at 2 s) and
+    /// the horizon ends within a fifth of it.
+    #[test]
+    fn the_returning_plan_comes_back_to_neutral() {
+        let (steps, times) = grid();
+        let start = CommandedMotion { position: [0.1; CHANNELS], rate: [0.5; CHANNELS], acceleration: [5.0; CHANNELS] };
+        let nominal = returning_plan(&steps, &start);
+        let mut m = start;
+        let mut largest = 0.0f64;
+        for j in 0..GRID_STEPS {
+            m.advance(&nominal[j], steps[j]);
+            largest = largest.max(m.position[0].abs());
+        }
+        let held = motion_at(&start, &times, &[[0.0; CHANNELS]; GRID_STEPS], times[GRID_STEPS]);
+        println!(
+            "largest excursion {largest:.3} (zero jerks: {:.2}), at the horizon's end {:.3}",
+            held.position[0], m.position[0]
+        );
+        assert!(largest < 0.05 * held.position[0] && m.position[0].abs() < 0.2 * largest);
+    }
 }
