@@ -20,6 +20,7 @@ from stewart_fmu.ssp import SYSTEM_HYDRAULIC_SSP
 from oracles import hydraulics as oracle
 from oracles.stand import EQUILIBRIUM_FORCE, GRAVITY, MASS
 from test_fmi3 import PLATFORM3, Fmu3
+from central_differences import largest_error
 
 pytestmark = pytest.mark.quick
 
@@ -258,34 +259,10 @@ def test_directional_derivatives_with_hydraulics_match_central_differences():
                 # The line in the compensator's band, below the set pressure, above the relief.
                 x[59] = (16.2e6, 12.0e6, 18.4e6)[case]
             u = np.concatenate([rng.uniform(-0.5, 0.5, 6), [0.7 if powered else P["pS"] * 0.9]])
-            m.set_states(x)
-            m.fmu.setReal(u_vrs, list(u))
             scale = np.concatenate([np.full(24, 1e-6), np.full(9, 1e-6), np.full(12, 10.0), np.full(12, 1e-6),
                                     [1e-6, 1e-6, 10.0, 1e-6]])
-            for known_set, knowns in (("states", m.all_state_vrs), ("inputs", u_vrs)):
-                exact = m.jacobian(m.all_derivative_vrs, knowns)
-                exact_out = m.jacobian(out_vrs, knowns)
-                fd, fd_out = np.zeros_like(exact), np.zeros_like(exact_out)
-                for j in range(len(knowns)):
-                    values = []
-                    h = scale[j] if known_set == "states" else (1e-6 if j < 6 or powered else 10.0)
-                    for sign in (1, -1):
-                        if known_set == "states":
-                            xs = x.copy()
-                            xs[j] += sign * h
-                            m.set_states(xs)
-                        else:
-                            us = u.copy()
-                            us[j] += sign * h
-                            m.fmu.setReal(u_vrs, list(us))
-                        values.append((m.derivatives(), np.array(m.fmu.getReal(out_vrs))))
-                    m.set_states(x)
-                    m.fmu.setReal(u_vrs, list(u))
-                    fd[:, j] = (values[0][0] - values[1][0]) / (2 * h)
-                    fd_out[:, j] = (values[0][1] - values[1][1]) / (2 * h)
-                for a, b in ((exact, fd), (exact_out, fd_out)):
-                    rows = np.max(np.abs(a), axis=1, keepdims=True)
-                    worst = max(worst, float(np.max(np.abs(a - b) / np.maximum(rows, 1e-12))))
+            input_steps = [1e-6 if j < 6 or powered else 10.0 for j in range(len(u_vrs))]
+            worst = max(worst, largest_error(m, x, u, u_vrs, out_vrs, scale, input_steps, per_row=True))
         m.free()
     print(f"directional derivatives with hydraulics vs central differences: max relative error (per row) {worst:.1e}")
     assert worst <= 1e-6
