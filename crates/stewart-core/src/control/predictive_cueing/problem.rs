@@ -54,8 +54,9 @@ pub const NEUTRAL_TIME: f64 = 1.0;
 /// classical washout's split.
 pub const TERMINAL_WEIGHT: f64 = 10.0;
 /// The triple pole, 1/s, of the nominal plan's return to neutral after a failed solve
-/// ([`Problem::returning_inputs`]): slow against the grid's longest step (0.24 s at the
-/// default horizon), so the held jerks stay a stable approximation of the feedback.
+/// ([`Problem::returning_inputs`]): back within the 2 s horizon, and slow enough against the
+/// grid's longest step (0.24 s at the default horizon: 0.72 of the pole's time) that the
+/// jerks held over the steps still return (the unit test below).
 pub const RETURN_RATE: f64 = 3.0;
 /// A row over the unknowns.
 type Row = [f64; UNKNOWNS];
