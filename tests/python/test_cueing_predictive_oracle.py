@@ -198,7 +198,8 @@ def test_predictive_cueing_follows_the_oracle(name, runs):
     print(f"{name}: {len(oracle['solves'])} solves; smallest margins of the QP's rows (slack units: cm, "
           f"5 cm/s, deg/s, deg): {margins}; FMU iterations {iterations.min()}-{iterations.max()}")
     assert np.all(fmu["mpc.fallbacks"] == 0), "a solve of the FMU failed"
-    assert np.all((iterations >= 1) & (iterations <= max_iterations()))
+    # Below the budget: converged to 1e-8 (a solve kept at the looser 1e-6 reports the budget).
+    assert np.all((iterations >= 1) & (iterations < max_iterations()))
     assert np.all(fmu["workspace.scale"] == 1.0), "the workspace net acted"
     assert all(value > 0 for value in oracle["margins"].values())
     failures = []

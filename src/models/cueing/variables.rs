@@ -216,8 +216,8 @@ declare_variables! {
         ); real(parameters.predictive.leg_speed),
         MPC_MAX_ITERATIONS => V::parameter(
             "mpc.maxIterations", &[], 152, None,
-            "Predictive cueing: the solver's iteration budget; a solve that needs more hands its period to the \
-             classical washout (mpc.fallbacks)",
+            "Predictive cueing: the solver's iteration budget; a solve that does not converge within it takes its \
+             last iterate within 1e-6, or without one hands its period to the classical washout (mpc.fallbacks)",
         )
         .integer(1, 1000); integer(parameters.iterations),
         PREVIEW_FILE => V::parameter(

@@ -35,8 +35,8 @@ pub struct QpSettings {
     pub max_iterations: u32,
     /// Relative tolerance of the residuals and of the complementarity gap.
     pub tolerance: f64,
-    /// A looser one: a solve that cannot reach `tolerance` within its iterations (the normal
-    /// equations' round-off grows as the active rows' weights do) returns its last iterate
+    /// A looser one: a solve that ends without reaching `tolerance` (out of iterations, a
+    /// factorisation that breaks down, iterates that are not finite) returns its last iterate
     /// within this (IPOPT's "acceptable level"; Clarabel's "almost solved").
     pub acceptable_tolerance: f64,
 }
@@ -48,9 +48,9 @@ pub struct DenseQp {
     m: usize,
     settings: QpSettings,
     x: Vec<f64>,
-    /// The last iterate within the acceptable tolerance, and its iteration.
+    /// The last iterate within the acceptable tolerance, if one was.
     x_acceptable: Vec<f64>,
-    acceptable: Option<u32>,
+    acceptable: bool,
     s: Vec<f64>,
     z: Vec<f64>,
     /// The normal matrix and its Cholesky factor (lower, row-major).
@@ -87,7 +87,7 @@ impl DenseQp {
             settings,
             x: v(n),
             x_acceptable: v(n),
-            acceptable: None,
+            acceptable: false,
             s: v(m),
             z: v(m),
             normal: v(n * n),
@@ -123,12 +123,13 @@ impl DenseQp {
         // Start: x = 0, each slack its bound's value but at least 1 (an infeasible start is
         // fine: the primal residual closes along the way), each dual 1.
         self.x.fill(0.0);
-        self.acceptable = None;
+        self.acceptable = false;
         for i in 0..m {
             self.s[i] = b[i].max(1.0);
             self.z[i] = 1.0;
         }
-        for iteration in 1..=self.settings.max_iterations {
+        // One pass more than the budget: the last step's iterate is checked too.
+        for iteration in 1..=self.settings.max_iterations + 1 {
             // Residuals: r_d = H x + g + A^T z, r_p = A x + s - b.
             for (j, h_row) in h.chunks_exact(n).enumerate() {
                 self.r_dual[j] = g[j] + dot(h_row, &self.x);
@@ -162,7 +163,10 @@ impl DenseQp {
             }
             if within(self.settings.acceptable_tolerance) {
                 self.x_acceptable.copy_from_slice(&self.x);
-                self.acceptable = Some(iteration - 1);
+                self.acceptable = true;
+            }
+            if iteration > self.settings.max_iterations {
+                break;
             }
             if !self.factor(h, a) {
                 return self.give_up(x, iteration, "the normal equations are not positive definite");
@@ -205,12 +209,11 @@ impl DenseQp {
     /// The end of a solve that did not reach the tolerance: its last acceptable iterate to
     /// `x`, or a failure (`x` unchanged).
     fn give_up(&self, x: &mut [f64], iterations: u32, why: &'static str) -> QpOutcome {
-        match self.acceptable {
-            Some(_) => {
-                x.copy_from_slice(&self.x_acceptable);
-                QpOutcome::Acceptable { iterations }
-            }
-            None => QpOutcome::Failed { iterations, why },
+        if self.acceptable {
+            x.copy_from_slice(&self.x_acceptable);
+            QpOutcome::Acceptable { iterations }
+        } else {
+            QpOutcome::Failed { iterations, why }
         }
     }
 

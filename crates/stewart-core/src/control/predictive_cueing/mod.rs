@@ -74,7 +74,8 @@ pub struct PredictiveParameters {
     pub tilt_rate_limit: f64,
     /// `tilt.max`, rad: the largest roll and pitch.
     pub tilt_max: f64,
-    /// `mpc.maxIterations`: a solve that needs more fails.
+    /// `mpc.maxIterations`: a solve that does not converge within it takes its last iterate
+    /// within [`QP_ACCEPTABLE_TOLERANCE`], or (none) fails.
     pub max_iterations: u32,
 }
 
@@ -97,9 +98,9 @@ const GRID_GROWTH_TEXT: &str = "a factor 1.1";
 
 /// The QP solver's relative tolerance (residuals and complementarity).
 pub const QP_TOLERANCE: f64 = 1e-8;
-/// The tolerance a solve that runs out of iterations is still used at: a hundredth of a
-/// per cent of the plan's size, far below what a driver feels, and re-planned a period
-/// later (docs/cueing.md, "A failed solve").
+/// The tolerance a solve that ends without reaching [`QP_TOLERANCE`] (out of iterations, or
+/// broken down) is still used at, relative as that one is: a plan re-made a period later
+/// (docs/cueing.md, "A failed solve").
 pub const QP_ACCEPTABLE_TOLERANCE: f64 = 1e-6;
 
 impl PredictiveParameters {

@@ -43,8 +43,8 @@ const GIVE_LENGTH: f64 = 0.01;
 const GIVE_SPEED: f64 = 0.05;
 const GIVE_TILT_RATE: f64 = std::f64::consts::PI / 180.0;
 const GIVE_TILT: f64 = std::f64::consts::PI / 180.0;
-/// Ratio of consecutive grid steps: the first is about 36 ms at the default 2 s horizon, the
-/// last 0.24 s (a bump's heave is resolved ahead, the far future only sketched).
+/// Ratio of consecutive grid steps: the first is 35 ms at the default 2 s horizon, the last
+/// 0.21 s (a bump's heave is resolved ahead, the far future only sketched).
 pub const GRID_GROWTH: f64 = 1.1;
 /// The return to neutral weighs the head's and the yaw's rates per this time, s, squared: a
 /// drift of 0.1 m/s costs as a displacement of 0.1 m.
@@ -54,10 +54,12 @@ pub const NEUTRAL_TIME: f64 = 1.0;
 /// classical washout's split.
 pub const TERMINAL_WEIGHT: f64 = 10.0;
 /// The triple pole, 1/s, of the nominal plan's return to neutral after a failed solve
-/// ([`Problem::returning_inputs`]): back within the 2 s horizon, and slow enough against the
-/// grid's longest step (0.24 s at the default horizon: 0.72 of the pole's time) that the
-/// jerks held over the steps still return (the unit test below).
+/// ([`Problem::returning_inputs`]): back within the default 2 s horizon (the unit test below).
 pub const RETURN_RATE: f64 = 3.0;
+/// ... at most this over each grid step's length: the feedback's jerk held over a step
+/// returns only while pole times step stays below about 0.67 (above it the held jerks
+/// overshoot and grow), which longer horizons' last steps would pass.
+pub const RETURN_RATE_PER_STEP: f64 = 0.5;
 /// A row over the unknowns.
 type Row = [f64; UNKNOWNS];
 
@@ -459,10 +461,10 @@ fn shifted_plan(
 
 /// [`Problem::returning_inputs`] over the grid's `steps`.
 fn returning_plan(steps: &[f64; GRID_STEPS], now: &CommandedMotion) -> [[f64; CHANNELS]; GRID_STEPS] {
-    let l = RETURN_RATE;
     let mut motion = *now;
     let mut nominal = [[0.0; CHANNELS]; GRID_STEPS];
     for (j, jerk) in nominal.iter_mut().enumerate() {
+        let l = RETURN_RATE.min(RETURN_RATE_PER_STEP / steps[j]);
         *jerk = std::array::from_fn(|c| {
             -(l * l * l * motion.position[c] + 3.0 * l * l * motion.rate[c] + 3.0 * l * motion.acceleration[c])
         });
