@@ -143,11 +143,9 @@ impl System {
             components[from].connected_feedthrough |=
                 feeds_from.iter().any(|vr| inputs.iter().any(|&(input, _, _)| input == *vr));
         }
-        for c in &mut components {
-            c.feedthrough = c.connected_feedthrough;
-        }
-        let flags: Vec<bool> = components.iter().map(|c| c.feedthrough).collect();
-        let order = gauss_seidel_order(&components, &flags)?;
+        // The connections' loops are refused here; each run orders again with its own inputs.
+        let connected: Vec<bool> = components.iter().map(|c| c.connected_feedthrough).collect();
+        let order = gauss_seidel_order(&components, &connected)?;
         let name = description.map(|d| d.name.clone()).unwrap_or_else(|| names.join("+"));
         Ok(System { components, order, name })
     }

@@ -102,13 +102,7 @@ pub struct Problem {
 
 impl Problem {
     pub fn new(p: &PredictiveParameters, stand: &PredictiveStand) -> Problem {
-        let growth = GRID_GROWTH;
-        let first = p.first_grid_step();
-        let steps: [f64; GRID_STEPS] = std::array::from_fn(|j| first * maths::pow(growth, j as f64));
-        let mut times = [0.0; GRID_STEPS + 1];
-        for j in 0..GRID_STEPS {
-            times[j + 1] = times[j] + steps[j];
-        }
+        let (steps, times) = grid(p);
         let mut block_of = [0; GRID_STEPS];
         let mut at = 0;
         for (b, &len) in BLOCKS.iter().enumerate() {
@@ -438,6 +432,17 @@ impl Problem {
     }
 }
 
+/// The grid's step lengths and points, s: `h_j = h_0 GRID_GROWTH^j` from `tau_0 = 0`.
+fn grid(p: &PredictiveParameters) -> ([f64; GRID_STEPS], [f64; GRID_STEPS + 1]) {
+    let first = p.first_grid_step();
+    let steps: [f64; GRID_STEPS] = std::array::from_fn(|j| first * maths::pow(GRID_GROWTH, j as f64));
+    let mut times = [0.0; GRID_STEPS + 1];
+    for j in 0..GRID_STEPS {
+        times[j + 1] = times[j] + steps[j];
+    }
+    (steps, times)
+}
+
 /// [`Problem::nominal_inputs`] on the grid `times`.
 fn shifted_plan(
     times: &[f64; GRID_STEPS + 1],
@@ -487,16 +492,6 @@ mod tests {
     use super::super::DEFAULT_PREDICTIVE;
     use super::*;
 
-    fn grid() -> ([f64; GRID_STEPS], [f64; GRID_STEPS + 1]) {
-        let first = DEFAULT_PREDICTIVE.first_grid_step();
-        let steps: [f64; GRID_STEPS] = std::array::from_fn(|j| first * maths::pow(GRID_GROWTH, j as f64));
-        let mut times = [0.0; GRID_STEPS + 1];
-        for j in 0..GRID_STEPS {
-            times[j + 1] = times[j] + steps[j];
-        }
-        (steps, times)
-    }
-
     /// The motion of `plan` (jerks per step of the grid `times`) from `start`, `t` later.
     fn motion_at(
         start: &CommandedMotion,
@@ -523,7 +518,7 @@ mod tests {
     /// at one instant) put it 2 m off.
     #[test]
     fn the_shifted_plan_follows_the_last_plan() {
-        let (_, times) = grid();
+        let (_, times) = grid(&DEFAULT_PREDICTIVE);
         let period = DEFAULT_PREDICTIVE.period;
         let plan: [[f64; CHANNELS]; GRID_STEPS] =
             std::array::from_fn(|k| std::array::from_fn(|c| if (k + c) % 2 == 0 { 100.0 } else { -100.0 }));
@@ -567,7 +562,7 @@ mod tests {
     /// the horizon ends within a fifth of it.
     #[test]
     fn the_returning_plan_comes_back_to_neutral() {
-        let (steps, times) = grid();
+        let (steps, times) = grid(&DEFAULT_PREDICTIVE);
         let start = CommandedMotion { position: [0.1; CHANNELS], rate: [0.5; CHANNELS], acceleration: [5.0; CHANNELS] };
         let nominal = returning_plan(&steps, &start);
         let mut m = start;
