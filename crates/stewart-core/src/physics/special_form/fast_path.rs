@@ -2,7 +2,7 @@
 //! vector registers; for the paper's massless, frictionless legs the definition's bits (pinned
 //! by a test), for the machine's (legs with mass, friction, drives) its numbers to round-off.
 
-use super::machine::{Loads, MachineLoad, solve_spd6};
+use super::machine::{InertiaSums, Loads, MachineLoad, solve_spd6};
 use super::*;
 
 /// The fast path's joint check counts a joint within this of its limit's cosine as touching.
@@ -335,19 +335,19 @@ impl SpecialForm {
             point_masses[0] = g55;
             (point_masses, [b0, b1, b2, b3, b4, b5])
         };
+        let sums = InertiaSums {
+            along: [
+                g00, g10, g11, g20, g21, g22, g30, g31, g32, g33, g40, g41, g42, g43, g44, g50, g51, g52, g53, g54, g55,
+            ],
+            across: a,
+            across_arm: [ax, ay, az],
+            across_arm2: a_rho2,
+            across_arm_arm: [p00, p10, p11, p20, p21, p22],
+        };
+        let matrix = self.inertia_matrix(&state.e, &sums);
         let (mass, j, e) = (self.stand.mass, &self.stand.inertia, &state.e);
         // `J_w = sum_a J_a e_a e_a^T`, from `J_a e_a`.
         let je = [e[0] * j[0], e[1] * j[1], e[2] * j[2]];
-        let j_w = |r: usize, col: usize| je[0][r] * e[0][col] + je[1][r] * e[1][col] + je[2][r] * e[2][col];
-        let linear = mass + a;
-        let matrix = [
-            [g00 + linear, 0.0, 0.0, 0.0, 0.0, 0.0],
-            [g10, g11 + linear, 0.0, 0.0, 0.0, 0.0],
-            [g20, g21, g22 + linear, 0.0, 0.0, 0.0],
-            [g30, g31 - az, g32 + ay, g33 + j_w(0, 0) + (a_rho2 - p00), 0.0, 0.0],
-            [g40 + az, g41, g42 - ax, g43 + j_w(1, 0) - p10, g44 + j_w(1, 1) + (a_rho2 - p11), 0.0],
-            [g50 - ay, g51 + ax, g52, g53 + j_w(2, 0) - p20, g54 + j_w(2, 1) - p21, g55 + j_w(2, 2) + (a_rho2 - p22)],
-        ];
         let omega = state.angular_velocity_inertial();
         let j_omega = je[0] * e[0].dot(&omega) + je[1] * e[1].dot(&omega) + je[2] * e[2].dot(&omega);
         let mut force = Vector3::new(b0, b1, b2 - mass * self.stand.gravity);

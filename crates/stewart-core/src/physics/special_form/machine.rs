@@ -117,18 +117,10 @@ impl SpecialForm {
         let e = &state.e;
         let j_w =
             |x: &Vector3<T>| e[0] * (e[0].dot(x) * j[0]) + e[1] * (e[1].dot(x) * j[1]) + e[2] * (e[2].dot(x) * j[2]);
-        // The system [[M I + sum M_k, -sum M_k [rho]x], [., J_w - sum [rho]x M_k [rho]x]], with
-        // M_k = a I + c n n^T (a = I_t / l^2, c = m_r + m_a - a): each leg adds
-        // c S S^T with S = (n, rho x n), and where a != 0 the point mass's
-        // a [[I, -[rho]x], [[rho]x, |rho|^2 I - rho rho^T]]. Lower triangle only.
         let zero = T::zero();
-        let mut a = [[zero; 6]; 6];
-        for r in 0..3 {
-            a[r][r] = T::constant(self.stand.mass);
-            for c in 0..=r {
-                a[3 + r][3 + c] = e[0][r] * e[0][c] * j[0] + e[1][r] * e[1][c] * j[1] + e[2][r] * e[2][c] * j[2];
-            }
-        }
+        // Each leg's terms of the system's sums (`InertiaSums`), summed below in the fast path's
+        // order; a leg without inertia adds nothing.
+        let (mut along, mut across) = ([[zero; LEG_COUNT]; 21], [[zero; LEG_COUNT]; 11]);
         let mut force = Vector3::new(zero, zero, -T::constant(self.stand.mass * self.stand.gravity));
         let mut moment = -omega.cross(&j_w(&omega));
         for k in 0..LEG_COUNT {
@@ -142,32 +134,34 @@ impl SpecialForm {
             let f = f0 - m.times(n, &omega.cross(&omega.cross(&rho)));
             force += f;
             moment += rho.cross(&f) + loads.machine_moment[k];
-            let (across, along) = (m.across, m.along - m.across);
             let rn = rho.cross(n);
             let s = [n.x, n.y, n.z, rn.x, rn.y, rn.z];
+            let mut i = 0;
             for r in 0..6 {
-                let sr = s[r] * along;
+                let ws = s[r] * (m.along - m.across);
                 for c in 0..=r {
-                    a[r][c] += sr * s[c];
+                    along[i][k] = ws * s[c];
+                    i += 1;
                 }
             }
-            if across.value() != 0.0 {
-                // The point mass: a11 += a I, a21 += a [rho]x, a22 += a (|rho|^2 I - rho rho^T).
-                let skew = [[zero, -rho.z, rho.y], [rho.z, zero, -rho.x], [-rho.y, rho.x, zero]];
-                let rr = rho.dot(&rho);
-                for r in 0..3 {
-                    a[r][r] += across;
-                    for c in 0..3 {
-                        a[3 + r][c] += skew[r][c] * across;
-                    }
-                    for c in 0..=r {
-                        let diagonal = if r == c { rr } else { zero };
-                        a[3 + r][3 + c] += (diagonal - rho[r] * rho[c]) * across;
-                    }
-                }
+            let a = m.across;
+            let a_rho = [a * rho.x, a * rho.y, a * rho.z];
+            let rho2 = rho.x * rho.x + rho.y * rho.y + rho.z * rho.z;
+            let terms = [a, a_rho[0], a_rho[1], a_rho[2], a * rho2, a_rho[0] * rho.x, a_rho[1] * rho.x];
+            let more = [a_rho[1] * rho.y, a_rho[2] * rho.x, a_rho[2] * rho.y, a_rho[2] * rho.z];
+            for (i, t) in terms.into_iter().chain(more).enumerate() {
+                across[i][k] = t;
             }
         }
-        let q = solve_spd6(a, [force.x, force.y, force.z, moment.x, moment.y, moment.z]);
+        let across = across.map(|x| sum_over_legs(&x));
+        let sums = InertiaSums {
+            along: along.map(|x| sum_over_legs(&x)),
+            across: across[0],
+            across_arm: [across[1], across[2], across[3]],
+            across_arm2: across[4],
+            across_arm_arm: [across[5], across[6], across[7], across[8], across[9], across[10]],
+        };
+        let q = solve_spd6(self.inertia_matrix(e, &sums), [force.x, force.y, force.z, moment.x, moment.y, moment.z]);
         let (alpha, beta) = (Vector3::new(q[0], q[1], q[2]), Vector3::new(q[3], q[4], q[5]));
         for k in 0..LEG_COUNT {
             if let Some((m, n)) = &inertia[k] {
@@ -177,6 +171,52 @@ impl SpecialForm {
             }
         }
     }
+
+    /// The lower triangle of the 6x6 system `[[M I + sum M_k, -sum M_k [rho_k]x], [., J_w -
+    /// sum [rho_k]x M_k [rho_k]x]]` in the platform's accelerations `(r'', omega')`, from the
+    /// legs' sums and the body axes `e` (`J_w = sum_a J_a e_a e_a^T`). With `M_k = a_k I + c_k
+    /// n_k n_k^T` (`a_k = I_t / l_k^2`, `c_k = m_r + m_a - a_k`) each leg adds `c_k S_k S_k^T`
+    /// (`S_k = (n_k, rho_k x n_k)`) and its point mass `a_k [[I, -[rho_k]x], [[rho_k]x,
+    /// |rho_k|^2 I - rho_k rho_k^T]]`. The one form of the system: the definition
+    /// ([`SpecialForm::solve_inertia`]) and the fast path build it here, each with its own sums
+    /// in the same order.
+    #[inline(always)]
+    #[rustfmt::skip]
+    pub(super) fn inertia_matrix<T: Real>(&self, e: &[Vector3<T>; 3], sums: &InertiaSums<T>) -> [[T; 6]; 6] {
+        let j = &self.stand.inertia;
+        let je = [0, 1, 2].map(|a| [e[a].x * j[a], e[a].y * j[a], e[a].z * j[a]]);
+        let j_w = |r: usize, c: usize| je[0][r] * e[0][c] + je[1][r] * e[1][c] + je[2][r] * e[2][c];
+        let g = &sums.along;
+        let [ax, ay, az] = sums.across_arm;
+        let [p00, p10, p11, p20, p21, p22] = sums.across_arm_arm;
+        let rr = sums.across_arm2;
+        let linear = T::constant(self.stand.mass) + sums.across;
+        let o = T::zero();
+        [
+            [g[0] + linear, o, o, o, o, o],
+            [g[1], g[2] + linear, o, o, o, o],
+            [g[3], g[4], g[5] + linear, o, o, o],
+            [g[6], g[7] - az, g[8] + ay, g[9] + j_w(0, 0) + (rr - p00), o, o],
+            [g[10] + az, g[11], g[12] - ax, g[13] + j_w(1, 0) - p10, g[14] + j_w(1, 1) + (rr - p11), o],
+            [g[15] - ay, g[16] + ax, g[17], g[18] + j_w(2, 0) - p20, g[19] + j_w(2, 1) - p21, g[20] + j_w(2, 2) + (rr - p22)],
+        ]
+    }
+}
+
+/// The legs' sums in the 6x6 system of their inertia ([`SpecialForm::inertia_matrix`]), each
+/// over the legs in [`sum_over_legs`]'s order (the fast path's lanes sum in it too): with
+/// `S_k = (n_k, rho_k x n_k)`, `c_k = along_k - across_k` and `a_k = across_k` (kg).
+pub(super) struct InertiaSums<T> {
+    /// `sum c_k S_k S_k^T`, its lower triangle row by row (00; 10, 11; 20, 21, 22; ...; 50 .. 55).
+    pub(super) along: [T; 21],
+    /// `sum a_k`, kg.
+    pub(super) across: T,
+    /// `sum a_k rho_k`, kg m.
+    pub(super) across_arm: [T; 3],
+    /// `sum a_k |rho_k|^2`, kg m².
+    pub(super) across_arm2: T,
+    /// `sum a_k rho_k rho_k^T`, its lower triangle (00; 10, 11; 20, 21, 22), kg m².
+    pub(super) across_arm_arm: [T; 6],
 }
 
 /// Solves `A x = b` for a symmetric positive definite 6x6 `A` given by its lower triangle

@@ -268,3 +268,68 @@ unsafe fn wide_joint_margins(
 ) {
     form.joint_margins::<Wide>(state, legs, base, platform)
 }
+
+/// The 6x6 system of the legs' inertia (`SpecialForm::inertia_matrix`, the one form both the
+/// definition and the fast path solve) against the Newton-Euler blocks written out as matrices:
+/// `[[M I + sum M_k, -sum M_k [rho_k]x], [sum [rho_k]x M_k, J_w - sum [rho_k]x M_k [rho_k]x]]`
+/// with `M_k = a_k I + c_k n_k n_k^T`, for tilted axes and legs of unequal mass and inertia.
+#[test]
+fn the_legs_inertia_system_is_the_newton_euler_blocks() {
+    use super::machine::InertiaSums;
+    use nalgebra::{Matrix3, Matrix6};
+    let stand = Stand::truck_cabin();
+    let form = SpecialForm::new(stand.clone());
+    let rotation = rotation_from_angles(&Vector3::new(0.3, -0.2, 1.1));
+    let e: [Vector3<f64>; 3] = std::array::from_fn(|a| rotation.column(a).into_owned());
+    let skew = |v: &Vector3<f64>| Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0);
+    let j_w = (0..3).fold(Matrix3::zeros(), |m, a| m + e[a] * e[a].transpose() * stand.inertia[a]);
+    // The blocks (force, moment) x (r'', omega').
+    let mut blocks = [[Matrix3::identity() * stand.mass, Matrix3::zeros()], [Matrix3::zeros(), j_w]];
+    let (mut along, mut across) = ([[0.0; LEG_COUNT]; 21], [[0.0; LEG_COUNT]; 11]);
+    for k in 0..LEG_COUNT {
+        let rho = rotation * stand.platform_joints[k];
+        let n = (rho + Stand::truck_cabin_neutral_position() - stand.base_joints[k]).normalize();
+        let (a, c) = (0.4 + 0.1 * k as f64, 55.0 + 3.0 * k as f64);
+        let m_k = Matrix3::identity() * a + n * n.transpose() * c;
+        let x = skew(&rho);
+        blocks[0][0] += m_k;
+        blocks[1][0] += x * m_k;
+        blocks[0][1] -= m_k * x;
+        blocks[1][1] -= x * m_k * x;
+        let rn = rho.cross(&n);
+        let s = [n.x, n.y, n.z, rn.x, rn.y, rn.z];
+        let mut i = 0;
+        for r in 0..6 {
+            for col in 0..=r {
+                along[i][k] = s[r] * c * s[col];
+                i += 1;
+            }
+        }
+        let terms = [a, a * rho.x, a * rho.y, a * rho.z, a * rho.norm_squared()];
+        let outer = [(0, 0), (1, 0), (1, 1), (2, 0), (2, 1), (2, 2)].map(|(r, col)| a * rho[r] * rho[col]);
+        for (i, t) in terms.into_iter().chain(outer).enumerate() {
+            across[i][k] = t;
+        }
+    }
+    let across = across.map(|x| sum_over_legs(&x));
+    let sums = InertiaSums {
+        along: along.map(|x| sum_over_legs(&x)),
+        across: across[0],
+        across_arm: [across[1], across[2], across[3]],
+        across_arm2: across[4],
+        across_arm_arm: [across[5], across[6], across[7], across[8], across[9], across[10]],
+    };
+    let reference = Matrix6::from_fn(|r, col| blocks[r / 3][col / 3][(r % 3, col % 3)]);
+    let matrix = form.inertia_matrix(&e, &sums);
+    assert!((reference - reference.transpose()).amax() < 1e-9 * reference.amax(), "the blocks are symmetric");
+    let mut worst: f64 = 0.0;
+    for r in 0..6 {
+        for col in 0..=r {
+            worst = worst.max((matrix[r][col] - reference[(r, col)]).abs() / reference.amax());
+        }
+        for col in r + 1..6 {
+            assert_eq!(matrix[r][col], 0.0, "the lower triangle only");
+        }
+    }
+    assert!(worst < 1e-14, "the 6x6 system differs from the Newton-Euler blocks by {worst:e} relative");
+}
