@@ -47,10 +47,12 @@ check_disk() {
         *) need_gb=3 ;;
     esac
     local free_kb
-    free_kb=$(df -Pk . 2>/dev/null | awk 'NR == 2 {print $4}')
+    # The repository's file system (the builds, .venv and, on a machine of one disk as CI's,
+    # the toolchains too); a df that cannot tell skips the check.
+    free_kb=$(df -Pk . 2>/dev/null | awk 'NR == 2 {print $4}') || return 0
     [ -n "$free_kb" ] || return 0
     if [ "$free_kb" -lt $((need_gb * 1024 * 1024)) ]; then
-        step "warning: $((free_kb / 1024)) MB free on $(df -P . | awk 'NR == 2 {print $6}'); on a fresh machine this command needs about $need_gb GB (toolchains, builds, .venv); it may stop with 'No space left on device'"
+        step "warning: $(awk -v k="$free_kb" 'BEGIN {printf "%.1f", k / 1048576}') GB free on the repository's file system; on a fresh machine this command needs about $need_gb GB (toolchains, builds, .venv); it may stop with 'No space left on device'"
     fi
 }
 
