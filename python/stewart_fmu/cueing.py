@@ -57,14 +57,14 @@ def run(manoeuvre, h=1e-3, parameters=None, record=RECORDED, fmu=CUEING_FMU, fir
     the inputs held over each step of `h`, or with `first_order` following their chord to the
     next point (fmi2SetRealInputDerivatives). `integers`: Integer parameters by name (for
     example {"cueing.method": 1}, predictive cueing); `strings`: String parameters
-    ({"preview.file": path}). Integer outputs in `record` (`mpc.fallbacks`, `mpc.iterations`)
+    ({"preview.file": path}). Integer outputs in `record` (`mpc.fallbacks`, `mpc.acceptable`, `mpc.iterations`)
     are read as such. Returns a dict of arrays: `time`, the vehicle's `f[k]`, `omega[k]` as
     set, and `record` at the same instants (the outputs at a communication point see the inputs
     set there)."""
     t_end = float(manoeuvre["time"][-1])
     check_times(t_end, h)
     cue = Component(fmu, "cueing", {**(parameters or {}), **(strings or {})}, integers)
-    counters = [n for n in record if n in ("mpc.fallbacks", "mpc.iterations")]
+    counters = [n for n in record if n in ("mpc.fallbacks", "mpc.iterations", "mpc.acceptable")]
     reals = [n for n in record if n not in counters]
     counter_vrs = [cue.vr[n] for n in counters]
     inputs = [cue.vr[n] for n in F + OMEGA]

@@ -1,9 +1,9 @@
 """Predictive cueing (cueing.method = 1, SPEC §12, docs/cueing.md): what the driver perceives
 on the main job's manoeuvres against the classical washout's, the legs inside their margins
-on 300 fuzzed drives on a Dask cluster on loopback (and, a known defect marked as an expected
-failure, the solves' success and the command's smoothness there), FMI 3 against
-FMI 2 bit for bit, a preview file of a recorded drive, and the refusals (Model Exchange, a
-bad preview file)."""
+on 300 fuzzed drives on a Dask cluster on loopback with the solves' success and the
+command's smoothness there, the solver's counters (mpc.fallbacks, mpc.acceptable), FMI 3
+against FMI 2 bit for bit, a preview file of a recorded drive, and the refusals (Model
+Exchange, a bad preview file)."""
 
 import math
 import sys
@@ -171,6 +171,65 @@ def test_the_solves_succeed_and_the_command_is_smooth_on_fuzzed_drives(fuzzed):
     power; a jump (the net pulling back) would show as a residual of m/s."""
     assert fuzzed["fallbacks"] < 0.01 * fuzzed["solves"], fuzzed
     assert fuzzed["worst_v"] < 0.03, fuzzed
+
+
+def test_the_counters_tell_failed_and_acceptable_solves_apart():
+    """`mpc.fallbacks` counts the solves with no iterate within the acceptable level (1e-6),
+    `mpc.acceptable` those that ended on one without reaching the tolerance (1e-8). On the
+    slalom, one solve per 10 ms step: with 13 iterations, too few for this problem, both
+    counters rise, by at most one a step, and (no factorisation breaks down on this drive) only
+    on solves that used the whole budget; with the default 30 every solve converges and both
+    stay at 0."""
+    def counters(budget):
+        r = cueing.run(vehicle.MANOEUVRES["slalom"](), h=0.01, integers={**PREDICTIVE, "mpc.maxIterations": budget},
+                       record=["mpc.iterations", "mpc.acceptable", "mpc.fallbacks"])
+        return tuple(np.asarray(r[n], dtype=np.int64) for n in ("mpc.iterations", "mpc.acceptable", "mpc.fallbacks"))
+
+    iterations, acceptable, fallbacks = counters(13)
+    rises = np.diff(acceptable), np.diff(fallbacks)
+    solves = len(iterations) - 1
+    at_budget = int(np.sum(iterations[1:] == 13))
+    print(f"slalom, 13 iterations: {solves} solves, {at_budget} at the budget, {acceptable[-1]} kept at the "
+          f"acceptable level, {fallbacks[-1]} failed")
+    for rise in rises:
+        assert set(np.unique(rise)) <= {0, 1}, "a counter fell or rose by more than one solve in a step"
+    assert np.all(rises[0] + rises[1] <= 1), "one solve counted twice"
+    assert acceptable[-1] > 0 and fallbacks[-1] > 0, "with too few iterations both kinds of solve occur"
+    assert np.all(iterations[1:][(rises[0] + rises[1]) == 1] == 13), "a counted solve stopped before its budget"
+    iterations, acceptable, fallbacks = counters(30)
+    print(f"slalom, 30 iterations (the default): at most {iterations.max()} per solve")
+    assert acceptable[-1] == 0 and fallbacks[-1] == 0 and iterations.max() < 30
+
+
+def test_a_saved_state_keeps_the_plan_and_the_solvers_counters():
+    """Predictive cueing with a tight budget (13 iterations) saved after 5 s of the slalom,
+    serialized and restored into another instance: the next second's commands and the
+    counters (mpc.iterations, mpc.acceptable, mpc.fallbacks) equal the uninterrupted run's."""
+    m = vehicle.MANOEUVRES["slalom"]()
+    integers = {**PREDICTIVE, "mpc.maxIterations": 13}
+    names = ["mpc.iterations", "mpc.acceptable", "mpc.fallbacks"]
+
+    def steps(c, i0, i1):
+        out = []
+        for i in range(i0, i1):
+            c.set_values(cueing.F + cueing.OMEGA, np.concatenate(vehicle.at(m, i * 0.01)))
+            c.step(0.01)
+            out.append(np.concatenate([c.values(cueing.POSE), c.slave.getInteger([c.vr[n] for n in names])]))
+        return np.array(out)
+
+    a = Component(CUEING_FMU, "a", {}, integers)
+    b = Component(CUEING_FMU, "b", {}, integers)
+    try:
+        before = steps(a, 0, 500)
+        assert before[-1, -2] > 0 and before[-1, -1] > 0, "both kinds of counted solve before the save"
+        state, saved_at = a.slave.serializeFMUstate(a.slave.getFMUstate()), a.time
+        whole = steps(a, 500, 600)
+        b.slave.setFMUstate(b.slave.deSerializeFMUstate(state))
+        b.time = saved_at
+        assert np.array_equal(steps(b, 500, 600), whole)
+    finally:
+        a.free()
+        b.free()
 
 
 def test_fmi3_equals_fmi2_bit_for_bit_with_predictive_cueing():

@@ -243,6 +243,7 @@ impl FmuModel for CueingModel {
         match var.group {
             variables::group::MPC_ITERATIONS => self.predictive_state.iterations,
             variables::group::MPC_FALLBACKS => self.predictive_state.fallbacks,
+            variables::group::MPC_ACCEPTABLE => self.predictive_state.acceptable,
             _ => self.integer(var).unwrap_or(0),
         }
     }
@@ -439,6 +440,7 @@ impl FmuModel for CueingModel {
         w.u64(p.solves);
         w.i32(p.iterations);
         w.i32(p.fallbacks);
+        w.i32(p.acceptable);
         w.bool(p.falling_back);
         w.u8(self.tilt_modes[0].code());
         w.u8(self.tilt_modes[1].code());
@@ -463,6 +465,7 @@ impl FmuModel for CueingModel {
         p.solves = r.u64()?;
         p.iterations = r.i32()?;
         p.fallbacks = r.i32()?;
+        p.acceptable = r.i32()?;
         p.falling_back = r.bool()?;
         for i in 0..2 {
             model.tilt_modes[i] =

@@ -134,6 +134,8 @@ pub struct PredictiveState {
     pub iterations: i32,
     /// `mpc.fallbacks`: failed solves since the start.
     pub fallbacks: i32,
+    /// `mpc.acceptable`: solves since the start whose plan met only the acceptable level.
+    pub acceptable: i32,
     /// Whether the current period is the classical washout's (the last solve failed).
     pub falling_back: bool,
 }

@@ -386,8 +386,9 @@ fn solve(
     let outcome = solver.solve(&state.motion, last_plan, &future, felt_vehicle, felt_simulator);
     state.solves += 1;
     match outcome {
-        SolveOutcome::Planned { iterations, plan } => {
+        SolveOutcome::Planned { iterations, plan, acceptable } => {
             state.plan = plan;
+            state.acceptable = state.acceptable.saturating_add(i32::from(acceptable));
             state.jerk = plan[0];
             state.iterations = iterations as i32;
             state.falling_back = false;

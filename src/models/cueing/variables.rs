@@ -299,8 +299,16 @@ declare_variables! {
         .discrete(); computed,
         MPC_FALLBACKS => V::output(
             "mpc.fallbacks", &[], 173, None,
-            "Predictive cueing: solves that failed or ran out of iterations since the start (each hands its period \
-             to the classical washout)",
+            "Predictive cueing: solves since the start that failed, with no iterate within the acceptable level \
+             (each hands its period to the classical washout)",
+            KNOWNS,
+        )
+        .integer(0, 2147483647)
+        .discrete(); computed,
+        MPC_ACCEPTABLE => V::output(
+            "mpc.acceptable", &[], 174, None,
+            "Predictive cueing: solves since the start whose plan met only the acceptable level (1e-6; out of \
+             iterations or broken down) instead of the solver's tolerance (1e-8)",
             KNOWNS,
         )
         .integer(0, 2147483647)

@@ -163,8 +163,10 @@ pub struct PredictiveStand {
 // Returned by value once per solve: boxing the plan would allocate in the step.
 #[allow(clippy::large_enum_variant)]
 pub enum SolveOutcome {
-    /// The new plan: jerks per grid step (its first are the next period's).
-    Planned { iterations: u32, plan: [[f64; CHANNELS]; GRID_STEPS] },
+    /// The new plan: jerks per grid step (its first are the next period's); `acceptable`
+    /// where the solve kept an iterate within [`QP_ACCEPTABLE_TOLERANCE`] only (out of
+    /// iterations, or broken down), not one within [`QP_TOLERANCE`].
+    Planned { iterations: u32, plan: [[f64; CHANNELS]; GRID_STEPS], acceptable: bool },
     /// No plan: the period goes to the classical washout.
     Failed { iterations: u32, why: &'static str },
 }
@@ -228,8 +230,11 @@ impl PredictiveCueing {
         );
         let p = &mut *self.problem;
         match self.qp.solve(&p.hessian, &p.gradient, &p.constraints, &p.bounds, &mut p.solution) {
-            QpOutcome::Solved { iterations } | QpOutcome::Acceptable { iterations } => {
-                SolveOutcome::Planned { iterations, plan: p.plan(&nominal) }
+            QpOutcome::Solved { iterations } => {
+                SolveOutcome::Planned { iterations, plan: p.plan(&nominal), acceptable: false }
+            }
+            QpOutcome::Acceptable { iterations } => {
+                SolveOutcome::Planned { iterations, plan: p.plan(&nominal), acceptable: true }
             }
             QpOutcome::Failed { iterations, why } => SolveOutcome::Failed { iterations, why },
         }
