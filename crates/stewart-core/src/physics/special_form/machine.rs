@@ -153,14 +153,7 @@ impl SpecialForm {
                 across[i][k] = t;
             }
         }
-        let across = across.map(|x| sum_over_legs(&x));
-        let sums = InertiaSums {
-            along: along.map(|x| sum_over_legs(&x)),
-            across: across[0],
-            across_arm: [across[1], across[2], across[3]],
-            across_arm2: across[4],
-            across_arm_arm: [across[5], across[6], across[7], across[8], across[9], across[10]],
-        };
+        let sums = InertiaSums::over_legs(&along, &across);
         let q = solve_spd6(self.inertia_matrix(e, &sums), [force.x, force.y, force.z, moment.x, moment.y, moment.z]);
         let (alpha, beta) = (Vector3::new(q[0], q[1], q[2]), Vector3::new(q[3], q[4], q[5]));
         for k in 0..LEG_COUNT {
@@ -217,6 +210,22 @@ pub(super) struct InertiaSums<T> {
     pub(super) across_arm2: T,
     /// `sum a_k rho_k rho_k^T`, its lower triangle (00; 10, 11; 20, 21, 22), kg m².
     pub(super) across_arm_arm: [T; 6],
+}
+
+impl<T: Real> InertiaSums<T> {
+    /// The sums of the legs' terms given leg by leg: `along` in the order of
+    /// [`InertiaSums::along`], `across` as `a_k`, `a_k rho_k` (3), `a_k |rho_k|^2`, then
+    /// `a_k rho_k rho_k^T`'s lower triangle (6).
+    pub(super) fn over_legs(along: &[[T; LEG_COUNT]; 21], across: &[[T; LEG_COUNT]; 11]) -> Self {
+        let a = across.map(|x| sum_over_legs(&x));
+        InertiaSums {
+            along: along.map(|x| sum_over_legs(&x)),
+            across: a[0],
+            across_arm: [a[1], a[2], a[3]],
+            across_arm2: a[4],
+            across_arm_arm: [a[5], a[6], a[7], a[8], a[9], a[10]],
+        }
+    }
 }
 
 /// Solves `A x = b` for a symmetric positive definite 6x6 `A` given by its lower triangle

@@ -311,14 +311,7 @@ fn the_legs_inertia_system_is_the_newton_euler_blocks() {
             across[i][k] = t;
         }
     }
-    let across = across.map(|x| sum_over_legs(&x));
-    let sums = InertiaSums {
-        along: along.map(|x| sum_over_legs(&x)),
-        across: across[0],
-        across_arm: [across[1], across[2], across[3]],
-        across_arm2: across[4],
-        across_arm_arm: [across[5], across[6], across[7], across[8], across[9], across[10]],
-    };
+    let sums = InertiaSums::over_legs(&along, &across);
     let reference = Matrix6::from_fn(|r, col| blocks[r / 3][col / 3][(r % 3, col % 3)]);
     let matrix = form.inertia_matrix(&e, &sums);
     assert!((reference - reference.transpose()).amax() < 1e-9 * reference.amax(), "the blocks are symmetric");
