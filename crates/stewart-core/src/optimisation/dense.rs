@@ -152,11 +152,9 @@ impl DenseQp {
                 atz_x += self.z[i] * self.ax[i];
             }
             objective -= 0.5 * atz_x;
-            let within = |tol: f64| {
-                max_abs(&self.r_dual) <= tol * scale_d
-                    && max_abs(&self.r_primal) <= tol * scale_p
-                    && gap <= tol * objective.abs().max(1.0)
-            };
+            let (dual, primal) = (max_abs(&self.r_dual), max_abs(&self.r_primal));
+            let within =
+                |tol: f64| dual <= tol * scale_d && primal <= tol * scale_p && gap <= tol * objective.abs().max(1.0);
             if within(tol) {
                 x.copy_from_slice(&self.x);
                 return QpOutcome::Solved { iterations: iteration - 1 };
