@@ -35,7 +35,7 @@ apt_install() {
 # free space than KIND takes on a fresh machine, so that a run that then fails with "No space
 # left on device" has its cause on its first lines. The full tier added 10.4 GB to a fresh
 # Debian 12 machine at its largest, at its end (measured 2026-12-02, df every 5 s): the cross
-# toolchains 2.6 GB, the arm64 Python root 1.0, the Wine prefix 0.7, the builds in target/ 1.8,
+# toolchains 2.6 GB, the arm64 Python root 1.0, the Wine prefix 0.7, the rest of target/ 2.0,
 # .venv 0.8, the crates 0.45, fmi-sim's build and the tests' files in /tmp the rest. The main
 # job and the quick tier need less (6 and 3 GB: estimates from those parts, not measured). A
 # machine that has the toolchains and builds already needs far less: a warning, not a stop.

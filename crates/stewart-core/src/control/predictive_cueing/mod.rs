@@ -229,13 +229,13 @@ impl PredictiveCueing {
             perceived_simulator,
         );
         let p = &mut *self.problem;
-        match self.qp.solve(&p.hessian, &p.gradient, &p.constraints, &p.bounds, &mut p.solution) {
-            QpOutcome::Solved { iterations } => {
-                SolveOutcome::Planned { iterations, plan: p.plan(&nominal), acceptable: false }
-            }
-            QpOutcome::Acceptable { iterations } => {
-                SolveOutcome::Planned { iterations, plan: p.plan(&nominal), acceptable: true }
-            }
+        let outcome = self.qp.solve(&p.hessian, &p.gradient, &p.constraints, &p.bounds, &mut p.solution);
+        match outcome {
+            QpOutcome::Solved { iterations } | QpOutcome::Acceptable { iterations } => SolveOutcome::Planned {
+                iterations,
+                plan: p.plan(&nominal),
+                acceptable: matches!(outcome, QpOutcome::Acceptable { .. }),
+            },
             QpOutcome::Failed { iterations, why } => SolveOutcome::Failed { iterations, why },
         }
     }

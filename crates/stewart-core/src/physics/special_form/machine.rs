@@ -120,7 +120,7 @@ impl SpecialForm {
         let zero = T::zero();
         // Each leg's terms of the system's sums (`InertiaSums`), summed below in the fast path's
         // order; a leg without inertia adds nothing.
-        let (mut along, mut across) = ([[zero; LEG_COUNT]; 21], [[zero; LEG_COUNT]; 11]);
+        let mut terms = [([zero; 21], [zero; 11]); LEG_COUNT];
         let mut force = Vector3::new(zero, zero, -T::constant(self.stand.mass * self.stand.gravity));
         let mut moment = -omega.cross(&j_w(&omega));
         for k in 0..LEG_COUNT {
@@ -134,26 +134,9 @@ impl SpecialForm {
             let f = f0 - m.times(n, &omega.cross(&omega.cross(&rho)));
             force += f;
             moment += rho.cross(&f) + loads.machine_moment[k];
-            let rn = rho.cross(n);
-            let s = [n.x, n.y, n.z, rn.x, rn.y, rn.z];
-            let mut i = 0;
-            for r in 0..6 {
-                let ws = s[r] * (m.along - m.across);
-                for c in 0..=r {
-                    along[i][k] = ws * s[c];
-                    i += 1;
-                }
-            }
-            let a = m.across;
-            let a_rho = [a * rho.x, a * rho.y, a * rho.z];
-            let rho2 = rho.x * rho.x + rho.y * rho.y + rho.z * rho.z;
-            let terms = [a, a_rho[0], a_rho[1], a_rho[2], a * rho2, a_rho[0] * rho.x, a_rho[1] * rho.x];
-            let more = [a_rho[1] * rho.y, a_rho[2] * rho.x, a_rho[2] * rho.y, a_rho[2] * rho.z];
-            for (i, t) in terms.into_iter().chain(more).enumerate() {
-                across[i][k] = t;
-            }
+            terms[k] = InertiaSums::leg_terms(&rho, n, m.along - m.across, m.across);
         }
-        let sums = InertiaSums::over_legs(&along, &across);
+        let sums = InertiaSums::over_legs(&terms);
         let q = solve_spd6(self.inertia_matrix(e, &sums), [force.x, force.y, force.z, moment.x, moment.y, moment.z]);
         let (alpha, beta) = (Vector3::new(q[0], q[1], q[2]), Vector3::new(q[3], q[4], q[5]));
         for k in 0..LEG_COUNT {
@@ -213,13 +196,47 @@ pub(super) struct InertiaSums<T> {
 }
 
 impl<T: Real> InertiaSums<T> {
-    /// The sums of the legs' terms given leg by leg: `along` in the order of
-    /// [`InertiaSums::along`], `across` as `a_k`, `a_k rho_k` (3), `a_k |rho_k|^2`, then
-    /// `a_k rho_k rho_k^T`'s lower triangle (6).
-    pub(super) fn over_legs(along: &[[T; LEG_COUNT]; 21], across: &[[T; LEG_COUNT]; 11]) -> Self {
-        let a = across.map(|x| sum_over_legs(&x));
+    /// One leg's terms of the sums: with the arm `rho`, the direction `n`, `c = along -
+    /// across` and `a = across`, `c S S^T`'s lower triangle (the order of
+    /// [`InertiaSums::along`]) and `a`, `a rho` (3), `a |rho|^2`, `a rho rho^T`'s lower
+    /// triangle (6), each product in the order the fast path's lanes take it.
+    #[inline(always)]
+    pub(super) fn leg_terms(rho: &Vector3<T>, n: &Vector3<T>, c: T, a: T) -> ([T; 21], [T; 11]) {
+        let rn = rho.cross(n);
+        let s = [n.x, n.y, n.z, rn.x, rn.y, rn.z];
+        let mut along = [T::zero(); 21];
+        let mut i = 0;
+        for r in 0..6 {
+            let cs = s[r] * c;
+            for col in 0..=r {
+                along[i] = cs * s[col];
+                i += 1;
+            }
+        }
+        let a_rho = [a * rho.x, a * rho.y, a * rho.z];
+        let rho2 = rho.x * rho.x + rho.y * rho.y + rho.z * rho.z;
+        let across = [
+            a,
+            a_rho[0],
+            a_rho[1],
+            a_rho[2],
+            a * rho2,
+            a_rho[0] * rho.x,
+            a_rho[1] * rho.x,
+            a_rho[1] * rho.y,
+            a_rho[2] * rho.x,
+            a_rho[2] * rho.y,
+            a_rho[2] * rho.z,
+        ];
+        (along, across)
+    }
+
+    /// The sums of the legs' terms ([`InertiaSums::leg_terms`], leg by leg), each in
+    /// [`sum_over_legs`]' order.
+    pub(super) fn over_legs(terms: &[([T; 21], [T; 11]); LEG_COUNT]) -> Self {
+        let a: [T; 11] = std::array::from_fn(|i| sum_over_legs(&std::array::from_fn(|k| terms[k].1[i])));
         InertiaSums {
-            along: along.map(|x| sum_over_legs(&x)),
+            along: std::array::from_fn(|i| sum_over_legs(&std::array::from_fn(|k| terms[k].0[i]))),
             across: a[0],
             across_arm: [a[1], a[2], a[3]],
             across_arm2: a[4],

@@ -269,8 +269,9 @@ unsafe fn wide_joint_margins(
     form.joint_margins::<Wide>(state, legs, base, platform)
 }
 
-/// The 6x6 system of the legs' inertia (`SpecialForm::inertia_matrix`, the one form both the
-/// definition and the fast path solve) against the Newton-Euler blocks written out as matrices:
+/// The 6x6 system of the legs' inertia as the definition makes it (each leg's terms,
+/// `InertiaSums::leg_terms`, their sums, and `SpecialForm::inertia_matrix`, the one form the
+/// fast path solves too) against the Newton-Euler blocks written out as matrices:
 /// `[[M I + sum M_k, -sum M_k [rho_k]x], [sum [rho_k]x M_k, J_w - sum [rho_k]x M_k [rho_k]x]]`
 /// with `M_k = a_k I + c_k n_k n_k^T`, for tilted axes and legs of unequal mass and inertia.
 #[test]
@@ -285,7 +286,7 @@ fn the_legs_inertia_system_is_the_newton_euler_blocks() {
     let j_w = (0..3).fold(Matrix3::zeros(), |m, a| m + e[a] * e[a].transpose() * stand.inertia[a]);
     // The blocks (force, moment) x (r'', omega').
     let mut blocks = [[Matrix3::identity() * stand.mass, Matrix3::zeros()], [Matrix3::zeros(), j_w]];
-    let (mut along, mut across) = ([[0.0; LEG_COUNT]; 21], [[0.0; LEG_COUNT]; 11]);
+    let mut terms = [([0.0; 21], [0.0; 11]); LEG_COUNT];
     for k in 0..LEG_COUNT {
         let rho = rotation * stand.platform_joints[k];
         let n = (rho + Stand::truck_cabin_neutral_position() - stand.base_joints[k]).normalize();
@@ -296,22 +297,9 @@ fn the_legs_inertia_system_is_the_newton_euler_blocks() {
         blocks[1][0] += x * m_k;
         blocks[0][1] -= m_k * x;
         blocks[1][1] -= x * m_k * x;
-        let rn = rho.cross(&n);
-        let s = [n.x, n.y, n.z, rn.x, rn.y, rn.z];
-        let mut i = 0;
-        for r in 0..6 {
-            for col in 0..=r {
-                along[i][k] = s[r] * c * s[col];
-                i += 1;
-            }
-        }
-        let terms = [a, a * rho.x, a * rho.y, a * rho.z, a * rho.norm_squared()];
-        let outer = [(0, 0), (1, 0), (1, 1), (2, 0), (2, 1), (2, 2)].map(|(r, col)| a * rho[r] * rho[col]);
-        for (i, t) in terms.into_iter().chain(outer).enumerate() {
-            across[i][k] = t;
-        }
+        terms[k] = InertiaSums::leg_terms(&rho, &n, c, a);
     }
-    let sums = InertiaSums::over_legs(&along, &across);
+    let sums = InertiaSums::over_legs(&terms);
     let reference = Matrix6::from_fn(|r, col| blocks[r / 3][col / 3][(r % 3, col % 3)]);
     let matrix = form.inertia_matrix(&e, &sums);
     assert!((reference - reference.transpose()).amax() < 1e-9 * reference.amax(), "the blocks are symmetric");
