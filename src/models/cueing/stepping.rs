@@ -87,6 +87,11 @@ impl Preview {
         self.rows.is_empty()
     }
 
+    /// How far ahead of `t` the rows know the vehicle's motion, s (0 without rows).
+    pub fn known_after(&self, t: f64) -> f64 {
+        self.rows.last().map_or(0.0, |last| (last[0] - t).max(0.0))
+    }
+
     /// The rows into an FMU state.
     pub fn save(&self, w: &mut crate::models::snapshot::ByteWriter) {
         w.u64(self.rows.len() as u64);
@@ -383,7 +388,8 @@ fn solve(
     let future: [VehicleMotion; GRID_STEPS + 1] =
         std::array::from_fn(|j| if m.preview.is_empty() || j == 0 { now } else { m.preview.at(tau + times[j]) });
     let last_plan = if state.falling_back { None } else { Some(&state.plan) };
-    let outcome = solver.solve(&state.motion, last_plan, &future, felt_vehicle, felt_simulator);
+    let known = m.preview.known_after(tau);
+    let outcome = solver.solve(&state.motion, last_plan, &future, known, felt_vehicle, felt_simulator);
     state.solves += 1;
     match outcome {
         SolveOutcome::Planned { iterations, plan, acceptable } => {

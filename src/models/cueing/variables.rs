@@ -188,8 +188,8 @@ declare_variables! {
         ); real(parameters.predictive.horizon),
         MPC_TRUST => V::parameter(
             "mpc.trust", &[], 142, Some("s"),
-            "Predictive cueing: the perceived errors tau ahead weigh exp(-tau/trust) (the held inputs are a guess of \
-             the vehicle's future that grows worse with tau)",
+            "Predictive cueing: the perceived errors tau ahead weigh exp(-tau/trust) where the vehicle's future is \
+             guessed (the inputs held, a guess that grows worse with tau); within a preview file's rows they weigh 1",
         ); real(parameters.predictive.trust),
         MPC_WEIGHT_F => V::parameter(
             "mpc.weight.f", &[3], 143, Some("1"),

@@ -57,7 +57,8 @@ pub struct PredictiveParameters {
     pub period: f64,
     /// `mpc.horizon`, s.
     pub horizon: f64,
-    /// `mpc.trust`, s: the perceived errors at `tau` ahead weigh `exp(-tau/trust)`.
+    /// `mpc.trust`, s: the perceived errors at `tau` ahead weigh `exp(-tau/trust)` where the
+    /// vehicle's motion is guessed (the inputs held); where a preview knows it they weigh 1.
     pub trust: f64,
     /// `mpc.weight.f[i]`: per squared threshold of perceived specific-force error.
     pub weight_f: [f64; 3],
@@ -205,13 +206,16 @@ impl PredictiveCueing {
     /// Plans from the commanded motion `now` and the last plan (what this solve linearises
     /// about, shifted by the period; `None` after a failed solve: a return to neutral from
     /// `now`, [`Problem::returning_inputs`]), with the vehicle's motion at the grid's points
-    /// (`vehicle[j]` at `j` grid steps ahead, `vehicle[0]` now) and the lags of both
+    /// (`vehicle[j]` at `j` grid steps ahead, `vehicle[0]` now), how far ahead that motion is
+    /// known (`known`, s: 0 for the inputs held, a preview's end less now) and the lags of both
     /// perceptions now.
+    #[allow(clippy::too_many_arguments)]
     pub fn solve(
         &mut self,
         now: &CommandedMotion,
         plan: Option<&[[f64; CHANNELS]; GRID_STEPS]>,
         vehicle: &[VehicleMotion; GRID_STEPS + 1],
+        known: f64,
         perceived_vehicle: &Perception,
         perceived_simulator: &Perception,
     ) -> SolveOutcome {
@@ -225,6 +229,7 @@ impl PredictiveCueing {
             now,
             &nominal,
             vehicle,
+            known,
             perceived_vehicle,
             perceived_simulator,
         );

@@ -8,7 +8,8 @@
 //!   the points; the vehicle's perception the same way from its predicted cues.
 //! - **Objective** `1/2 sum w r^2` over the grid points `j = 1..N` (`dt` each): the perceived
 //!   errors (simulator minus vehicle) per axis in thresholds, weighed `mpc.weight.*` times
-//!   `exp(-tau_j/trust)`; the head's displacement and the yaw, weighed `mpc.weight.neutral`;
+//!   `exp(-max(0, tau_j - known)/trust)` (`known`: how far ahead a preview knows the vehicle's
+//!   motion; the held inputs are a guess from now on); the head's displacement and the yaw, weighed `mpc.weight.neutral`;
 //!   and over every grid step the jerks, weighed `mpc.weight.input` (angular ones times g²).
 //! - **Constraints** at the blocks' ends: every leg within [`super::STROKE_SHARE`] of its stroke
 //!   to the margins (the legs linearised about the nominal pose), every leg's speed
@@ -235,6 +236,7 @@ impl Problem {
         now: &CommandedMotion,
         nominal: &[[f64; CHANNELS]; GRID_STEPS],
         vehicle: &[VehicleMotion; GRID_STEPS + 1],
+        known: f64,
         perceived_vehicle: &Perception,
         perceived_simulator: &Perception,
     ) {
@@ -274,14 +276,15 @@ impl Problem {
             // The perceived errors.
             let (felt_vehicle_f, felt_vehicle_w) = vehicle_lags.perceived();
             let (felt_sim_f, felt_sim_w) = simulator_lags.perceived();
-            let trust = maths::exp(-self.times[j] / p.trust);
+            // A guess of the vehicle's future weighs less the further ahead it guesses; what a
+            // preview knows is no guess.
+            let trust = maths::exp(-(self.times[j] - known).max(0.0) / p.trust);
             for o in 0..CUES {
                 let error =
                     if o < 3 { felt_sim_f[o] - felt_vehicle_f[o] } else { felt_sim_w[o - 3] - felt_vehicle_w[o - 3] };
                 let row = self.perceived_row(o);
                 self.add_residual(dt * trust * error_weight[o], error, &row);
             }
-            // Back to neutral: the head's displacement and the yaw.
             // Back to neutral: the head's displacement and the yaw, and their rates (per
             // NEUTRAL_TIME² s²), over the horizon and, TERMINAL_WEIGHT times more, at its end.
             for c in [0, 1, 2, 5] {
