@@ -199,14 +199,18 @@ def perceived(lines):
 
 def preview_replay(lines):
     """The braking replayed with its preview (preview.file: the recorded drive) against held
-    inputs, the predictive method."""
+    inputs, the predictive method, and against the classical washout."""
     path = (OUT / "manoeuvres" / "brake.csv").resolve()
     m = vehicle.read_csv(path)
+    classical = cueing.measures(cueing.run(m))
     held = cueing.measures(cueing.run(m, integers=PREDICTIVE))
     previewed = cueing.measures(cueing.run(m, integers=PREDICTIVE, strings={"preview.file": str(path)}))
+    lower = 100.0 * (1.0 - previewed["perceived_error"] / classical["perceived_error"])
     lines.append(f"braking replayed with its preview (preview.file, predictive): perceived error x,y "
-                 f"{previewed['perceived_error']:.3f} m/s2 against {held['perceived_error']:.3f} with the inputs held, "
-                 f"correlation {previewed['correlation']:.2f} against {held['correlation']:.2f}")
+                 f"{previewed['perceived_error']:.3f} m/s2 against {held['perceived_error']:.3f} with the inputs held "
+                 f"and {classical['perceived_error']:.3f} classical ({lower:.0f} % lower), "
+                 f"correlation {previewed['correlation']:.2f} against {held['correlation']:.2f} and "
+                 f"{classical['correlation']:.2f}")
 
 
 def predictive_motion_system(lines):
