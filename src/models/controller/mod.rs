@@ -531,7 +531,9 @@ impl FmuModel for ControllerModel {
                     ", valve outputs (force loop gain {:e} 1/N, flow feed-forward {:?} at pS = {:e} Pa)",
                     p.hydraulic.force_gain, p.hydraulic.flow_feedforward, p.hydraulic.supply
                 ),
-                Drive::Forces => String::new(),
+                // Force outputs: the force inputs', and any actuator without a command mode of
+                // the controller's own.
+                _ => String::new(),
             }
         )
         .into())

@@ -116,9 +116,8 @@ impl PlatformModel {
             };
             let Some(slot) = slot else {
                 return Err(format!(
-                    "known {} is neither a state nor an input (derivatives are with respect to r, v, R, der(R), \
-                     work.F, work.dissipated, I, work.electric, pA, pB, spool, der(spool), work.hydraulic, \
-                     work.compression, supply.linePressure, work.pump and the inputs F, U or valve, pS and pump.speed)",
+                    "known {} is neither a state nor an input (derivatives are with respect to the states, the \
+                     legs' actuator's inputs, pS and pump.speed)",
                     element_name(*k)
                 ));
             };

@@ -222,8 +222,8 @@ impl<L: LegForceLaw + ?Sized, V: Lanes> PlatformDynamics<'_, L, V> {
 }
 
 /// The platform's ODE system over the whole [`SimulationState`] (`N = SIMULATION_DIM`), or
-/// over its leading [`MECHANICAL_DIM`](super::state::MECHANICAL_DIM) components when the
-/// hydraulic legs are off (the integrators' arrays are then shorter;
+/// over its leading [`MECHANICAL_DIM`](super::state::MECHANICAL_DIM) components when the legs'
+/// actuator's block ends within them (the integrators' arrays are then shorter;
 /// [`PlatformSimulation::advance`](super::PlatformSimulation::advance) chooses).
 impl<L: LegForceLaw + ?Sized, V: Lanes, const N: usize> OdeSystem<N> for PlatformDynamics<'_, L, V> {
     type Fault = PhysicsFault;

@@ -322,7 +322,9 @@ impl PlatformSimulation {
             ..PlatformDynamics::new(&self.form, law, self.stabilisation, &self.guard, self.stop_at_singularity)
         };
         let path = self.vector_path;
-        let result = if self.form.hydraulics().is_some() {
+        // The whole state where the legs' actuator has its block past the leading part (the
+        // hydraulic legs, and any actuator listed after them).
+        let result = if self.form.actuator().kind().block().end > MECHANICAL_DIM {
             let saved = self.state;
             let call = super::vector::Call {
                 t0: self.time,
@@ -333,8 +335,8 @@ impl PlatformSimulation {
             };
             super::vector::integrate(path, &mut self.integrator, &dynamics, call).inspect_err(|_| self.state = saved)
         } else {
-            // Without hydraulic legs their components stay 0: the integrators step the shorter
-            // leading part, in place.
+            // Otherwise the later blocks stay 0: the integrators step the shorter leading
+            // part, in place.
             // Always there (the assertion beside MECHANICAL_DIM).
             let Some(head) = self.state.first_chunk_mut::<MECHANICAL_DIM>() else { unreachable!() };
             let saved = *head;

@@ -20,8 +20,9 @@ use crate::physics::stand::LEG_COUNT;
 /// and constant when its actuator is not the legs'.
 pub const SIMULATION_DIM: usize = layout::END;
 
-/// The leading part of a [`SimulationState`] the integrators step when the hydraulic legs are
-/// off (their components are then 0 and constant): up to the end of the drives' block. The
+/// The leading part of a [`SimulationState`] the integrators step when the legs' actuator's
+/// block ends within it (the later blocks are then 0 and constant): up to the end of the
+/// drives' block; an actuator listed after it steps the whole state. The
 /// shorter arrays keep the force inputs' and the drives' steps as cheap as before the
 /// hydraulics ([`PlatformSimulation::advance`](super::PlatformSimulation::advance)); within
 /// them the methods step up to the active actuator's block's end only

@@ -406,7 +406,8 @@ declare_variables! {
              hydraulic differential cylinder fed by a servo valve, the valve commands valve and the supply pressure pS \
              its inputs",
         )
-        .integer(0, 2); integer(parameters.drive),
+        // Every code of the actuators' list (`ActuatorKind::ALL` in code order).
+        .integer(0, crate::physics::actuators::ActuatorKind::ALL.len() as i32 - 1); integer(parameters.drive),
         MOTOR_R => machine::motor_resistance(401); real(parameters.actuators.electric.resistance),
         MOTOR_L => machine::motor_inductance(402); real(parameters.actuators.electric.inductance),
         MOTOR_KE => machine::motor_ke(403); real(parameters.actuators.electric.ke),
