@@ -10,9 +10,11 @@
 //!
 //! | module | what it holds |
 //! |---|---|
+//! | [`outputs`] | what it reports: the commands, the programme and its angles |
 //! | [`parameters`] | the programmes, the feedback, the hydraulic loop: parameters and defaults |
 //! | [`variables`] | every variable, declared once with where its value lives |
 
+pub mod outputs;
 pub mod parameters;
 pub mod variables;
 
@@ -28,6 +30,7 @@ use crate::physics::body::kinematics::{PoseTrajectoryPoint, angles_from_rotation
 use crate::physics::direct_problem::{DirectProblemSolution, solve_direct_problem};
 use crate::physics::programme::{PoseProgramme, SafeLanding, SoftStartSinusoid, StartUp};
 use crate::physics::stand::{LEG_COUNT, MAX_COORDINATE};
+pub use outputs::*;
 pub use parameters::*;
 use variables::BINDINGS;
 
@@ -47,70 +50,6 @@ pub static INFO: ModelInfo = ModelInfo {
     // derivatives are not provided.
     capabilities: super::Capabilities::NONE,
 };
-
-/// Everything the controller reports at one instant (but the programme's angles).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ControllerOutputs {
-    pub commands: Commands,
-    pub programme: ProgrammeOutputs,
-}
-
-/// The commands, which follow the measured legs: a cache block of their own, so that the
-/// programme's outputs a closed loop reads after a step do not compute them with the legs it
-/// is about to set.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Commands {
-    /// Leg forces, N.
-    pub f: [f64; LEG_COUNT],
-    /// The drives' voltage command, V (0 without drives).
-    pub u: [f64; LEG_COUNT],
-    /// The servo valves' command (0 without hydraulic legs).
-    pub valve: [f64; LEG_COUNT],
-}
-
-/// The programme at the current time: forces (N), leg lengths (m) and rates (m/s) of the
-/// direct problem, centre of mass (m).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ProgrammeOutputs {
-    pub fp: [f64; LEG_COUNT],
-    pub lp: [f64; LEG_COUNT],
-    pub ldotp: [f64; LEG_COUNT],
-    pub rp: Vector3<f64>,
-}
-
-/// The programme's roll, pitch and yaw: a cache block of their own, computed only when read
-/// (three inverse trigonometric functions a closed loop does not need).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ProgrammeAngles {
-    pub anglesp: Vector3<f64>,
-}
-
-// Where the programme cannot be produced the outputs are not numbers (the FMI layer refuses to
-// return them, naming the variable).
-const NAN3: Vector3<f64> = Vector3::new(f64::NAN, f64::NAN, f64::NAN);
-
-impl Commands {
-    const UNDEFINED: Commands =
-        Commands { f: [f64::NAN; LEG_COUNT], u: [f64::NAN; LEG_COUNT], valve: [f64::NAN; LEG_COUNT] };
-}
-
-impl ProgrammeOutputs {
-    const UNDEFINED: ProgrammeOutputs = ProgrammeOutputs {
-        fp: [f64::NAN; LEG_COUNT],
-        lp: [f64::NAN; LEG_COUNT],
-        ldotp: [f64::NAN; LEG_COUNT],
-        rp: NAN3,
-    };
-
-    fn of(point: &PoseTrajectoryPoint, solution: &DirectProblemSolution) -> Self {
-        ProgrammeOutputs { fp: solution.forces, lp: solution.lengths, ldotp: solution.rates, rp: point.r }
-    }
-}
-
-
-impl ProgrammeAngles {
-    const UNDEFINED: ProgrammeAngles = ProgrammeAngles { anglesp: NAN3 };
-}
 
 /// The controller FMU model.
 #[derive(Clone, Debug, PartialEq)]

@@ -6,6 +6,7 @@ use crate::models::machine;
 use crate::models::variables::Dependency::{All, SameIndex};
 
 mod dependencies;
+mod hydraulics;
 mod power_unit;
 use dependencies::*;
 use crate::models::variables::VariableGroup as V;
@@ -467,63 +468,23 @@ declare_variables! {
             "Hydraulic supply pressure p_S (gauge; drive = 2). Drop it to 0 to model a pump failure: the supply port \
              then acts as a second tank (no check valve)",
         ); real(parameters.actuators.hydraulic.supply),
-        TANK_PRESSURE => V::parameter(
-            "hydraulic.tankPressure", &[], 470, Some("Pa"), "Tank (return line) pressure p_T, gauge",
-        ); real(parameters.actuators.hydraulic.legs.tank_pressure),
+        TANK_PRESSURE => hydraulics::tank_pressure(470); real(parameters.actuators.hydraulic.legs.tank_pressure),
         BORE => machine::hydraulic_bore(471); real(parameters.actuators.hydraulic.legs.bore),
         ROD => machine::hydraulic_rod(472); real(parameters.actuators.hydraulic.legs.rod),
-        DEAD_VOLUME_A => V::parameter(
-            "hydraulic.deadVolumeA", &[], 473, Some("m3"),
-            "Dead volume V_A0 of each cap-side chamber at lmin (ports, hoses, the cap's end): V_A = V_A0 + A_A (l - lmin)",
-        ); real(parameters.actuators.hydraulic.legs.dead_volume_a),
-        DEAD_VOLUME_B => V::parameter(
-            "hydraulic.deadVolumeB", &[], 474, Some("m3"),
-            "Dead volume V_B0 of each rod-side chamber at lmax: V_B = V_B0 + A_B (lmax - l)",
-        ); real(parameters.actuators.hydraulic.legs.dead_volume_b),
-        BULK_MODULUS => V::parameter(
-            "hydraulic.bulkModulus", &[], 475, Some("Pa"),
-            "Effective bulk modulus beta of the oil with its hoses and seals",
-        ); real(parameters.actuators.hydraulic.legs.bulk_modulus),
+        DEAD_VOLUME_A => hydraulics::dead_volume_a(473); real(parameters.actuators.hydraulic.legs.dead_volume_a),
+        DEAD_VOLUME_B => hydraulics::dead_volume_b(474); real(parameters.actuators.hydraulic.legs.dead_volume_b),
+        BULK_MODULUS => hydraulics::bulk_modulus(475); real(parameters.actuators.hydraulic.legs.bulk_modulus),
         RATED_FLOW => machine::valve_rated_flow(476); real(parameters.actuators.hydraulic.legs.rated_flow),
         RATED_DROP => machine::valve_rated_pressure_drop(477); real(parameters.actuators.hydraulic.legs.rated_pressure_drop),
-        VALVE_OMEGA => V::parameter(
-            "valve.omega", &[], 478, Some("rad/s"), "Natural frequency w_v of each valve's spool (second order)",
-        ); real(parameters.actuators.hydraulic.legs.valve_omega),
-        VALVE_DAMPING => V::parameter(
-            "valve.damping", &[], 479, Some("1"), "Damping ratio zeta_v of each valve's spool",
-        ); real(parameters.actuators.hydraulic.legs.valve_damping),
-        VALVE_PCR => V::parameter(
-            "valve.pcr", &[], 480, Some("Pa"),
-            "Regularisation pressure p_cr of the orifice law phi(dp) = dp / (dp^2 + p_cr^2)^(1/4): the flow is \
-             linear in dp below about p_cr, the square root above",
-        ); real(parameters.actuators.hydraulic.legs.pcr),
-        VALVE_LEAKAGE => V::parameter(
-            "valve.leakage", &[], 481, Some("m3/(s.Pa)"),
-            "Null leakage coefficient C_v of each land: each chamber leaks C_v dp to supply and to tank",
-        ); real(parameters.actuators.hydraulic.legs.valve_leakage),
-        INTERNAL_LEAKAGE => V::parameter(
-            "hydraulic.internalLeakage", &[], 482, Some("m3/(s.Pa)"),
-            "Internal leakage coefficient C_i across each piston: Q_i = C_i (p_A - p_B)",
-        ); real(parameters.actuators.hydraulic.legs.internal_leakage),
-        AIR_FRACTION => V::parameter(
-            "hydraulic.airFraction", &[], 483, Some("1"),
-            "Volume fraction alpha0 of undissolved air in the oil at atmospheric pressure: each chamber's bulk \
-             modulus becomes beta_e(p) = beta (1 + theta) / (1 + theta beta / (n P)), theta = alpha0 / (1 - alpha0) \
-             (p_atm / P)^(1/n), P = p + 101325 Pa absolute, so no chamber reaches zero absolute; 0: oil without air \
-             (section 10's law, which has no pressure floor)",
-        ); real(parameters.actuators.hydraulic.legs.air_fraction),
-        AIR_POLYTROPIC => V::parameter(
-            "hydraulic.airPolytropic", &[], 484, Some("1"),
-            "Polytropic exponent n of the entrained air (1: isothermal)",
-        ); real(parameters.actuators.hydraulic.legs.air_polytropic),
-        PA0 => V::parameter(
-            "pA0", &[6], 490, Some("Pa"),
-            "Initial cap-side pressure of leg k (default: what holds the default stand at rest in its neutral pose \
-             with pB0 = pS/2)",
-        ); real(parameters.actuators.hydraulic.initial_pa),
-        PB0 => V::parameter(
-            "pB0", &[6], 496, Some("Pa"), "Initial rod-side pressure of leg k (default pS/2 at the default supply)",
-        ); real(parameters.actuators.hydraulic.initial_pb),
+        VALVE_OMEGA => hydraulics::valve_omega(478); real(parameters.actuators.hydraulic.legs.valve_omega),
+        VALVE_DAMPING => hydraulics::valve_damping(479); real(parameters.actuators.hydraulic.legs.valve_damping),
+        VALVE_PCR => hydraulics::valve_pcr(480); real(parameters.actuators.hydraulic.legs.pcr),
+        VALVE_LEAKAGE => hydraulics::valve_leakage(481); real(parameters.actuators.hydraulic.legs.valve_leakage),
+        INTERNAL_LEAKAGE => hydraulics::internal_leakage(482); real(parameters.actuators.hydraulic.legs.internal_leakage),
+        AIR_FRACTION => hydraulics::air_fraction(483); real(parameters.actuators.hydraulic.legs.air_fraction),
+        AIR_POLYTROPIC => hydraulics::air_polytropic(484); real(parameters.actuators.hydraulic.legs.air_polytropic),
+        PA0 => hydraulics::pa0(490); real(parameters.actuators.hydraulic.initial_pa),
+        PB0 => hydraulics::pb0(496); real(parameters.actuators.hydraulic.initial_pb),
         PA => V::output(
             "pA", &[6], 510, Some("Pa"), "Cap-side chamber pressure p_A of leg k, gauge (Model Exchange state; 0 \
              unless drive = 2)", &[All(group::DRIVE), SameIndex(group::PA0)],

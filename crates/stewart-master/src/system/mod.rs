@@ -13,7 +13,9 @@
 //!
 //! A run sets parameters, steps, and hands the values an `Observer` asks for to it after every
 //! step; nothing else is recorded. Instances are made once and reused with `fmi2Reset`. What a
-//! run is given and gives back is `run.rs`'s.
+//! run is given and gives back is `run.rs`'s; the Gauss-Seidel order is `order.rs`'s.
+
+mod order;
 
 use std::sync::Arc;
 
@@ -22,6 +24,7 @@ use crate::fmi2::{CallError, Instance, Value};
 use crate::fmu::Fmu;
 pub use crate::run::{Failure, Given, InputTable, Observer, Outcome, Override, Readings, RunSpec, Scheme, convert};
 use crate::ssd::SystemDescription;
+use order::gauss_seidel_order;
 
 struct Component {
     name: String,
@@ -569,36 +572,4 @@ impl System {
         std::mem::swap(sources, next_sources);
         Ok(())
     }
-}
-
-/// The Gauss-Seidel order: a component gets its inputs once every component it reads from
-/// either has no direct feed-through (its outputs are known at the communication point) or has
-/// had its inputs already. A cycle of feed-through components (an algebraic loop) is refused.
-fn gauss_seidel_order(components: &[Component], feedthrough: &[bool]) -> Result<Vec<usize>, String> {
-    let mut order = vec![];
-    let mut done = vec![false; components.len()];
-    while order.len() < components.len() {
-        let ready = (0..components.len()).find(|&k| {
-            !done[k] && components[k].inputs.iter().all(|&(_, from, _)| !feedthrough[from] || done[from] || from == k)
-        });
-        match ready {
-            Some(k) if feedthrough[k] && components[k].inputs.iter().any(|&(_, from, _)| from == k) => {
-                return Err(format!("{} feeds its own input through directly: an algebraic loop", components[k].name));
-            }
-            Some(k) => {
-                done[k] = true;
-                order.push(k);
-            }
-            None => {
-                let rest: Vec<&str> =
-                    (0..components.len()).filter(|&k| !done[k]).map(|k| components[k].name.as_str()).collect();
-                return Err(format!(
-                    "the components {} form an algebraic loop (outputs that depend directly on inputs, in a cycle): \
-                     a fixed-step master cannot order them",
-                    rest.join(", ")
-                ));
-            }
-        }
-    }
-    Ok(order)
 }
