@@ -207,8 +207,8 @@ def preview_replay(lines):
     previewed = cueing.measures(cueing.run(m, integers=PREDICTIVE, strings={"preview.file": str(path)}))
     lower = 100.0 * (1.0 - previewed["perceived_error"] / classical["perceived_error"])
     lines.append(f"braking replayed with its preview (preview.file, predictive): perceived error x,y "
-                 f"{previewed['perceived_error']:.3f} m/s2 against {held['perceived_error']:.3f} with the inputs held "
-                 f"and {classical['perceived_error']:.3f} classical ({lower:.0f} % lower), "
+                 f"{previewed['perceived_error']:.3f} m/s2 ({lower:.0f} % below the classical washout's "
+                 f"{classical['perceived_error']:.3f}) against {held['perceived_error']:.3f} with the inputs held, "
                  f"correlation {previewed['correlation']:.2f} against {held['correlation']:.2f} and "
                  f"{classical['correlation']:.2f}")
 

@@ -87,9 +87,13 @@ impl Preview {
         self.rows.is_empty()
     }
 
-    /// How far ahead of `t` the rows know the vehicle's motion, s (0 without rows).
+    /// How far ahead of `t` the rows know the vehicle's motion, s: to the last row from `t` on
+    /// or after the first (0 without rows, or before the first: `at` holds that row, a guess).
     pub fn known_after(&self, t: f64) -> f64 {
-        self.rows.last().map_or(0.0, |last| (last[0] - t).max(0.0))
+        match (self.rows.first(), self.rows.last()) {
+            (Some(first), Some(last)) if t >= first[0] => (last[0] - t).max(0.0),
+            _ => 0.0,
+        }
     }
 
     /// The rows into an FMU state.

@@ -117,7 +117,7 @@ impl PlatformModel {
             let Some(slot) = slot else {
                 return Err(format!(
                     "known {} is neither a state nor an input (derivatives are with respect to the states, the \
-                     legs' actuator's inputs, pS and pump.speed)",
+                     actuators' inputs, pS and pump.speed)",
                     element_name(*k)
                 ));
             };

@@ -8,9 +8,10 @@
 //!   the points; the vehicle's perception the same way from its predicted cues.
 //! - **Objective** `1/2 sum w r^2` over the grid points `j = 1..N` (`dt` each): the perceived
 //!   errors (simulator minus vehicle) per axis in thresholds, weighed `mpc.weight.*` times
-//!   `exp(-max(0, tau_j - known)/trust)` (`known`: how far ahead a preview knows the vehicle's
-//!   motion; the held inputs are a guess from now on); the head's displacement and the yaw, weighed `mpc.weight.neutral`;
-//!   and over every grid step the jerks, weighed `mpc.weight.input` (angular ones times g²).
+//!   `exp(-max(0, tau_j - known)/trust)` (`known`: how far ahead a preview knows the
+//!   vehicle's motion; the held inputs are a guess from now on); the head's displacement and
+//!   the yaw, weighed `mpc.weight.neutral`; and over every grid step the jerks, weighed
+//!   `mpc.weight.input` (angular ones times g²).
 //! - **Constraints** at the blocks' ends: every leg within [`super::STROKE_SHARE`] of its stroke
 //!   to the margins (the legs linearised about the nominal pose), every leg's speed
 //!   (`J(nominal pose) (p', beta')`) within `mpc.legSpeed`, the roll and pitch rates within

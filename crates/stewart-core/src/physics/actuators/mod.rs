@@ -490,3 +490,18 @@ where
         self(t, state, legs)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::ActuatorKind;
+
+    /// The `drive` codes are the list's places, 0 to n - 1: the platform declares `drive`'s
+    /// range as `0..=ActuatorKind::ALL.len() - 1`.
+    #[test]
+    fn the_codes_are_the_lists_places() {
+        for (place, kind) in ActuatorKind::ALL.into_iter().enumerate() {
+            assert_eq!(kind.code(), place as i32, "{}", kind.name());
+            assert_eq!(ActuatorKind::from_code(place as i32), Some(kind));
+        }
+    }
+}
