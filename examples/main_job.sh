@@ -26,7 +26,7 @@ step "the drive scenarios: holding, dynamic braking, voltage commands, a failed 
 .venv/bin/python examples/drive_scenarios.py "$OUT"
 step "the hydraulic scenarios: holding, heave, loss of control power, pump failure, a stuck valve"
 .venv/bin/python examples/hydraulic_scenarios.py "$OUT"
-step "the power unit: the heave on pump and accumulator, pump stops with the safe landing, an accumulator design study on a local Dask cluster (under a minute)"
+step "the power unit: the heave on pump and accumulator, pump stops with the safe landing (under a minute)"
 .venv/bin/python examples/power_unit_scenarios.py "$OUT"
 step "motion cueing: the truck's manoeuvres, the motion system, the harsh manoeuvres, the OMCT (about a minute)"
 .venv/bin/python examples/cueing_scenarios.py "$OUT"
@@ -34,7 +34,8 @@ step "the linearisation about the neutral pose"
 .venv/bin/python examples/linearise.py --output "$OUT"
 # Design studies on a local Dask cluster (one worker per core) with the compiled co-simulation
 # master (stewart-sweep's default): results.parquet, summary, plots.
-for study in stability payload power_loss workspace washout; do
+# accumulator: the power unit's design study (scenario 8 of examples/power_unit_scenarios.py).
+for study in stability payload power_loss workspace washout accumulator; do
     step "design study $study on a local Dask cluster (seconds to half a minute; a progress bar)"
     .venv/bin/stewart-sweep "studies/$study.toml" --out "$OUT/$study"
 done

@@ -77,10 +77,10 @@ SECTIONS = [
         ("hydraulic_work_precision.png", "pressure error against doStep wall time, RK4 and the adaptive method, stiff regime"),
         ("hydraulic_work_precision.md", "the same as a table"),
     ]),
-    ("The hydraulic power unit: the heave on pump and accumulator, pump stops answered by the safe landing, an "
-     "accumulator design study on Dask (`examples/power_unit_scenarios.py`; SI; [docs/model.md](../docs/model.md) "
-     "§10b)", [
-        ("hydraulic_power_unit_summary.txt", "the power unit's scenarios and the design study as printed by the main job"),
+    ("The hydraulic power unit: the heave on pump and accumulator, pump stops answered by the safe landing "
+     "(`examples/power_unit_scenarios.py`; SI; [docs/model.md](../docs/model.md) §10b; its design study is "
+     "accumulator/ below)", [
+        ("hydraulic_power_unit_summary.txt", "the power unit's scenarios as printed by the main job"),
         ("hydraulic6_power_unit_heave.csv", "the heave programme on the power unit: supply pressure, pump, relief and "
                                            "valve flows, accumulator oil, pump work, leg error"),
         ("hydraulic7_pump_stop_landing.csv", "the pump stopped at the heave's worst moment, the safe landing: the same "
@@ -88,10 +88,6 @@ SECTIONS = [
         ("hydraulic_power_unit.png", "the heave on the power unit: supply pressure, flows, accumulator oil, leg error"),
         ("hydraulic_landing.png", "the pump stop and the safe landing: height, supply pressure, accumulator oil, "
                                   "velocity and acceleration"),
-        ("accumulator_study.csv", "the design study's rows: volume, precharge, landed, lowest supply, least oil, peak "
-                                  "acceleration, ..."),
-        ("accumulator_study.png", "the design study's maps: lowest supply pressure and peak acceleration against "
-                                  "volume and precharge"),
     ]),
     ("Motion cueing: the truck's manoeuvres, the motion system, the harsh manoeuvres, the OMCT "
      "(`examples/cueing_scenarios.py`; SI; [docs/cueing.md](../docs/cueing.md))", [

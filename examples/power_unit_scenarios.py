@@ -1,18 +1,19 @@
 """The main job's demonstration of the hydraulic power unit (docs/model.md §10b, `hydraulic.supply
 = 1`): the heave programme fed by the pump and the accumulator (scenario 3), a pump stop at the
 heave programme's worst moment answered by the accumulator and the controller's safe landing
-(scenario 4), and a design study of the accumulator's volume and precharge on a local Dask
-cluster (scenario 5); through the packaged FMUs, SI units, default stand, legs and power unit.
-Writes hydraulic6_power_unit_heave.csv, hydraulic7_pump_stop_landing.csv, hydraulic_power_unit.png,
-hydraulic_landing.png, accumulator_study.csv, accumulator_study.png and
-hydraulic_power_unit_summary.txt.
+(scenario 4); through the packaged FMUs, SI units, default stand, legs and power unit. The
+design study of the accumulator's volume and precharge (scenario 5) is studies/accumulator.toml,
+which `stewart-sweep` runs on a local Dask cluster after this script (examples/main_job.sh):
+this script checks that the study's pump stop is the worst moment it finds. Writes
+hydraulic6_power_unit_heave.csv, hydraulic7_pump_stop_landing.csv, hydraulic_power_unit.png,
+hydraulic_landing.png and hydraulic_power_unit_summary.txt.
 
     python examples/power_unit_scenarios.py [output-folder]   (default: output/)
 """
 
 import math
 import sys
-import time
+import tomllib
 from pathlib import Path
 
 import matplotlib
@@ -31,8 +32,7 @@ PERIOD = 2 * math.pi / 2.5573423705088842  # the default heave programme's, s
 LANDING_PRESSURE = 12.0e6  # Pa: the scenarios' landing.pressure (the controller's default is 0, off)
 STOP_PHASES = 8  # pump stops tried over one heave cycle
 AFTER_STOP = 14.0  # s simulated after the pump stops (the slowest landings in the study take 12)
-VOLUMES = [20e-3, 30e-3, 40e-3, 50e-3, 60e-3]  # m3, the study's accumulator.volume
-PRECHARGES = [4.5e6, 6e6, 7.5e6, 9e6, 10.5e6, 12e6]  # Pa absolute, the study's accumulator.precharge
+STUDY = Path(__file__).resolve().parents[1] / "studies" / "accumulator.toml"  # scenario 8, run by stewart-sweep
 
 
 def starts(fmu, names):
@@ -169,66 +169,20 @@ def landing(summary):
     return t_stop
 
 
-def study_point(volume, precharge, t_stop):
-    """One design point: the pump stop at `t_stop` with the accumulator (volume m3, precharge Pa)."""
-    c, _, status = hy.pump_stop_landing(t_stop, t_stop + AFTER_STOP, LANDING_PRESSURE,
-                                        platform={"accumulator.volume": volume, "accumulator.precharge": precharge})
-    f = landing_figures(c, t_stop)
-    return {"volume": volume, "precharge": precharge, "status": status, "landed": landed(f), **f}
-
-
-def study(summary, t_stop):
-    from dask.distributed import Client, LocalCluster, as_completed
-
-    points = [(v, p) for v in VOLUMES for p in PRECHARGES]
-    print(f"8 design study: {len(points)} accumulators (volume x precharge) on a local Dask cluster, pump stop at "
-          f"{t_stop:.3f} s ...")
-    started = time.perf_counter()
-    with LocalCluster(n_workers=2, threads_per_worker=1, host="127.0.0.1", dashboard_address=None,
-                      processes=True) as cluster, Client(cluster) as client:
-        futures = [client.submit(study_point, v, p, t_stop, pure=False) for v, p in points]
-        rows = []
-        for done, future in enumerate(as_completed(futures), 1):
-            rows.append(future.result())
-            print(f"  {done}/{len(points)} done ({time.perf_counter() - started:.0f} s)", flush=True)
-    rows.sort(key=lambda r: (r["volume"], r["precharge"]))
-    keys = ["volume", "precharge", "landed", "lowest_supply", "least_oil", "peak_acceleration", "fastest_descent",
-            "final_z", "shortest_leg", "stop_force", "balance"]
-    write_columns(OUT / "accumulator_study.csv", {k: np.array([float(r[k]) for r in rows]) for k in keys})
-    grid = {k: np.array([[next(r[k] for r in rows if r["volume"] == v and r["precharge"] == p) for p in PRECHARGES]
-                         for v in VOLUMES], dtype=float) for k in ("lowest_supply", "peak_acceleration", "landed")}
-    fig, ax = plt.subplots(1, 2, figsize=(14, 5.5))
-    for a, key, scale, unit, title in ((ax[0], "lowest_supply", 1e-6, "MPa", "lowest supply pressure"),
-                                       (ax[1], "peak_acceleration", 1.0, "m/s2", "peak vertical acceleration")):
-        image = a.imshow(grid[key] * scale, origin="lower", aspect="auto", cmap="viridis")
-        fig.colorbar(image, ax=a, label=unit)
-        for i in range(len(VOLUMES)):
-            for j in range(len(PRECHARGES)):
-                mark = "" if grid["landed"][i, j] else "\n(not landed)"
-                a.text(j, i, f"{grid[key][i, j] * scale:.2f}{mark}", ha="center", va="center", fontsize=7,
-                       color="w")
-        a.set_xticks(range(len(PRECHARGES)), [f"{p / 1e6:.1f}" for p in PRECHARGES])
-        a.set_yticks(range(len(VOLUMES)), [f"{v * 1e3:.0f}" for v in VOLUMES])
-        a.set(xlabel="accumulator.precharge, MPa absolute", ylabel="accumulator.volume, L", title=title)
-    fig.suptitle(f"Scenario 8: the accumulator against a pump stop at the heave's worst moment (t = {t_stop:.3f} s), "
-                 f"safe landing below {LANDING_PRESSURE / 1e6:.0f} MPa")
-    fig.tight_layout()
-    fig.savefig(OUT / "accumulator_study.png", dpi=110)
-    plt.close(fig)
-    landed_count = sum(bool(r["landed"]) for r in rows)
-    default = next(r for r in rows if r["volume"] == UNIT["accumulator.volume"]
-                   and r["precharge"] == UNIT["accumulator.precharge"])
-    smallest = min((r for r in rows if r["landed"]), key=lambda r: r["volume"], default=None)
+def check_study(summary, t_stop):
+    """The design study (scenario 8) is studies/accumulator.toml, which stewart-sweep runs after
+    this script (examples/main_job.sh): its pump stop must be the worst moment found here."""
+    spec = tomllib.loads(STUDY.read_text())
+    at = float(spec["fixed"]["scenario.pump_stop_at"])
+    assert abs(at - t_stop) < 1e-9, (f"{STUDY} stops the pump at {at} s, but the worst of the pump stops is now at "
+                                     f"{t_stop} s: set its scenario.pump_stop_at (and stop_time = {t_stop} + "
+                                     f"{AFTER_STOP}) to it")
+    grid = spec["grid"]
     summary.append(
-        f"8 design study on a local Dask cluster (2 workers on 127.0.0.1), {len(rows)} accumulators: volume "
-        f"{VOLUMES[0] * 1e3:.0f} .. {VOLUMES[-1] * 1e3:.0f} L x precharge {PRECHARGES[0] / 1e6:.1f} .. "
-        f"{PRECHARGES[-1] / 1e6:.1f} MPa absolute, the pump stopped at t = {t_stop:.3f} s; {landed_count} land at rest "
-        f"on the floor without a stop; the default ({default['volume'] * 1e3:.0f} L, "
-        f"{default['precharge'] / 1e6:.1f} MPa) keeps the supply above {default['lowest_supply'] / 1e6:.2f} MPa with "
-        f"{default['least_oil'] * 1e3:.2f} L of oil left"
-        + (f"; the smallest that lands: {smallest['volume'] * 1e3:.0f} L at {smallest['precharge'] / 1e6:.1f} MPa "
-           f"(lowest supply {smallest['lowest_supply'] / 1e6:.2f} MPa)" if smallest else ""))
-    print(f"the design study took {time.perf_counter() - started:.0f} s")
+        f"8 design study: {STUDY.relative_to(STUDY.parents[1])} (stewart-sweep on a local Dask cluster, "
+        f"{len(grid['platform.accumulator.volume']) * len(grid['platform.accumulator.precharge'])} accumulators, "
+        f"the pump stopped at t = {at:.3f} s, the worst moment above): its rows, summary and maps in "
+        f"{OUT / spec['study']['name']}/")
 
 
 def main():
@@ -236,7 +190,7 @@ def main():
     summary = []
     heave(summary)
     t_stop = landing(summary)
-    study(summary, t_stop)
+    check_study(summary, t_stop)
     (OUT / "hydraulic_power_unit_summary.txt").write_text("\n".join(summary) + "\n")
     print("\n".join(summary))
     print(f"wrote the power unit's CSV files and plots to {OUT.resolve()}")

@@ -14,6 +14,9 @@ METRICS = {
     "energy_residual": ("Largest energy-balance residual", "J"),
     "peak_deceleration": ("Peak upward acceleration (largest dv_z/dt over a step)", "m/s2"),
     "final_z": ("Final height of the centre of mass z", "m"),
+    "min_supply_pressure": ("Lowest supply pressure p_S the valves see (gauge)", "Pa"),
+    "landing_deceleration": ("Peak upward acceleration after the scenario's event (largest dv_z/dt over a step)",
+                             "m/s2"),
     "discard_time": ("Time of the discarded step", "s"),
     "wall_time": ("Wall time of the run", "s"),
     "step": ("Communication step", "s"),
@@ -21,6 +24,7 @@ METRICS = {
     "scenario.power_loss_at": ("Time of the power loss", "s"),
     "scenario.failure_time": ("Time of the actuator failure", "s"),
     "scenario.failed_leg": ("Failed leg", ""),
+    "scenario.pump_stop_at": ("Time the pump stops", "s"),
     "platform.com_offset[1]": ("Centre-of-mass offset along e1", "m"),
     "platform.com_offset[2]": ("Centre-of-mass offset along e2", "m"),
     "platform.com_offset[3]": ("Centre-of-mass offset along e3", "m"),
@@ -31,7 +35,7 @@ METRICS = {
 NONDIMENSIONAL = {
     "m": "R_b", "s": "sqrt(R_b/g)", "kg": "M", "N": "M g", "m/s": "sqrt(g R_b)", "m/s2": "g", "N/m": "M g/R_b",
     "N.s/m": "M sqrt(g/R_b)", "J": "M g R_b", "kg.m2": "M R_b^2", "1/s": "sqrt(g/R_b)", "rad/s": "sqrt(g/R_b)",
-    "W": "M g sqrt(g R_b)",
+    "W": "M g sqrt(g R_b)", "Pa": "M g/R_b^2",
 }
 UNIT_TEXT = {"m/s2": "m/s²", "kg.m2": "kg m²", "N.s/m": "N s/m"}
 

@@ -10,7 +10,9 @@ A run is a dict of parameter values keyed by name:
   (the platform joints `A` move by minus it, `r0` by plus it, so the legs start unchanged);
 - `step`, `stop_time`: the communication step and the end of the run;
 - `scenario.power_loss_at` (platform alone): the leg forces fall to 0 at that time;
-  `scenario.failed_leg`, `scenario.failure_time` (closed loop): that leg's force falls to 0.
+  `scenario.failed_leg`, `scenario.failure_time` (closed loop): that leg's force falls to 0;
+  `scenario.pump_stop_at` (hydraulic legs fed by the power unit, `platform.drive = 2`,
+  `platform.hydraulic.supply = 1`): the platform's `pump.speed` falls to 0.
 
 A run is stable when it completes, every leg stays within the study's `stable_error` of its
 programme (closed loop) and, with `stop_contact_unstable = true`, no leg touches an end stop.
@@ -23,7 +25,8 @@ Two masters run a study's points, with the same rows to the bit: the compiled on
 (`stewart_fmu.master`, Rust; the default: the loop in compiled code at the FMUs' own speed,
 many runs per call) and the FMPy one (`_execute` below, the reference: `--master fmpy`). In a
 closed-loop study the coupling is `StewartSystem.ssp`'s (with `drive = 1` in both FMUs,
-`StewartSystemDrives.ssp`'s voltages), Gauss-Seidel.
+`StewartSystemDrives.ssp`'s voltages; with `drive = 2`, `StewartSystemHydraulic.ssp`'s valve
+commands, the pressures measured), Gauss-Seidel.
 """
 
 import hashlib
@@ -44,7 +47,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import fmi2Terminated
 
 from . import cosim, study_params, study_schema
-from .cosim import F, L, LP, U
+from .cosim import COMMANDS, F, L, LP, MEASURED
 from .core import LEGS, Component, fmu_file, stand_parameters
 from .ssp import couplings
 from .study_schema import DEFAULT_MAX_RUNS, StudyError
@@ -52,7 +55,7 @@ from .study_schema import DEFAULT_MAX_RUNS, StudyError
 
 MASTERS = ("compiled", "fmpy")
 METRICS = ["max_leg_error", "max_pose_error", "stable", "discard_time", "min_kappa", "max_stop_force",
-           "energy_residual", "peak_deceleration", "final_z", "cue_error", "max_usage", "least_scale", "max_tilt",
+           "energy_residual", "peak_deceleration", "final_z", "min_supply_pressure", "landing_deceleration", "cue_error", "max_usage", "least_scale", "max_tilt",
            "perceived_error", "correlation", "false_cues", "fallbacks"]
 
 
@@ -150,6 +153,10 @@ def fmus_for(spec, paths=None):
 
 FSTOP = [f"Fstop[{k}]" for k in LEGS]
 ENERGY = ["E", "work.F", "work.dissipated", "kappa", "r[1]", "r[2]", "r[3]", "v[3]"]
+# The hydraulic supply's work (`work.pump` with the power unit, else `work.hydraulic`), the
+# oil's compression, the supply's pressure (docs/model.md §10, §10b; all 0 for forces and
+# drives but the pressure, pS).
+HYDRAULIC = ["work.hydraulic", "work.pump", "work.compression", "supply.pressure"]
 
 
 def _parameters(spec, run, platform_md):
@@ -216,31 +223,51 @@ def execute(spec, run, fmus, master="fmpy"):
     return row
 
 
+def _drive(run):
+    """The platform's `drive` (0 forces, 1 electric drives, 2 hydraulic servo legs)."""
+    return int(run.get("platform.drive", 0))
+
+
 def _commands(run, closed):
-    """The platform's command inputs (F, or U with electric drives) and, if the run's `drive`
-    values do not fit together, why it cannot run."""
+    """The platform's command inputs (F; U with electric drives; valve with hydraulic legs) and,
+    if the run's values do not fit together, why it cannot run."""
     drives = [int(run.get(f"{role}.drive", 0)) for role in ("platform", "controller")]
-    if 2 in drives:
-        return F, ("drive = 2 (hydraulic servo legs) is not available in studies yet: run it with "
-                   "stewart_fmu.cosim.closed_loop or StewartSystemHydraulic.ssp")
     if closed and drives[0] != drives[1]:
-        return F, (f"platform.drive = {drives[0]} but controller.drive = {drives[1]}: the controller's voltage "
-                   f"commands U drive the platform only when both have drive = 1")
-    return (U if drives[0] == 1 else F), None
+        return F, (f"platform.drive = {drives[0]} but controller.drive = {drives[1]}: the controller's commands "
+                   f"(F, U or valve) drive the platform only when both have the same drive")
+    if drives[0] not in COMMANDS:
+        return F, f"platform.drive = {drives[0]}: 0 (forces), 1 (electric drives) or 2 (hydraulic servo legs)"
+    if run.get("scenario.pump_stop_at") is not None and (
+            drives[0] != 2 or int(run.get("platform.hydraulic.supply", 0)) != 1):
+        return F, ("scenario.pump_stop_at stops the power unit's pump: it needs platform.drive = 2 and "
+                   "platform.hydraulic.supply = 1 in the study")
+    return COMMANDS[drives[0]], None
 
 
 def _scenario(run, closed, commands):
-    """The run's scenario as inputs held at 0 from a time on: (platform input, 0.0, time)."""
+    """The run's scenario as platform inputs held at a value from a time on: (input, value,
+    time)."""
+    held = []
     if closed and run.get("scenario.failed_leg") is not None:
         leg = int(run["scenario.failed_leg"])
-        return [(commands[leg - 1], 0.0, float(run.get("scenario.failure_time", 0.0)))]
+        held.append((commands[leg - 1], 0.0, float(run.get("scenario.failure_time", 0.0))))
     if not closed and run.get("scenario.power_loss_at") is not None:
-        return [(c, 0.0, float(run["scenario.power_loss_at"])) for c in commands]
-    return []
+        held += [(c, 0.0, float(run["scenario.power_loss_at"])) for c in commands]
+    if run.get("scenario.pump_stop_at") is not None:
+        held.append(("pump.speed", 0.0, float(run["scenario.pump_stop_at"])))
+    return held
 
 
-def _finish(study, row, closed):
-    """The row's `stable` from its status and metrics (both masters)."""
+def _event(held):
+    """The scenario's event, s: its earliest held input's time (infinite without one)."""
+    return min((at for _, _, at in held), default=math.inf)
+
+
+def _finish(study, row, closed, run):
+    """The row's `stable` from its status and metrics (both masters); the supply's pressure is
+    the hydraulic legs' alone."""
+    if _drive(run) != 2:
+        row["min_supply_pressure"] = math.nan
     threshold = float(study.get("stable_error", math.inf))
     touched = bool(study.get("stop_contact_unstable", False)) and row["max_stop_force"] > 0.0
     row["stable"] = bool(row["status"] == "ok" and (not closed or row["max_leg_error"] < threshold) and not touched)
@@ -303,7 +330,7 @@ def compiled_point(spec, run, platform_md, variables):
     values = ([(f"platform.{k}", v) for k, v in platform_values.items()]
               + [(f"controller.{k}", v) for k, v in controller_values.items()])
     overrides = [(f"platform.{name}", value, at) for name, value, at in _scenario(run, closed, commands)]
-    return (1 if commands is U else 0), (n, h, values, overrides)
+    return _drive(run), (n, h, values, overrides)
 
 
 def execute_many(spec, runs, fmus):
@@ -347,7 +374,7 @@ def execute_many(spec, runs, fmus):
             row.update(result)
             if row["status"] == "error" and row["message"].startswith("panic in the compiled master"):
                 _drop_compiled()
-            _finish(study, row, closed)
+            _finish(study, row, closed, runs[i])
             out[i] = (row, seconds + prepared[i])
     return out
 
@@ -372,24 +399,34 @@ def _execute(spec, run, fmus, row):
     stop = float(run.get("stop_time", study["stop_time"]))
     if not _start(spec, run, platform, controller, row):
         return
-    # The scenario: inputs held at 0 from a time on (a failed leg, a power loss).
-    held = [(commands.index(name), value, at) for name, value, at in _scenario(run, closed, commands)]
+    # The scenario: inputs held from a time on (a failed leg, a power loss, a pump stop).
+    scenario = _scenario(run, closed, commands)
     n = int(round(stop / h))
-    t = 0.0
-    e0 = platform.values(["E"])[0]
+    t = start = 0.0
+    e0, line0 = platform.values(["E", "supply.linePressure"])
+    powered = line0 != 0.0  # the power unit: its line's pressure is a state, 0 without it
+    event = _event(scenario)
     leg_error = pose_error = stop_force = residual = deceleration = 0.0
-    kappa_min = math.inf
+    kappa_min = supply_min = math.inf
+    landing = -math.inf
     v_prev = None
     values = None
     try:
-        for t in _steps(platform, controller if closed else None, n, h, commands, held):
+        for t in _steps(platform, controller if closed else None, n, h, commands, scenario, _drive(run)):
             values = platform.values(ENERGY)
             energy, work, dissipated, kappa, z, vz = values[0], values[1], values[2], values[3], values[6], values[7]
+            hydraulic, pump, compression, supply = platform.values(HYDRAULIC)
+            # As the compiled master sums it (crates/stewart-master/src/study.rs).
+            work = work + ((pump if powered else hydraulic) - compression)
             residual = max(residual, abs(energy - e0 - (work - dissipated)))
             kappa_min = min(kappa_min, kappa)
+            supply_min = min(supply_min, supply)
             stop_force = max(stop_force, float(np.max(np.abs(platform.values(FSTOP)))))
             if v_prev is not None:
                 deceleration = max(deceleration, (vz - v_prev) / h)
+                if start >= event:
+                    landing = max(landing, (vz - v_prev) / h)
+            start = t
             v_prev = vz
             if closed:
                 leg_error = max(leg_error, float(np.max(np.abs(platform.values(L) - controller.values(LP)))))
@@ -403,10 +440,12 @@ def _execute(spec, run, fmus, row):
         row.update(status="discard" if e.status == 2 else "error", discard_time=t,
                    message=problem + ("" if terminated else " (recoverable with shorter steps)"))
     row.update(max_stop_force=stop_force, energy_residual=residual, min_kappa=kappa_min if kappa_min < math.inf else math.nan,
-               peak_deceleration=deceleration, final_z=float(values[6]) if values is not None else math.nan)
+               peak_deceleration=deceleration, final_z=float(values[6]) if values is not None else math.nan,
+               min_supply_pressure=supply_min if supply_min < math.inf else math.nan,
+               landing_deceleration=landing if landing > -math.inf else math.nan)
     if closed:
         row.update(max_leg_error=leg_error, max_pose_error=pose_error)
-    _finish(study, row, closed)
+    _finish(study, row, closed, run)
 
 
 def _start(spec, run, platform, controller, row):
@@ -477,17 +516,25 @@ def _execute_cueing(spec, run, fmus, row):
     row["stable"] = row["status"] == "ok"
 
 
-def _steps(platform, controller, n, h, commands, held):
+def _steps(platform, controller, n, h, commands, held, drive):
     """A run's communication steps through the package's one master loop
     (`stewart_fmu.cosim.steps`: Gauss-Seidel, or the platform alone without a controller),
-    yielding the time after each; `held`: inputs (index in `commands`, value, from time) held
-    from a time on."""
+    yielding the time after each; `held`: the platform's inputs (name, value, from time) held
+    from a time on, a command on its way to the platform, another input (no connection drives
+    it: `pump.speed`) set before each step from then on, as the compiled master sets them."""
+    on_the_way = [(commands.index(name), value, at) for name, value, at in held if name in commands]
+    free = [(name, value, at) for name, value, at in held if name not in commands]
+
     def hold(t, forces):
-        for k, value, at in held:
+        for k, value, at in on_the_way:
             if t >= at:
                 forces[k] = value
+        for name, value, at in free:
+            if t >= at:
+                platform.set_values([name], [value])
         return forces
-    yield from cosim.steps(platform, controller, n, h, "gauss-seidel", commands, hold if held else None)
+    yield from cosim.steps(platform, controller, n, h, "gauss-seidel", commands, hold if held else None,
+                           MEASURED[drive])
 
 
 def _safe(f, default):

@@ -136,6 +136,10 @@ def describe(name, system, units, variables):
         if name == "scenario.failed_leg":
             return Param("int", 1, 6, what="leg number")
         return Param("time", 0.0, unit=time_unit, what="time of the failure")
+    if name == "scenario.pump_stop_at":
+        if system == "cueing":
+            return f"{name} applies to system = 'platform' or 'closed-loop' studies, and this one is 'cueing'"
+        return Param("time", 0.0, unit=time_unit, what="time the pump stops")
     role, dot, variable = name.partition(".")
     if not dot:
         known = [f"{r}.{name}" for r in ("platform", "controller") if name in variables.get(r, {})]
@@ -163,7 +167,9 @@ def describe(name, system, units, variables):
         return f"{name} is {'an' if v.causality[0] in 'aeiou' else 'a'} {v.causality}, not a parameter or input"
     if system == "closed-loop" and v.causality == "input":
         driver = "controller" if role == "platform" else "platform"
-        if variable.split("[")[0] in (("F",) if role == "platform" else ("l", "ldot")):
+        # The commands (F, U or valve, by `drive`) and what the controller measures.
+        driven = ("F", "U", "valve") if role == "platform" else ("l", "ldot", "pA", "pB", "supply.pressure")
+        if variable.split("[")[0] in driven:
             return f"{name} is an input that the {driver} drives in a closed-loop study: it cannot be set"
     unit = v.unit if units == "si" else None
     if v.type == "Real":
@@ -180,6 +186,7 @@ def _candidates(system, variables):
     if system != "cueing":
         names += ["platform.com_offset[1]", "platform.com_offset[2]", "platform.com_offset[3]"]
         names += ["scenario.power_loss_at"] if system == "platform" else ["scenario.failed_leg", "scenario.failure_time"]
+        names += ["scenario.pump_stop_at"]
     for role in ROLES.get(system, ("platform", "controller")) if isinstance(system, str) else ("platform", "controller"):
         names += [f"{role}.{n}" for n, v in variables.get(role, {}).items() if v.causality in ("parameter", "input")]
     return names

@@ -47,8 +47,8 @@ STUDY_KEYS = {
 REQUIRED_STUDY_KEYS = ("stop_time", "step")
 # Metrics a plot can show (`stable` is a yes/no, shown by the map's blanks instead).
 PLOT_VALUES = ("max_leg_error", "max_pose_error", "discard_time", "min_kappa", "max_stop_force", "energy_residual",
-               "peak_deceleration", "final_z", "wall_time", "cue_error", "max_usage", "least_scale", "max_tilt",
-               "perceived_error", "correlation", "false_cues", "fallbacks")
+               "peak_deceleration", "final_z", "min_supply_pressure", "landing_deceleration", "wall_time", "cue_error",
+               "max_usage", "least_scale", "max_tilt", "perceived_error", "correlation", "false_cues", "fallbacks")
 PLOT_KEYS = {
     "map": ("kind", "value", "x", "y", "facet", "log", "file", "title", "unstable_blank"),
     "scatter": ("kind", "value", "x", "file", "title"),

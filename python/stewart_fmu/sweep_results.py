@@ -90,7 +90,8 @@ def summarise(spec, results, executed, elapsed, order=None, master=None):
         lines.append("status: " + ", ".join(f"{k} {v}" for k, v in sorted(counts.items())))
         lines.append(f"stable: {int(results['stable'].sum())} of {len(results)}")
         for metric in ("max_leg_error", "max_pose_error", "max_stop_force", "peak_deceleration", "energy_residual",
-                       "cue_error", "max_usage", "least_scale", "max_tilt"):
+                       "min_supply_pressure", "landing_deceleration", "cue_error", "max_usage", "least_scale",
+                       "max_tilt"):
             column = results[metric].dropna()
             if len(column):
                 lines.append(f"{metric}: min {column.min():.3g}, median {column.median():.3g}, max {column.max():.3g}")

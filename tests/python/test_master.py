@@ -1,8 +1,9 @@
 """The compiled co-simulation master (crates/stewart-master, `stewart_fmu.master`) against the
 FMPy master (`stewart_fmu.study._execute`, `stewart_fmu.cosim`): the shipped stability study
 (with its discards), payload, power-loss (the platform alone, its forces cut) and workspace
-studies, and a study with electric drives and a failed leg, give the same rows in every
-column to the bit; the closed loop gives the same numbers with both schemes; its command line
+studies, a study with electric drives and a failed leg, and studies of hydraulic legs fed by the
+power unit whose pump stops (the shipped accumulator study among them), give the same rows in
+every column to the bit; the closed loop gives the same numbers with both schemes; its command line
 writes what Python gets and says when an FMU ends a run; on a real Dask cluster on loopback a
 worker killed mid-study loses no run and the rows equal the serial run's."""
 
@@ -50,7 +51,8 @@ def compare(spec, runs):
 
 
 # (study file, runs compared: all, or the first N to keep the FMPy side short)
-STUDIES = [("stability.toml", None), ("payload.toml", 24), ("power_loss.toml", None), ("workspace.toml", 12)]
+STUDIES = [("stability.toml", None), ("payload.toml", 24), ("power_loss.toml", None), ("workspace.toml", 12),
+           ("accumulator.toml", 1)]
 
 
 @pytest.mark.parametrize("name,count", STUDIES)
@@ -71,6 +73,15 @@ def test_the_shipped_studies_give_the_same_rows_with_both_masters(name, count):
         assert all(r["discard_time"] > 0 for r in discards) and any(r["status"] == "ok" for r in compiled)
     if name == "power_loss.toml":
         assert all(r["status"] == "ok" and r["peak_deceleration"] > 0 for r in compiled)
+    if name == "accumulator.toml":
+        # 20 L precharged to 4.5 MPa: the supply falls, the controller lands the stand; the
+        # balance of docs/model.md §10b (work.pump) holds to the integration's tolerance.
+        r = compiled[0]
+        print(f"accumulator study, first point: lowest supply {r['min_supply_pressure'] / 1e6:.3f} MPa, upward "
+              f"acceleration after the stop {r['landing_deceleration']:.3f} m/s2, final z {r['final_z']:.4f} m, "
+              f"energy residual {r['energy_residual']:.2e} J")
+        assert r["status"] == "ok" and r["min_supply_pressure"] < 12.0e6 and r["final_z"] < 1.6
+        assert r["energy_residual"] < 1e-6 and 0.0 < r["landing_deceleration"] < 10.0
 
 
 DRIVES = """
@@ -106,6 +117,66 @@ def test_a_drives_study_with_a_failed_leg_gives_the_same_rows_with_both_masters(
     assert all(r["status"] == "ok" for r in compiled)
     # The failed leg is felt: it no longer follows its programme.
     assert all(r["max_leg_error"] > 1e-3 for r in compiled)
+
+
+POWER_UNIT = """
+[study]
+name = "pump_stop"
+system = "closed-loop"
+units = "si"
+stop_time = 1.5
+step = 0.001
+
+[fixed]
+"platform.drive" = 2
+"controller.drive" = 2
+"controller.landing.pressure" = 12.0e6
+"scenario.pump_stop_at" = 0.3
+
+[grid]
+"platform.hydraulic.supply" = [0, 1]
+"platform.accumulator.volume" = [2.0e-3, 40.0e-3]
+"""
+
+
+def test_a_pump_stop_study_gives_the_same_rows_with_both_masters(tmp_path):
+    """Hydraulic legs (StewartSystemHydraulic.ssp's valve commands, the pressures and the supply
+    pressure measured) on the power unit, its pump stopped at 0.3 s (`pump.speed` set by the
+    master, an input no connection drives): the same rows to the bit, the balance of
+    docs/model.md §10b in `energy_residual`, a small accumulator's supply lower than a large
+    one's; with the ideal supply the pump stop is refused by name."""
+    path = tmp_path / "pump_stop.toml"
+    path.write_text(POWER_UNIT)
+    spec = st.load(path)
+    runs = st.runs(spec)
+    compiled, _, differ = compare(spec, runs)
+    rows = {(r["run_id"]): r for r in compiled}
+    by = {(int(run["platform.hydraulic.supply"]), run["platform.accumulator.volume"]): rows[st.run_id(run)]
+          for run in runs}
+    for key, r in sorted(by.items()):
+        print(f"supply {key[0]}, accumulator {key[1] * 1e3:.0f} L: {r['status']} {r['message'][:60]!r} lowest supply "
+              f"{r['min_supply_pressure'] / 1e6:.3f} MPa, upward acceleration after the stop "
+              f"{r['landing_deceleration']:.3f} m/s2, energy residual {r['energy_residual']:.2e} J")
+    assert not differ, differ[:5]
+    for volume in (2.0e-3, 40.0e-3):
+        assert by[(0, volume)]["status"] == "error" and "hydraulic.supply = 1" in by[(0, volume)]["message"]
+        assert by[(1, volume)]["status"] == "ok"
+    # The 2 L accumulator empties and the supply collapses (a stiff passage for the default
+    # adaptive method at its tolerance); the 40 L one keeps the supply up.
+    assert by[(1, 2.0e-3)]["energy_residual"] < 1e-2 and by[(1, 40.0e-3)]["energy_residual"] < 1e-6
+    assert by[(1, 2.0e-3)]["min_supply_pressure"] < by[(1, 40.0e-3)]["min_supply_pressure"] - 1e6
+    # The ideal supply (work.hydraulic in the balance) with a valve's command cut at 0.3 s.
+    path.write_text(POWER_UNIT.replace('"scenario.pump_stop_at" = 0.3', '"scenario.failed_leg" = 2\n'
+                                       '"scenario.failure_time" = 0.3').split("[grid]")[0])
+    spec = st.load(path)
+    compiled, _, differ = compare(spec, st.runs(spec))
+    r = compiled[0]
+    print(f"ideal supply, valve 2 cut at 0.3 s: {r['status']}, largest leg error {r['max_leg_error'] * 1e3:.2f} mm, "
+          f"supply {r['min_supply_pressure'] / 1e6:.1f} MPa, energy residual {r['energy_residual']:.2e} J; "
+          f"columns that differ: {len(differ)}")
+    assert not differ, differ[:5]
+    assert r["status"] == "ok" and r["energy_residual"] < 1e-6 and r["max_leg_error"] > 1e-3
+    assert r["min_supply_pressure"] == 16.0e6 and r["landing_deceleration"] >= 0.0
 
 
 @pytest.mark.quick

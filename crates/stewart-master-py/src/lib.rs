@@ -291,6 +291,8 @@ impl PySystem {
                     d.set_item("energy_residual", r.energy_residual)?;
                     d.set_item("peak_deceleration", r.peak_deceleration)?;
                     d.set_item("final_z", r.final_z)?;
+                    d.set_item("min_supply_pressure", r.min_supply_pressure)?;
+                    d.set_item("landing_deceleration", r.landing_deceleration)?;
                 }
                 Err(message) => {
                     d.set_item("status", "error")?;

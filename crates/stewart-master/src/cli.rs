@@ -321,7 +321,7 @@ fn study(system: &mut System, options: &[String]) -> Result<i32, String> {
     writeln!(
         writer,
         "status,discard_time,max_leg_error,max_pose_error,min_kappa,max_stop_force,energy_residual,\
-         peak_deceleration,final_z,steps,message"
+         peak_deceleration,final_z,min_supply_pressure,landing_deceleration,steps,message"
     )
     .map_err(io)?;
     for spec in &specs {
@@ -335,6 +335,8 @@ fn study(system: &mut System, options: &[String]) -> Result<i32, String> {
             r.energy_residual,
             r.peak_deceleration,
             r.final_z,
+            r.min_supply_pressure,
+            r.landing_deceleration,
         ];
         let metrics: Vec<String> = metrics.iter().map(|x| format!("{x:?}")).collect();
         let message = format!("\"{}\"", r.message.replace('"', "\"\""));

@@ -3,11 +3,16 @@
 //! both give the same rows to the bit. Every comparison is written as Python's `max(a, b)`
 //! (`b` only if `b > a`) and `min`, and a maximum over legs as NumPy's, which is NaN if any
 //! element is.
+//!
+//! The energy residual is `|E - E(0) - (work.F + supplied - work.compression - work.dissipated)|`
+//! with `supplied` the hydraulic supply's work: `work.pump` with the power unit (its line's
+//! pressure `supply.linePressure` not 0 at the start), `work.hydraulic` without (both 0, and
+//! `work.compression` too, for forces and drives, whose rows it leaves as they were).
 
 use crate::system::{Failure, Observer, Readings, RunSpec, System};
 
 /// The platform's variables a study reads after every step, in this order.
-pub const PLATFORM_WATCHED: [&str; 20] = [
+pub const PLATFORM_WATCHED: [&str; 25] = [
     "E",
     "work.F",
     "work.dissipated",
@@ -28,6 +33,11 @@ pub const PLATFORM_WATCHED: [&str; 20] = [
     "l[4]",
     "l[5]",
     "l[6]",
+    "work.hydraulic",
+    "work.pump",
+    "work.compression",
+    "supply.linePressure",
+    "supply.pressure",
 ];
 /// The controller's (closed loop), in this order.
 pub const CONTROLLER_WATCHED: [&str; 9] =
@@ -47,6 +57,12 @@ pub struct StudyRow {
     pub energy_residual: f64,
     pub peak_deceleration: f64,
     pub final_z: f64,
+    /// The lowest `supply.pressure` after a step, Pa (gauge).
+    pub min_supply_pressure: f64,
+    /// The largest upward acceleration of the centre of mass over a step that starts at or
+    /// after the scenario's event (the earliest override's time: a pump stop, a failed leg, a
+    /// power loss), m/s²; NaN without one.
+    pub landing_deceleration: f64,
     /// Steps completed.
     pub steps: usize,
 }
@@ -87,6 +103,14 @@ struct Metrics {
     kappa_min: f64,
     v_prev: Option<f64>,
     final_z: Option<f64>,
+    /// The work supplied is `work.pump` (the power unit), else `work.hydraulic`.
+    powered: bool,
+    supply_min: f64,
+    /// The scenario's event, s (infinite without one), the current step's start and the
+    /// largest upward acceleration from the event on.
+    event: f64,
+    step_start: f64,
+    landing: f64,
 }
 
 impl Observer for Metrics {
@@ -100,20 +124,31 @@ impl Observer for Metrics {
     }
 
     fn initial(&mut self, values: &Readings) {
-        self.e0 = values.of(0)[0];
+        let p = values.of(0);
+        self.e0 = p[0];
+        self.powered = p[23] != 0.0;
     }
 
-    fn step(&mut self, _step: usize, _time: f64, values: &Readings) {
+    fn step(&mut self, _step: usize, time: f64, values: &Readings) {
         let p = values.of(0);
         let (energy, work, dissipated, kappa, z, vz) = (p[0], p[1], p[2], p[3], p[6], p[7]);
+        let supplied = if self.powered { p[21] } else { p[20] };
+        let work = work + (supplied - p[22]);
         python_max(&mut self.residual, ((energy - self.e0) - (work - dissipated)).abs());
+        if p[24] < self.supply_min {
+            self.supply_min = p[24];
+        }
         if kappa < self.kappa_min {
             self.kappa_min = kappa;
         }
         python_max(&mut self.stop_force, max_propagating(p[8..14].iter().map(|f| f.abs())));
         if let Some(v_prev) = self.v_prev {
             python_max(&mut self.deceleration, (vz - v_prev) / self.step);
+            if self.step_start >= self.event {
+                python_max(&mut self.landing, (vz - v_prev) / self.step);
+            }
         }
+        self.step_start = time;
         self.v_prev = Some(vz);
         self.final_z = Some(z);
         if self.closed {
@@ -153,6 +188,11 @@ pub fn run(system: &mut System, controller: Option<usize>, spec: &RunSpec) -> Re
         kappa_min: f64::INFINITY,
         v_prev: None,
         final_z: None,
+        powered: false,
+        supply_min: f64::INFINITY,
+        event: spec.overrides.iter().map(|o| o.from).fold(f64::INFINITY, f64::min),
+        step_start: spec.start_time,
+        landing: f64::NEG_INFINITY,
     };
     let outcome = system.run(spec, &mut metrics);
     let nan = f64::NAN;
@@ -167,6 +207,8 @@ pub fn run(system: &mut System, controller: Option<usize>, spec: &RunSpec) -> Re
         energy_residual: nan,
         peak_deceleration: nan,
         final_z: nan,
+        min_supply_pressure: nan,
+        landing_deceleration: nan,
         steps: outcome.steps,
     };
     match outcome.failure {
@@ -190,6 +232,8 @@ pub fn run(system: &mut System, controller: Option<usize>, spec: &RunSpec) -> Re
     row.min_kappa = if metrics.kappa_min < f64::INFINITY { metrics.kappa_min } else { nan };
     row.peak_deceleration = metrics.deceleration;
     row.final_z = metrics.final_z.unwrap_or(nan);
+    row.min_supply_pressure = if metrics.supply_min < f64::INFINITY { metrics.supply_min } else { nan };
+    row.landing_deceleration = if metrics.landing > f64::NEG_INFINITY { metrics.landing } else { nan };
     if metrics.closed {
         row.max_leg_error = metrics.leg_error;
         row.max_pose_error = metrics.pose_error;
