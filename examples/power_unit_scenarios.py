@@ -1,8 +1,8 @@
 """The main job's demonstration of the hydraulic power unit (docs/model.md §10b, `hydraulic.supply
-= 1`): the heave programme fed by the pump and the accumulator (scenario 3), a pump stop at the
-heave programme's worst moment answered by the accumulator and the controller's safe landing
-(scenario 4); through the packaged FMUs, SI units, default stand, legs and power unit. The
-design study of the accumulator's volume and precharge (scenario 5) is studies/accumulator.toml,
+= 1`): the heave programme fed by the pump and the accumulator (summary line 6), a pump stop at
+the heave programme's worst moment answered by the accumulator and the controller's safe landing
+(line 7); through the packaged FMUs, SI units, default stand, legs and power unit. The design
+study of the accumulator's volume and precharge (line 8) is studies/accumulator.toml,
 which `stewart-sweep` runs on a local Dask cluster after this script (examples/main_job.sh):
 this script checks that the study's pump stop is the worst moment it finds. Writes
 hydraulic6_power_unit_heave.csv, hydraulic7_pump_stop_landing.csv, hydraulic_power_unit.png,
@@ -177,6 +177,8 @@ def check_study(summary, t_stop):
     assert abs(at - t_stop) < 1e-9, (f"{STUDY} stops the pump at {at} s, but the worst of the pump stops is now at "
                                      f"{t_stop} s: set its scenario.pump_stop_at (and stop_time = {t_stop} + "
                                      f"{AFTER_STOP}) to it")
+    stop = float(spec["study"]["stop_time"])
+    assert abs(stop - (at + AFTER_STOP)) < 1e-9, f"{STUDY}: stop_time = {stop} s, not the pump stop + {AFTER_STOP} s"
     grid = spec["grid"]
     summary.append(
         f"8 design study: {STUDY.relative_to(STUDY.parents[1])} (stewart-sweep on a local Dask cluster, "

@@ -146,7 +146,7 @@ pub fn fnv1a64(bytes: &[u8]) -> u64 {
 /// Serialized FMU states start with this.
 const STATE_FORMAT_MAGIC: &[u8; 8] = b"STEWFMU\x00";
 /// Version of the format; a state of another version is refused with a message.
-pub const STATE_FORMAT_VERSION: u32 = 7;
+pub const STATE_FORMAT_VERSION: u32 = 8;
 
 /// Wraps a payload in the envelope: magic, version, model kind, token hash, length, payload,
 /// checksum.

@@ -299,18 +299,19 @@ impl FmuModel for CueingModel {
             Method::Predictive => {
                 let p = self.parameters.predictive();
                 format!(
-                    "predictive cueing: period {:?} s, horizon {:?} s, trust {:?} s, weights f {:?}, omega {:?}, \
-                     neutral {:?}, input {:?}, leg speed {:?} m/s, preview {}",
+                    "predictive cueing: period {:?} s, horizon {:?} s, trust {:?} s, trend {:?} s, weights f {:?}, \
+                     omega {:?}, neutral {:?}, input {:?}, leg speed {:?} m/s, preview {}",
                     p.period,
                     p.horizon,
                     p.trust,
+                    p.trend,
                     p.weight_f,
                     p.weight_omega,
                     p.weight_neutral,
                     p.weight_input,
                     p.leg_speed,
                     if self.preview.is_empty() {
-                        "none (the inputs held over the horizon)".to_string()
+                        "none (the inputs guessed over the horizon: mpc.trend)".to_string()
                     } else {
                         format!("{} rows from {}", self.preview.len(), self.parameters.preview_file)
                     }
@@ -442,6 +443,10 @@ impl FmuModel for CueingModel {
         w.i32(p.fallbacks);
         w.i32(p.acceptable);
         w.bool(p.falling_back);
+        w.bool(p.last_vehicle.is_some());
+        let last = p.last_vehicle.unwrap_or(VehicleMotion { f: [0.0; 3], omega: [0.0; 3] });
+        w.f64s(&last.f);
+        w.f64s(&last.omega);
         w.u8(self.tilt_modes[0].code());
         w.u8(self.tilt_modes[1].code());
         // After initialisation the preview's rows belong to the state: a restored state does
@@ -467,6 +472,9 @@ impl FmuModel for CueingModel {
         p.fallbacks = r.i32()?;
         p.acceptable = r.i32()?;
         p.falling_back = r.bool()?;
+        let has_last = r.bool()?;
+        let last = VehicleMotion { f: r.finite_array("the last solve's f")?, omega: r.finite_array("the last solve's omega")? };
+        p.last_vehicle = has_last.then_some(last);
         for i in 0..2 {
             model.tilt_modes[i] =
                 TiltMode::from_code(r.u8()?).ok_or(SnapshotError("a tilt mode out of range".into()))?;

@@ -4,7 +4,7 @@
 use crate::control::predictive_cueing::motion::{CHANNELS, CommandedMotion};
 use crate::control::predictive_cueing::GRID_STEPS;
 use crate::physics::cueing::perception::Perception;
-use crate::physics::cueing::washout::{STATE_DIM, layout};
+use crate::physics::cueing::washout::{STATE_DIM, VehicleMotion, layout};
 
 /// The washout's states by name (the FMU's state variables `washout.*`).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -138,4 +138,7 @@ pub struct PredictiveState {
     pub acceptable: i32,
     /// Whether the current period is the classical washout's (the last solve failed).
     pub falling_back: bool,
+    /// The vehicle's motion at the last solve (`None` before the first): the guess's rate of
+    /// change is the inputs' over the period since (`mpc.trend`).
+    pub last_vehicle: Option<VehicleMotion>,
 }

@@ -8,7 +8,7 @@ use std::path::Path;
 use super::parameters::{MAX_STEPS_PER_CALL, Method};
 use super::{CueingModel, CueingStates, PerceptionStates, PredictiveState, check_pitch};
 use crate::control::predictive_cueing::motion::{CHANNELS, CommandedMotion};
-use crate::control::predictive_cueing::{GRID_STEPS, SolveOutcome};
+use crate::control::predictive_cueing::{GRID_STEPS, SolveOutcome, guess};
 use crate::models::StepError;
 use crate::physics::cueing::jet::Jet;
 use crate::physics::cueing::perception::{Perception, PerceptionSteps};
@@ -389,8 +389,24 @@ fn solve(
     let Some(solver) = m.predictive.as_deref_mut() else { return };
     let now = at(tau);
     let times = *solver.grid_times();
-    let future: [VehicleMotion; GRID_STEPS + 1] =
-        std::array::from_fn(|j| if m.preview.is_empty() || j == 0 { now } else { m.preview.at(tau + times[j]) });
+    // Without a preview the future is a guess: the inputs going on at their rate over the
+    // last period (`mpc.trend`; none at the first solve).
+    let (period, trend) = (solver.parameters.period, solver.parameters.trend);
+    let rate: [f64; 6] = match state.last_vehicle.replace(now) {
+        Some(last) => std::array::from_fn(|i| {
+            if i < 3 { (now.f[i] - last.f[i]) / period } else { (now.omega[i - 3] - last.omega[i - 3]) / period }
+        }),
+        None => [0.0; 6],
+    };
+    let future: [VehicleMotion; GRID_STEPS + 1] = std::array::from_fn(|j| {
+        if j == 0 {
+            now
+        } else if m.preview.is_empty() {
+            guess(&now, &rate, trend, times[j])
+        } else {
+            m.preview.at(tau + times[j])
+        }
+    });
     let last_plan = if state.falling_back { None } else { Some(&state.plan) };
     let known = m.preview.known_after(tau);
     let outcome = solver.solve(&state.motion, last_plan, &future, known, felt_vehicle, felt_simulator);

@@ -95,6 +95,7 @@ const KNOWNS: &[Dependency] = &[
     All("mpc.period"),
     All("mpc.horizon"),
     All("mpc.trust"),
+    All("mpc.trend"),
     All("mpc.weight.f"),
     All("mpc.weight.omega"),
     All("mpc.weight.neutral"),
@@ -189,8 +190,15 @@ declare_variables! {
         MPC_TRUST => V::parameter(
             "mpc.trust", &[], 142, Some("s"),
             "Predictive cueing: the perceived errors tau ahead weigh exp(-tau/trust) where the vehicle's future is \
-             guessed (the inputs held, a guess that grows worse with tau); within a preview file's rows they weigh 1",
+             guessed (mpc.trend's guess, which grows worse with tau); within a preview file's rows they weigh 1",
         ); real(parameters.predictive.trust),
+        MPC_TREND => V::parameter(
+            "mpc.trend", &[], 154, Some("s"),
+            "Predictive cueing: without a preview file the vehicle's future is guessed from its inputs now and their \
+             rate of change over the last solve period: the horizontal specific force and the angular velocity go on \
+             at that rate, fading over about this time (rate trend (1 - exp(-tau/trend)), within 8 m/s2 and 0.5 \
+             rad/s); 0 holds the inputs",
+        ); real(parameters.predictive.trend),
         MPC_WEIGHT_F => V::parameter(
             "mpc.weight.f", &[3], 143, Some("1"),
             "Predictive cueing: weight of the perceived specific-force error per cabin axis, per squared threshold \
@@ -223,8 +231,8 @@ declare_variables! {
         PREVIEW_FILE => V::parameter(
             "preview.file", &[], 153, None,
             "Predictive cueing: a CSV file of the vehicle's future (header time, f[1], f[2], f[3], omega[1], omega[2], \
-             omega[3]; s, m/s2, rad/s; simulation time), read at initialisation; empty: the inputs are held over the \
-             horizon",
+             omega[3]; s, m/s2, rad/s; simulation time), read at initialisation; empty: the inputs are guessed over \
+             the horizon (mpc.trend)",
         )
         .string(); string(parameters.preview_file),
         B => machine::base_joints(50); real(parameters.base_joints),

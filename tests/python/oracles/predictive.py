@@ -41,7 +41,8 @@ w_body = E(beta) beta'; the perception model of §12 as in `oracles.perception`)
      nominal_j), the deviation linear in du (each block's unit jerk propagated over the grid);
      the simulator's lags advanced over each grid step with the cues linear between the
      points, from their values now; the vehicle's lags from their values now with f and omega
-     held at the inputs now (no preview file);
+     guessed at the points from the inputs now and their change since the last solve (no
+     preview file; `mpc.trend`, `Predictive.guess`), linear between the points;
   5. the objective 1/2 sum w r^2 over the residuals r:
      - points j = 1..20, cabin axis i: perceived simulator minus perceived vehicle cue, weight
        h_{j-1} exp(-tau_j / mpc.trust) mpc.weight.f[i] / thr_f[i]^2 (and .omega, with the
@@ -185,6 +186,7 @@ class Predictive:
         lmax = np.array([p[f"lmax[{k}]"] for k in range(1, 7)])
         self.rate_limit, self.tilt_max = p["tilt.rateLimit"], p["tilt.max"]
         self.period, self.horizon, self.trust = p["mpc.period"], p["mpc.horizon"], p["mpc.trust"]
+        self.trend = p["mpc.trend"]
         self.leg_speed, self.max_step = p["mpc.legSpeed"], p["solver.maxStep"]
         # The grid, the blocks, and per channel the deviation (position, rate, acceleration)
         # at each point per block's unit jerk.
@@ -285,7 +287,19 @@ class Predictive:
                 out[j] = overlap @ plan / (self.tau[j + 1] - self.tau[j])
         return out
 
-    def solve(self, x, sim_lags, vehicle_lags, f, omega, plan=None):
+    def guess(self, f, omega, rate):
+        """The vehicle's inputs (f, omega) at the grid's points, guessed as docs/cueing.md says
+        (`mpc.trend`): f[1], f[2], omega go on at `rate` (their change over the last solve
+        period, per second), by rate T (1 - exp(-tau/T)) within 8 m/s2 and 0.5 rad/s; f[3]
+        held; T = 0 holds them all."""
+        held = np.concatenate([f, omega])
+        if not self.trend > 0.0:
+            return np.tile(held, (STEPS + 1, 1))
+        reach = self.trend * (1.0 - np.exp(-self.tau / self.trend))
+        limit = np.array([8.0, 8.0, 0.0, 0.5, 0.5, 0.5])
+        return held + np.clip(np.outer(reach, rate), -limit, limit)
+
+    def solve(self, x, sim_lags, vehicle_lags, f, omega, plan=None, rate=np.zeros(6)):
         """A solve at the command x (6, 3) with the lags now (15 each) and the vehicle's inputs
         now, from the last plan. Returns (plan, info): the new plan (steps x channels of jerks)
         and the correction du (blocks x channels), the objective at du, the inequalities'
@@ -298,14 +312,14 @@ class Predictive:
         y, jac = self.cues(xs, jacobian=True)
         dy = np.einsum("nkcd,ndb->nkbc", jac, self.sens).reshape(STEPS + 1, 6, N_UNKNOWNS)
         # The perceived errors at the points 1..20: the simulator's lags on the linearised cues
-        # (affine in du), the vehicle's on its held inputs.
-        held = np.concatenate([f, omega])[LAG_CUE]
+        # (affine in du), the vehicle's on its guessed inputs (linear between the points).
+        guessed = self.guess(f, omega, rate)[:, LAG_CUE]
         sim, dsim, veh = sim_lags.copy(), np.zeros((len(LAG_TAU), N_UNKNOWNS)), vehicle_lags.copy()
         values, rows = np.empty((STEPS, 6)), np.empty((STEPS, 6, N_UNKNOWNS))
         for j, (e, a, b) in enumerate(self.grid_lags):
             sim = e * sim + a * y[j, LAG_CUE] + b * y[j + 1, LAG_CUE]
             dsim = e[:, None] * dsim + a[:, None] * dy[j, LAG_CUE] + b[:, None] * dy[j + 1, LAG_CUE]
-            veh = e * veh + (a + b) * held
+            veh = e * veh + a * guessed[j] + b * guessed[j + 1]
             values[j], rows[j] = LAG_SUM @ (sim - veh), LAG_SUM @ dsim
         cue_rows, cue_values, cue_weights = rows.reshape(-1, N_UNKNOWNS), values.ravel(), self.w_cue.ravel()
         fixed_values = np.concatenate([xs[self.neutral_index], (self.jerk_scale * u_nom).ravel()])
@@ -406,7 +420,9 @@ class Predictive:
         record(0)
         for i in range(len(t) - 1):
             if i % every == 0:
-                plan, info = self.solve(x, sim, veh, inputs[i, :3], inputs[i, 3:], plan)
+                # The inputs' change since the last solve, per second (none at the first).
+                rate = (inputs[i] - inputs[i - every]) / self.period if i >= every else np.zeros(6)
+                plan, info = self.solve(x, sim, veh, inputs[i, :3], inputs[i, 3:], plan, rate)
                 if perturb is not None:
                     du = perturb(len(solves), info)
                     plan = plan + (du - info["du"])[self.block]

@@ -58,8 +58,11 @@ pub struct PredictiveParameters {
     /// `mpc.horizon`, s.
     pub horizon: f64,
     /// `mpc.trust`, s: the perceived errors at `tau` ahead weigh `exp(-tau/trust)` where the
-    /// vehicle's motion is guessed (the inputs held); where a preview knows it they weigh 1.
+    /// vehicle's motion is guessed ([`guess`]); where a preview knows it they weigh 1.
     pub trust: f64,
+    /// `mpc.trend`, s: the guess of the vehicle's future goes on with the inputs' rate of change
+    /// over the last solve period for about this long ([`guess`]); 0 holds the inputs.
+    pub trend: f64,
     /// `mpc.weight.f[i]`: per squared threshold of perceived specific-force error.
     pub weight_f: [f64; 3],
     /// `mpc.weight.omega[i]`: per squared threshold of perceived angular-velocity error.
@@ -85,6 +88,7 @@ pub const DEFAULT_PREDICTIVE: PredictiveParameters = PredictiveParameters {
     period: 0.01,
     horizon: 2.0,
     trust: 0.6,
+    trend: 1.0,
     weight_f: [1.0, 1.0, 4.0],
     weight_omega: [1.0, 1.0, 1.0],
     weight_neutral: 10.0,
@@ -113,6 +117,9 @@ impl PredictiveParameters {
         positive("mpc.period", self.period)?;
         positive("mpc.horizon", self.horizon)?;
         positive("mpc.trust", self.trust)?;
+        if !(self.trend >= 0.0 && self.trend.is_finite()) {
+            return Err(format!("parameter mpc.trend: must be >= 0 (0 holds the inputs), got {:?}", self.trend));
+        }
         positive("mpc.weight.input", self.weight_input)?;
         positive("mpc.legSpeed", self.leg_speed)?;
         positive("tilt.rateLimit", self.tilt_rate_limit)?;
@@ -145,6 +152,31 @@ impl PredictiveParameters {
     pub fn first_grid_step(&self) -> f64 {
         let g = problem::GRID_GROWTH;
         self.horizon * (g - 1.0) / (crate::maths::pow(g, GRID_STEPS as f64) - 1.0)
+    }
+}
+
+/// The largest change of the horizontal specific force (m/s²) and of the angular velocity
+/// (rad/s) a [`guess`] extrapolates: the bounds of the drives the method is tested on, so that
+/// a noisy input's difference quotient cannot make the guess leave them.
+pub const GUESS_LIMIT_F: f64 = 8.0;
+pub const GUESS_LIMIT_OMEGA: f64 = 0.5;
+
+/// The vehicle's motion `tau` ahead guessed from its motion `now` and its inputs' rate of
+/// change `rate` (`d f / dt`, m/s³, then `d omega / dt`, rad/s², cabin axes): the horizontal
+/// specific force and the angular velocity go on at that rate, fading over `trend` s, `rate
+/// trend (1 - exp(-tau / trend))` (within [`GUESS_LIMIT_F`], [`GUESS_LIMIT_OMEGA`]); the vertical
+/// specific force is held. `trend = 0` holds the inputs. A ramp (a braking's onset and end,
+/// a lane change's swing) is seen coming for the second or so its rate lasts; a held guess
+/// sees only the level reached.
+pub fn guess(now: &VehicleMotion, rate: &[f64; 6], trend: f64, tau: f64) -> VehicleMotion {
+    if !(trend > 0.0) {
+        return *now;
+    }
+    let reach = trend * (1.0 - crate::maths::exp(-tau / trend));
+    let change = |i: usize, limit: f64| (rate[i] * reach).clamp(-limit, limit);
+    VehicleMotion {
+        f: [now.f[0] + change(0, GUESS_LIMIT_F), now.f[1] + change(1, GUESS_LIMIT_F), now.f[2]],
+        omega: std::array::from_fn(|i| now.omega[i] + change(3 + i, GUESS_LIMIT_OMEGA)),
     }
 }
 
@@ -243,5 +275,31 @@ impl PredictiveCueing {
             },
             QpOutcome::Failed { iterations, why } => SolveOutcome::Failed { iterations, why },
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The guess against its closed form: a held level with `trend = 0`, the rate's fading
+    /// extrapolation otherwise (to `rate trend` far ahead), the limits, the vertical held.
+    #[test]
+    fn the_guess_goes_on_with_the_rate_and_fades() {
+        let now = VehicleMotion { f: [-1.0, 0.5, 9.81], omega: [0.0, 0.1, -0.2] };
+        let rate = [-2.0, 3.0, 50.0, 0.1, -0.2, 40.0];
+        assert_eq!(guess(&now, &rate, 0.0, 1.5), now);
+        for tau in [0.0, 0.1, 1.0, 2.0] {
+            let g = guess(&now, &rate, 1.0, tau);
+            let reach = 1.0 - (-tau as f64).exp();
+            assert!((g.f[0] - (-1.0 - 2.0 * reach)).abs() < 1e-15);
+            assert!((g.f[1] - (0.5 + 3.0 * reach)).abs() < 1e-15);
+            assert_eq!(g.f[2], 9.81);
+            assert!((g.omega[0] - 0.1 * reach).abs() < 1e-15);
+            assert!((g.omega[1] - (0.1 - 0.2 * reach)).abs() < 1e-15);
+            assert!((g.omega[2] - (-0.2 + (40.0 * reach).min(GUESS_LIMIT_OMEGA))).abs() < 1e-15);
+        }
+        let far = guess(&now, &[100.0, 0.0, 0.0, 0.0, 0.0, 0.0], 1.0, 2.0);
+        assert_eq!(far.f[0], -1.0 + GUESS_LIMIT_F);
     }
 }
