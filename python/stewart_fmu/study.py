@@ -155,8 +155,8 @@ FSTOP = [f"Fstop[{k}]" for k in LEGS]
 ENERGY = ["E", "work.F", "work.dissipated", "kappa", "r[1]", "r[2]", "r[3]", "v[3]"]
 # The hydraulic supply's work (`work.pump` with the power unit, else `work.hydraulic`), the
 # oil's compression, the supply's pressure (docs/model.md §10, §10b; all 0 for forces and
-# drives but the pressure, pS).
-HYDRAULIC = ["work.hydraulic", "work.pump", "work.compression", "supply.pressure"]
+# drives but the pressure, pS), the drives' electric work (§9).
+HYDRAULIC = ["work.hydraulic", "work.pump", "work.compression", "supply.pressure", "work.electric"]
 
 
 def _parameters(spec, run, platform_md):
@@ -415,9 +415,9 @@ def _execute(spec, run, fmus, row):
         for t in _steps(platform, controller if closed else None, n, h, commands, scenario, _drive(run)):
             values = platform.values(ENERGY)
             energy, work, dissipated, kappa, z, vz = values[0], values[1], values[2], values[3], values[6], values[7]
-            hydraulic, pump, compression, supply = platform.values(HYDRAULIC)
+            hydraulic, pump, compression, supply, electric = platform.values(HYDRAULIC)
             # As the compiled master sums it (crates/stewart-master/src/study.rs).
-            work = work + ((pump if powered else hydraulic) - compression)
+            work = work + ((electric + (pump if powered else hydraulic)) - compression)
             residual = max(residual, abs(energy - e0 - (work - dissipated)))
             kappa_min = min(kappa_min, kappa)
             supply_min = min(supply_min, supply)

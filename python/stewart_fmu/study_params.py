@@ -166,11 +166,12 @@ def describe(name, system, units, variables):
     if v.causality not in ("parameter", "input"):
         return f"{name} is {'an' if v.causality[0] in 'aeiou' else 'a'} {v.causality}, not a parameter or input"
     if system == "closed-loop" and v.causality == "input":
-        driver = "controller" if role == "platform" else "platform"
         # The commands (F, U or valve, by `drive`) and what the controller measures.
         driven = ("F", "U", "valve") if role == "platform" else ("l", "ldot", "pA", "pB", "supply.pressure")
         if variable.split("[")[0] in driven:
-            return f"{name} is an input that the {driver} drives in a closed-loop study: it cannot be set"
+            return (f"{name} is an input the coupling drives in a closed-loop study (the platform's commands F, U or "
+                    f"valve by its drive, the controller's measurements l, ldot, pA, pB, supply.pressure): it cannot "
+                    f"be set")
     unit = v.unit if units == "si" else None
     if v.type == "Real":
         return Param("real", v.min, v.max, unit=unit, what=v.causality)

@@ -167,6 +167,13 @@ def check(spec, path="", max_runs=DEFAULT_MAX_RUNS, variables=None, fmus=None):
     samples = _check_sampling(random, samples, seed, problems)
     if "scenario.failure_time" in seen and "scenario.failed_leg" not in seen:
         problems.append("scenario.failure_time is set but scenario.failed_leg is not: name the leg that fails")
+    if "scenario.pump_stop_at" in seen:
+        # Where the study fixes them (else each run says so in its row).
+        drive, supply = fixed.get("platform.drive", 0), fixed.get("platform.hydraulic.supply", 0)
+        varied = {n for n in ("platform.drive", "platform.hydraulic.supply") if n in grid or n in random}
+        if not varied and (drive != 2 or supply != 1):
+            problems.append("scenario.pump_stop_at stops the power unit's pump: it needs platform.drive = 2 and "
+                            "platform.hydraulic.supply = 1 in [fixed]")
 
     steps = _check_steps(study, fixed, grid, random, units, problems)
     count = math.prod(len(v) for v in grid.values() if isinstance(v, list)) * (samples or 1)

@@ -117,6 +117,8 @@ def test_a_drives_study_with_a_failed_leg_gives_the_same_rows_with_both_masters(
     assert all(r["status"] == "ok" for r in compiled)
     # The failed leg is felt: it no longer follows its programme.
     assert all(r["max_leg_error"] > 1e-3 for r in compiled)
+    # The balance with the drives' electric work (docs/model.md §9): 1.2e-6 J measured.
+    assert all(r["energy_residual"] < 1e-4 for r in compiled), [r["energy_residual"] for r in compiled]
 
 
 POWER_UNIT = """

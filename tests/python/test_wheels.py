@@ -61,7 +61,7 @@ step = [0.05, 0.2, 0.29, 0.3, 0.58]
 """
 # What `stewart-master study` writes of a run's row.
 MASTER_ROW = ["status", "message", "discard_time", "max_leg_error", "max_pose_error", "min_kappa", "max_stop_force",
-              "energy_residual", "peak_deceleration", "final_z"]
+              "energy_residual", "peak_deceleration", "final_z", "landing_deceleration"]
 # What a Windows DLL of the compiled master may import: Windows' own DLLs (as the FMUs' DLLs,
 # docs/platforms.md) and the stable ABI's python3.dll.
 WINDOWS_DLLS = {"kernel32.dll", "ntdll.dll", "msvcrt.dll", "bcryptprimitives.dll", "userenv.dll", "ws2_32.dll",

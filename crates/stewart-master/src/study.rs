@@ -4,15 +4,16 @@
 //! (`b` only if `b > a`) and `min`, and a maximum over legs as NumPy's, which is NaN if any
 //! element is.
 //!
-//! The energy residual is `|E - E(0) - (work.F + supplied - work.compression - work.dissipated)|`
-//! with `supplied` the hydraulic supply's work: `work.pump` with the power unit (its line's
-//! pressure `supply.linePressure` not 0 at the start), `work.hydraulic` without (both 0, and
-//! `work.compression` too, for forces and drives, whose rows it leaves as they were).
+//! The energy residual is `|E - E(0) - (work.F + work.electric + supplied - work.compression -
+//! work.dissipated)|` (docs/model.md §9, §10, §10b) with `supplied` the hydraulic supply's
+//! work: `work.pump` with the power unit (taken to be there when its line's pressure
+//! `supply.linePressure` is not 0 at the start), `work.hydraulic` without. With forces every
+//! term but `work.F` and `work.dissipated` is 0, and their rows keep their bits.
 
 use crate::system::{Failure, Observer, Readings, RunSpec, System};
 
 /// The platform's variables a study reads after every step, in this order.
-pub const PLATFORM_WATCHED: [&str; 25] = [
+pub const PLATFORM_WATCHED: [&str; 26] = [
     "E",
     "work.F",
     "work.dissipated",
@@ -38,6 +39,7 @@ pub const PLATFORM_WATCHED: [&str; 25] = [
     "work.compression",
     "supply.linePressure",
     "supply.pressure",
+    "work.electric",
 ];
 /// The controller's (closed loop), in this order.
 pub const CONTROLLER_WATCHED: [&str; 9] =
@@ -133,7 +135,7 @@ impl Observer for Metrics {
         let p = values.of(0);
         let (energy, work, dissipated, kappa, z, vz) = (p[0], p[1], p[2], p[3], p[6], p[7]);
         let supplied = if self.powered { p[21] } else { p[20] };
-        let work = work + (supplied - p[22]);
+        let work = work + ((p[25] + supplied) - p[22]);
         python_max(&mut self.residual, ((energy - self.e0) - (work - dissipated)).abs());
         if p[24] < self.supply_min {
             self.supply_min = p[24];
