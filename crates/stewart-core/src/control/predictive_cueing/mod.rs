@@ -291,7 +291,7 @@ mod tests {
         assert_eq!(guess(&now, &rate, 0.0, 1.5), now);
         for tau in [0.0, 0.1, 1.0, 2.0] {
             let g = guess(&now, &rate, 1.0, tau);
-            let reach = 1.0 - (-tau as f64).exp();
+            let reach = 1.0 - f64::exp(-tau);
             assert!((g.f[0] - (-1.0 - 2.0 * reach)).abs() < 1e-15);
             assert!((g.f[1] - (0.5 + 3.0 * reach)).abs() < 1e-15);
             assert_eq!(g.f[2], 9.81);
