@@ -215,7 +215,9 @@ def _run_all(runner, pending, window):
                 # Its inputs were lost with workers that died: not the task's doing.
                 futures.add(runner.submit(batch, attempt + 1))
                 continue
-            if killed(e):
+            if killed(e) or cancelled(e):
+                # Still cancelled after the retries: workers kept dying under it, as under a
+                # KilledWorker; alone on the cluster it shows whether one of its runs is why.
                 suspects.extend(batch)
             else:
                 runner.record(runner.error_rows(batch, e))
