@@ -2,7 +2,7 @@
 declare, over 3000 steps of 1 ms through FMPy, with forces (legs with mass and friction; RK4;
 the paper's legs), with electric drives (adaptive and RK4) under a leg feedback with a
 ripple, and with hydraulic legs of oil without air and with the default air, the ideal supply (adaptive and
-RK4; a valve ripple, the pump failing at 2 s). How a change that should not touch these modes is checked (benches/results/hydraulics.txt),
+RK4; a valve ripple, the pump failing at 2 s) and fed by the power unit (its pump stopping at 2 s). How a change that should not touch these modes is checked (benches/results/hydraulics.txt),
 and how far apart a change that moves them at round-off leaves them (benches/results/machine_lanes.txt).
 
     .venv/bin/python benches/same_bits.py OLD/StewartPlatform.fmu NEW/StewartPlatform.fmu
@@ -19,7 +19,7 @@ def run(fmu, params, inputs_name, law, steps=3000, h=1e-3, scalars=None):
     for k, v in params.items():
         if k not in vr:  # a parameter the older build does not have (at its neutral value here)
             continue
-        if isinstance(v, int) and k in ("drive", "solver.method"): s.setInteger([vr[k]], [v])
+        if isinstance(v, int) and k in INTEGERS: s.setInteger([vr[k]], [v])
         elif isinstance(v, bool): s.setBoolean([vr[k]], [v])
         else: s.setReal([vr[k]], [v])
     s.exitInitializationMode()
@@ -35,6 +35,7 @@ def run(fmu, params, inputs_name, law, steps=3000, h=1e-3, scalars=None):
     s.terminate(); s.freeInstance()
     return np.array(rows), names
 import sys
+INTEGERS = ("drive", "solver.method", "hydraulic.supply")
 old, new = sys.argv[1], sys.argv[2]
 OLD_NAMES = {v.name for v in read_model_description(old).modelVariables}
 l0 = 1.7550860729486566
@@ -58,9 +59,14 @@ cases += [("hydraulics, no air", no_air, "valve", valves, pump),
           # unit of §10b leaves as it was.
           ("hydraulics, air", {"drive": 2}, "valve", valves, pump),
           ("hydraulics, air, RK4", {"drive": 2, "solver.method": 2}, "valve", valves, pump)]
+# The power unit (hydraulic.supply = 1), the pump stopping at 2 s (where the older build has it).
+stop = lambda t: {"pump.speed": 1.0 if t < 2.0 else 0.0}
+if "pump.speed" in OLD_NAMES:
+    cases += [("power unit", {"drive": 2, "hydraulic.supply": 1}, "valve", valves, stop),
+              ("power unit, RK4", {"drive": 2, "hydraulic.supply": 1, "solver.method": 2}, "valve", valves, stop)]
 for name, params, inp, law, *scalars in cases:
-    a, names = run(old, {k: (int(v) if k in ("drive","solver.method") else v) for k,v in params.items()}, inp, law, scalars=scalars[0] if scalars else None)
-    b, _ = run(new, {k: (int(v) if k in ("drive","solver.method") else v) for k,v in params.items()}, inp, law, scalars=scalars[0] if scalars else None)
+    a, names = run(old, {k: (int(v) if k in INTEGERS else v) for k,v in params.items()}, inp, law, scalars=scalars[0] if scalars else None)
+    b, _ = run(new, {k: (int(v) if k in INTEGERS else v) for k,v in params.items()}, inp, law, scalars=scalars[0] if scalars else None)
     diff = np.argwhere(a.view(np.uint64) != b.view(np.uint64))
     print(f"{name}: {a.shape[1]} outputs x {a.shape[0]} steps; differing bits: {len(diff)}", [names[j] for j in sorted(set(diff[:,1]))][:5])
     if len(diff):

@@ -45,6 +45,8 @@ pub trait Number:
     fn greater(self, other: Self) -> Self::Mask;
     /// `yes` where `mask` holds, else `no`.
     fn select(mask: Self::Mask, yes: Self, no: Self) -> Self;
+    /// `self` to the constant power `y` (`self > 0`; libm's `pow`, in each lane).
+    fn powf(self, y: f64) -> Self;
     /// `value` where `self > 0`, else 0 (also where `self` is NaN): a leg's direction and
     /// its other quantities that vanish with a collapsed leg.
     #[inline(always)]
@@ -76,8 +78,6 @@ pub trait Real:
     fn atan2(self, x: Self) -> Self;
     fn exp(self) -> Self;
     fn tanh(self) -> Self;
-    /// `self` to the constant power `y` (`self > 0`).
-    fn powf(self, y: f64) -> Self;
 
     /// `self` limited to `[lower, upper]` by value (`lower <= upper`).
     #[inline(always)]
@@ -116,6 +116,10 @@ impl Number for f64 {
     fn select(mask: bool, yes: Self, no: Self) -> Self {
         if mask { yes } else { no }
     }
+    #[inline(always)]
+    fn powf(self, y: f64) -> Self {
+        maths::pow(self, y)
+    }
 }
 
 impl Real for f64 {
@@ -150,10 +154,6 @@ impl Real for f64 {
     #[inline(always)]
     fn tanh(self) -> Self {
         maths::tanh(self)
-    }
-    #[inline(always)]
-    fn powf(self, y: f64) -> Self {
-        maths::pow(self, y)
     }
 }
 
@@ -319,6 +319,12 @@ impl Number for Dual {
     fn select(mask: bool, yes: Self, no: Self) -> Self {
         if mask { yes } else { no }
     }
+    #[inline(always)]
+    fn powf(self, y: f64) -> Self {
+        // d(x^y) = y x^(y - 1) dx = y x^y / x dx.
+        let p = maths::pow(self.re, y);
+        Dual::new(p, y * p / self.re * self.eps)
+    }
 }
 
 impl Real for Dual {
@@ -361,12 +367,6 @@ impl Real for Dual {
     fn tanh(self) -> Self {
         let t = maths::tanh(self.re);
         Dual::new(t, (1.0 - t * t) * self.eps)
-    }
-    #[inline(always)]
-    fn powf(self, y: f64) -> Self {
-        // d(x^y) = y x^(y - 1) dx = y x^y / x dx.
-        let p = maths::pow(self.re, y);
-        Dual::new(p, y * p / self.re * self.eps)
     }
 }
 

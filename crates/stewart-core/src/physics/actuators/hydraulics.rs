@@ -35,15 +35,16 @@
 //! it is computed as `p_A q_A + p_B q_B`, the chambers' net inflows `q` times their pressures,
 //! which it equals, and which stays finite where `beta_e` is 0).
 //!
-//! The law is written once over [`Real`]: one leg in `f64` or [`crate::physics::number::Dual`]
-//! (values and exact derivatives), six side by side in vector registers.
+//! The law is written once over [`Number`]: one leg in `f64` or [`crate::physics::number::Dual`]
+//! (values and exact derivatives), the six side by side in vector registers
+//! ([`crate::physics::legs::per_leg::PerLeg`], the steps' fast path: the same bits).
 
 mod actuator;
 pub mod power_unit;
 pub use actuator::{Block, HydraulicActuators, block, holding_pressures};
 
 use crate::physics::error::ParameterError;
-use crate::physics::number::{Dual, Real};
+use crate::physics::number::Number;
 use crate::physics::stand::check_finite;
 
 /// Default bore `D`, m: an ISO 63 mm cylinder. At the 16 MPa supply it pushes 50 kN, six and a
@@ -245,42 +246,49 @@ impl HydraulicLegs {
 
     /// `beta_e(p)`, Pa, of oil with entrained air at the gauge pressure `p`: `beta (1 + theta) /
     /// (1 + theta beta / (n P))`, `theta = alpha0 / (1 - alpha0) (p_atm / P)^(1/n)`, `P = p +
-    /// p_atm`; 0 at and below zero absolute (its limit there: `beta_e -> n P`).
+    /// p_atm`; 0 at and below zero absolute (its limit there: `beta_e -> n P`). Computed
+    /// everywhere and then selected, so that six legs side by side take the same bits.
     #[inline(always)]
-    pub fn effective_bulk_modulus<T: Real>(&self, air: &EntrainedAir, p: T) -> T {
+    pub fn effective_bulk_modulus<T: Number>(&self, air: &EntrainedAir, p: T) -> T {
         let absolute = p + ATMOSPHERIC_PRESSURE;
         let zero = T::constant(0.0);
-        if !absolute.greater(zero) {
-            return zero;
-        }
-        if air.inverse_polytropic == 1.0 {
+        let beta_e = if air.inverse_polytropic == 1.0 {
             // n = 1 (the default): theta = a / P, multiplied through by P^2.
-            return absolute * (absolute + air.air_pressure) * self.bulk_modulus
-                / (absolute * absolute + air.isothermal_constant);
-        }
-        let theta = (T::constant(ATMOSPHERIC_PRESSURE) / absolute).powf(air.inverse_polytropic) * air.ratio;
-        (theta + 1.0) * self.bulk_modulus / (theta * air.beta_over_n / absolute + 1.0)
+            absolute * (absolute + air.air_pressure) * self.bulk_modulus / (absolute * absolute + air.isothermal_constant)
+        } else {
+            let theta = (T::constant(ATMOSPHERIC_PRESSURE) / absolute).powf(air.inverse_polytropic) * air.ratio;
+            (theta + 1.0) * self.bulk_modulus / (theta * air.beta_over_n / absolute + 1.0)
+        };
+        T::select(absolute.greater(zero), beta_e, zero)
     }
 
-    /// `beta_e'(p)`, the effective bulk modulus's rate of change with pressure (1): for `n = 1`
-    /// in closed form, `beta (2 P c - a P^2 + a c) / (P^2 + c)^2` with `c = a beta / n`;
-    /// otherwise through a dual number. 0 at and below zero absolute.
-    pub fn effective_bulk_modulus_slope(&self, air: &EntrainedAir, p: f64) -> f64 {
+    /// `beta_e'(p)`, the effective bulk modulus's rate of change with pressure (1), in closed
+    /// form: for `n = 1` `beta (2 P c - a P^2 + a c) / (P^2 + c)^2` with `c = a beta / n`;
+    /// otherwise `beta (theta' D - (1 + theta) D') / D^2` with `D = 1 + theta beta / (n P)`,
+    /// `theta' = -theta / (n P)` and `D' = -theta beta / (n P^2) (1 / n + 1)`. 0 at and below
+    /// zero absolute.
+    #[inline(always)]
+    pub fn effective_bulk_modulus_slope<T: Number>(&self, air: &EntrainedAir, p: T) -> T {
         let absolute = p + ATMOSPHERIC_PRESSURE;
-        if !(absolute > 0.0) {
-            return 0.0;
-        }
-        if air.inverse_polytropic == 1.0 {
+        let zero = T::constant(0.0);
+        let slope = if air.inverse_polytropic == 1.0 {
             let (a, c) = (air.air_pressure, air.isothermal_constant);
             let d = absolute * absolute + c;
-            return self.bulk_modulus * (2.0 * absolute * c - a * absolute * absolute + a * c) / (d * d);
-        }
-        self.effective_bulk_modulus(air, Dual::new(p, 1.0)).eps
+            (absolute * 2.0 * c - absolute * a * absolute + a * c) * self.bulk_modulus / (d * d)
+        } else {
+            let n = air.inverse_polytropic;
+            let theta = (T::constant(ATMOSPHERIC_PRESSURE) / absolute).powf(n) * air.ratio;
+            let d = theta * air.beta_over_n / absolute + 1.0;
+            let theta_rate = zero - theta * n / absolute;
+            let d_rate = zero - theta * air.beta_over_n / (absolute * absolute) * (n + 1.0);
+            (theta_rate * d - (theta + 1.0) * d_rate) * self.bulk_modulus / (d * d)
+        };
+        T::select(absolute.greater(zero), slope, zero)
     }
 
     /// `(V_A, V_B)`, m³, at the piston position `x` in a stroke `L_s`.
     #[inline(always)]
-    pub fn volumes<T: Real>(&self, piston: &Piston<T>) -> (T, T) {
+    pub fn volumes<T: Number>(&self, piston: &Piston<T>) -> (T, T) {
         let (area_a, area_b) = self.areas();
         (piston.position * area_a + self.dead_volume_a, (piston.stroke - piston.position) * area_b + self.dead_volume_b)
     }
@@ -289,7 +297,7 @@ impl HydraulicLegs {
     /// state `chambers`, piston `piston`, saturated valve command `command` (in [-1, 1]) and
     /// supply pressure `supply`: the law.
     #[inline(always)]
-    pub fn rate<T: Real>(
+    pub fn rate<T: Number>(
         &self,
         chambers: &Chambers<T>,
         piston: &Piston<T>,
@@ -301,18 +309,22 @@ impl HydraulicLegs {
         let tank = self.tank_pressure;
         let pcr2 = self.pcr * self.pcr;
         let Chambers { pa, pb, spool, spool_rate } = *chambers;
-        // phi(dp) = dp / (dp^2 + p_cr^2)^(1/4).
-        let phi = |dp: T| dp / (dp * dp + pcr2).sqrt().sqrt();
+        // phi(dp) = dp / (dp^2 + p_cr^2)^(1/4): a function, not a closure, so that it inlines
+        // into the AVX2 path.
+        #[inline(always)]
+        fn phi<T: Number>(dp: T, pcr2: f64) -> T {
+            dp / (dp * dp + pcr2).sqrt().sqrt()
+        }
         let zero = T::constant(0.0);
         let opening = spool * k;
         // The four lands' flows (each >= 0 in the direction written), by the spool's side.
         let extend = spool.greater(zero);
         let retract = zero.greater(spool);
-        let supply_a = T::select(extend, opening * phi(supply - pa), zero);
-        let b_tank = T::select(extend, opening * phi(pb - tank), zero);
+        let supply_a = T::select(extend, opening * phi(supply - pa, pcr2), zero);
+        let b_tank = T::select(extend, opening * phi(pb - tank, pcr2), zero);
         let closing = zero - opening;
-        let a_tank = T::select(retract, closing * phi(pa - tank), zero);
-        let supply_b = T::select(retract, closing * phi(supply - pb), zero);
+        let a_tank = T::select(retract, closing * phi(pa - tank, pcr2), zero);
+        let supply_b = T::select(retract, closing * phi(supply - pb, pcr2), zero);
         // The null leakage, each chamber to supply and to tank.
         let (drop_sa, drop_at, drop_sb, drop_bt) = (supply - pa, pa - tank, supply - pb, pb - tank);
         let (leak_sa, leak_at) = (drop_sa * self.valve_leakage, drop_at * self.valve_leakage);
@@ -364,52 +376,59 @@ impl HydraulicLegs {
     /// turns soft: a chamber emptying towards vacuum) and at least `4 beta_e |q| / (V P)` (so
     /// that a step loses at most half of a chamber's absolute pressure `P`), and the spool's
     /// `|lambda| <= w_v max(1, 2 zeta_v)`. An explicit method of stability interval `r` is stable for steps up to
-    /// about `r / rate`.
-    pub fn stiffness(&self, chambers: &Chambers<f64>, piston: &Piston<f64>, supply: f64) -> f64 {
+    /// about `r / rate`. One leg, or six side by side (the steps' bound).
+    #[inline(always)]
+    pub fn stiffness<T: Number>(&self, chambers: &Chambers<T>, piston: &Piston<T>, supply: T) -> T {
         let k = self.flow_coefficient();
-        let land = |dp: f64| self.land(dp);
-        let s = chambers.spool.abs();
-        let (pa, pb, tank) = (chambers.pa, chambers.pb, self.tank_pressure);
-        let ((a_in, flow_a), (b_in, flow_b)) =
-            if chambers.spool >= 0.0 { (land(supply - pa), land(pb - tank)) } else { (land(pa - tank), land(supply - pb)) };
+        let zero = T::constant(0.0);
+        let Chambers { pa, pb, spool, .. } = *chambers;
+        let tank = self.tank_pressure;
+        // The open lands: supply to A and B to tank for s >= 0, A to tank and supply to B for s < 0.
+        let retract = zero.greater(spool);
+        let s = T::select(retract, zero - spool, spool);
+        let (a_in, flow_a) = self.land(T::select(retract, pa - tank, supply - pa));
+        let (b_in, flow_b) = self.land(T::select(retract, supply - pb, pb - tank));
         let leak = 2.0 * self.valve_leakage + self.internal_leakage;
         let (va, vb) = self.volumes(piston);
-        let mut chamber_a = self.bulk_modulus / va * (k * s * a_in + leak);
-        let mut chamber_b = self.bulk_modulus / vb * (k * s * b_in + leak);
+        let beta = T::constant(self.bulk_modulus);
+        let mut chamber_a = beta / va * (s * k * a_in + leak);
+        let mut chamber_b = beta / vb * (s * k * b_in + leak);
         if let Some(air) = self.air() {
             // |q| bounded by its terms: the open land, both lands' leakage, the piston, the
             // internal leakage.
             let (area_a, area_b) = self.areas();
-            let internal = self.internal_leakage * (pa - pb).abs();
-            let q_a = k * s * flow_a
-                + self.valve_leakage * ((supply - pa).abs() + (pa - tank).abs())
-                + area_a * piston.rate.abs()
+            let internal = magnitude(pa - pb) * self.internal_leakage;
+            let piston_rate = magnitude(piston.rate);
+            let q_a = s * k * flow_a
+                + (magnitude(supply - pa) + magnitude(pa - tank)) * self.valve_leakage
+                + piston_rate * area_a
                 + internal;
-            let q_b = k * s * flow_b
-                + self.valve_leakage * ((supply - pb).abs() + (pb - tank).abs())
-                + area_b * piston.rate.abs()
+            let q_b = s * k * flow_b
+                + (magnitude(supply - pb) + magnitude(pb - tank)) * self.valve_leakage
+                + piston_rate * area_b
                 + internal;
-            chamber_a += self.effective_bulk_modulus_slope(&air, pa).abs() * q_a / va;
-            chamber_b += self.effective_bulk_modulus_slope(&air, pb).abs() * q_b / vb;
+            chamber_a = chamber_a + magnitude(self.effective_bulk_modulus_slope(&air, pa)) * q_a / va;
+            chamber_b = chamber_b + magnitude(self.effective_bulk_modulus_slope(&air, pb)) * q_b / vb;
             // No chamber may lose more than half its absolute pressure in a step (2 / rate):
             // from high pressure an emptying chamber falls almost linearly, and one step past
             // zero absolute would leave it there (beta_e = 0).
-            let emptying = |p: f64, q: f64, v: f64| {
-                let absolute = p + ATMOSPHERIC_PRESSURE;
-                if absolute > 0.0 { 4.0 * self.effective_bulk_modulus(&air, p) * q / (v * absolute) } else { 0.0 }
-            };
-            chamber_a = chamber_a.max(emptying(pa, q_a, va));
-            chamber_b = chamber_b.max(emptying(pb, q_b, vb));
+            let (absolute_a, absolute_b) = (pa + ATMOSPHERIC_PRESSURE, pb + ATMOSPHERIC_PRESSURE);
+            let emptying_a = self.effective_bulk_modulus(&air, pa) * 4.0 * q_a / (va * absolute_a);
+            let emptying_b = self.effective_bulk_modulus(&air, pb) * 4.0 * q_b / (vb * absolute_b);
+            chamber_a = larger(chamber_a, T::select(absolute_a.greater(zero), emptying_a, zero));
+            chamber_b = larger(chamber_b, T::select(absolute_b.greater(zero), emptying_b, zero));
         }
-        chamber_a.max(chamber_b).max(self.valve_omega * (2.0 * self.valve_damping).max(1.0))
+        larger(larger(chamber_a, chamber_b), T::constant(self.valve_omega * (2.0 * self.valve_damping).max(1.0)))
     }
 
     /// An open land's `(phi'(dp), |phi(dp)|)` at the drop `dp`: its flow's slope and its flow
     /// per `K |s|`. `phi'(dp) = (dp^2 / 2 + p_cr^2) / (dp^2 + p_cr^2)^(5/4)`.
-    pub fn land(&self, dp: f64) -> (f64, f64) {
-        let q = dp * dp + self.pcr * self.pcr;
+    #[inline(always)]
+    pub fn land<T: Number>(&self, dp: T) -> (T, T) {
+        let pcr2 = self.pcr * self.pcr;
+        let q = dp * dp + pcr2;
         let root = q.sqrt().sqrt();
-        ((0.5 * dp * dp + self.pcr * self.pcr) / (q * root), dp.abs() / root)
+        ((dp * 0.5 * dp + pcr2) / (q * root), magnitude(dp) / root)
     }
 
     /// The cap-side pressure `p_A` (Pa) at which the leg pushes with `force` (N) for the rod-side
@@ -476,9 +495,23 @@ pub fn saturated(valve: f64) -> f64 {
     valve.clamp(-1.0, 1.0)
 }
 
+/// `|x|` in any number type (`-x` where `x < 0`).
+#[inline(always)]
+fn magnitude<T: Number>(x: T) -> T {
+    let zero = T::constant(0.0);
+    T::select(zero.greater(x), zero - x, x)
+}
+
+/// The larger of `a` and `b` by value (`a` if equal) in any number type.
+#[inline(always)]
+fn larger<T: Number>(a: T, b: T) -> T {
+    T::select(b.greater(a), b, a)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::physics::number::Dual;
 
     fn leg() -> (Chambers<f64>, Piston<f64>) {
         (
@@ -542,6 +575,7 @@ mod tests {
                 assert!((exact - central).abs() < 1e-5 * central.abs(), "n {n}, p {p:e}: {exact:e} {central:e}");
                 let closed = h.effective_bulk_modulus_slope(&air, p);
                 assert!((closed - central).abs() < 1e-5 * central.abs(), "n {n}, p {p:e}: {closed:e} {central:e}");
+                assert!((closed - exact).abs() < 1e-12 * exact.abs(), "n {n}, p {p:e}: {closed:e} {exact:e}");
             }
         }
         let without = HydraulicLegs { air_fraction: 0.0, ..HydraulicLegs::default() };

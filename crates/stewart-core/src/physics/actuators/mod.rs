@@ -16,7 +16,7 @@
 use crate::physics::body::state::{BodyState, STATE_DIM};
 use crate::physics::error::{ParameterError, PhysicsFault};
 use crate::physics::legs::geometry::LegGeometry;
-use crate::physics::number::Real;
+use crate::physics::number::{Number, Real};
 use crate::physics::stand::LEG_COUNT;
 
 /// Every actuator the legs can have, each named once: its kind (the `drive` parameter's code),
@@ -358,6 +358,33 @@ pub trait BodyRate<T: Real> {
     /// The body's rate with the electric drives (which the body's form must have) at their
     /// currents, the inputs their voltages: the drives' law at each leg's rate.
     fn driven(&self, currents: &[T; LEG_COUNT], dy: &mut [T; STATE_DIM]) -> DrivenRates<T>;
+    /// An actuator's per-leg law at each leg, its `I` inputs given per leg (`inputs[i][k]`):
+    /// leg by leg in the definition, the six side by side in the fast path's lanes (the same
+    /// bits: [`Number`]'s operations are the scalar ones in each lane).
+    #[inline(always)]
+    fn per_leg<P: PerLegLaw<I, O>, const I: usize, const O: usize>(
+        &self,
+        law: &P,
+        inputs: &[[T; LEG_COUNT]; I],
+    ) -> [[T; LEG_COUNT]; O] {
+        let mut out = [[T::zero(); LEG_COUNT]; O];
+        for k in 0..LEG_COUNT {
+            let mut leg = [T::zero(); I];
+            for (value, input) in leg.iter_mut().zip(inputs) {
+                *value = input[k];
+            }
+            for (output, value) in out.iter_mut().zip(law.at(leg)) {
+                output[k] = value;
+            }
+        }
+        out
+    }
+}
+
+/// A law of one leg written once over [`Number`] (`I` inputs to `O` outputs), which
+/// [`BodyRate::per_leg`] runs on each leg or on the six side by side.
+pub trait PerLegLaw<const I: usize, const O: usize> {
+    fn at<N: Number>(&self, inputs: [N; I]) -> [N; O];
 }
 
 /// The hydraulic supply's inputs, held over a step: the supply pressure `pS` (Pa; the legs'

@@ -153,6 +153,12 @@ impl Number for Jet {
     fn select(mask: bool, yes: Self, no: Self) -> Self {
         if mask { yes } else { no }
     }
+    fn powf(self, y: f64) -> Self {
+        // f = x^y, f' = y x^(y-1), f'' = y (y - 1) x^(y-2).
+        let p = maths::pow(self.v, y);
+        let d = y * p / self.v;
+        self.compose(p, d, (y - 1.0) * d / self.v)
+    }
 }
 
 impl Real for Jet {
@@ -196,12 +202,6 @@ impl Real for Jet {
         let t = maths::tanh(self.v);
         let dt = 1.0 - t * t;
         self.compose(t, dt, -2.0 * t * dt)
-    }
-    fn powf(self, y: f64) -> Self {
-        // f = x^y, f' = y x^(y-1), f'' = y (y - 1) x^(y-2).
-        let p = maths::pow(self.v, y);
-        let d = y * p / self.v;
-        self.compose(p, d, (y - 1.0) * d / self.v)
     }
 }
 

@@ -166,6 +166,15 @@ impl<L: Lanes> Number for PerLeg<L> {
     fn where_positive(self, value: Self) -> Self {
         PerLeg(self.0.where_positive(value.0))
     }
+    /// Leg by leg (libm has no vector form): the scalar `pow`'s bits.
+    #[inline(always)]
+    fn powf(self, y: f64) -> Self {
+        let mut x = self.to_array();
+        for v in &mut x {
+            *v = crate::maths::pow(*v, y);
+        }
+        PerLeg::new(&x)
+    }
 }
 
 #[cfg(test)]

@@ -7,10 +7,10 @@
 use std::marker::PhantomData;
 
 use super::{Actuation, SpecialForm, sum_over_legs};
-use crate::physics::actuators::{BodyRate, DrivenRates, HeldForces, LegForceLaw, LegPower, Supply};
+use crate::physics::actuators::{BodyRate, DrivenRates, HeldForces, LegForceLaw, LegPower, PerLegLaw, Supply};
 use crate::physics::body::state::{BodyState, STATE_DIM, StateVector};
 use crate::physics::legs::geometry::LegGeometry;
-use crate::physics::legs::per_leg::Lanes;
+use crate::physics::legs::per_leg::{Lanes, PerLeg};
 use crate::physics::number::Real;
 use crate::physics::stand::LEG_COUNT;
 
@@ -110,5 +110,23 @@ impl<L: LegForceLaw + ?Sized, V: Lanes> BodyRate<f64> for FastPath<'_, L, V> {
     fn driven(&self, currents: &[f64; LEG_COUNT], dy: &mut StateVector) -> DrivenRates {
         let voltages = self.inputs();
         self.form.derivative_machine_of::<V>(self.body, Actuation::Drives { currents, voltages: &voltages }, dy)
+    }
+
+    /// The six legs side by side in `V`'s registers.
+    #[inline(always)]
+    fn per_leg<P: PerLegLaw<I, O>, const I: usize, const O: usize>(
+        &self,
+        law: &P,
+        inputs: &[[f64; LEG_COUNT]; I],
+    ) -> [[f64; LEG_COUNT]; O] {
+        let mut lanes = [PerLeg::<V>::splat(0.0); I];
+        for (lane, input) in lanes.iter_mut().zip(inputs) {
+            *lane = PerLeg::new(input);
+        }
+        let mut out = [[0.0; LEG_COUNT]; O];
+        for (output, value) in out.iter_mut().zip(law.at(lanes)) {
+            *output = value.to_array();
+        }
+        out
     }
 }

@@ -4,11 +4,11 @@
 
 use super::power_unit::{PowerUnit, PowerUnitRate};
 use super::{ATMOSPHERIC_PRESSURE, Chambers, DEFAULT_SUPPLY_PRESSURE, HydraulicLegs, Piston};
-use crate::physics::actuators::{Actuator, BodyRate, LegMotion, LegPower, Supply};
+use crate::physics::actuators::{Actuator, BodyRate, LegMotion, LegPower, PerLegLaw, Supply};
 use crate::physics::body::state::{BodyState, STATE_DIM};
 use crate::physics::error::{ParameterError, PhysicsFault};
 use crate::physics::legs::geometry::LegGeometry;
-use crate::physics::legs::per_leg::sum_over_legs;
+use crate::physics::legs::per_leg::{Narrow, PerLeg, sum_over_legs};
 use crate::physics::number::{Number, Real};
 use crate::physics::stand::{LEG_COUNT, check_finite};
 
@@ -95,10 +95,13 @@ impl HydraulicActuators {
     /// The legs' rates at their block `x` (legs of lengths `l`, rates `l_dot`) for the valve
     /// commands `valves` and the supply pressure `supply`, written into `dx`; returns the forces
     /// `u_k` and the sums over the legs of the supply power, the compression power, the losses,
-    /// the supply flow `Q_S` and the tank flow `Q_T`. Leg by leg, in any number type.
+    /// the supply flow `Q_S` and the tank flow `Q_T`. The law through `body`'s
+    /// [`BodyRate::per_leg`]: leg by leg in the definition, the six side by side in the steps.
     #[inline(always)]
-    pub fn leg_rates<T: Real>(
+    #[allow(clippy::too_many_arguments)]
+    pub fn leg_rates<T: Real, B: BodyRate<T>>(
         &self,
+        body: &B,
         x: &Block<T>,
         l: &[T; LEG_COUNT],
         l_dot: &[T; LEG_COUNT],
@@ -106,23 +109,30 @@ impl HydraulicActuators {
         supply: T,
         dx: &mut Block<T>,
     ) -> ([T; LEG_COUNT], [T; 5]) {
-        let mut u = [T::zero(); LEG_COUNT];
-        let mut powers = [[T::zero(); LEG_COUNT]; 5];
+        let mut inputs = [[T::zero(); LEG_COUNT]; LAW_INPUTS];
         for k in 0..LEG_COUNT {
+            let Chambers { pa, pb, spool, spool_rate } = Self::chambers(x, k);
+            let Piston { position, stroke, rate } = self.piston(k, l[k], l_dot[k]);
             let command = valves[k].clamp_to(T::constant(-1.0), T::constant(1.0));
-            let r = self.legs.rate(&Self::chambers(x, k), &self.piston(k, l[k], l_dot[k]), command, supply);
-            dx[block::PA + k] = r.pa_rate;
-            dx[block::PB + k] = r.pb_rate;
-            dx[block::SPOOL + k] = r.spool_rate;
-            dx[block::SPOOL_RATE + k] = r.spool_acceleration;
-            u[k] = r.force;
-            powers[0][k] = r.supply_power;
-            powers[1][k] = r.compression_power;
-            powers[2][k] = r.dissipation;
-            powers[3][k] = r.supply_flow;
-            powers[4][k] = r.tank_flow;
+            for (input, value) in inputs.iter_mut().zip([pa, pb, spool, spool_rate, position, stroke, rate, command, supply]) {
+                input[k] = value;
+            }
         }
-        (u, powers.map(|p| sum_over_legs(&p)))
+        let [pa_rate, pb_rate, spool_rate, spool_acceleration, u, powers @ ..] = body.per_leg(&LegLaw(&self.legs), &inputs);
+        for k in 0..LEG_COUNT {
+            dx[block::PA + k] = pa_rate[k];
+            dx[block::PB + k] = pb_rate[k];
+            dx[block::SPOOL + k] = spool_rate[k];
+            dx[block::SPOOL_RATE + k] = spool_acceleration[k];
+        }
+        let [supplied, compression, losses, drawn, returned] = powers;
+        (u, [
+            sum_over_legs(&supplied),
+            sum_over_legs(&compression),
+            sum_over_legs(&losses),
+            sum_over_legs(&drawn),
+            sum_over_legs(&returned),
+        ])
     }
 
     /// `Qsupply`, m³/s: the flow the six valves draw from the supply at the legs' block `x`
@@ -252,6 +262,35 @@ const STABLE_STEP_FACTOR: f64 = 2.0;
 
 /// The legs' states: the pressures `p_A`, `p_B`, the spools' positions and rates (six each),
 /// then `work.hydraulic`, `work.compression` ([`block`]).
+/// The hydraulic law of one leg ([`HydraulicLegs::rate`]) as a [`PerLegLaw`]: from `p_A`, `p_B`,
+/// `s`, `s'`, the piston's position, stroke and rate, the saturated valve command and the supply
+/// pressure to `p_A'`, `p_B'`, `s'`, `s''`, `u`, and the supply power, compression power,
+/// losses, `Q_S` and `Q_T`.
+struct LegLaw<'a>(&'a HydraulicLegs);
+
+/// How many inputs [`LegLaw`] takes per leg.
+const LAW_INPUTS: usize = 9;
+
+impl PerLegLaw<LAW_INPUTS, 10> for LegLaw<'_> {
+    #[inline(always)]
+    fn at<N: Number>(&self, inputs: [N; LAW_INPUTS]) -> [N; 10] {
+        let [pa, pb, spool, spool_rate, position, stroke, rate, command, supply] = inputs;
+        let r = self.0.rate(&Chambers { pa, pb, spool, spool_rate }, &Piston { position, stroke, rate }, command, supply);
+        [
+            r.pa_rate,
+            r.pb_rate,
+            r.spool_rate,
+            r.spool_acceleration,
+            r.force,
+            r.supply_power,
+            r.compression_power,
+            r.dissipation,
+            r.supply_flow,
+            r.tank_flow,
+        ]
+    }
+}
+
 impl Actuator for HydraulicActuators {
     const NAME: &'static str = "hydraulic servo legs";
     const STATES: usize = block::LEN;
@@ -273,7 +312,8 @@ impl Actuator for HydraulicActuators {
         let (l, l_dot) = body.legs();
         let inputs = body.supply();
         let supply = self.supply_pressure(x, inputs.pressure);
-        let (u, [supplied, compression, losses, drawn, returned]) = self.leg_rates(x, &l, &l_dot, &valves, supply, dx);
+        let (u, [supplied, compression, losses, drawn, returned]) =
+            self.leg_rates(body, x, &l, &l_dot, &valves, supply, dx);
         let power = body.under_forces(&u, dy);
         dx[block::WORK_HYDRAULIC] = supplied;
         if !self.powered {
@@ -310,10 +350,24 @@ impl Actuator for HydraulicActuators {
         // The rates bound the chambers' flows, which matter with air alone.
         let LegMotion { lengths: l, rates: l_dot } = legs(self.legs.air().is_some());
         let supply = self.supply_pressure(x, self.supply);
+        // The six legs side by side (SSE2 pairs on x86-64: the baseline; the same bits as leg
+        // by leg).
+        let per_leg = |start: usize| PerLeg::<Narrow>::new(x[start..].first_chunk().unwrap_or(&[0.0; LEG_COUNT]));
+        let chambers = Chambers {
+            pa: per_leg(block::PA),
+            pb: per_leg(block::PB),
+            spool: per_leg(block::SPOOL),
+            spool_rate: per_leg(block::SPOOL_RATE),
+        };
+        let piston = Piston {
+            position: PerLeg::new(&l) - PerLeg::new(&self.lower),
+            stroke: PerLeg::new(&self.stroke),
+            rate: PerLeg::new(&l_dot),
+        };
+        let rates = self.legs.stiffness(&chambers, &piston, PerLeg::splat(supply)).to_array();
         let mut fastest = 0.0_f64;
-        for k in 0..LEG_COUNT {
-            fastest =
-                fastest.max(self.legs.stiffness(&Self::chambers(x, k), &self.piston(k, l[k], l_dot[k]), supply));
+        for rate in rates {
+            fastest = fastest.max(rate);
         }
         if self.powered {
             fastest = fastest.max(self.supply_line_stiffness(x, supply));
@@ -443,3 +497,69 @@ impl Actuator for HydraulicActuators {
     }
 }
 
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::physics::legs::per_leg::Lanes;
+
+    /// Six legs in states from vacuum to above the supply, both spool sides, with and without
+    /// air, for n = 1 and n = 1.4: each input per leg, in `inputs[i][k]`.
+    fn states() -> Vec<(HydraulicLegs, [[f64; LEG_COUNT]; LAW_INPUTS])> {
+        let mut cases = Vec::new();
+        for (air_fraction, air_polytropic) in [(0.0, 1.0), (0.005, 1.0), (0.005, 1.4)] {
+            let legs = HydraulicLegs { air_fraction, air_polytropic, ..HydraulicLegs::default() };
+            for seed in 0..20_u32 {
+                // A fixed spread of values per leg (no random source in the crate's tests).
+                let w = |i: usize, k: usize| ((seed as f64 + 1.0) * (i as f64 + 2.3) * (k as f64 + 0.7)).sin();
+                let inputs = std::array::from_fn(|i| {
+                    std::array::from_fn(|k| match i {
+                        0 | 1 => 9e6 + 1.1e7 * w(i, k),  // p_A, p_B: -2e6 .. 2e7 Pa gauge
+                        2 => w(i, k),                    // spool
+                        3 => 50.0 * w(i, k),             // spool rate
+                        4 => 0.2 + 0.19 * w(i, k),       // position
+                        5 => 0.4,                        // stroke
+                        6 => 0.5 * w(i, k),              // piston rate
+                        7 => w(i, k),                    // command
+                        _ => 16e6 + 1e6 * w(i, 0),       // supply
+                    })
+                });
+                cases.push((legs, inputs));
+            }
+        }
+        cases
+    }
+
+    /// The legs' law and the stiffness bound side by side in registers give each leg's bits.
+    fn law_in_lanes_is_leg_by_leg<V: Lanes>() {
+        for (legs, inputs) in states() {
+            let lanes = LegLaw(&legs).at(inputs.map(|x| PerLeg::<V>::new(&x))).map(PerLeg::to_array);
+            let chambers = |k: usize| Chambers { pa: inputs[0][k], pb: inputs[1][k], spool: inputs[2][k], spool_rate: inputs[3][k] };
+            let piston = |k: usize| Piston { position: inputs[4][k], stroke: inputs[5][k], rate: inputs[6][k] };
+            let stiffness = legs
+                .stiffness(
+                    &Chambers { pa: PerLeg::<V>::new(&inputs[0]), pb: PerLeg::new(&inputs[1]), spool: PerLeg::new(&inputs[2]), spool_rate: PerLeg::new(&inputs[3]) },
+                    &Piston { position: PerLeg::new(&inputs[4]), stroke: PerLeg::new(&inputs[5]), rate: PerLeg::new(&inputs[6]) },
+                    PerLeg::new(&inputs[8]),
+                )
+                .to_array();
+            for k in 0..LEG_COUNT {
+                let one = LegLaw(&legs).at(inputs.map(|x| x[k]));
+                for (o, value) in one.iter().enumerate() {
+                    assert_eq!(value.to_bits(), lanes[o][k].to_bits(), "output {o} of leg {k}: {value:e} {:e}", lanes[o][k]);
+                }
+                let alone = legs.stiffness(&chambers(k), &piston(k), inputs[8][k]);
+                assert_eq!(alone.to_bits(), stiffness[k].to_bits(), "stiffness of leg {k}: {alone:e} {:e}", stiffness[k]);
+                assert!(alone > 0.0);
+            }
+        }
+    }
+
+    #[test]
+    fn the_law_and_its_bound_in_lanes_are_leg_by_leg() {
+        law_in_lanes_is_leg_by_leg::<Narrow>();
+        if crate::simd::wide_testable() {
+            law_in_lanes_is_leg_by_leg::<crate::simd::Wide>();
+        }
+    }
+}
