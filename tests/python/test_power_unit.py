@@ -120,6 +120,49 @@ def test_model_exchange_through_the_accumulators_switch_matches_co_simulation():
     assert events >= 1 and dz < 1e-6 and dp < 1e-3 * U["pS"]
 
 
+def test_co_simulation_lands_on_the_accumulators_switch():
+    """The same accumulator emptying through FMI 3 Co-Simulation (the adaptive method, event mode
+    and early return, 10 ms steps): the step that meets the switch returns early at it, where
+    the line's pressure equals the precharge (P_0 - p_atm gauge), and says so in its event
+    message; the line goes on to collapse as in Model Exchange."""
+    events, early = [], []
+
+    def intermediate_update(_env, time, _set_requested, _get_allowed, _finished, can_return_early,
+                            early_return_requested, early_return_time):
+        early_return_requested[0] = True
+        early_return_time[0] = time
+
+    p3 = Fmu3(PLATFORM3, name="accumulator-switch", eventModeUsed=True, earlyReturnAllowed=True,
+              intermediateUpdate=intermediate_update, events=events,
+              integers=POWERED, booleans={"stops": False},
+              reals={"pump.speed": 0.0, "accumulator.volume": 1e-3, "solver.relTol": 1e-10, "valve": [0.05] * 6})
+    p3.fmu.enterStepMode()
+    h, t_end = 1e-2, 1.0
+    precharge = U["accumulator.precharge"] - ATMOSPHERE
+    at_switch = None
+    while p3.time < t_end - 1e-12:
+        target = min(t_end, (math.floor(p3.time / h + 1e-9) + 1) * h)
+        event, terminate, early_return, last = p3.fmu.doStep(p3.time, target - p3.time)
+        assert not terminate
+        p3.time = last
+        if early_return:
+            early.append(last)
+            if at_switch is None:
+                at_switch = p3.get("supply.pressure")
+        if event:
+            p3.fmu.enterEventMode()
+            p3.fmu.updateDiscreteStates()
+            p3.fmu.enterStepMode()
+    line = p3.get("supply.pressure")
+    p3.free()
+    said = [m for _, category, m in events if "accumulator emptied" in m]
+    print(f"FMI 3 Co-Simulation returned early at {[round(t, 9) for t in early]} s; the line there "
+          f"{at_switch:.6f} Pa gauge against the precharge {precharge:.6f} Pa ({at_switch - precharge:+.2e} Pa), "
+          f"{line / 1e6:.3f} MPa at {t_end} s; logged: {said[:1]}")
+    assert len(early) == 1 and 0.0 < early[0] < t_end and len(said) == 1
+    assert abs(at_switch - precharge) < 1.0 and line < 0.5 * precharge
+
+
 def test_a_pump_stop_at_the_top_of_the_heave_lands_the_stand_at_rest_on_its_floor():
     """The pump stops at the heave programme's highest point (2.25 periods in); the accumulator
     feeds the valves, the controller lands when the supply falls below 12 MPa: at rest on

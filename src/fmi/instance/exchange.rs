@@ -4,7 +4,7 @@
 use super::access::*;
 use super::{EventInfo, Instance};
 use crate::fmi::log::LogCategory;
-use crate::fmi::{ModelState, Status};
+use crate::fmi::{InterfaceType, ModelState, Status};
 use crate::models::EventUpdate;
 use crate::models::variables::VariableRef;
 
@@ -233,6 +233,13 @@ impl Instance {
         let mut info = EventInfo::default();
         let logger = &self.logger;
         self.fresh = 0;
+        if self.interface == InterfaceType::CoSimulation {
+            // FMI 3 Co-Simulation's Event Mode: the step located its events, logged them and
+            // took the switching functions' sides past them. Reading the sides again from a
+            // state that the landing step left a round-off short of its crossing would find
+            // the crossing again, and the next step would land on it again.
+            return info;
+        }
         let update: EventUpdate = self.model.event_update(&mut |m| logger.log(Status::Ok, LogCategory::Events, m));
         if let Some(reason) = update.terminate {
             info.terminate_simulation = true;

@@ -72,7 +72,7 @@ impl PlatformModel {
         let now = switching_sides(&sim.dynamics(&law), sim.time, &sim.state);
         let changed = now.bits ^ sim.integrator.sides.bits;
         let mut update = EventUpdate::default();
-        for i in (0..switching::COUNT).filter(|i| changed >> i & 1 == 1) {
+        for i in (0..switching::EVENT_INDICATORS).filter(|i| changed >> i & 1 == 1) {
             let c = Crossing { index: i, t: sim.time, rising: now.bits >> i & 1 == 1, y: sim.state };
             let message = Self::describe_crossing(sim, &c);
             if i == switching::DETERMINANT && sim.stop_at_singularity {

@@ -9,7 +9,7 @@ use crate::physics::error::leg_list;
 use crate::physics::legs::geometry::LegGeometry;
 use crate::simulation::PlatformSimulation;
 use crate::simulation::outputs::LegLoadOutputs;
-use crate::simulation::state::{SIMULATION_DIM, body, switching};
+use crate::simulation::state::{SIMULATION_DIM, body, hydraulic, switching};
 
 impl PlatformModel {
     /// Why a failed RK4 step is most likely the integrator's instability rather than the motion:
@@ -71,6 +71,15 @@ impl PlatformModel {
                      changed sign; legs {} form a force combination without resultant there)",
                     c.t,
                     leg_list(&involved)
+                );
+            }
+            switching::ACCUMULATOR => {
+                let pressure = c.y.get(hydraulic::SUPPLY_PRESSURE).copied().unwrap_or(f64::NAN);
+                let what = if c.rising { "began to charge again" } else { "emptied" };
+                return format!(
+                    "t = {:?}: the accumulator {what}: the supply line passed its precharge (supply.pressure = {pressure:?} Pa \
+                     gauge)",
+                    c.t
                 );
             }
             i => {

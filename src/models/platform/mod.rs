@@ -346,7 +346,7 @@ impl FmuModel for PlatformModel {
         }
         if sim.crossings.dropped > 0 {
             sink(&format!(
-                "{} more contact or singularity events in this step were not reported",
+                "{} more contact, singularity or accumulator events in this step were not reported",
                 sim.crossings.dropped
             ));
         }

@@ -18,7 +18,7 @@ use crate::physics::special_form::{FastPath, SpecialForm};
 use crate::physics::stand::LEG_COUNT;
 use std::marker::PhantomData;
 
-use super::state::{SimulationState, body, rate_in, switching};
+use super::state::{SimulationState, accumulator_switching, body, hydraulic, rate_in, switching};
 
 /// How the constraints `e_a . e_b = delta_ab` are kept during integration.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -216,6 +216,9 @@ impl<L: LegForceLaw + ?Sized, V: Lanes> PlatformDynamics<'_, L, V> {
         self.checked_legs.set(Some(LegOutputs { l: legs.lengths(), ldot }));
         if let Some(g) = g {
             self.switching_of(&state, &legs, g, self.tracks_singularities());
+            if let Some(slot) = g.get_mut(switching::ACCUMULATOR) {
+                *slot = accumulator_switching(self.form, y);
+            }
         }
         Ok(())
     }
@@ -288,7 +291,9 @@ impl<L: LegForceLaw + ?Sized, V: Lanes, const N: usize> OdeSystem<N> for Platfor
     }
 
     fn switching_count(&self) -> usize {
-        if self.form.joint_limits().is_some() {
+        if self.form.hydraulics().is_some_and(|h| h.powered) && N > hydraulic::SUPPLY_PRESSURE {
+            switching::EVENT_INDICATORS
+        } else if self.form.joint_limits().is_some() {
             switching::COUNT
         } else if self.tracks_singularities() {
             switching::DETERMINANT + 1
@@ -302,6 +307,9 @@ impl<L: LegForceLaw + ?Sized, V: Lanes, const N: usize> OdeSystem<N> for Platfor
         let state = BodyState::from_vector(body(y));
         let legs = self.form.joints.kinematics(&state);
         self.switching_of(&state, &legs, g, self.tracks_singularities());
+        if let Some(slot) = g.get_mut(switching::ACCUMULATOR) {
+            *slot = accumulator_switching(self.form, y);
+        }
     }
 
     fn switching_kind(&self, index: usize) -> SwitchingKind {

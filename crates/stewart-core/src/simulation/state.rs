@@ -204,19 +204,22 @@ pub mod switching {
     /// `cos thetaA_k - cos thetaMax_A`, k = 0..5 (the platform joints).
     pub const PLATFORM_JOINT: usize = 19;
     pub const COUNT: usize = 25;
-    /// Model Exchange only, after the others: `p_S - (P_0 - p_atm)`, the power unit's supply
-    /// pressure over the accumulator's precharge (a sign change is the accumulator emptying
-    /// or charging again, where `dV_oil/dp_S` jumps); 1 without the power unit. The steps
-    /// integrate through it (their stages take the accumulator's side at their own pressure).
+    /// After the others: `p_S - (P_0 - p_atm)`, the power unit's supply pressure over the
+    /// accumulator's precharge (a sign change is the accumulator emptying or charging again,
+    /// where `dV_oil/dp_S` jumps); 1 without the power unit. A switching function of the
+    /// steps only with the power unit (the adaptive method lands on it and restarts there, as
+    /// at a contact; RK4 steps across it).
     pub const ACCUMULATOR: usize = COUNT;
     /// How many event indicators Model Exchange has.
     pub const EVENT_INDICATORS: usize = COUNT + 1;
 }
 
-/// The accumulator's event indicator ([`switching::ACCUMULATOR`]) at the simulation state `y`.
-pub fn accumulator_switching(form: &SpecialForm, y: &SimulationState) -> f64 {
-    match form.hydraulics() {
-        Some(h) if h.powered => y[hydraulic::SUPPLY_PRESSURE] - h.power_unit.precharge_gauge(),
+/// The accumulator's event indicator ([`switching::ACCUMULATOR`]) at the simulation state `y`
+/// (or its leading part: 1 where it ends before the supply line).
+#[inline(always)]
+pub fn accumulator_switching<const N: usize>(form: &SpecialForm, y: &[f64; N]) -> f64 {
+    match (form.hydraulics(), y.get(hydraulic::SUPPLY_PRESSURE)) {
+        (Some(h), Some(p)) if h.powered => p - h.power_unit.precharge_gauge(),
         _ => 1.0,
     }
 }
