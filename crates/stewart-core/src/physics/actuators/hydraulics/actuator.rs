@@ -119,11 +119,10 @@ impl HydraulicActuators {
             }
         }
         let [pa_rate, pb_rate, spool_rate, spool_acceleration, u, powers @ ..] = body.per_leg(&LegLaw(&self.legs), &inputs);
-        for k in 0..LEG_COUNT {
-            dx[block::PA + k] = pa_rate[k];
-            dx[block::PB + k] = pb_rate[k];
-            dx[block::SPOOL + k] = spool_rate[k];
-            dx[block::SPOOL_RATE + k] = spool_acceleration[k];
+        for (start, rates) in
+            [(block::PA, pa_rate), (block::PB, pb_rate), (block::SPOOL, spool_rate), (block::SPOOL_RATE, spool_acceleration)]
+        {
+            dx[start..start + LEG_COUNT].copy_from_slice(&rates);
         }
         let [supplied, compression, losses, drawn, returned] = powers;
         (u, [
