@@ -234,10 +234,6 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
     // A step redone to end on a non-smooth point: the function it lands on, and the step
     // size the controller had before.
     let mut landing: Option<(usize, f64)> = None;
-    // How many short steps followed a landing that ended a hair before its root, and the
-    // next one's size.
-    let mut short_steps = 0u8;
-    let mut short_step: Option<f64> = None;
 
     loop {
         if steps >= s.max_steps_per_call {
@@ -296,7 +292,6 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
                             let resume = landing.map_or(h, |(_, r)| r);
                             landing = Some((index, resume));
                             h *= theta;
-                            short_steps = 0;
                             stats.event_landings += 1;
                             continue;
                         }
@@ -306,31 +301,9 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
                 if let Some(i) = target
                     && changed >> i & 1 == 0
                 {
-                    // The landing step ended a hair before the root: its interpolant straddled
-                    // the non-smooth point, where it is least accurate. One more short step,
-                    // aimed by the secant through this step's ends half as far again past the
-                    // root, crosses it, and the crossing is recorded there, once (taken here,
-                    // the next step would end short of it again and find it twice). After three
-                    // such steps, or where the secant does not reach on or reaches less than a
-                    // landing is worth, the crossing is here.
-                    let mut g_start = [0.0; MAX_SWITCHING];
-                    system.switching(t, y, &mut g_start);
-                    let (g0, g1) = (g_start.get(i).copied().unwrap_or(0.0), g.get(i).copied().unwrap_or(0.0));
-                    let reach = 1.5 * g1 / (g0 - g1) * h;
-                    // A root closer than a landing is worth (as in `locate_crossings`) is here.
-                    let worth = (1e-9 * h).max(1e3 * f64::EPSILON * t_new.abs().max(span));
-                    if short_steps < 3 && reach > worth && t_new + reach < t1 {
-                        short_steps += 1;
-                        short_step = Some(reach);
-                    } else {
-                        events.sides.bits ^= 1 << i;
-                        events.log.push(Crossing {
-                            index: i,
-                            t: t_new,
-                            rising: events.sides.bits >> i & 1 == 1,
-                            y: y_new,
-                        });
-                    }
+                    // The landing step ended a hair before the root: the crossing is here.
+                    events.sides.bits ^= 1 << i;
+                    events.log.push(Crossing { index: i, t: t_new, rising: events.sides.bits >> i & 1 == 1, y: y_new });
                 }
             }
             // Accept.
@@ -340,8 +313,7 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
             if rejected_last {
                 h_new = h_new.min(h);
             }
-            let landed = landing.take();
-            if let Some((_, resume)) = landed {
+            if let Some((_, resume)) = landing.take() {
                 // After a non-smooth point go on no faster than before it.
                 h_new = h_new.min(resume);
             }
@@ -362,11 +334,6 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
                 return Ok(t);
             }
             h = h_new.min(h_max);
-            if let Some(reach) = short_step.take() {
-                // Across the root a landing step ended short of (above): still a landing.
-                h = reach;
-                landing = landed;
-            }
             rejected_last = false;
             if fsal {
                 k1 = k7;
