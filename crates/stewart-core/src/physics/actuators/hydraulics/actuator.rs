@@ -3,7 +3,7 @@
 //! ([`block`]), their rate, force, check and stability bound.
 
 use super::power_unit::{PowerUnit, PowerUnitRate};
-use super::{ATMOSPHERIC_PRESSURE, Chambers, DEFAULT_SUPPLY_PRESSURE, HydraulicLegs, Piston};
+use super::{ATMOSPHERIC_PRESSURE, Chambers, DEFAULT_SUPPLY_PRESSURE, HydraulicLegs, Piston, magnitude};
 use crate::physics::actuators::{Actuator, BodyRate, LegMotion, LegPower, PerLegLaw, Supply};
 use crate::physics::body::state::{BodyState, STATE_DIM};
 use crate::physics::error::{ParameterError, PhysicsFault};
@@ -109,29 +109,39 @@ impl HydraulicActuators {
         supply: T,
         dx: &mut Block<T>,
     ) -> ([T; LEG_COUNT], [T; 5]) {
-        let mut inputs = [[T::zero(); LEG_COUNT]; LAW_INPUTS];
-        for k in 0..LEG_COUNT {
-            let Chambers { pa, pb, spool, spool_rate } = Self::chambers(x, k);
-            let Piston { position, stroke, rate } = self.piston(k, l[k], l_dot[k]);
-            let command = valves[k].clamp_to(T::constant(-1.0), T::constant(1.0));
-            for (input, value) in inputs.iter_mut().zip([pa, pb, spool, spool_rate, position, stroke, rate, command, supply]) {
-                input[k] = value;
-            }
-        }
+        // The block holds each quantity's six values side by side: the law's inputs as they are.
+        let quantity = |start: usize| -> [T; LEG_COUNT] { std::array::from_fn(|k| x[start + k]) };
+        let inputs = [
+            quantity(block::PA),
+            quantity(block::PB),
+            quantity(block::SPOOL),
+            quantity(block::SPOOL_RATE),
+            std::array::from_fn(|k| self.piston(k, l[k], l_dot[k]).position),
+            self.stroke.map(T::constant),
+            *l_dot,
+            valves.map(|v| v.clamp_to(T::constant(-1.0), T::constant(1.0))),
+            [supply; LEG_COUNT],
+        ];
         let [pa_rate, pb_rate, spool_rate, spool_acceleration, u, powers @ ..] = body.per_leg(&LegLaw(&self.legs), &inputs);
         for (start, rates) in
             [(block::PA, pa_rate), (block::PB, pb_rate), (block::SPOOL, spool_rate), (block::SPOOL_RATE, spool_acceleration)]
         {
             dx[start..start + LEG_COUNT].copy_from_slice(&rates);
         }
-        let [supplied, compression, losses, drawn, returned] = powers;
-        (u, [
-            sum_over_legs(&supplied),
-            sum_over_legs(&compression),
-            sum_over_legs(&losses),
-            sum_over_legs(&drawn),
-            sum_over_legs(&returned),
-        ])
+        (u, powers.map(|p| sum_over_legs(&p)))
+    }
+
+    /// The chambers of the six legs side by side (SSE2 pairs on x86-64: the baseline) in the
+    /// legs' block `x`, for the step's bounds.
+    #[inline(always)]
+    fn chambers_side_by_side(x: &Block<f64>) -> Chambers<PerLeg<Narrow>> {
+        let quantity = |start: usize| PerLeg::<Narrow>::new(x[start..].first_chunk().unwrap_or(&[0.0; LEG_COUNT]));
+        Chambers {
+            pa: quantity(block::PA),
+            pb: quantity(block::PB),
+            spool: quantity(block::SPOOL),
+            spool_rate: quantity(block::SPOOL_RATE),
+        }
     }
 
     /// `Qsupply`, m³/s: the flow the six valves draw from the supply at the legs' block `x`
@@ -196,18 +206,23 @@ impl HydraulicActuators {
     /// |s| phi'` and its leakage) over its capacitance `V_s / beta_e + dV_oil/dp_S`; with air as
     /// the chambers' bound ([`HydraulicLegs::stiffness`]): the oil's stiffening with pressure,
     /// and at most half the line's absolute pressure lost in a step.
-    fn supply_line_stiffness(&self, x: &Block<f64>, p: f64) -> f64 {
+    fn supply_line_stiffness(&self, chambers: &Chambers<PerLeg<Narrow>>, p: f64) -> f64 {
         let (unit, legs) = (&self.power_unit, &self.legs);
-        let k = legs.flow_coefficient();
         let speed = self.pump_speed.clamp(0.0, 1.0);
         let mut conductance = speed * unit.max_flow / unit.compensator_band + unit.relief_gain;
         let mut flow = speed * unit.max_flow + unit.relief_flow(p);
-        for leg in 0..LEG_COUNT {
-            let c = Self::chambers(x, leg);
-            let drop = if c.spool >= 0.0 { p - c.pa } else { p - c.pb };
-            let (slope, per_opening) = legs.land(drop);
-            conductance += k * c.spool.abs() * slope + 2.0 * legs.valve_leakage;
-            flow += k * c.spool.abs() * per_opening + legs.valve_leakage * ((p - c.pa).abs() + (p - c.pb).abs());
+        // Each leg's share in lanes, then summed leg by leg in order (the same bits as a loop).
+        let Chambers { pa, pb, spool, .. } = *chambers;
+        let (zero, line) = (PerLeg::splat(0.0), PerLeg::splat(p));
+        let drop = PerLeg::select(zero.greater(spool), line - pb, line - pa);
+        let (slope, per_opening) = legs.land(drop);
+        let opening = magnitude(spool) * legs.flow_coefficient();
+        let leakage = legs.valve_leakage;
+        let shares = (opening * slope + 2.0 * leakage).to_array();
+        let flows = (opening * per_opening + (magnitude(line - pa) + magnitude(line - pb)) * leakage).to_array();
+        for k in 0..LEG_COUNT {
+            conductance += shares[k];
+            flow += flows[k];
         }
         let slope = unit.oil_volume_slope(p);
         let Some(air) = legs.air() else {
@@ -349,15 +364,8 @@ impl Actuator for HydraulicActuators {
         // The rates bound the chambers' flows, which matter with air alone.
         let LegMotion { lengths: l, rates: l_dot } = legs(self.legs.air().is_some());
         let supply = self.supply_pressure(x, self.supply);
-        // The six legs side by side (SSE2 pairs on x86-64: the baseline; the same bits as leg
-        // by leg).
-        let per_leg = |start: usize| PerLeg::<Narrow>::new(x[start..].first_chunk().unwrap_or(&[0.0; LEG_COUNT]));
-        let chambers = Chambers {
-            pa: per_leg(block::PA),
-            pb: per_leg(block::PB),
-            spool: per_leg(block::SPOOL),
-            spool_rate: per_leg(block::SPOOL_RATE),
-        };
+        // The six legs side by side (the same bits as leg by leg).
+        let chambers = Self::chambers_side_by_side(x);
         let piston = Piston {
             position: PerLeg::new(&l) - PerLeg::new(&self.lower),
             stroke: PerLeg::new(&self.stroke),
@@ -369,7 +377,7 @@ impl Actuator for HydraulicActuators {
             fastest = fastest.max(rate);
         }
         if self.powered {
-            fastest = fastest.max(self.supply_line_stiffness(x, supply));
+            fastest = fastest.max(self.supply_line_stiffness(&chambers, supply));
         }
         STABLE_STEP_FACTOR / fastest
     }
