@@ -77,6 +77,8 @@ pub trait Real:
     fn sin(self) -> Self;
     fn atan2(self, x: Self) -> Self;
     fn exp(self) -> Self;
+    /// The natural logarithm (`self > 0`).
+    fn ln(self) -> Self;
     fn tanh(self) -> Self;
 
     /// `self` limited to `[lower, upper]` by value (`lower <= upper`).
@@ -150,6 +152,10 @@ impl Real for f64 {
     #[inline(always)]
     fn exp(self) -> Self {
         maths::exp(self)
+    }
+    #[inline(always)]
+    fn ln(self) -> Self {
+        maths::ln(self)
     }
     #[inline(always)]
     fn tanh(self) -> Self {
@@ -362,6 +368,10 @@ impl Real for Dual {
     fn exp(self) -> Self {
         let e = maths::exp(self.re);
         Dual::new(e, e * self.eps)
+    }
+    #[inline(always)]
+    fn ln(self) -> Self {
+        Dual::new(maths::ln(self.re), self.eps / self.re)
     }
     #[inline(always)]
     fn tanh(self) -> Self {

@@ -198,6 +198,10 @@ impl Real for Jet {
         let e = maths::exp(self.v);
         self.compose(e, e, e)
     }
+    fn ln(self) -> Self {
+        let inverse = 1.0 / self.v;
+        self.compose(maths::ln(self.v), inverse, -inverse * inverse)
+    }
     fn tanh(self) -> Self {
         let t = maths::tanh(self.v);
         let dt = 1.0 - t * t;
