@@ -17,7 +17,7 @@ repository's, byte for byte.
 The foreign extensions are built as build-fmu builds the FMUs' foreign binaries
 (crates/build-fmu/src/platforms.rs): with rustup's target where it is installed, otherwise with
 Debian 12's Rust compiler and the standard library compiled from its source (`-Zbuild-std`, in
-build-fmu's target/cross, so the standard library is compiled once for both), linked by the
+build-fmu's target/cross/<triple>, so the standard library is compiled once for both), linked by the
 target's C compiler from Debian's cross packages. The Windows extension imports python3.dll, the
 stable ABI's DLL, which PyO3 links by name (raw-dylib): no Windows Python is needed to build it.
 
@@ -90,7 +90,7 @@ def cross_build(triple, linker):
     if shutil.which(env[variable]) is None:
         sys.exit(f"build_wheels: the linker {env[variable]} for {triple} is missing: bash tests/setup_cross.sh "
                  f"installs it (Debian 12), or set {variable}")
-    cross = ROOT / "target" / "cross"
+    cross = ROOT / "target" / "cross" / triple  # build-fmu's folder for this target
     if has_target_std(triple):
         return env, [], cross, f"the installed {triple} standard library"
     cargo = os.environ.get("STEWART_BUILD_STD_CARGO", "/usr/bin/cargo")

@@ -173,7 +173,7 @@ WINDOWS_TRIPLE = build_wheels.PLATFORMS["x86_64-windows"][0]
 def windows_master():
     """The `stewart-master` command built for Windows x64 from the crate whose extension the
     Windows wheel carries, with the toolchain that built that extension (python/build_wheels.py's
-    cross build, in target/cross: its standard library and dependencies are already compiled)."""
+    cross build, in target/cross/<triple>: its standard library and dependencies are already compiled)."""
     env, extra, target_dir, _ = build_wheels.cross_build(WINDOWS_TRIPLE, build_wheels.PLATFORMS["x86_64-windows"][3])
     run = subprocess.run(["cargo", "build", "--release", "-p", "stewart-master", "--bin", "stewart-master", "--target",
                           WINDOWS_TRIPLE, "--target-dir", str(target_dir), *extra], cwd=ROOT, env=env,

@@ -4,7 +4,7 @@
 //! (FMI 3.0) for the product models, each FMU carrying the binaries of all the platforms built.
 //!
 //! Steps, each of which stops the build with a clear message when it fails:
-//! 1. build the FMU crate's library for each target (`platforms.rs`: this machine's with its
+//! 1. build the FMU crate's library for every target at once (`platforms.rs`: this machine's with its
 //!    own toolchain, the others with an installed target or with the standard library compiled
 //!    from source, and the target's linker);
 //! 2. check each binary from its file (`file_check.rs`): the FMI functions exported and
@@ -88,10 +88,7 @@ fn run() -> Result<(), String> {
     };
 
     let platforms = platforms::selected(targets.as_deref())?;
-    let mut binaries = vec![];
-    for platform in platforms {
-        binaries.push(build_binary(platform, &root, &target_dir)?);
-    }
+    let binaries = build_binaries(&platforms, &root, &target_dir)?;
     let native = binaries.iter().find(|b| b.platform.triple == platforms::host_triple()).map(|b| b.path.clone());
     if native.is_none() {
         println!(
@@ -145,32 +142,93 @@ fn default_names() -> String {
     platforms::PLATFORMS.iter().filter(|p| p.by_default).map(|p| p.name).collect::<Vec<_>>().join(",")
 }
 
-/// Builds the FMU crate's library for `platform` and checks the file.
-fn build_binary(platform: &'static Platform, root: &Path, target_dir: &Path) -> Result<Binary, String> {
-    let mut build = platforms::build_command(platform, root, target_dir)?;
-    println!(
-        "build-fmu: {}: building the FMU binary ({}; minutes the first time, seconds when nothing changed)",
-        platform.name, build.how
-    );
+/// Builds the FMU crate's library for every platform at once and checks each file. Each build
+/// compiles the FMU crate in one codegen unit (one core) in a target folder of its own, so
+/// they run side by side; each writes its output to `<target>/build-logs/<platform>.log`, and
+/// a line says when each is done (or the log's end, when it failed).
+fn build_binaries(targets: &[&'static Platform], root: &Path, target_dir: &Path) -> Result<Vec<Binary>, String> {
+    // Every command first: a platform that cannot be built here stops everything before any starts.
+    let builds = targets
+        .iter()
+        .map(|&platform| platforms::build_command(platform, root, target_dir).map(|build| (platform, build)))
+        .collect::<Result<Vec<_>, String>>()?;
+    let log_dir = target_dir.join("build-logs");
+    std::fs::create_dir_all(&log_dir).map_err(|e| format!("cannot create {}: {e}", log_dir.display()))?;
     let started = Instant::now();
-    let status = build
-        .command
-        .status()
-        .map_err(|e| format!("{}: cannot run {:?}: {e}", platform.name, build.command.get_program()))?;
-    if !status.success() {
-        return Err(format!(
-            "{}: the build failed ({:?} {:?})",
+    let mut running = vec![];
+    for (platform, mut build) in builds {
+        let log_path = log_dir.join(format!("{}.log", platform.name));
+        let log = std::fs::File::create(&log_path).map_err(|e| format!("cannot create {}: {e}", log_path.display()))?;
+        let log_too = log.try_clone().map_err(|e| format!("{}: {e}", log_path.display()))?;
+        println!(
+            "build-fmu: {}: building the FMU binary ({}; minutes the first time, seconds when nothing changed; {})",
             platform.name,
-            build.command.get_program(),
-            build.command.get_args().collect::<Vec<_>>()
-        ));
+            build.how,
+            log_path.display()
+        );
+        let child = build.command.stdout(log).stderr(log_too).spawn();
+        match child {
+            Ok(child) => running.push((platform, build, log_path, child)),
+            Err(e) => {
+                // The builds already started finish on their own; their results are not used.
+                return Err(format!("{}: cannot run {:?}: {e}", platform.name, build.command.get_program()));
+            }
+        }
     }
-    if !build.output.exists() {
-        return Err(format!("{}: {} was not built", platform.name, build.output.display()));
+    let mut binaries = vec![];
+    let mut failures = vec![];
+    while !running.is_empty() {
+        let mut index = 0;
+        while index < running.len() {
+            let (platform, build, log_path, child) = &mut running[index];
+            let status = child.try_wait().map_err(|e| format!("{}: waiting for the build: {e}", platform.name))?;
+            let Some(status) = status else {
+                index += 1;
+                continue;
+            };
+            let seconds = started.elapsed().as_secs_f64();
+            let outcome = if !status.success() {
+                Err(format!(
+                    "{}: the build failed ({:?} {:?}); the end of {}:\n{}",
+                    platform.name,
+                    build.command.get_program(),
+                    build.command.get_args().collect::<Vec<_>>(),
+                    log_path.display(),
+                    log_tail(log_path, 40)
+                ))
+            } else if !build.output.exists() {
+                Err(format!("{}: {} was not built", platform.name, build.output.display()))
+            } else {
+                file_check::check(&build.output, platform).map(|summary| {
+                    println!("build-fmu: {}: {seconds:.1} s; {summary}", platform.name);
+                    Binary { platform, path: build.output.clone() }
+                })
+            };
+            match outcome {
+                Ok(binary) => binaries.push(binary),
+                Err(message) => failures.push(message),
+            }
+            running.swap_remove(index);
+        }
+        std::thread::sleep(std::time::Duration::from_millis(100));
     }
-    let summary = file_check::check(&build.output, platform)?;
-    println!("build-fmu: {}: {:.1} s; {summary}", platform.name, started.elapsed().as_secs_f64());
-    Ok(Binary { platform, path: build.output })
+    if !failures.is_empty() {
+        return Err(failures.join("\nbuild-fmu: error: "));
+    }
+    // The order of the platforms asked, whatever the order they finished in.
+    binaries.sort_by_key(|b| targets.iter().position(|p| p.name == b.platform.name));
+    Ok(binaries)
+}
+
+/// The last `lines` lines of the file at `path` (or why it cannot be read).
+fn log_tail(path: &Path, lines: usize) -> String {
+    match std::fs::read_to_string(path) {
+        Ok(text) => {
+            let all: Vec<&str> = text.lines().collect();
+            all[all.len().saturating_sub(lines)..].join("\n")
+        }
+        Err(e) => format!("(cannot read it: {e})"),
+    }
 }
 
 /// The binaries an FMU of FMI `version` carries: (path inside the archive, file).

@@ -179,7 +179,9 @@ pub fn build_command(platform: &Platform, root: &Path, target_dir: &Path) -> Res
             how: "this machine's toolchain".into(),
         });
     }
-    let cross_dir = target_dir.join("cross");
+    // A target folder per platform, so that the builds run side by side (cargo lets one build
+    // at a time use a target folder).
+    let cross_dir = target_dir.join("cross").join(platform.triple);
     let output = cross_dir.join(platform.triple).join("release").join(platform.built_file);
     // `cargo rustc` so that `-D warnings` reaches the FMU crate alone (not the standard
     // library built with it): every target compiles without a warning.
