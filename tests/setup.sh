@@ -16,6 +16,23 @@ die() {
     exit 1
 }
 
+# `in_background NAME COMMAND...`: runs a step beside the others, its output into
+# target/test-logs/NAME.log; `finish NAME` waits for it and, if it failed, shows its log's end.
+declare -A BACKGROUND
+in_background() {
+    local name="$1"
+    shift
+    mkdir -p target/test-logs
+    ("$@") > "target/test-logs/$name.log" 2>&1 &
+    BACKGROUND[$name]=$!
+}
+finish() {
+    if ! wait "${BACKGROUND[$1]}"; then
+        tail -n 40 "target/test-logs/$1.log" >&2
+        die "$1 failed (its whole output: target/test-logs/$1.log)"
+    fi
+}
+
 # Debian packages for what is missing; elsewhere, a message naming what to install.
 apt_install() {
     local sudo=""
@@ -132,16 +149,21 @@ source "$(dirname "${BASH_SOURCE[0]}")/setup_cross.sh"
 build_fmus() {
     # The build program in a target folder of its own, run directly (not by `cargo run`): as
     # its dependency the FMU crate resolves otherwise than in its own build and the tests'
-    # (target/), and the two would take turns compiling it, a minute or two each time.
+    # (target/), and the two would take turns compiling it, a minute or two each time. Its own
+    # profile (Cargo.toml's build-tool) compiles its copy of the FMU crate faster.
     step "building the build program (crates/build-fmu, into target/build-fmu; a minute or two the first time)"
-    CARGO_TARGET_DIR=target/build-fmu cargo build --release -p build-fmu
+    CARGO_TARGET_DIR=target/build-fmu cargo build --profile build-tool -p build-fmu
     if [ -n "${STEWART_FMU_TARGETS:-}" ]; then
         step "building the FMUs for $STEWART_FMU_TARGETS (STEWART_FMU_TARGETS), then packaging into target/fmu/"
-        target/build-fmu/release/build-fmu --targets "$STEWART_FMU_TARGETS"
+        target/build-fmu/build-tool/build-fmu --targets "$STEWART_FMU_TARGETS"
     else
+        if [ -n "${BACKGROUND[cross]:-}" ]; then  # started beside the build program (tests/run_all.sh)
+            step "waiting for the cross toolchains (target/test-logs/cross.log)"
+            finish cross
+        fi
         cross_toolchains "${SETUP_KIND:-tests}"
         step "building the FMUs for Linux x86-64, Linux aarch64 and Windows x64, then packaging into target/fmu/ (about 5 minutes the first time on 2 cores, seconds after; a line per platform)"
-        target/build-fmu/release/build-fmu
+        target/build-fmu/build-tool/build-fmu
     fi
     step "building the compiled co-simulation master's command (crates/stewart-master; a minute the first time)"
     cargo build --release -p stewart-master
