@@ -99,6 +99,32 @@ class Fmu3:
         self.time = result[3]
         return result
 
+    def steps_with_events(self, h, t_end, before_step=None, at_early_return=None):
+        """Co-Simulation in step mode on the grid of `h` up to `t_end` (an instance made with
+        eventModeUsed and earlyReturnAllowed): `before_step(self)` before each step; a step that
+        returns early is followed by the rest of its grid interval, `at_early_return(self)` called
+        where it returned; each event handled in Event Mode. Returns the times of the early returns
+        and the flags of each fmi3UpdateDiscreteStates (discreteStatesNeedUpdate,
+        terminateSimulation, ...)."""
+        early, flags = [], []
+        self.fmu.enterStepMode()
+        while self.time < t_end - 1e-12:
+            if before_step is not None:
+                before_step(self)
+            target = min(t_end, (math.floor(self.time / h + 1e-9) + 1) * h)
+            event, terminate, early_return, last = self.fmu.doStep(self.time, target - self.time)
+            assert not terminate
+            self.time = last
+            if early_return:
+                early.append(last)
+                if at_early_return is not None:
+                    at_early_return(self)
+            if event:
+                self.fmu.enterEventMode()
+                flags.append(self.fmu.updateDiscreteStates())
+                self.fmu.enterStepMode()
+        return early, flags
+
     def free(self):
         self.fmu.terminate()
         self.fmu.freeInstance()
@@ -195,7 +221,7 @@ def test_fmi3_co_simulation_returns_early_at_contacts_and_reports_events():
     """Power loss through FMI 3 Co-Simulation with event mode and early return: each step that
     meets a contact returns at the located contact time with eventHandlingNeeded; the
     importer handles it in Event Mode; the motion equals the FMI 2 run's."""
-    early, requests = [], []
+    requests = []
 
     def intermediate_update(_env, time, _set_requested, _get_allowed, _finished, can_return_early,
                             early_return_requested, early_return_time):
@@ -205,21 +231,9 @@ def test_fmi3_co_simulation_returns_early_at_contacts_and_reports_events():
 
     p3 = Fmu3(PLATFORM3, name="events", eventModeUsed=True, earlyReturnAllowed=True,
               intermediateUpdate=intermediate_update)
-    p3.fmu.enterStepMode()
     h, t_end = 1e-2, 1.5
-    while p3.time < t_end - 1e-12:
-        p3.set("F", [FORCE if p3.time < 0.5 - 1e-12 else 0.0] * 6)
-        target = min(t_end, (math.floor(p3.time / h + 1e-9) + 1) * h)
-        event, terminate, early_return, last = p3.fmu.doStep(p3.time, target - p3.time)
-        assert not terminate
-        p3.time = last
-        if early_return:
-            early.append(last)
-        if event:
-            p3.fmu.enterEventMode()
-            flags = p3.fmu.updateDiscreteStates()
-            assert not flags[0] and not flags[1]
-            p3.fmu.enterStepMode()
+    early, flags = p3.steps_with_events(h, t_end, lambda p: p.set("F", [FORCE if p.time < 0.5 - 1e-12 else 0.0] * 6))
+    assert flags and not any(f[0] or f[1] for f in flags)
     z3 = p3.get("r")[2]
     p3.free()
     p2 = Platform(name="reference")

@@ -125,7 +125,7 @@ def test_co_simulation_lands_on_the_accumulators_switch():
     and early return, 10 ms steps): the step that meets the switch returns early at it, where
     the line's pressure equals the precharge (P_0 - p_atm gauge), and says so in its event
     message; the line goes on to collapse as in Model Exchange."""
-    events, early = [], []
+    events = []
 
     def intermediate_update(_env, time, _set_requested, _get_allowed, _finished, can_return_early,
                             early_return_requested, early_return_time):
@@ -136,23 +136,11 @@ def test_co_simulation_lands_on_the_accumulators_switch():
               intermediateUpdate=intermediate_update, events=events,
               integers=POWERED, booleans={"stops": False},
               reals={"pump.speed": 0.0, "accumulator.volume": 1e-3, "solver.relTol": 1e-10, "valve": [0.05] * 6})
-    p3.fmu.enterStepMode()
     h, t_end = 1e-2, 1.0
     precharge = U["accumulator.precharge"] - ATMOSPHERE
-    at_switch = None
-    while p3.time < t_end - 1e-12:
-        target = min(t_end, (math.floor(p3.time / h + 1e-9) + 1) * h)
-        event, terminate, early_return, last = p3.fmu.doStep(p3.time, target - p3.time)
-        assert not terminate
-        p3.time = last
-        if early_return:
-            early.append(last)
-            if at_switch is None:
-                at_switch = p3.get("supply.pressure")
-        if event:
-            p3.fmu.enterEventMode()
-            p3.fmu.updateDiscreteStates()
-            p3.fmu.enterStepMode()
+    lines = []  # the line's pressure at each early return
+    early, _ = p3.steps_with_events(h, t_end, at_early_return=lambda p: lines.append(p.get("supply.pressure")))
+    at_switch = lines[0] if lines else None
     line = p3.get("supply.pressure")
     p3.free()
     said = [m for _, category, m in events if "accumulator emptied" in m]
