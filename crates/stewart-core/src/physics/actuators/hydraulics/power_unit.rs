@@ -128,9 +128,9 @@ impl PowerUnit {
 
     /// `V_g / V_0 = (P_0 / P_S)^(1/n_a)`, the gas's share of the accumulator at the absolute
     /// supply pressure `absolute` (> 0), as `exp(ln(P_0 / P_S) / n_a)`: libm's `log` and `exp`
-    /// take about 140 instructions together where its `pow` takes 280, and every rate
-    /// evaluation with the power unit needs this once; within a few ulps of `pow` over the
-    /// accumulator's range (a test below).
+    /// together take about 145 instructions fewer than its `pow` (benches/results/hydraulics.txt
+    /// §7), and every rate evaluation with the power unit needs this once; within a few ulps of
+    /// `pow` over the accumulator's range (a test below).
     #[inline(always)]
     fn gas_volume_fraction<T: Real>(&self, absolute: T) -> T {
         ((T::constant(self.precharge) / absolute).ln() * (1.0 / self.accumulator_polytropic)).exp()
