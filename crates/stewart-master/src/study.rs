@@ -41,9 +41,63 @@ pub const PLATFORM_WATCHED: [&str; 26] = [
     "supply.pressure",
     "work.electric",
 ];
+/// The position of `name` in `list`, found when compiling: a name the list does not hold does
+/// not compile.
+const fn position(list: &[&str], name: &str) -> usize {
+    let mut i = 0;
+    while i < list.len() {
+        if same_bytes(list[i].as_bytes(), name.as_bytes()) {
+            return i;
+        }
+        i += 1;
+    }
+    panic!("a name that the watched list does not hold")
+}
+
+const fn watched(name: &str) -> usize {
+    position(&PLATFORM_WATCHED, name)
+}
+
+const fn same_bytes(a: &[u8], b: &[u8]) -> bool {
+    if a.len() != b.len() {
+        return false;
+    }
+    let mut i = 0;
+    while i < a.len() {
+        if a[i] != b[i] {
+            return false;
+        }
+        i += 1;
+    }
+    true
+}
+
+const E: usize = watched("E");
+const WORK_F: usize = watched("work.F");
+const WORK_DISSIPATED: usize = watched("work.dissipated");
+const KAPPA: usize = watched("kappa");
+const R: usize = watched("r[1]");
+const VZ: usize = watched("v[3]");
+/// `Fstop[1]`, the five others after it.
+const FSTOP: usize = watched("Fstop[1]");
+/// `l[1]`, the five others after it.
+const L: usize = watched("l[1]");
+const WORK_HYDRAULIC: usize = watched("work.hydraulic");
+const WORK_PUMP: usize = watched("work.pump");
+const WORK_COMPRESSION: usize = watched("work.compression");
+const LINE_PRESSURE: usize = watched("supply.linePressure");
+const SUPPLY_PRESSURE: usize = watched("supply.pressure");
+const WORK_ELECTRIC: usize = watched("work.electric");
+const _: () = assert!(watched("r[3]") == R + 2 && watched("Fstop[6]") == FSTOP + 5 && watched("l[6]") == L + 5);
+
 /// The controller's (closed loop), in this order.
 pub const CONTROLLER_WATCHED: [&str; 9] =
     ["lp[1]", "lp[2]", "lp[3]", "lp[4]", "lp[5]", "lp[6]", "rp[1]", "rp[2]", "rp[3]"];
+/// `lp[1]` and `rp[1]` in [`CONTROLLER_WATCHED`], the others after each.
+const LP: usize = position(&CONTROLLER_WATCHED, "lp[1]");
+const RP: usize = position(&CONTROLLER_WATCHED, "rp[1]");
+const _: () =
+    assert!(position(&CONTROLLER_WATCHED, "lp[6]") == LP + 5 && position(&CONTROLLER_WATCHED, "rp[3]") == RP + 2);
 
 /// A study run's row: status ("ok", "discard", "error"), message and metrics (NaN where the
 /// run gives none).
@@ -127,23 +181,23 @@ impl Observer for Metrics {
 
     fn initial(&mut self, values: &Readings) {
         let p = values.of(0);
-        self.e0 = p[0];
-        self.powered = p[23] != 0.0;
+        self.e0 = p[E];
+        self.powered = p[LINE_PRESSURE] != 0.0;
     }
 
     fn step(&mut self, _step: usize, time: f64, values: &Readings) {
         let p = values.of(0);
-        let (energy, work, dissipated, kappa, z, vz) = (p[0], p[1], p[2], p[3], p[6], p[7]);
-        let supplied = if self.powered { p[21] } else { p[20] };
-        let work = work + ((p[25] + supplied) - p[22]);
+        let (energy, work, dissipated, kappa, z, vz) = (p[E], p[WORK_F], p[WORK_DISSIPATED], p[KAPPA], p[R + 2], p[VZ]);
+        let supplied = if self.powered { p[WORK_PUMP] } else { p[WORK_HYDRAULIC] };
+        let work = work + ((p[WORK_ELECTRIC] + supplied) - p[WORK_COMPRESSION]);
         python_max(&mut self.residual, ((energy - self.e0) - (work - dissipated)).abs());
-        if p[24] < self.supply_min {
-            self.supply_min = p[24];
+        if p[SUPPLY_PRESSURE] < self.supply_min {
+            self.supply_min = p[SUPPLY_PRESSURE];
         }
         if kappa < self.kappa_min {
             self.kappa_min = kappa;
         }
-        python_max(&mut self.stop_force, max_propagating(p[8..14].iter().map(|f| f.abs())));
+        python_max(&mut self.stop_force, max_propagating(p[FSTOP..FSTOP + 6].iter().map(|f| f.abs())));
         if let Some(v_prev) = self.v_prev {
             python_max(&mut self.deceleration, (vz - v_prev) / self.step);
             if self.step_start >= self.event {
@@ -155,8 +209,8 @@ impl Observer for Metrics {
         self.final_z = Some(z);
         if self.closed {
             let c = values.of(self.controller_index);
-            python_max(&mut self.leg_error, max_propagating((0..6).map(|k| (p[14 + k] - c[k]).abs())));
-            let (dx, dy, dz) = (p[4] - c[6], p[5] - c[7], p[6] - c[8]);
+            python_max(&mut self.leg_error, max_propagating((0..6).map(|k| (p[L + k] - c[LP + k]).abs())));
+            let (dx, dy, dz) = (p[R] - c[RP], p[R + 1] - c[RP + 1], p[R + 2] - c[RP + 2]);
             python_max(&mut self.pose_error, (dx * dx + dy * dy + dz * dz).sqrt());
         }
     }
