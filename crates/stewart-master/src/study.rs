@@ -12,92 +12,67 @@
 
 use crate::system::{Failure, Observer, Readings, RunSpec, System};
 
-/// The platform's variables a study reads after every step, in this order.
-pub const PLATFORM_WATCHED: [&str; 26] = [
-    "E",
-    "work.F",
-    "work.dissipated",
-    "kappa",
-    "r[1]",
-    "r[2]",
-    "r[3]",
-    "v[3]",
-    "Fstop[1]",
-    "Fstop[2]",
-    "Fstop[3]",
-    "Fstop[4]",
-    "Fstop[5]",
-    "Fstop[6]",
-    "l[1]",
-    "l[2]",
-    "l[3]",
-    "l[4]",
-    "l[5]",
-    "l[6]",
-    "work.hydraulic",
-    "work.pump",
-    "work.compression",
-    "supply.linePressure",
-    "supply.pressure",
-    "work.electric",
-];
-/// The position of `name` in `list`, found when compiling: a name the list does not hold does
-/// not compile.
-const fn position(list: &[&str], name: &str) -> usize {
-    let mut i = 0;
-    while i < list.len() {
-        if same_bytes(list[i].as_bytes(), name.as_bytes()) {
-            return i;
+/// A list of watched names and, beside it, an enum whose values are their positions: each name
+/// is declared once, with the identifier the metrics read it by.
+macro_rules! watched {
+    ($(#[$doc:meta])* $list:ident, $index:ident { $($id:ident = $name:literal,)* }) => {
+        $(#[$doc])*
+        pub const $list: [&str; [$($name),*].len()] = [$($name),*];
+        /// Positions in the list beside it.
+        #[derive(Clone, Copy)]
+        #[allow(dead_code)] // the runs' later elements are read by offset from the first
+        enum $index {
+            $($id),*
         }
-        i += 1;
-    }
-    panic!("a name that the watched list does not hold")
+    };
 }
 
-const fn watched(name: &str) -> usize {
-    position(&PLATFORM_WATCHED, name)
-}
-
-const fn same_bytes(a: &[u8], b: &[u8]) -> bool {
-    if a.len() != b.len() {
-        return false;
+watched!(
+    /// The platform's variables a study reads after every step, in this order.
+    PLATFORM_WATCHED, P {
+        E = "E",
+        WorkF = "work.F",
+        WorkDissipated = "work.dissipated",
+        Kappa = "kappa",
+        R1 = "r[1]",
+        R2 = "r[2]",
+        R3 = "r[3]",
+        Vz = "v[3]",
+        Fstop1 = "Fstop[1]",
+        Fstop2 = "Fstop[2]",
+        Fstop3 = "Fstop[3]",
+        Fstop4 = "Fstop[4]",
+        Fstop5 = "Fstop[5]",
+        Fstop6 = "Fstop[6]",
+        L1 = "l[1]",
+        L2 = "l[2]",
+        L3 = "l[3]",
+        L4 = "l[4]",
+        L5 = "l[5]",
+        L6 = "l[6]",
+        WorkHydraulic = "work.hydraulic",
+        WorkPump = "work.pump",
+        WorkCompression = "work.compression",
+        LinePressure = "supply.linePressure",
+        SupplyPressure = "supply.pressure",
+        WorkElectric = "work.electric",
     }
-    let mut i = 0;
-    while i < a.len() {
-        if a[i] != b[i] {
-            return false;
-        }
-        i += 1;
+);
+
+watched!(
+    /// The controller's (closed loop), in this order.
+    CONTROLLER_WATCHED, C {
+        Lp1 = "lp[1]",
+        Lp2 = "lp[2]",
+        Lp3 = "lp[3]",
+        Lp4 = "lp[4]",
+        Lp5 = "lp[5]",
+        Lp6 = "lp[6]",
+        Rp1 = "rp[1]",
+        Rp2 = "rp[2]",
+        Rp3 = "rp[3]",
     }
-    true
-}
-
-const E: usize = watched("E");
-const WORK_F: usize = watched("work.F");
-const WORK_DISSIPATED: usize = watched("work.dissipated");
-const KAPPA: usize = watched("kappa");
-const R: usize = watched("r[1]");
-const VZ: usize = watched("v[3]");
-/// `Fstop[1]`, the five others after it.
-const FSTOP: usize = watched("Fstop[1]");
-/// `l[1]`, the five others after it.
-const L: usize = watched("l[1]");
-const WORK_HYDRAULIC: usize = watched("work.hydraulic");
-const WORK_PUMP: usize = watched("work.pump");
-const WORK_COMPRESSION: usize = watched("work.compression");
-const LINE_PRESSURE: usize = watched("supply.linePressure");
-const SUPPLY_PRESSURE: usize = watched("supply.pressure");
-const WORK_ELECTRIC: usize = watched("work.electric");
-const _: () = assert!(watched("r[3]") == R + 2 && watched("Fstop[6]") == FSTOP + 5 && watched("l[6]") == L + 5);
-
-/// The controller's (closed loop), in this order.
-pub const CONTROLLER_WATCHED: [&str; 9] =
-    ["lp[1]", "lp[2]", "lp[3]", "lp[4]", "lp[5]", "lp[6]", "rp[1]", "rp[2]", "rp[3]"];
-/// `lp[1]` and `rp[1]` in [`CONTROLLER_WATCHED`], the others after each.
-const LP: usize = position(&CONTROLLER_WATCHED, "lp[1]");
-const RP: usize = position(&CONTROLLER_WATCHED, "rp[1]");
-const _: () =
-    assert!(position(&CONTROLLER_WATCHED, "lp[6]") == LP + 5 && position(&CONTROLLER_WATCHED, "rp[3]") == RP + 2);
+);
 
 /// A study run's row: status ("ok", "discard", "error"), message and metrics (NaN where the
 /// run gives none).
@@ -181,23 +156,28 @@ impl Observer for Metrics {
 
     fn initial(&mut self, values: &Readings) {
         let p = values.of(0);
-        self.e0 = p[E];
-        self.powered = p[LINE_PRESSURE] != 0.0;
+        self.e0 = p[P::E as usize];
+        self.powered = p[P::LinePressure as usize] != 0.0;
     }
 
     fn step(&mut self, _step: usize, time: f64, values: &Readings) {
         let p = values.of(0);
-        let (energy, work, dissipated, kappa, z, vz) = (p[E], p[WORK_F], p[WORK_DISSIPATED], p[KAPPA], p[R + 2], p[VZ]);
-        let supplied = if self.powered { p[WORK_PUMP] } else { p[WORK_HYDRAULIC] };
-        let work = work + ((p[WORK_ELECTRIC] + supplied) - p[WORK_COMPRESSION]);
+        let at = |v: P| p[v as usize];
+        let (energy, work, dissipated, kappa, z, vz) =
+            (at(P::E), at(P::WorkF), at(P::WorkDissipated), at(P::Kappa), at(P::R3), at(P::Vz));
+        let supplied = if self.powered { at(P::WorkPump) } else { at(P::WorkHydraulic) };
+        let work = work + ((at(P::WorkElectric) + supplied) - at(P::WorkCompression));
         python_max(&mut self.residual, ((energy - self.e0) - (work - dissipated)).abs());
-        if p[SUPPLY_PRESSURE] < self.supply_min {
-            self.supply_min = p[SUPPLY_PRESSURE];
+        if at(P::SupplyPressure) < self.supply_min {
+            self.supply_min = at(P::SupplyPressure);
         }
         if kappa < self.kappa_min {
             self.kappa_min = kappa;
         }
-        python_max(&mut self.stop_force, max_propagating(p[FSTOP..FSTOP + 6].iter().map(|f| f.abs())));
+        python_max(
+            &mut self.stop_force,
+            max_propagating(p[P::Fstop1 as usize..=P::Fstop6 as usize].iter().map(|f| f.abs())),
+        );
         if let Some(v_prev) = self.v_prev {
             python_max(&mut self.deceleration, (vz - v_prev) / self.step);
             if self.step_start >= self.event {
@@ -209,8 +189,12 @@ impl Observer for Metrics {
         self.final_z = Some(z);
         if self.closed {
             let c = values.of(self.controller_index);
-            python_max(&mut self.leg_error, max_propagating((0..6).map(|k| (p[L + k] - c[LP + k]).abs())));
-            let (dx, dy, dz) = (p[R] - c[RP], p[R + 1] - c[RP + 1], p[R + 2] - c[RP + 2]);
+            python_max(
+                &mut self.leg_error,
+                max_propagating((0..6).map(|k| (p[P::L1 as usize + k] - c[C::Lp1 as usize + k]).abs())),
+            );
+            let (dx, dy, dz) =
+                (at(P::R1) - c[C::Rp1 as usize], at(P::R2) - c[C::Rp2 as usize], at(P::R3) - c[C::Rp3 as usize]);
             python_max(&mut self.pose_error, (dx * dx + dy * dy + dz * dz).sqrt());
         }
     }
