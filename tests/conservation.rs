@@ -4,7 +4,7 @@
 
 use crate::common;
 
-use common::simulation;
+use common::{dyn_law, simulation};
 use nalgebra::{Matrix3, Vector3};
 use stewart_fmu::integration::SolverSettings;
 use stewart_fmu::physics::actuators::{HeldForces, SpringLegs};
@@ -51,7 +51,7 @@ fn energy_is_conserved_with_spring_legs() {
     let e0 = total_energy(&sim, &springs);
     let mut worst: f64 = 0.0;
     for i in 1..=1000 {
-        sim.advance(&springs, 0.1 * i as f64).expect("step");
+        sim.advance(dyn_law(&springs), 0.1 * i as f64).expect("step");
         worst = worst.max(((total_energy(&sim, &springs) - e0) / e0).abs());
     }
     let s = sim.body_state();
@@ -86,7 +86,7 @@ fn momenta_are_conserved_for_a_free_tumbling_body() {
     let free = HeldForces::constant([0.0; 6]);
     let (mut dp, mut dh, mut de) = (0.0f64, 0.0f64, 0.0f64);
     for i in 1..=200 {
-        sim.advance(&free, 0.1 * i as f64).expect("step");
+        sim.advance(dyn_law(&free), 0.1 * i as f64).expect("step");
         let s = sim.body_state();
         dp = dp.max((linear_momentum(&stand, &s) - p0).norm() / p0.norm());
         dh = dh.max((angular_momentum(&stand, &s) - h0).norm() / h0.norm());
@@ -114,7 +114,7 @@ fn euler_top_intermediate_axis_is_unstable() {
         let axis = w.iamax();
         let (mut min_ratio, mut max_ratio) = (f64::INFINITY, f64::NEG_INFINITY);
         for i in 1..=300 {
-            sim.advance(&free, 0.1 * i as f64).expect("step");
+            sim.advance(dyn_law(&free), 0.1 * i as f64).expect("step");
             let ratio = sim.body_state().angular_velocity_body()[axis] / w[axis];
             min_ratio = min_ratio.min(ratio);
             max_ratio = max_ratio.max(ratio);
@@ -144,8 +144,8 @@ fn constraint_residual_with_and_without_projection() {
     let mut free_at = vec![];
     for i in 1..=1000 {
         let t = 0.1 * i as f64;
-        projected.advance(&springs, t).expect("step");
-        free.advance(&springs, t).expect("step");
+        projected.advance(dyn_law(&springs), t).expect("step");
+        free.advance(dyn_law(&springs), t).expect("step");
         worst_projected = worst_projected.max(projected.body_state().constraint_residual());
         if i % 250 == 0 {
             free_at.push(free.body_state().constraint_residual());

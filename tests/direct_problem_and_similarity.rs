@@ -5,7 +5,7 @@
 
 use crate::common;
 
-use common::simulation;
+use common::{dyn_law, simulation};
 use nalgebra::Vector3;
 use stewart_fmu::integration::SolverSettings;
 use stewart_fmu::physics::body::kinematics::angles_from_rotation;
@@ -41,7 +41,7 @@ fn round_trip(stand: &Stand, programme: &PoseProgramme, t_end: f64, dt: f64) -> 
     let n = (t_end / dt).round() as usize;
     for i in 1..=n {
         let t = i as f64 * dt;
-        if sim.advance(&law, t).is_err() {
+        if sim.advance(dyn_law(&law), t).is_err() {
             break;
         }
         let s = sim.body_state();
@@ -153,8 +153,8 @@ fn si_and_nondimensional_runs_agree_after_scaling() {
     let mut worst: f64 = 0.0;
     for i in 1..=30 {
         let t_si = 0.1 * i as f64;
-        a.advance(&law_si, t_si).unwrap();
-        b.advance(&law_nd, t_si / scales.time).unwrap();
+        a.advance(dyn_law(&law_si), t_si).unwrap();
+        b.advance(dyn_law(&law_nd), t_si / scales.time).unwrap();
         let (sa, sb) = (a.body_state(), b.body_state());
         let dr = (sa.r / scales.length - sb.r).norm() / sb.r.norm();
         let dv = (sa.v / scales.velocity() - sb.v).norm() / sb.v.norm().max(1e-3);

@@ -5,14 +5,15 @@
 //! armature circuit against a tight reference.
 
 use crate::common;
+use common::dyn_law;
 
 use common::machine_oracle::{OracleDrives, OracleInputs, OracleMachine, OracleState};
 use nalgebra::Vector3;
 use stewart_fmu::integration::{
     CrossingLog, Integrator, LinearDecay, MAX_SWITCHING, Method, OdeSystem, SolverSettings, SwitchingKind,
 };
-use stewart_fmu::physics::actuators::HeldForces;
 use stewart_fmu::physics::actuators::drives::ElectricDrives;
+use stewart_fmu::physics::actuators::{HeldForces, LegForceLaw};
 use stewart_fmu::physics::body::kinematics::rotation_from_angles;
 use stewart_fmu::physics::body::state::BodyState;
 use stewart_fmu::physics::error::PhysicsFault;
@@ -166,7 +167,7 @@ fn drives_agree_with_the_independent_formulation() {
         for i in 0..steps {
             let t = i as f64 * h;
             let o = LegOutputs::compute(&sim.form, &sim.state);
-            sim.advance(&HeldForces::constant(law(t, &o.l, &o.ldot)), t + h).expect("steps");
+            sim.advance(dyn_law(&HeldForces::constant(law(t, &o.l, &o.ldot))), t + h).expect("steps");
             let u = law(t, &oracle.leg_lengths(&reference), &oracle.leg_rates(&reference));
             reference = oracle.simulate(&reference, h, 1, &|_| OracleInputs::Voltages(u))[1];
             worst = worst.max(difference(&sim, &reference));
@@ -210,7 +211,7 @@ fn the_drives_energy_balance_holds() {
             // stops and joint limits; then the supply drops and the drives brake.
             let u: [f64; 6] =
                 std::array::from_fn(|k| if t < 1.5 { u_hold + if k % 2 == 0 { 150.0 } else { -150.0 } } else { 0.0 });
-            sim.advance(&HeldForces::constant(u), t + 0.01).expect("the motion goes on");
+            sim.advance(dyn_law(&HeldForces::constant(u)), t + 0.01).expect("the motion goes on");
             contacts += sim.crossings.as_slice().len();
             let o = PlatformOutputs::compute(&sim.form, &sim.state, None);
             let balance = o.energy - e0 - (o.work_of_forces + o.electric_work - o.dissipated_energy);
@@ -229,7 +230,7 @@ fn the_drives_energy_balance_holds() {
 
 /// The platform's dynamics with the exponential treatment of the circuit switched off: the
 /// classical method, for comparison.
-struct Classical<'a>(PlatformDynamics<'a, HeldForces>);
+struct Classical<'a>(PlatformDynamics<'a, dyn LegForceLaw + 'a>);
 
 impl OdeSystem<SIMULATION_DIM> for Classical<'_> {
     type Fault = PhysicsFault;
@@ -286,13 +287,13 @@ fn heave_in_closed_loop(
         let o = LegOutputs::compute(&sim.form, &sim.state);
         let held = HeldForces::constant(law(t, &o.l, &o.ldot));
         if classical {
-            let system = Classical(sim.dynamics(&held));
+            let system = Classical(sim.dynamics(dyn_law(&held)));
             let mut y = sim.state;
             Integrator::new(settings).integrate(&system, t, &mut y, t + h, &mut CrossingLog::default()).ok()?;
             sim.state = y;
             sim.time = t + h;
         } else {
-            sim.advance(&held, t + h).ok()?;
+            sim.advance(dyn_law(&held), t + h).ok()?;
         }
         if !sim.state.iter().all(|x| x.is_finite() && x.abs() < 1e6) {
             return None;
@@ -356,7 +357,7 @@ fn the_holding_voltage_holds_the_stand() {
         &Vector3::zeros(),
     );
     let mut sim = simulation(&start, drives, [i_hold; 6], SolverSettings::default());
-    sim.advance(&HeldForces::constant([u_hold; 6]), 2.0).expect("holds");
+    sim.advance(dyn_law(&HeldForces::constant([u_hold; 6])), 2.0).expect("holds");
     let drift = (sim.body_state().r - start.r).norm();
     let current = sim.currents().iter().map(|i| (i - i_hold).abs()).fold(0.0, f64::max);
     println!(

@@ -5,17 +5,18 @@
 //! reference: the work-precision table the docs quote.
 
 use crate::common;
+use common::dyn_law;
 
 use common::machine_oracle::{OracleHydraulics, OracleInputs, OracleMachine, OraclePowerUnit, OracleState};
 use nalgebra::Vector3;
 use stewart_fmu::integration::{
     CrossingLog, Integrator, MAX_SWITCHING, Method, OdeSystem, SolverSettings, SwitchingKind,
 };
-use stewart_fmu::physics::actuators::HeldForces;
 use stewart_fmu::physics::actuators::hydraulics::power_unit::PowerUnit;
 use stewart_fmu::physics::actuators::hydraulics::{
     ATMOSPHERIC_PRESSURE, DEFAULT_SUPPLY_PRESSURE, HydraulicActuators, HydraulicLegs,
 };
+use stewart_fmu::physics::actuators::{HeldForces, LegForceLaw};
 use stewart_fmu::physics::body::kinematics::rotation_from_angles;
 use stewart_fmu::physics::body::state::BodyState;
 use stewart_fmu::physics::error::PhysicsFault;
@@ -208,7 +209,7 @@ fn agree_with_the_oracle(h: HydraulicLegs, pump_fails_at: Option<f64>) {
         sim.form.set_supply_pressure(supply);
         let o = LegOutputs::compute(&sim.form, &sim.state);
         let [pa, pb] = sim.pressures();
-        sim.advance(&HeldForces::constant(law(t, (&o.l, &o.ldot, &pa, &pb))), t + step).expect("steps");
+        sim.advance(dyn_law(&HeldForces::constant(law(t, (&o.l, &o.ldot, &pa, &pb)))), t + step).expect("steps");
         let (l, ldot) = (oracle.leg_lengths(&reference), oracle.leg_rates(&reference));
         let valve = law(t, (&l, &ldot, &reference.pa, &reference.pb));
         let inputs = OracleInputs::Valves { valve, supply_pressure: supply, pump_speed: 1.0 };
@@ -280,7 +281,7 @@ fn power_unit_agrees(unit: PowerUnit, ripple: f64, pump_stops_at: Option<f64>) {
         sim.form.set_pump_speed(speed);
         let o = LegOutputs::compute(&sim.form, &sim.state);
         let [pa, pb] = sim.pressures();
-        sim.advance(&HeldForces::constant(law(t, (&o.l, &o.ldot, &pa, &pb))), t + step).expect("steps");
+        sim.advance(dyn_law(&HeldForces::constant(law(t, (&o.l, &o.ldot, &pa, &pb)))), t + step).expect("steps");
         let (l, ldot) = (oracle.leg_lengths(&reference), oracle.leg_rates(&reference));
         let valve = law(t, (&l, &ldot, &reference.pa, &reference.pb));
         // The input pS is ignored with the power unit: a value that would show if it were not.
@@ -342,7 +343,7 @@ fn energy_balance(h: HydraulicLegs) {
             sim.form.set_supply_pressure(0.0);
         }
         let valve: [f64; 6] = std::array::from_fn(|k| if k % 2 == 0 { 0.5 } else { -0.4 });
-        sim.advance(&HeldForces::constant(valve), t + 0.01).expect("the motion goes on");
+        sim.advance(dyn_law(&HeldForces::constant(valve)), t + 0.01).expect("the motion goes on");
         contacts += sim.crossings.as_slice().len();
         let o = PlatformOutputs::compute(&sim.form, &sim.state, None);
         let balance = o.energy - e0 - (o.hydraulic_work - o.compression_work - o.dissipated_energy);
@@ -409,7 +410,7 @@ fn work_precision(h: HydraulicLegs) -> (f64, Vec<(&'static str, f64, f64)>) {
             }
             let valve = HeldForces::constant([if t < 0.5 { 0.0 } else { 1.0 }; 6]);
             if whole_steps {
-                let system = WholeSteps(sim.dynamics(&valve));
+                let system = WholeSteps(sim.dynamics(dyn_law(&valve)));
                 let mut y = sim.state;
                 let reached =
                     Integrator::new(settings).integrate(&system, t, &mut y, t + 1e-3, &mut CrossingLog::default());
@@ -420,7 +421,7 @@ fn work_precision(h: HydraulicLegs) -> (f64, Vec<(&'static str, f64, f64)>) {
                 sim.state = y;
                 sim.time = t + 1e-3;
             } else {
-                sim.advance(&valve, t + 1e-3).expect("steps");
+                sim.advance(dyn_law(&valve), t + 1e-3).expect("steps");
             }
             let legs = LegOutputs::compute(&sim.form, &sim.state).l;
             let [pa, pb] = sim.pressures();
@@ -473,7 +474,7 @@ fn work_precision(h: HydraulicLegs) -> (f64, Vec<(&'static str, f64, f64)>) {
 }
 
 /// The platform's dynamics without a stability bound: RK4 takes each step whole.
-struct WholeSteps<'a>(PlatformDynamics<'a, HeldForces>);
+struct WholeSteps<'a>(PlatformDynamics<'a, dyn LegForceLaw + 'a>);
 
 impl OdeSystem<SIMULATION_DIM> for WholeSteps<'_> {
     type Fault = PhysicsFault;

@@ -3,6 +3,7 @@
 //! coordinates, written from the specification alone), and its energy balance.
 
 use crate::common;
+use common::dyn_law;
 
 use common::machine_oracle::{
     OracleFriction, OracleInputs, OracleJoints, OracleMachine, OracleState, identity_rotation,
@@ -130,7 +131,7 @@ fn compare(
     for i in 0..steps {
         let t = i as f64 * h;
         let o = stewart_fmu::simulation::LegOutputs::compute(&sim.form, &sim.state);
-        if let Err(e) = sim.advance(&HeldForces::constant(law(t, &o.l, &o.ldot)), t + h) {
+        if let Err(e) = sim.advance(dyn_law(&HeldForces::constant(law(t, &o.l, &o.ldot))), t + h) {
             panic!("at t = {t}: {e} (tilt {tilt}, worst {worst:e})");
         }
         let u = law(t, &oracle.leg_lengths(&reference), &oracle.leg_rates(&reference));
@@ -325,7 +326,7 @@ fn heavier_legs_need_larger_forces_and_the_static_forces_hold_the_platform() {
         &Vector3::zeros(),
     );
     let mut sim = simulation(&start, legs, Friction::default(), None);
-    sim.advance(&HeldForces::constant(ours), 0.1).expect("steps");
+    sim.advance(dyn_law(&HeldForces::constant(ours)), 0.1).expect("steps");
     let drift = (sim.body_state().r - start.r).norm();
     println!("released at rest under the static forces: drift {drift:.2e} m in 0.1 s");
     assert!(drift < 1e-9, "{drift:e}");
@@ -363,7 +364,7 @@ fn the_machines_energy_balance_holds_through_contacts() {
         for i in 0..300 {
             let t = i as f64 * 0.01;
             let u = if damped { [2000.0 * (t * 3.0).sin(); 6] } else { [0.0; 6] };
-            sim.advance(&HeldForces::constant(u), t + 0.01).expect("the motion goes on");
+            sim.advance(dyn_law(&HeldForces::constant(u)), t + 0.01).expect("the motion goes on");
             contacts += sim.crossings.as_slice().len();
             let o = PlatformOutputs::compute(&sim.form, &sim.state, None);
             let balance = o.energy - e0 - (o.work_of_forces - o.dissipated_energy);

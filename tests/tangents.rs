@@ -3,6 +3,7 @@
 //! random states, on and off the constraint manifold, with legs inside their strokes and in
 //! contact with their lower and upper stops: relative error <= 1e-6.
 
+use crate::common::dyn_law;
 use nalgebra::Vector3;
 use stewart_fmu::physics::actuators::HeldForces;
 use stewart_fmu::physics::body::kinematics::rotation_from_angles;
@@ -86,7 +87,7 @@ fn right_hand_side_tangent_matches_central_differences() {
             let yy: StateVector = std::array::from_fn(|i| y[i] + sign * h * dy[i]);
             let uu: [f64; 6] = std::array::from_fn(|k| u[k] + sign * h * du[k]);
             let mut f = [0.0; 24];
-            let p = form.derivative(0.0, &yy, &HeldForces::constant(uu), &mut f);
+            let p = form.derivative(0.0, &yy, dyn_law(&HeldForces::constant(uu)), &mut f);
             let mut v = f.to_vec();
             v.extend([p.actuator / 1e4, p.dissipation / 1e4]);
             v

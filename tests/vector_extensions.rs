@@ -6,7 +6,7 @@
 
 use crate::common;
 
-use common::{pose, simulation};
+use common::{dyn_law, pose, simulation};
 use nalgebra::Vector3;
 use stewart_fmu::integration::{Method, SolverSettings};
 use stewart_fmu::physics::actuators::HeldForces;
@@ -42,7 +42,7 @@ fn run(
         let phase: [f64; 6] = std::array::from_fn(|k| (2.0 * std::f64::consts::PI * (1.5 * t + 0.01 * k as f64)).sin());
         let value = std::array::from_fn(|k| f0 * (1.0 + amplitude * phase[k]));
         let law = HeldForces { value, slope: [0.0; 6], t0: t };
-        sim.advance(&law, t + 1e-3).expect("the motion goes on");
+        sim.advance(dyn_law(&law), t + 1e-3).expect("the motion goes on");
         states.push(sim.state.map(f64::to_bits));
         crossings.extend(sim.crossings.as_slice().iter().map(|c| c.t.to_bits()));
     }

@@ -8,7 +8,7 @@
 
 use crate::common;
 
-use common::{neutral_state, simulation};
+use common::{dyn_law, neutral_state, simulation};
 use stewart_fmu::integration::{Method, SolverSettings};
 use stewart_fmu::physics::actuators::HeldForces;
 use stewart_fmu::physics::legs::end_stops::EndStops;
@@ -67,14 +67,14 @@ fn power_loss_lands_the_platform_on_its_lower_stops_at_the_static_rest_pose() {
     let mut t = 0.0;
     while t < t_end - 1e-12 {
         let f = if t < t_cut - 1e-12 { equilibrium_force() } else { 0.0 };
-        sim.advance(&HeldForces::constant([f; 6]), t + h).expect("step");
+        sim.advance(dyn_law(&HeldForces::constant([f; 6])), t + h).expect("step");
         t += h;
         for c in sim.crossings.as_slice() {
             if c.index < switching::UPPER && !c.rising && first_contact.is_none() {
                 first_contact = Some(c.t);
             }
         }
-        let dy = sim.derivative(&HeldForces::constant([0.0; 6]));
+        let dy = sim.derivative(dyn_law(&HeldForces::constant([0.0; 6])));
         if dy[5] > peak_deceleration {
             (peak_deceleration, t_peak) = (dy[5], t);
         }
@@ -143,7 +143,7 @@ fn energy_balance_holds_through_contacts_for_forced_motion() {
         let (mut worst, mut contacts, mut t) = (0.0f64, 0usize, 0.0);
         let h = 1e-3;
         while t < DURATION - 1e-12 {
-            sim.advance(&HeldForces::constant(law(t)), t + h).expect("step");
+            sim.advance(dyn_law(&HeldForces::constant(law(t))), t + h).expect("step");
             t += h;
             contacts +=
                 sim.crossings.as_slice().iter().filter(|c| c.index < switching::DETERMINANT && !c.rising).count();
@@ -174,7 +174,7 @@ fn bounce(settings: SolverSettings, t_end: f64) -> (Vec<f64>, f64, usize, Vec<f6
     let (mut z, mut worst, mut landings, mut t) = (vec![], 0.0f64, vec![], 0.0);
     let h = 1e-2;
     while t < t_end - 1e-9 {
-        sim.advance(&HeldForces::constant([0.0; 6]), t + h).expect("step");
+        sim.advance(dyn_law(&HeldForces::constant([0.0; 6])), t + h).expect("step");
         t += h;
         for c in sim.crossings.as_slice().iter().filter(|c| c.index == switching::LOWER && !c.rising) {
             let s =

@@ -9,6 +9,7 @@ pub mod rng;
 
 use nalgebra::{Matrix3, Vector3};
 use stewart_fmu::integration::SolverSettings;
+use stewart_fmu::physics::actuators::LegForceLaw;
 use stewart_fmu::physics::body::kinematics::rotation_from_angles;
 use stewart_fmu::physics::body::state::BodyState;
 use stewart_fmu::physics::stand::Stand;
@@ -27,6 +28,16 @@ pub fn neutral_state() -> BodyState {
 /// A pose offset from neutral by `dr`, rotated by 1-2-3 `angles`, moving with `v` and `w`.
 pub fn pose(dr: Vector3<f64>, angles: Vector3<f64>, v: Vector3<f64>, w: Vector3<f64>) -> BodyState {
     BodyState::from_pose(Stand::truck_cabin_neutral_position() + dr, v, &rotation_from_angles(&angles), &w)
+}
+
+/// A force law as the tests hand it to the simulation: `sim.advance(dyn_law(&springs), t)`.
+/// The simulation's steps are generic over the law, so that the FMU's laws compile into its
+/// step; in this crate each law type handed in would compile the whole integrator again (both
+/// state layouts and both vector paths: about 3.5 million lines of unoptimised LLVM IR, four
+/// fifths of this crate's build time with six law types). Through `&dyn LegForceLaw` it
+/// compiles once.
+pub fn dyn_law(law: &impl LegForceLaw) -> &dyn LegForceLaw {
+    law
 }
 
 pub fn simulation(
