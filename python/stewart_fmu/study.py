@@ -152,11 +152,16 @@ def fmus_for(spec, paths=None):
 
 
 FSTOP = [f"Fstop[{k}]" for k in LEGS]
-ENERGY = ["E", "work.F", "work.dissipated", "kappa", "r[1]", "r[2]", "r[3]", "v[3]"]
-# The hydraulic supply's work (`work.pump` with the power unit, else `work.hydraulic`), the
-# oil's compression, the supply's pressure (docs/model.md §10, §10b; all 0 for forces and
-# drives but the pressure, pS), the drives' electric work (§9).
-HYDRAULIC = ["work.hydraulic", "work.pump", "work.compression", "supply.pressure", "work.electric"]
+# What the FMPy master reads from the platform after each step, in one call: the energy, its
+# works and kappa, the position and the heave rate; the hydraulic supply's work (`work.pump`
+# with the power unit, else `work.hydraulic`), the oil's compression, the supply's pressure
+# (docs/model.md §10, §10b; all 0 for forces and drives but the pressure, pS), the drives'
+# electric work (§9); then the end stops' forces and the legs' lengths. (The compiled master
+# reads the same values in one call too, in its own order: PLATFORM_WATCHED in
+# crates/stewart-master/src/study.rs.)
+WATCHED = ["E", "work.F", "work.dissipated", "kappa", "r[1]", "r[2]", "r[3]", "v[3]", "work.hydraulic", "work.pump",
+           "work.compression", "supply.pressure", "work.electric", *FSTOP, *L]
+_SCALARS = len(WATCHED) - len(FSTOP) - len(L)  # where the end stops' forces begin
 
 
 def _parameters(spec, run, platform_md):
@@ -413,15 +418,16 @@ def _execute(spec, run, fmus, row):
     values = None
     try:
         for t in _steps(platform, controller if closed else None, n, h, commands, scenario, _drive(run)):
-            values = platform.values(ENERGY)
-            energy, work, dissipated, kappa, z, vz = values[0], values[1], values[2], values[3], values[6], values[7]
-            hydraulic, pump, compression, supply, electric = platform.values(HYDRAULIC)
+            values = platform.values(WATCHED)
+            (energy, work, dissipated, kappa, x, y, z, vz, hydraulic, pump, compression, supply,
+             electric) = values[:_SCALARS]
+            stops, legs = values[_SCALARS:_SCALARS + len(FSTOP)], values[_SCALARS + len(FSTOP):]
             # As the compiled master sums it (crates/stewart-master/src/study.rs).
             work = work + ((electric + (pump if powered else hydraulic)) - compression)
             residual = max(residual, abs(energy - e0 - (work - dissipated)))
             kappa_min = min(kappa_min, kappa)
             supply_min = min(supply_min, supply)
-            stop_force = max(stop_force, float(np.max(np.abs(platform.values(FSTOP)))))
+            stop_force = max(stop_force, float(np.max(np.abs(stops))))
             if v_prev is not None:
                 deceleration = max(deceleration, (vz - v_prev) / h)
                 if start >= event:
@@ -429,10 +435,10 @@ def _execute(spec, run, fmus, row):
             start = t
             v_prev = vz
             if closed:
-                leg_error = max(leg_error, float(np.max(np.abs(platform.values(L) - controller.values(LP)))))
+                leg_error = max(leg_error, float(np.max(np.abs(legs - controller.values(LP)))))
                 rp = controller.values(["rp[1]", "rp[2]", "rp[3]"])
                 # |r - r^p| written out, so that both masters sum the squares in one order.
-                dx, dy, dz = (float(values[4 + i] - rp[i]) for i in range(3))
+                dx, dy, dz = (float(r - rp[i]) for i, r in enumerate((x, y, z)))
                 pose_error = max(pose_error, math.sqrt(dx * dx + dy * dy + dz * dz))
     except FMICallException as e:
         terminated = _safe(lambda: platform.slave.getBooleanStatus(fmi2Terminated), True)
@@ -440,7 +446,7 @@ def _execute(spec, run, fmus, row):
         row.update(status="discard" if e.status == 2 else "error", discard_time=t,
                    message=problem + ("" if terminated else " (recoverable with shorter steps)"))
     row.update(max_stop_force=stop_force, energy_residual=residual, min_kappa=kappa_min if kappa_min < math.inf else math.nan,
-               peak_deceleration=deceleration, final_z=float(values[6]) if values is not None else math.nan,
+               peak_deceleration=deceleration, final_z=float(z) if values is not None else math.nan,
                min_supply_pressure=supply_min if supply_min < math.inf else math.nan,
                landing_deceleration=landing if landing > -math.inf else math.nan)
     if closed:
