@@ -162,6 +162,8 @@ FSTOP = [f"Fstop[{k}]" for k in LEGS]
 WATCHED = ["E", "work.F", "work.dissipated", "kappa", "r[1]", "r[2]", "r[3]", "v[3]", "work.hydraulic", "work.pump",
            "work.compression", "supply.pressure", "work.electric", *FSTOP, *L]
 _SCALARS = len(WATCHED) - len(FSTOP) - len(L)  # where the end stops' forces begin
+# The controller's, in the closed loop (one call; the compiled master's CONTROLLER_WATCHED).
+CONTROLLER_WATCHED = [*LP, "rp[1]", "rp[2]", "rp[3]"]
 
 
 def _parameters(spec, run, platform_md):
@@ -435,8 +437,9 @@ def _execute(spec, run, fmus, row):
             start = t
             v_prev = vz
             if closed:
-                leg_error = max(leg_error, float(np.max(np.abs(legs - controller.values(LP)))))
-                rp = controller.values(["rp[1]", "rp[2]", "rp[3]"])
+                c = controller.values(CONTROLLER_WATCHED)
+                lp, rp = c[:len(LP)], c[len(LP):]
+                leg_error = max(leg_error, float(np.max(np.abs(legs - lp))))
                 # |r - r^p| written out, so that both masters sum the squares in one order.
                 dx, dy, dz = (float(r - rp[i]) for i, r in enumerate((x, y, z)))
                 pose_error = max(pose_error, math.sqrt(dx * dx + dy * dy + dz * dz))
