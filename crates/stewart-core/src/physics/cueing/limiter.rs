@@ -16,7 +16,7 @@
 //! back further, a jump taken only then. The limiter has no state of its own: it is a function
 //! of the washout's states and inputs, which the FMU state holds.
 
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 
 use super::jet::{Jet, Trig};
 use super::washout::rotation;
@@ -58,8 +58,13 @@ pub struct LimitedPose {
 impl Workspace {
     /// `l_k` at the pose `neutral + dr`, angles `da`.
     pub fn leg_length<T: Trig>(&self, k: usize, dr: &[T; 3], da: &[T; 3]) -> T {
+        self.leg_length_rotated(k, dr, &rotation(da))
+    }
+
+    /// `l_k` at the pose `neutral + dr` with the angles' rotation `rot` (worked out once per
+    /// pose by the callers: it is most of a leg's cost).
+    fn leg_length_rotated<T: Trig>(&self, k: usize, dr: &[T; 3], rot: &Matrix3<T>) -> T {
         let a = self.platform_joints[k];
-        let rot = rotation(da);
         let mut s = T::zero();
         for i in 0..3 {
             let arm = rot[(i, 0)] * a.x + rot[(i, 1)] * a.y + rot[(i, 2)] * a.z;
@@ -69,20 +74,27 @@ impl Workspace {
         s.sqrt()
     }
 
-    /// Leg k's excursion at the pose `neutral + dr`, angles `da`, from its neutral length `l0`:
+    /// Leg k's excursion at the pose `neutral + dr`, rotation `rot`, from its neutral length `l0`:
     /// towards the upper bound and towards the lower, each 0 on the other side.
-    fn excursions(&self, k: usize, l0: f64, dr: &[Jet; 3], da: &[Jet; 3]) -> [Jet; 2] {
-        let l = self.leg_length(k, dr, da);
+    fn excursions(&self, k: usize, l0: f64, dr: &[Jet; 3], rot: &Matrix3<Jet>) -> [Jet; 2] {
+        let l = self.leg_length_rotated(k, dr, rot);
         let zero = Jet::default();
         let up = (l - l0) / (self.upper[k] - l0);
         let down = (l - l0) / (self.lower[k] - l0);
         [Jet::select(up.greater(zero), up, zero), Jet::select(down.greater(zero), down, zero)]
     }
 
+    /// The legs' lengths at neutral.
+    fn neutral_lengths(&self) -> [f64; LEG_COUNT] {
+        let rot = rotation(&[0.0; 3]);
+        std::array::from_fn(|k| self.leg_length_rotated(k, &[0.0; 3], &rot))
+    }
+
     /// Whether every leg is strictly inside its bounds at `neutral + s d` (values).
     fn fits(&self, s: f64, dr: &[f64; 3], da: &[f64; 3]) -> bool {
+        let (r, rot) = (dr.map(|x| s * x), rotation(&da.map(|x| s * x)));
         (0..LEG_COUNT).all(|k| {
-            let l = self.leg_length(k, &dr.map(|x| s * x), &da.map(|x| s * x));
+            let l = self.leg_length_rotated(k, &r, &rot);
             l > self.lower[k] && l < self.upper[k]
         })
     }
@@ -90,14 +102,14 @@ impl Workspace {
     /// The pose command for the washout's deviation `dr` (centre of mass from neutral) and
     /// angles `da`, each with two derivatives.
     pub fn limit(&self, dr: &[Jet; 3], da: &[Jet; 3]) -> LimitedPose {
-        let neutral: [f64; LEG_COUNT] = std::array::from_fn(|k| self.leg_length(k, &[0.0; 3], &[0.0; 3]));
+        let neutral = self.neutral_lengths();
         let mut largest = 0.0f64;
         let mut all = [[Jet::default(); 2 * LEG_COUNT]; SAMPLES];
         for (i, row) in all.iter_mut().enumerate() {
             let mu = (i + 1) as f64 / SAMPLES as f64;
-            let (r, a) = (dr.map(|x| x * mu), da.map(|x| x * mu));
+            let (r, rot) = (dr.map(|x| x * mu), rotation(&da.map(|x| x * mu)));
             for k in 0..LEG_COUNT {
-                let [up, down] = self.excursions(k, neutral[k], &r, &a);
+                let [up, down] = self.excursions(k, neutral[k], &r, &rot);
                 row[2 * k] = up / mu;
                 row[2 * k + 1] = down / mu;
                 largest = largest.max(row[2 * k].v).max(row[2 * k + 1].v);
@@ -152,10 +164,10 @@ impl Workspace {
     /// then). `usage` is the largest leg excursion at the pose itself.
     pub fn net(&self, dr: &[Jet; 3], da: &[Jet; 3]) -> LimitedPose {
         let (vr, va) = (dr.map(|x| x.v), da.map(|x| x.v));
+        let (neutral, rot) = (self.neutral_lengths(), rotation(&va));
         let mut usage = 0.0f64;
-        for k in 0..LEG_COUNT {
-            let l0 = self.leg_length(k, &[0.0; 3], &[0.0; 3]);
-            let l = self.leg_length(k, &vr, &va);
+        for (k, &l0) in neutral.iter().enumerate() {
+            let l = self.leg_length_rotated(k, &vr, &rot);
             let e = if l > l0 { (l - l0) / (self.upper[k] - l0) } else { (l - l0) / (self.lower[k] - l0) };
             usage = usage.max(e);
         }
