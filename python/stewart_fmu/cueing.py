@@ -261,16 +261,21 @@ def omct(tests=tuple(OMCT_TESTS), frequencies=OMCT_FREQUENCIES, parameters=None,
     phase of the output's fundamental over the input's. `progress(test, frequency)` is called
     before each run."""
     settle = _settling_time(parameters, fmu)
-    result = {}
     for test in tests:
         if test not in OMCT_TESTS:
             raise ValueError(f"omct: unknown test {test!r}; the tests are {list(OMCT_TESTS)}")
+    # Tests that drive the same input with the same amplitude share their runs (surge and
+    # surge -> pitch, sway and sway -> roll): one run reads every output they measure.
+    runs = {}
+    for test in tests:
         source, output, amplitude = OMCT_TESTS[test]
-        amplitude *= amplitude_scale
-        gains, phases, limited = [], [], []
+        runs.setdefault((source, amplitude * amplitude_scale), []).append((test, output))
+    measured = {test: {"gain": [], "phase": [], "limited": []} for test in tests}
+    for (source, amplitude), outputs in runs.items():
         for w in frequencies:
             if progress:
-                progress(test, w)
+                for test, _ in outputs:
+                    progress(test, w)
             period = 2 * math.pi / w
             per_period = max(samples, int(math.ceil(period / max_step)))
             h = period / per_period
@@ -283,6 +288,7 @@ def omct(tests=tuple(OMCT_TESTS), frequencies=OMCT_FREQUENCIES, parameters=None,
                 at = names.index(source)
                 vr = cue.vr[source]
                 values = np.array(list(REST.values()))
+                read = [output for _, output in outputs] + ["workspace.scale"]
                 for i in range(n):
                     # A first-order hold: the input at the point and its chord to the next.
                     now, then = (amplitude * math.sin(w * j * h) for j in (i, i + 1))
@@ -295,19 +301,21 @@ def omct(tests=tuple(OMCT_TESTS), frequencies=OMCT_FREQUENCIES, parameters=None,
                         # straight through).
                         values[at] = REST[source] + then
                         cue.set_values(names, values)
-                        ys.append(cue.values([output, "workspace.scale"]))
+                        ys.append(cue.values(read))
                         ts.append((i + 1) * h)
             finally:
                 cue.free()
             ys, ts = np.array(ys), np.array(ts)
             phasor = np.exp(-1j * w * ts)
-            ratio = np.sum(ys[:, 0] * phasor) / np.sum(amplitude * np.sin(w * ts) * phasor)
-            gains.append(abs(ratio))
-            phases.append(math.degrees(np.angle(ratio)))
-            limited.append(bool(np.min(ys[:, 1]) < 1.0))
-        result[test] = {"frequency": np.array(frequencies), "gain": np.array(gains), "phase": np.array(phases),
-                        "limited": np.array(limited)}
-    return result
+            reference = np.sum(amplitude * np.sin(w * ts) * phasor)
+            limited = bool(np.min(ys[:, -1]) < 1.0)
+            for j, (test, _) in enumerate(outputs):
+                ratio = np.sum(ys[:, j] * phasor) / reference
+                measured[test]["gain"].append(abs(ratio))
+                measured[test]["phase"].append(math.degrees(np.angle(ratio)))
+                measured[test]["limited"].append(limited)
+    return {test: {"frequency": np.array(frequencies), **{k: np.array(v) for k, v in measured[test].items()}}
+            for test in tests}
 
 
 #: The one fidelity region at hand (docs/cueing.md): Sinacori's and Schroeder's "high
