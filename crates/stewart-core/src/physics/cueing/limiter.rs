@@ -19,8 +19,9 @@
 use nalgebra::{Matrix3, Vector3};
 
 use super::jet::{Jet, Trig};
-use super::washout::rotation;
-use crate::physics::number::{Number, Real};
+use super::washout::{rotation, rotation_of};
+use crate::maths;
+use crate::physics::number::Real;
 use crate::physics::stand::LEG_COUNT;
 use num_traits::One;
 
@@ -76,12 +77,52 @@ impl Workspace {
 
     /// Leg k's excursion at the pose `neutral + dr`, rotation `rot`, from its neutral length `l0`:
     /// towards the upper bound and towards the lower, each 0 on the other side.
-    fn excursions(&self, k: usize, l0: f64, dr: &[Jet; 3], rot: &Matrix3<Jet>) -> [Jet; 2] {
+    fn excursions<T: Trig>(&self, k: usize, l0: f64, dr: &[T; 3], rot: &Matrix3<T>) -> [T; 2] {
         let l = self.leg_length_rotated(k, dr, rot);
-        let zero = Jet::default();
         let up = (l - l0) / (self.upper[k] - l0);
         let down = (l - l0) / (self.lower[k] - l0);
-        [Jet::select(up.greater(zero), up, zero), Jet::select(down.greater(zero), down, zero)]
+        [T::select(up.greater(T::zero()), up, T::zero()), T::select(down.greater(T::zero()), down, T::zero())]
+    }
+
+    /// `rho` of the deviation `dr`, `da` (the module's smooth maximum), in jets or in values:
+    /// `rotate` gives a pose's rotation from its angles.
+    fn usage<T: Trig>(
+        &self,
+        neutral: &[f64; LEG_COUNT],
+        dr: &[T; 3],
+        da: &[T; 3],
+        rotate: impl Fn(&[T; 3]) -> Matrix3<T>,
+    ) -> T {
+        let mut largest = 0.0f64;
+        let mut all = [[T::zero(); 2 * LEG_COUNT]; SAMPLES];
+        for (i, row) in all.iter_mut().enumerate() {
+            let mu = (i + 1) as f64 / SAMPLES as f64;
+            let (r, rot) = (dr.map(|x| x * mu), rotate(&da.map(|x| x * mu)));
+            for k in 0..LEG_COUNT {
+                let [up, down] = self.excursions(k, neutral[k], &r, &rot);
+                row[2 * k] = up / mu;
+                row[2 * k + 1] = down / mu;
+                largest = largest.max(row[2 * k].value()).max(row[2 * k + 1].value());
+            }
+        }
+        // Scaled by the largest term so that the 64th powers stay finite.
+        if largest > 0.0 {
+            let mut sum = T::zero();
+            for t in all.iter().flatten() {
+                let mut x = *t / largest;
+                for _ in 0..POWER_HALVINGS {
+                    x = x * x;
+                }
+                sum += x;
+            }
+            let mut root = sum;
+            for _ in 0..POWER_HALVINGS {
+                root = root.sqrt();
+            }
+            root * largest
+        } else {
+            T::zero()
+        }
     }
 
     /// The legs' lengths at neutral.
@@ -103,42 +144,20 @@ impl Workspace {
     /// angles `da`, each with two derivatives.
     pub fn limit(&self, dr: &[Jet; 3], da: &[Jet; 3]) -> LimitedPose {
         let neutral = self.neutral_lengths();
-        let mut largest = 0.0f64;
-        let mut all = [[Jet::default(); 2 * LEG_COUNT]; SAMPLES];
-        for (i, row) in all.iter_mut().enumerate() {
-            let mu = (i + 1) as f64 / SAMPLES as f64;
-            let (r, rot) = (dr.map(|x| x * mu), rotation(&da.map(|x| x * mu)));
-            for k in 0..LEG_COUNT {
-                let [up, down] = self.excursions(k, neutral[k], &r, &rot);
-                row[2 * k] = up / mu;
-                row[2 * k + 1] = down / mu;
-                largest = largest.max(row[2 * k].v).max(row[2 * k + 1].v);
-            }
-        }
-        // The smooth maximum, scaled by the largest term so that the 64th powers stay finite.
-        let usage = if largest > 0.0 {
-            let mut sum = Jet::default();
-            for t in all.iter().flatten() {
-                let mut x = *t / largest;
-                for _ in 0..POWER_HALVINGS {
-                    x = x * x;
-                }
-                sum += x;
-            }
-            let mut root = sum;
-            for _ in 0..POWER_HALVINGS {
-                root = root.sqrt();
-            }
-            root * largest
+        // Inside the onset the command is the washout's own (scale 1), and `rho`'s value is all
+        // that is needed: worked out in values first, each angle's sine and cosine from one
+        // `sin_cos` as the jets' are, so it is the jets' value to the bit.
+        let values = self.usage(&neutral, &dr.map(|x| x.v), &da.map(|x| x.v), |a: &[f64; 3]| {
+            let pairs = a.map(maths::sin_cos);
+            rotation_of(pairs.map(|p| p.0), pairs.map(|p| p.1))
+        });
+        let (usage, mut scale) = if values <= self.onset {
+            (values, Jet::one())
         } else {
-            Jet::default()
-        };
-        let mut scale = if usage.v <= self.onset {
-            Jet::one()
-        } else {
+            let usage = self.usage(&neutral, dr, da, rotation);
             let span = 1.0 - self.onset;
             let sigma = ((usage - self.onset) / span).tanh() * span + self.onset;
-            sigma / usage
+            (usage.v, sigma / usage)
         };
         // Between the multiples a leg may still leave its margins: pull back until it fits.
         let (vr, va) = (dr.map(|x| x.v), da.map(|x| x.v));
@@ -153,7 +172,7 @@ impl Workspace {
         LimitedPose {
             r: std::array::from_fn(|i| dr[i] * scale + self.neutral[i]),
             angles: da.map(|a| a * scale),
-            usage: usage.v,
+            usage,
             scale: scale.v,
         }
     }
@@ -207,5 +226,52 @@ impl Workspace {
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::physics::stand::Stand;
+
+    fn workspace() -> Workspace {
+        let stand = Stand::default();
+        Workspace {
+            base_joints: stand.base_joints,
+            platform_joints: stand.platform_joints,
+            lower: [1.48; 6],
+            upper: [2.12; 6],
+            neutral: Stand::truck_cabin_neutral_position(),
+            onset: 0.8,
+        }
+    }
+
+    /// The value path that `limit` takes inside the onset gives the jets' `rho` to the bit,
+    /// over deviations from tiny to far beyond the legs' bounds (a fixed pseudo-random walk).
+    #[test]
+    fn rho_in_values_is_the_jets_value_to_the_bit() {
+        let ws = workspace();
+        let neutral = ws.neutral_lengths();
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let (mut inside, mut beyond) = (0, 0);
+        for case in 0..2000 {
+            let size = 10f64.powi(case % 8 - 6); // 1e-6 .. 10: m and rad
+            let dr: [Jet; 3] = std::array::from_fn(|_| Jet::new(size * next(), next(), next()));
+            let da: [Jet; 3] = std::array::from_fn(|_| Jet::new(0.3 * size * next(), next(), next()));
+            let jets = ws.usage(&neutral, &dr, &da, rotation);
+            let values = ws.usage(&neutral, &dr.map(|x| x.v), &da.map(|x| x.v), |a: &[f64; 3]| {
+                let pairs = a.map(maths::sin_cos);
+                rotation_of(pairs.map(|p| p.0), pairs.map(|p| p.1))
+            });
+            assert_eq!(values.to_bits(), jets.v.to_bits(), "case {case}: {values:e} against {:e}", jets.v);
+            if values <= ws.onset { inside += 1 } else { beyond += 1 }
+        }
+        assert!(inside > 400 && beyond > 400, "{inside} inside the onset, {beyond} beyond");
     }
 }

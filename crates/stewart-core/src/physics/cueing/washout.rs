@@ -153,9 +153,12 @@ fn clip(x: f64, limit: f64) -> f64 {
 
 /// Rotation body -> inertial of 1-2-3 angles, `Rx(roll) Ry(pitch) Rz(yaw)`.
 pub fn rotation<T: Trig>(a: &[T; 3]) -> Matrix3<T> {
-    let (sa, ca) = (a[0].sin(), a[0].cos());
-    let (sb, cb) = (a[1].sin(), a[1].cos());
-    let (sc, cc) = (a[2].sin(), a[2].cos());
+    rotation_of(a.map(|x| x.sin()), a.map(|x| x.cos()))
+}
+
+/// [`rotation`] from the angles' sines and cosines.
+pub fn rotation_of<T: Real>(sin: [T; 3], cos: [T; 3]) -> Matrix3<T> {
+    let ([sa, sb, sc], [ca, cb, cc]) = (sin, cos);
     Matrix3::new(
         cb * cc,
         -(cb * sc),
