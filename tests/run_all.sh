@@ -117,7 +117,8 @@ if [ -n "${BACKGROUND[fmi-sim]:-}" ]; then
     finish fmi-sim
 fi
 # Each test once (-v); the numbers the tests print (-rP: passes' output), failures and errors
-# (-rfE); on both cores, a file's tests on one of them (their module fixtures build once).
+# (-rfE), the slowest twelve (--durations); on both cores, a file's tests on one of them (their
+# module fixtures build once).
 step "the Python tests over the packaged FMUs, on both cores (3-8 minutes, with the machine's load)"
-.venv/bin/python -m pytest tests/python -v -rfEP -n 2 --dist loadfile
+.venv/bin/python -m pytest tests/python -v -rfEP -n 2 --dist loadfile --durations=12
 step "the full tier passed"
