@@ -28,7 +28,7 @@ step "the hydraulic scenarios: holding, heave, loss of control power, pump failu
 .venv/bin/python examples/hydraulic_scenarios.py "$OUT"
 step "the power unit: the heave on pump and accumulator, pump stops with the safe landing (under a minute)"
 .venv/bin/python examples/power_unit_scenarios.py "$OUT"
-step "motion cueing: the truck's manoeuvres, the motion system, the harsh manoeuvres, the OMCT (about five minutes)"
+step "motion cueing: the truck's manoeuvres, the motion system, the harsh manoeuvres, the OMCT (about three minutes)"
 .venv/bin/python examples/cueing_scenarios.py "$OUT"
 step "the linearisation about the neutral pose"
 .venv/bin/python examples/linearise.py --output "$OUT"
