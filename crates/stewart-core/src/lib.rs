@@ -33,3 +33,5 @@ pub mod optimisation;
 pub mod physics;
 pub mod simd;
 pub mod simulation;
+#[cfg(test)]
+mod test_support;

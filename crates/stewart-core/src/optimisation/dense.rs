@@ -367,13 +367,7 @@ mod tests {
     fn random_qps_against_clarabel() {
         use clarabel::algebra::CscMatrix;
         use clarabel::solver::{DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus};
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        let mut next = crate::test_support::xorshift(0x9e37_79b9_7f4a_7c15);
         let (n, m) = (24, 128);
         let mut worst = 0.0f64;
         for case in 0..20 {

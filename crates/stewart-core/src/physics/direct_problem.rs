@@ -330,19 +330,16 @@ mod tests {
 
     /// Matrices `U diag(s) V^T` of a given condition number `s_max / s_min` (singular values
     /// spread geometrically), with orthogonal `U`, `V` from the QR of pseudo-random matrices.
-    struct KnownConditionNumbers(u64);
+    struct KnownConditionNumbers(Box<dyn FnMut() -> f64>);
 
     impl KnownConditionNumbers {
         fn new(seed: u64) -> Self {
-            KnownConditionNumbers(seed)
+            KnownConditionNumbers(Box::new(crate::test_support::xorshift(seed)))
         }
 
-        /// xorshift64, in [-1, 1).
+        /// In [-1, 1).
         fn random(&mut self) -> f64 {
-            self.0 ^= self.0 << 13;
-            self.0 ^= self.0 >> 7;
-            self.0 ^= self.0 << 17;
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+            (self.0)()
         }
 
         fn matrix(&mut self, kappa: f64) -> ForceMomentMatrix {

@@ -167,14 +167,10 @@ mod tests {
         std::array::from_fn(|c| std::array::from_fn(|r| m[(r, c)]))
     }
 
+    /// In [-0.5, 0.5).
     fn random() -> impl FnMut() -> f64 {
-        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-        move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        }
+        let mut uniform = crate::test_support::xorshift(0x9e37_79b9_7f4a_7c15);
+        move || 0.5 * uniform()
     }
 
     /// Matrices that exercise every branch: random, with repeated entries (ties in the pivot

@@ -225,13 +225,8 @@ mod tests {
     /// spectra, including repeated eigenvalues and an already diagonal one.
     #[test]
     fn the_extreme_eigenvalues_are_nalgebras() {
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut uniform = crate::test_support::xorshift(0x2545_f491_4f6c_dd1d);
+        let mut next = || 0.5 * uniform(); // in [-0.5, 0.5)
         let mut worst: f64 = 0.0;
         for case in 0..500 {
             let m = Matrix6::from_fn(|_, _| next());

@@ -97,19 +97,7 @@ impl Legs {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::physics::stand::Stand;
-
-    fn workspace() -> Workspace {
-        let stand = Stand::default();
-        Workspace {
-            base_joints: stand.base_joints,
-            platform_joints: stand.platform_joints,
-            lower: [1.48; 6],
-            upper: [2.12; 6],
-            neutral: Stand::truck_cabin_neutral_position(),
-            onset: 0.8,
-        }
-    }
+    use crate::test_support::truck_workspace as workspace;
 
     /// Every Jacobian against central differences.
     #[test]

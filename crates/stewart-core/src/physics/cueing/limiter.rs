@@ -232,33 +232,15 @@ impl Workspace {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::physics::stand::Stand;
-
-    fn workspace() -> Workspace {
-        let stand = Stand::default();
-        Workspace {
-            base_joints: stand.base_joints,
-            platform_joints: stand.platform_joints,
-            lower: [1.48; 6],
-            upper: [2.12; 6],
-            neutral: Stand::truck_cabin_neutral_position(),
-            onset: 0.8,
-        }
-    }
+    use crate::test_support::{truck_workspace, xorshift};
 
     /// The value path that `limit` takes inside the onset gives the jets' `rho` to the bit,
     /// over deviations from tiny to far beyond the legs' bounds (a fixed pseudo-random walk).
     #[test]
     fn rho_in_values_is_the_jets_value_to_the_bit() {
-        let ws = workspace();
+        let ws = truck_workspace();
         let neutral = ws.neutral_lengths();
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        let mut next = xorshift(0x2545_f491_4f6c_dd1d);
         let (mut inside, mut beyond) = (0, 0);
         for case in 0..2000 {
             let size = 10f64.powi(case % 8 - 6); // 1e-6 .. 10: m and rad
