@@ -259,8 +259,9 @@ def omct(tests=tuple(OMCT_TESTS), frequencies=OMCT_FREQUENCIES, parameters=None,
     {"cueing.method": 1}, predictive cueing). Returns {test: {"frequency": rad/s, "gain",
     "phase": deg, "limited": whether the limiter acted during the measurement}}; gain and
     phase of the output's fundamental over the input's. `progress(test, frequency)` is called
-    before each run."""
+    before each run, for each test the run measures (tests that drive the same input share it)."""
     settle = _settling_time(parameters, fmu)
+    tests = tuple(dict.fromkeys(tests))  # each test once, in the order given
     for test in tests:
         if test not in OMCT_TESTS:
             raise ValueError(f"omct: unknown test {test!r}; the tests are {list(OMCT_TESTS)}")
