@@ -56,6 +56,14 @@ pub struct LimitedPose {
     pub scale: f64,
 }
 
+/// The value part of [`rotation`] on jets: each angle's sine and cosine from one `sin_cos`, as a
+/// jet's are (`rotation` on `f64` takes `sin` and `cos` apart), so that the limiter's values are
+/// the jets' values to the bit.
+fn rotation_as_jets_value(a: &[f64; 3]) -> Matrix3<f64> {
+    let pairs = a.map(maths::sin_cos);
+    rotation_of(pairs.map(|p| p.0), pairs.map(|p| p.1))
+}
+
 impl Workspace {
     /// `l_k` at the pose `neutral + dr`, angles `da`.
     pub fn leg_length<T: Trig>(&self, k: usize, dr: &[T; 3], da: &[T; 3]) -> T {
@@ -64,7 +72,7 @@ impl Workspace {
 
     /// `l_k` at the pose `neutral + dr` with the angles' rotation `rot` (worked out once per
     /// pose by the callers: it is most of a leg's cost).
-    fn leg_length_rotated<T: Trig>(&self, k: usize, dr: &[T; 3], rot: &Matrix3<T>) -> T {
+    fn leg_length_rotated<T: Real>(&self, k: usize, dr: &[T; 3], rot: &Matrix3<T>) -> T {
         let a = self.platform_joints[k];
         let mut s = T::zero();
         for i in 0..3 {
@@ -77,7 +85,7 @@ impl Workspace {
 
     /// Leg k's excursion at the pose `neutral + dr`, rotation `rot`, from its neutral length `l0`:
     /// towards the upper bound and towards the lower, each 0 on the other side.
-    fn excursions<T: Trig>(&self, k: usize, l0: f64, dr: &[T; 3], rot: &Matrix3<T>) -> [T; 2] {
+    fn excursions<T: Real>(&self, k: usize, l0: f64, dr: &[T; 3], rot: &Matrix3<T>) -> [T; 2] {
         let l = self.leg_length_rotated(k, dr, rot);
         let up = (l - l0) / (self.upper[k] - l0);
         let down = (l - l0) / (self.lower[k] - l0);
@@ -86,7 +94,7 @@ impl Workspace {
 
     /// `rho` of the deviation `dr`, `da` (the module's smooth maximum), in jets or in values:
     /// `rotate` gives a pose's rotation from its angles.
-    fn usage<T: Trig>(
+    fn usage<T: Real>(
         &self,
         neutral: &[f64; LEG_COUNT],
         dr: &[T; 3],
@@ -144,13 +152,10 @@ impl Workspace {
     /// angles `da`, each with two derivatives.
     pub fn limit(&self, dr: &[Jet; 3], da: &[Jet; 3]) -> LimitedPose {
         let neutral = self.neutral_lengths();
+        let (vr, va) = (dr.map(|x| x.v), da.map(|x| x.v));
         // Inside the onset the command is the washout's own (scale 1), and `rho`'s value is all
-        // that is needed: worked out in values first, each angle's sine and cosine from one
-        // `sin_cos` as the jets' are, so it is the jets' value to the bit.
-        let values = self.usage(&neutral, &dr.map(|x| x.v), &da.map(|x| x.v), |a: &[f64; 3]| {
-            let pairs = a.map(maths::sin_cos);
-            rotation_of(pairs.map(|p| p.0), pairs.map(|p| p.1))
-        });
+        // that is needed: worked out in values first, so jets only beyond it.
+        let values = self.usage(&neutral, &vr, &va, rotation_as_jets_value);
         let (usage, mut scale) = if values <= self.onset {
             (values, Jet::one())
         } else {
@@ -160,7 +165,6 @@ impl Workspace {
             (usage.v, sigma / usage)
         };
         // Between the multiples a leg may still leave its margins: pull back until it fits.
-        let (vr, va) = (dr.map(|x| x.v), da.map(|x| x.v));
         if !self.fits(scale.v, &vr, &va) {
             let (mut lo, mut hi) = (0.0, scale.v);
             for _ in 0..60 {
@@ -247,10 +251,7 @@ mod tests {
             let dr: [Jet; 3] = std::array::from_fn(|_| Jet::new(size * next(), next(), next()));
             let da: [Jet; 3] = std::array::from_fn(|_| Jet::new(0.3 * size * next(), next(), next()));
             let jets = ws.usage(&neutral, &dr, &da, rotation);
-            let values = ws.usage(&neutral, &dr.map(|x| x.v), &da.map(|x| x.v), |a: &[f64; 3]| {
-                let pairs = a.map(maths::sin_cos);
-                rotation_of(pairs.map(|p| p.0), pairs.map(|p| p.1))
-            });
+            let values = ws.usage(&neutral, &dr.map(|x| x.v), &da.map(|x| x.v), rotation_as_jets_value);
             assert_eq!(values.to_bits(), jets.v.to_bits(), "case {case}: {values:e} against {:e}", jets.v);
             if values <= ws.onset { inside += 1 } else { beyond += 1 }
         }
