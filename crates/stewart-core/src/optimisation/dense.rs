@@ -8,9 +8,13 @@
 //! hundred rows): the predictive cueing's problem. Mehrotra's predictor-corrector on the
 //! slack form `A x + s = b`, `s, z >= 0`, each Newton system reduced to the normal equations
 //! `(H + A^T (Z/S) A) dx = r` and solved by one dense Cholesky factorisation per iteration
-//! (used for the predictor and the corrector). Its work per iteration is `m n^2 + n^3/6`
-//! multiply-adds, about ten times less than a sparse LDL of the same dense KKT system
-//! (Clarabel's, which the tests hold it against: docs/cueing.md gives the measurements).
+//! (used for the predictor and the corrector). Its work per iteration is at most `m n^2 / 2 +
+//! n^3/6` multiply-adds, about ten times less than a sparse LDL of the same dense KKT system
+//! (Clarabel's, which the tests hold it against: docs/cueing.md gives the measurements). `A`
+//! is kept by columns, each from its first row other than 0: the normal matrix's entries and
+//! the products with `A` and `A^T` run over long stretches of rows and skip the leading zeros
+//! (the cueing's later unknowns reach only its later rows), and the dot products keep four
+//! partial sums (short dependency chains).
 //!
 //! Plain `f64` arithmetic in one fixed order and `sqrt` (exactly rounded): the same bits on
 //! every platform. Buffers are made with the solver; a solve allocates nothing.
@@ -53,8 +57,19 @@ pub struct DenseQp {
     acceptable: bool,
     s: Vec<f64>,
     z: Vec<f64>,
+    /// `A` by columns (`n x m`, row-major: column `j` is `a_columns[j m..(j + 1) m]`), and
+    /// each column's first row that is not 0: the sums over the rows start there.
+    a_columns: Vec<f64>,
+    first_row: Vec<usize>,
+    /// Per row: `Z/S`, then (in the directions) the weight of the row in the right-hand side.
+    row_weight: Vec<f64>,
+    /// A column of `A` times `Z/S`.
+    weighted_column: Vec<f64>,
     /// The normal matrix and its Cholesky factor (lower, row-major).
     normal: Vec<f64>,
+    /// The factor's diagonal's reciprocals: the solves multiply, a division's latency off
+    /// their dependency chains.
+    inverse_diagonal: Vec<f64>,
     /// Residuals and directions.
     r_dual: Vec<f64>,
     r_primal: Vec<f64>,
@@ -90,7 +105,12 @@ impl DenseQp {
             acceptable: false,
             s: v(m),
             z: v(m),
+            a_columns: v(n * m),
+            first_row: vec![0; n],
+            row_weight: v(m),
+            weighted_column: v(m),
             normal: v(n * n),
+            inverse_diagonal: v(n),
             r_dual: v(n),
             r_primal: v(m),
             rhs: v(n),
@@ -128,17 +148,27 @@ impl DenseQp {
             self.s[i] = b[i].max(1.0);
             self.z[i] = 1.0;
         }
+        // `A` by columns: the normal matrix's entries and `A^T v` are then sums over long
+        // stretches of rows, from where the columns' zeros end (the cueing's later blocks of
+        // unknowns reach only the later points' rows).
+        for j in 0..n {
+            let column = &mut self.a_columns[j * m..(j + 1) * m];
+            for (i, entry) in column.iter_mut().enumerate() {
+                *entry = a[i * n + j];
+            }
+            self.first_row[j] = column.iter().position(|&v| v != 0.0).unwrap_or(m);
+        }
         // One pass more than the budget: the last step's iterate is checked too.
         for iteration in 1..=self.settings.max_iterations + 1 {
             // Residuals: r_d = H x + g + A^T z, r_p = A x + s - b.
             for (j, h_row) in h.chunks_exact(n).enumerate() {
-                self.r_dual[j] = g[j] + dot(h_row, &self.x);
+                let from = self.first_row[j];
+                let column = &self.a_columns[j * m..(j + 1) * m];
+                self.r_dual[j] = g[j] + dot(h_row, &self.x) + dot(&column[from..], &self.z[from..]);
             }
-            for (i, row) in a.chunks_exact(n).enumerate() {
-                let ax = dot(row, &self.x);
-                self.ax[i] = ax;
-                self.r_primal[i] = ax + self.s[i] - b[i];
-                axpy(self.z[i], row, &mut self.r_dual);
+            columns_times(&self.a_columns, &self.first_row, &self.x, &mut self.ax);
+            for i in 0..m {
+                self.r_primal[i] = self.ax[i] + self.s[i] - b[i];
             }
             let gap = dot(&self.s, &self.z);
             let mu = if m > 0 { gap / m as f64 } else { 0.0 };
@@ -166,14 +196,14 @@ impl DenseQp {
             if iteration > self.settings.max_iterations {
                 break;
             }
-            if !self.factor(h, a) {
+            if !self.factor(h) {
                 return self.give_up(x, iteration, "the normal equations are not positive definite");
             }
             // Predictor: the affine direction (r_c = s z).
             for i in 0..m {
                 self.r_centre[i] = self.s[i] * self.z[i];
             }
-            self.direction(a);
+            self.direction();
             let alpha_affine = self.step_to_boundary(1.0);
             let mut mu_affine = 0.0;
             for i in 0..m {
@@ -188,7 +218,7 @@ impl DenseQp {
             for i in 0..m {
                 self.r_centre[i] = self.s[i] * self.z[i] + self.ds_affine[i] * self.dz_affine[i] - sigma * mu;
             }
-            self.direction(a);
+            self.direction();
             let alpha = self.step_to_boundary(0.99);
             for k in 0..n {
                 self.x[k] += alpha * self.dx[k];
@@ -217,16 +247,23 @@ impl DenseQp {
 
     /// The normal matrix `H + A^T (Z/S) A` and its Cholesky factor in `normal` (lower
     /// triangle); `false` if it is not positive definite.
-    fn factor(&mut self, h: &[f64], a: &[f64]) -> bool {
+    fn factor(&mut self, h: &[f64]) -> bool {
         let (n, m) = (self.n, self.m);
-        self.normal.copy_from_slice(&h[..n * n]);
-        for (i, row) in a.chunks_exact(n).enumerate().take(m) {
-            let d = self.z[i] / self.s[i];
-            for (j, normal_row) in self.normal.chunks_exact_mut(n).enumerate() {
-                let dj = d * row[j];
-                if dj != 0.0 {
-                    axpy(dj, &row[..=j], &mut normal_row[..=j]);
-                }
+        for i in 0..m {
+            self.row_weight[i] = self.z[i] / self.s[i];
+        }
+        // The lower triangle, `H_jk + sum_i (d_i a_ij) a_ik` over the rows where both columns
+        // may be other than 0.
+        for j in 0..n {
+            let from_j = self.first_row[j];
+            let column_j = &self.a_columns[j * m..(j + 1) * m];
+            for i in from_j..m {
+                self.weighted_column[i] = self.row_weight[i] * column_j[i];
+            }
+            for k in 0..=j {
+                let from = from_j.max(self.first_row[k]);
+                let column_k = &self.a_columns[k * m..(k + 1) * m];
+                self.normal[j * n + k] = h[j * n + k] + dot(&self.weighted_column[from..], &column_k[from..]);
             }
         }
         // Cholesky, row by row: L L^T = normal. Near the solution Z/S grows without bound on
@@ -245,9 +282,11 @@ impl DenseQp {
                         return false;
                     }
                     let pivot = if sum > 1e-13 * diagonal { sum } else { 1e128 };
-                    self.normal[j * n + j] = pivot.sqrt();
+                    let root = pivot.sqrt();
+                    self.normal[j * n + j] = root;
+                    self.inverse_diagonal[j] = 1.0 / root;
                 } else {
-                    self.normal[j * n + k] = sum / self.normal[k * n + k];
+                    self.normal[j * n + k] = sum * self.inverse_diagonal[k];
                 }
             }
         }
@@ -257,30 +296,31 @@ impl DenseQp {
     /// The Newton direction for the centring residual `r_centre`: `dx` from the normal
     /// equations `(H + A^T (Z/S) A) dx = -r_d - A^T S^-1 (Z r_p - r_c)`, then
     /// `ds = -r_p - A dx` and `dz = S^-1 (-r_c - Z ds)`.
-    fn direction(&mut self, a: &[f64]) {
+    fn direction(&mut self) {
         let (n, m) = (self.n, self.m);
+        for i in 0..m {
+            self.row_weight[i] = (self.z[i] * self.r_primal[i] - self.r_centre[i]) / self.s[i];
+        }
         for k in 0..n {
-            self.rhs[k] = -self.r_dual[k];
+            let from = self.first_row[k];
+            let column = &self.a_columns[k * m..(k + 1) * m];
+            self.rhs[k] = -self.r_dual[k] - dot(&column[from..], &self.row_weight[from..]);
         }
-        for (i, row) in a.chunks_exact(n).enumerate().take(m) {
-            let w = (self.z[i] * self.r_primal[i] - self.r_centre[i]) / self.s[i];
-            axpy(-w, row, &mut self.rhs);
-        }
-        // L y = rhs, then L^T dx = y.
+        // L y = rhs, then L^T dx = y: the latter by rows of L (each solved unknown taken out of
+        // the ones above it at once), which keeps one dependency chain per unknown short.
         for j in 0..n {
             let row = &self.normal[j * n..j * n + n];
-            self.dx[j] = (self.rhs[j] - dot(&row[..j], &self.dx[..j])) / row[j];
+            self.dx[j] = (self.rhs[j] - dot(&row[..j], &self.dx[..j])) * self.inverse_diagonal[j];
         }
         for j in (0..n).rev() {
-            let mut sum = self.dx[j];
-            for p in j + 1..n {
-                sum -= self.normal[p * n + j] * self.dx[p];
-            }
-            self.dx[j] = sum / self.normal[j * n + j];
+            let x = self.dx[j] * self.inverse_diagonal[j];
+            self.dx[j] = x;
+            axpy(-x, &self.normal[j * n..j * n + j], &mut self.dx[..j]);
         }
-        for (i, row) in a.chunks_exact(n).enumerate().take(m) {
-            let adx = dot(row, &self.dx);
-            self.ds[i] = -self.r_primal[i] - adx;
+        // `A dx` into `ds`, then `ds = -r_p - A dx`.
+        columns_times(&self.a_columns, &self.first_row, &self.dx, &mut self.ds);
+        for i in 0..m {
+            self.ds[i] = -self.r_primal[i] - self.ds[i];
             self.dz[i] = (-self.r_centre[i] - self.z[i] * self.ds[i]) / self.s[i];
         }
     }
@@ -300,14 +340,43 @@ impl DenseQp {
     }
 }
 
+/// `A v` into `out` from `A`'s columns (each from its first row other than 0), column by
+/// column.
+fn columns_times(a_columns: &[f64], first_row: &[usize], v: &[f64], out: &mut [f64]) {
+    let m = out.len();
+    out.fill(0.0);
+    if m == 0 {
+        return;
+    }
+    for (j, (column, &from)) in a_columns.chunks_exact(m).zip(first_row).enumerate() {
+        axpy(v[j], &column[from..], &mut out[from..]);
+    }
+}
+
 fn max_abs(v: &[f64]) -> f64 {
     v.iter().fold(0.0f64, |m, x| m.max(x.abs()))
 }
 
-/// `a . b`, summed in index order (one order everywhere: the same bits on every platform).
+/// `a . b` in four partial sums, element `i` into sum `i mod 4`, added as `(s0 + s2) + (s1 +
+/// s3)` (two registers of two lanes added, then their halves): one order everywhere (the same
+/// bits on every platform), and four dependency chains instead of one, which the solve's short
+/// dot products are bound by.
 #[inline]
 fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).fold(0.0, |sum, (x, y)| sum + x * y)
+    let n = a.len().min(b.len());
+    let (a, b) = (&a[..n], &b[..n]);
+    let mut sums = [0.0f64; 4];
+    let (a4, b4) = (a.chunks_exact(4), b.chunks_exact(4));
+    let (a_rest, b_rest) = (a4.remainder(), b4.remainder());
+    for (x, y) in a4.zip(b4) {
+        for lane in 0..4 {
+            sums[lane] += x[lane] * y[lane];
+        }
+    }
+    for (lane, (x, y)) in a_rest.iter().zip(b_rest).enumerate() {
+        sums[lane] += x * y;
+    }
+    (sums[0] + sums[2]) + (sums[1] + sums[3])
 }
 
 /// `y += alpha x`, element by element.
