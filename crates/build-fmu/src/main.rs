@@ -170,7 +170,7 @@ fn build_binaries(targets: &[&'static Platform], root: &Path, target_dir: &Path)
         match child {
             Ok(child) => running.push((platform, build, log_path, child)),
             Err(e) => {
-                // The builds already started finish on their own; their results are not used.
+                stop_builds(&mut running);
                 return Err(format!("{}: cannot run {:?}: {e}", platform.name, build.command.get_program()));
             }
         }
@@ -181,7 +181,14 @@ fn build_binaries(targets: &[&'static Platform], root: &Path, target_dir: &Path)
         let mut index = 0;
         while index < running.len() {
             let (platform, build, log_path, child) = &mut running[index];
-            let status = child.try_wait().map_err(|e| format!("{}: waiting for the build: {e}", platform.name))?;
+            let status = match child.try_wait() {
+                Ok(status) => status,
+                Err(e) => {
+                    let message = format!("{}: waiting for the build: {e}", platform.name);
+                    stop_builds(&mut running);
+                    return Err(message);
+                }
+            };
             let Some(status) = status else {
                 index += 1;
                 continue;
@@ -218,6 +225,18 @@ fn build_binaries(targets: &[&'static Platform], root: &Path, target_dir: &Path)
     // The order of the platforms asked, whatever the order they finished in.
     binaries.sort_by_key(|b| targets.iter().position(|p| p.name == b.platform.name));
     Ok(binaries)
+}
+
+/// Stops the builds still running and waits for them, when build-fmu gives up early: left
+/// behind, they would go on unobserved and hold their target folders' locks against the next
+/// run.
+fn stop_builds<P, B, L>(running: &mut Vec<(P, B, L, std::process::Child)>) {
+    for (_, _, _, child) in running.iter_mut() {
+        // A build that has ended already refuses the kill; the wait reaps it either way.
+        let _ = child.kill();
+        let _ = child.wait();
+    }
+    running.clear();
 }
 
 /// The last `lines` lines of the file at `path` (or why it cannot be read).
@@ -373,4 +392,19 @@ fn interface_tables(page: &Path, update: bool) -> Result<(), String> {
     std::fs::write(page, generated).map_err(|e| format!("cannot write {}: {e}", page.display()))?;
     println!("build-fmu: wrote the interface tables of {}", page.display());
     Ok(())
+}
+
+#[cfg(all(test, target_os = "linux"))]
+mod tests {
+    /// A build left running when build-fmu gives up is stopped and reaped, not left behind.
+    #[test]
+    fn stopping_the_builds_reaps_them() {
+        let child = std::process::Command::new("sleep").arg("60").spawn().expect("sleep runs");
+        let pid = child.id();
+        let mut running = vec![((), (), (), child)];
+        super::stop_builds(&mut running);
+        assert!(running.is_empty());
+        // Reaped: no process of that id is left, not even a zombie.
+        assert!(!std::path::Path::new(&format!("/proc/{pid}")).exists(), "process {pid} is still there");
+    }
 }
