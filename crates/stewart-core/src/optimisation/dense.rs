@@ -59,11 +59,8 @@ pub struct DenseQp {
     acceptable: bool,
     s: Vec<f64>,
     z: Vec<f64>,
-    /// `A` by columns (`n x m`, row-major: column `j` is `a_columns[j m..(j + 1) m]`), and
-    /// each column's first row that is not 0 (`m` for a column of zeros; -0.0 counts as 0,
-    /// NaN does not): the sums over the rows start there.
-    a_columns: Vec<f64>,
-    first_row: Vec<usize>,
+    /// `A` by columns.
+    columns: Columns,
     /// Per row: `Z/S` while the normal matrix is formed, then in each direction the row's
     /// weight in the right-hand side, `S^-1 (Z r_p - r_c)`.
     row_weight: Vec<f64>,
@@ -109,8 +106,7 @@ impl DenseQp {
             acceptable: false,
             s: v(m),
             z: v(m),
-            a_columns: v(n * m),
-            first_row: vec![0; n],
+            columns: Columns { m, values: v(n * m), first_row: vec![0; n] },
             row_weight: v(m),
             weighted_column: v(m),
             normal: v(n * n),
@@ -152,23 +148,14 @@ impl DenseQp {
             self.s[i] = b[i].max(1.0);
             self.z[i] = 1.0;
         }
-        // `A` by columns: the normal matrix's entries and `A^T v` are then sums over long
-        // stretches of rows, from where the columns' zeros end (the cueing's later blocks of
-        // unknowns reach only the later points' rows).
-        for j in 0..n {
-            let column = &mut self.a_columns[j * m..(j + 1) * m];
-            for (i, entry) in column.iter_mut().enumerate() {
-                *entry = a[i * n + j];
-            }
-            self.first_row[j] = column.iter().position(|&v| v != 0.0).unwrap_or(m);
-        }
+        self.columns.set(a);
         // One pass more than the budget: the last step's iterate is checked too.
         for iteration in 1..=self.settings.max_iterations + 1 {
             // Residuals: r_d = H x + g + A^T z, r_p = A x + s - b.
             for (j, h_row) in h.chunks_exact(n).enumerate() {
-                self.r_dual[j] = g[j] + dot(h_row, &self.x) + self.column_dot(j, &self.z);
+                self.r_dual[j] = g[j] + dot(h_row, &self.x) + self.columns.dot(j, &self.z);
             }
-            columns_times(&self.a_columns, &self.first_row, &self.x, &mut self.ax);
+            self.columns.times(&self.x, &mut self.ax);
             for i in 0..m {
                 self.r_primal[i] = self.ax[i] + self.s[i] - b[i];
             }
@@ -262,14 +249,13 @@ impl DenseQp {
         // The lower triangle, `H_jk + sum_i (d_i a_ij) a_ik` over the rows where both columns
         // may be other than 0.
         for j in 0..n {
-            let from_j = self.first_row[j];
-            let column_j = &self.a_columns[j * m..(j + 1) * m];
+            let (from_j, column_j) = self.columns.column(j);
             for i in from_j..m {
                 self.weighted_column[i] = self.row_weight[i] * column_j[i];
             }
             for k in 0..=j {
-                let from = from_j.max(self.first_row[k]);
-                let column_k = &self.a_columns[k * m..(k + 1) * m];
+                let from = from_j.max(self.columns.first_row[k]);
+                let column_k = self.columns.column(k).1;
                 self.normal[j * n + k] = h[j * n + k] + dot(&self.weighted_column[from..], &column_k[from..]);
             }
         }
@@ -309,7 +295,7 @@ impl DenseQp {
             self.row_weight[i] = (self.z[i] * self.r_primal[i] - self.r_centre[i]) / self.s[i];
         }
         for k in 0..n {
-            self.rhs[k] = -self.r_dual[k] - self.column_dot(k, &self.row_weight);
+            self.rhs[k] = -self.r_dual[k] - self.columns.dot(k, &self.row_weight);
         }
         // L y = rhs, then L^T dx = y: the latter by rows of L (each solved unknown taken out of
         // the ones above it at once), which keeps one dependency chain per unknown short.
@@ -323,17 +309,11 @@ impl DenseQp {
             axpy(-dx_j, &self.normal[j * n..j * n + j], &mut self.dx[..j]);
         }
         // `A dx` into `ds`, then `ds = -r_p - A dx`.
-        columns_times(&self.a_columns, &self.first_row, &self.dx, &mut self.ds);
+        self.columns.times(&self.dx, &mut self.ds);
         for i in 0..m {
             self.ds[i] = -self.r_primal[i] - self.ds[i];
             self.dz[i] = (-self.r_centre[i] - self.z[i] * self.ds[i]) / self.s[i];
         }
-    }
-
-    /// `A^T`'s row `j` times `v`: column `j` of `A` from its first row other than 0.
-    fn column_dot(&self, j: usize, v: &[f64]) -> f64 {
-        let (m, from) = (self.m, self.first_row[j]);
-        dot(&self.a_columns[j * m + from..(j + 1) * m], &v[from..])
     }
 
     /// The largest step up to 1 that keeps `s` and `z` positive, times `fraction`.
@@ -351,17 +331,54 @@ impl DenseQp {
     }
 }
 
-/// `A v` into `out` from `A`'s columns (each from its first row other than 0), column by
-/// column.
-fn columns_times(a_columns: &[f64], first_row: &[usize], v: &[f64], out: &mut [f64]) {
-    let m = out.len();
-    out.fill(0.0);
-    if m == 0 {
-        // No rows (and `chunks_exact` takes no chunk size 0).
-        return;
+/// `A` (`m x n`) by columns, each from its first row other than 0: the normal matrix's entries
+/// and the products with `A` and `A^T` are then sums over long stretches of rows, from where
+/// the columns' zeros end (the cueing's later blocks of unknowns reach only the later points'
+/// rows).
+#[derive(Clone, Debug)]
+struct Columns {
+    m: usize,
+    /// Row-major `n x m`: column `j` is `values[j m..(j + 1) m]`.
+    values: Vec<f64>,
+    /// Each column's first row that is not 0 (`m` for a column of zeros; -0.0 counts as 0,
+    /// NaN does not).
+    first_row: Vec<usize>,
+}
+
+impl Columns {
+    /// Takes `a` (row-major `m x n`).
+    fn set(&mut self, a: &[f64]) {
+        let (m, n) = (self.m, self.first_row.len());
+        for j in 0..n {
+            let column = &mut self.values[j * m..(j + 1) * m];
+            for (i, entry) in column.iter_mut().enumerate() {
+                *entry = a[i * n + j];
+            }
+            self.first_row[j] = column.iter().position(|&v| v != 0.0).unwrap_or(m);
+        }
     }
-    for (j, (column, &from)) in a_columns.chunks_exact(m).zip(first_row).enumerate() {
-        axpy(v[j], &column[from..], &mut out[from..]);
+
+    /// Column `j`'s first row other than 0, and the whole column.
+    fn column(&self, j: usize) -> (usize, &[f64]) {
+        (self.first_row[j], &self.values[j * self.m..(j + 1) * self.m])
+    }
+
+    /// `A^T`'s row `j` times `v`, from the column's first row other than 0.
+    fn dot(&self, j: usize, v: &[f64]) -> f64 {
+        let (from, column) = self.column(j);
+        dot(&column[from..], &v[from..])
+    }
+
+    /// `A v` into `out`, column by column.
+    fn times(&self, v: &[f64], out: &mut [f64]) {
+        out.fill(0.0);
+        if self.m == 0 {
+            // No rows (and `chunks_exact` takes no chunk size 0).
+            return;
+        }
+        for (j, (column, &from)) in self.values.chunks_exact(self.m).zip(&self.first_row).enumerate() {
+            axpy(v[j], &column[from..], &mut out[from..]);
+        }
     }
 }
 
@@ -370,9 +387,9 @@ fn max_abs(v: &[f64]) -> f64 {
 }
 
 /// `a . b` in four partial sums, element `i` into sum `i mod 4`, added as `(s0 + s2) + (s1 +
-/// s3)` (two registers of two lanes added, then their halves): one order everywhere (the same
-/// bits on every platform), and four dependency chains instead of one, which the solve's short
-/// dot products are bound by.
+/// s3)`: one order everywhere (the same bits on every platform), and four dependency chains
+/// instead of one, which the solve's short dot products are bound by. `a` and `b` are of one
+/// length (debug builds check it; release builds would take the shorter).
 #[inline]
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     debug_assert_eq!(a.len(), b.len());
