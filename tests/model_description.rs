@@ -65,7 +65,7 @@ fn every_dependency_names_an_existing_variable() {
         let groups = kind.info().groups;
         for g in groups {
             for deps in [g.output_dependencies, g.initial_dependencies, g.derivative_dependencies] {
-                Dependency::each_known(deps, groups, &mut |known, same| {
+                Dependency::each_known(deps, &mut |known, same| {
                     let target = groups.get(known);
                     assert!(
                         target.is_some(),

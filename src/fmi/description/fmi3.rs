@@ -35,11 +35,8 @@ pub(super) fn fmi3_state_groups(info: &ModelInfo) -> Vec<&'static str> {
 
 /// Value references of the variables a dependency list names (FMI 3: whole variables).
 pub(super) fn dependency_vrs(info: &ModelInfo, deps: &[Dependency]) -> Vec<u32> {
-    let mut out: Vec<u32> = Dependency::knowns(deps, info.groups)
-        .iter()
-        .filter_map(|&(g, _)| info.groups.get(g))
-        .map(|g| g.first_vr)
-        .collect();
+    let mut out: Vec<u32> =
+        Dependency::knowns(deps).iter().filter_map(|&(g, _)| info.groups.get(g)).map(|g| g.first_vr).collect();
     out.sort_unstable();
     out.dedup();
     out

@@ -75,7 +75,7 @@ fn digest(kind: ModelKind, version: FmiVersion) -> (u64, u64) {
         d.text(g.description);
         // Each known as `All("r")` or `SameIndex("r0")`, in the order declared (lists flattened).
         for deps in [g.output_dependencies, g.initial_dependencies, g.derivative_dependencies] {
-            Dependency::each_known(deps, info.groups, &mut |known, same| {
+            Dependency::each_known(deps, &mut |known, same| {
                 let name = info.groups.get(known).map_or("", |k| k.name);
                 d.text(&format!("{}({name:?})", if same { "SameIndex" } else { "All" }));
             });

@@ -89,7 +89,7 @@ pub(super) fn access_table(
     // The cache blocks holding a value that depends on an input group, by the model's
     // declared structure: outputs, initial unknowns and derivatives.
     let dependants = |input: usize| {
-        let on_input = |deps: &[Dependency]| Dependency::knowns(deps, table.groups).iter().any(|&(g, _)| g == input);
+        let on_input = |deps: &[Dependency]| Dependency::knowns(deps).iter().any(|&(g, _)| g == input);
         table.groups.iter().zip(&blocks).fold(0u32, |mask, (g, block)| {
             let knowns = [g.output_dependencies, g.initial_dependencies, g.derivative_dependencies];
             match block {

@@ -318,7 +318,7 @@ fn dependencies_of(inst: &Instance, vr: u32) -> Result<Vec<DependencyEntry>, Str
     };
     let index = |shape: &[usize], i: usize| if shape.is_empty() { 0 } else { i + 1 };
     let mut out = vec![];
-    let knowns = Dependency::knowns(deps, inst.table.groups);
+    let knowns = Dependency::knowns(deps);
     for i in 0..g.len() {
         for &(known, same) in &knowns {
             let Some(known) = inst.table.groups.get(known) else { continue };

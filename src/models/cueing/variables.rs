@@ -4,23 +4,23 @@
 
 use crate::models::declare::declare_variables;
 use crate::models::machine;
-use crate::models::variables::Dependency::{self, AllNamed as All, SameIndexNamed as SameIndex};
+use crate::models::variables::Dependency::{self, All, SameIndex};
 use crate::models::variables::VariableGroup as V;
 
 const STATE_GROUPS: [Dependency; 8] = [
-    All("washout.q"),
-    All("washout.r"),
-    All("washout.v"),
-    All("washout.fl"),
-    All("der(washout.fl)"),
-    All("washout.tilt"),
-    All("washout.z"),
-    All("washout.angles"),
+    All(group::Q),
+    All(group::HEAD_R),
+    All(group::HEAD_V),
+    All(group::FL),
+    All(group::DER_FL),
+    All(group::TILT),
+    All(group::Z),
+    All(group::ROT_ANGLES),
 ];
 /// The perceived vehicle's cues: its lags.
-const PERCEIVED_VEHICLE: &[Dependency] = &[All("perception.vehicle.otolith"), All("perception.vehicle.canal")];
+const PERCEIVED_VEHICLE: &[Dependency] = &[All(group::VEHICLE_OTOLITH), All(group::VEHICLE_CANAL)];
 /// The perceived simulator's cues: its lags.
-const PERCEIVED_SIMULATOR: &[Dependency] = &[All("perception.simulator.otolith"), All("perception.simulator.canal")];
+const PERCEIVED_SIMULATOR: &[Dependency] = &[All(group::SIMULATOR_OTOLITH), All(group::SIMULATOR_CANAL)];
 /// The simulator's lags' rates: the command's cues (the washout's states and both inputs) and
 /// the lags themselves.
 const SIMULATOR_LAG_RATES: &[Dependency] = &[
@@ -32,10 +32,10 @@ const SIMULATOR_LAG_RATES: &[Dependency] = &[
     STATE_GROUPS[5],
     STATE_GROUPS[6],
     STATE_GROUPS[7],
-    All("f"),
-    All("omega"),
-    All("perception.simulator.otolith"),
-    All("perception.simulator.canal"),
+    All(group::F),
+    All(group::OMEGA),
+    All(group::SIMULATOR_OTOLITH),
+    All(group::SIMULATOR_CANAL),
 ];
 /// Outputs of the pose alone: the washout's states (through the limiter, all of them).
 const POSE: &[Dependency] = &STATE_GROUPS;
@@ -50,7 +50,7 @@ const RATES: &[Dependency] = &[
     STATE_GROUPS[5],
     STATE_GROUPS[6],
     STATE_GROUPS[7],
-    All("omega"),
+    All(group::OMEGA),
 ];
 /// Outputs with accelerations, and the derivatives: the states and both inputs.
 const MOTION: &[Dependency] = &[
@@ -62,46 +62,46 @@ const MOTION: &[Dependency] = &[
     STATE_GROUPS[5],
     STATE_GROUPS[6],
     STATE_GROUPS[7],
-    All("f"),
-    All("omega"),
+    All(group::F),
+    All(group::OMEGA),
 ];
 /// In Initialization Mode the outputs depend on the inputs and every parameter.
 const KNOWNS: &[Dependency] = &[
-    All("f"),
-    All("omega"),
-    All("g"),
-    All("scale.f"),
-    All("scale.omega"),
-    All("fmax"),
-    All("omegamax"),
-    All("hp.f.omega"),
-    All("hp.f.damping"),
-    All("hp.f.break"),
-    All("tilt.omega"),
-    All("tilt.damping"),
-    All("tilt.rateLimit"),
-    All("tilt.max"),
-    All("hp.w.omega"),
-    All("hp.w.damping"),
-    All("head"),
-    All("margin"),
-    All("limiter.onset"),
-    All("neutral"),
-    All("B"),
-    All("A"),
-    All("lmin"),
-    All("lmax"),
-    All("cueing.method"),
-    All("mpc.period"),
-    All("mpc.horizon"),
-    All("mpc.trust"),
-    All("mpc.trend"),
-    All("mpc.weight.f"),
-    All("mpc.weight.omega"),
-    All("mpc.weight.neutral"),
-    All("mpc.weight.input"),
-    All("mpc.legSpeed"),
-    All("mpc.maxIterations"),
+    All(group::F),
+    All(group::OMEGA),
+    All(group::G_GRAVITY),
+    All(group::SCALE_F),
+    All(group::SCALE_OMEGA),
+    All(group::FMAX),
+    All(group::OMEGAMAX),
+    All(group::HP_F_OMEGA),
+    All(group::HP_F_DAMPING),
+    All(group::HP_F_BREAK),
+    All(group::TILT_OMEGA),
+    All(group::TILT_DAMPING),
+    All(group::TILT_RATE_LIMIT),
+    All(group::TILT_MAX),
+    All(group::HP_W_OMEGA),
+    All(group::HP_W_DAMPING),
+    All(group::HEAD),
+    All(group::MARGIN),
+    All(group::ONSET),
+    All(group::NEUTRAL),
+    All(group::B),
+    All(group::A),
+    All(group::LMIN),
+    All(group::LMAX),
+    All(group::METHOD),
+    All(group::MPC_PERIOD),
+    All(group::MPC_HORIZON),
+    All(group::MPC_TRUST),
+    All(group::MPC_TREND),
+    All(group::MPC_WEIGHT_F),
+    All(group::MPC_WEIGHT_OMEGA),
+    All(group::MPC_WEIGHT_NEUTRAL),
+    All(group::MPC_WEIGHT_INPUT),
+    All(group::MPC_LEG_SPEED),
+    All(group::MPC_MAX_ITERATIONS),
 ];
 
 declare_variables! {
@@ -327,14 +327,14 @@ declare_variables! {
         HEAD_R => V::local(
             "washout.r", &[3], 203, Some("m"), "The washout's head displacement from neutral, inertial axes", KNOWNS,
         )
-        .derivative_named("washout.q", &[SameIndex("washout.r")]); real(state.r),
+        .derivative_named("washout.q", &[SameIndex(group::HEAD_R)]); real(state.r),
         HEAD_V => V::local("washout.v", &[3], 206, Some("m/s"), "Its velocity", KNOWNS)
-            .derivative_named("washout.r", &[SameIndex("washout.v")]); real(state.v),
+            .derivative_named("washout.r", &[SameIndex(group::HEAD_V)]); real(state.v),
         DER_HEAD_V => V::local("der(washout.v)", &[3], 209, Some("m/s2"), "The head's acceleration (W_t's output)", KNOWNS)
             .derivative("washout.v", "washout.v", 1, MOTION); derivative,
         FL => V::local("washout.fl", &[2], 212, Some("m/s2"), "Low-passed specific force f_l (x, y) of the tilt coordination", KNOWNS); real(state.fl),
         DER_FL => V::local("der(washout.fl)", &[2], 214, Some("m/s3"), "Its rate", KNOWNS)
-            .derivative("washout.fl", "washout.fl", 1, &[SameIndex("der(washout.fl)")]); real(state.fl_rate),
+            .derivative("washout.fl", "washout.fl", 1, &[SameIndex(group::DER_FL)]); real(state.fl_rate),
         DER2_FL => V::local("der2(washout.fl)", &[2], 216, Some("m/s4"), "Its second derivative", KNOWNS)
             .derivative("der(washout.fl)", "washout.fl", 2, MOTION); derivative,
         TILT => V::local("washout.tilt", &[2], 218, Some("rad"), "Tilt coordination's roll and pitch (rate-limited)", KNOWNS)
@@ -344,7 +344,7 @@ declare_variables! {
         Z => V::local("washout.z", &[3], 222, Some("rad.s"), "Rotational filter's first state per angle: its derivative is washout.angles", KNOWNS); real(state.z),
         ROT_ANGLES => V::local("washout.angles", &[3], 225, Some("rad"), "The rotational channel's roll, pitch, yaw", KNOWNS)
             .display("deg")
-            .derivative_named("washout.z", &[SameIndex("washout.angles")]); real(state.angles),
+            .derivative_named("washout.z", &[SameIndex(group::ROT_ANGLES)]); real(state.angles),
         DER_ROT_ANGLES => V::local("der(washout.angles)", &[3], 228, Some("rad/s"), "Their rates (W_r's output)", KNOWNS)
             .derivative("washout.angles", "washout.angles", 1, MOTION); derivative,
         // The perception's lags (docs/cueing.md): per cabin axis the cue lagged by each time
@@ -371,14 +371,14 @@ declare_variables! {
         )
         .derivative(
             "perception.vehicle.otolith", "perception.vehicle.otolith", 1,
-            &[All("f"), All("perception.vehicle.otolith")],
+            &[All(group::F), All(group::VEHICLE_OTOLITH)],
         ); derivative,
         DER_VEHICLE_CANAL => V::local(
             "der(perception.vehicle.canal)", &[3, 3], 276, Some("rad/s2"), "Their rates", KNOWNS,
         )
         .derivative(
             "perception.vehicle.canal", "perception.vehicle.canal", 1,
-            &[All("omega"), All("perception.vehicle.canal")],
+            &[All(group::OMEGA), All(group::VEHICLE_CANAL)],
         ); derivative,
         DER_SIMULATOR_OTOLITH => V::local(
             "der(perception.simulator.otolith)", &[3, 2], 285, Some("m/s3"), "Their rates", KNOWNS,

@@ -122,34 +122,25 @@ pub enum Dependency {
     /// Every dependency of a list: a concern's knowns (an actuator's parameters, the body's
     /// states), written once and named in every list they belong to.
     Each(&'static [Dependency]),
-    /// [`Dependency::All`] by the group's name, for a table not switched to indices yet (the
-    /// cueing model's).
-    AllNamed(&'static str),
-    /// [`Dependency::SameIndex`] by the group's name.
-    SameIndexNamed(&'static str),
 }
 
 impl Dependency {
     /// Calls `f(group, same_index)` for every known of `deps` in order, lists flattened, each
-    /// group an index into `groups` (`usize::MAX` for a name that is none, which
-    /// `tests/model_description.rs` refuses).
-    pub fn each_known(deps: &[Dependency], groups: &[VariableGroup], f: &mut impl FnMut(usize, bool)) {
-        let named = |name: &str| groups.iter().position(|g| g.name == name).unwrap_or(usize::MAX);
+    /// group an index into the model's table.
+    pub fn each_known(deps: &[Dependency], f: &mut impl FnMut(usize, bool)) {
         for d in deps {
             match *d {
                 Dependency::All(g) => f(g, false),
                 Dependency::SameIndex(g) => f(g, true),
-                Dependency::Each(list) => Dependency::each_known(list, groups, f),
-                Dependency::AllNamed(name) => f(named(name), false),
-                Dependency::SameIndexNamed(name) => f(named(name), true),
+                Dependency::Each(list) => Dependency::each_known(list, f),
             }
         }
     }
 
     /// The knowns of `deps` as `(group, same_index)`, in order (lists flattened).
-    pub fn knowns(deps: &[Dependency], groups: &[VariableGroup]) -> Vec<(usize, bool)> {
+    pub fn knowns(deps: &[Dependency]) -> Vec<(usize, bool)> {
         let mut out = vec![];
-        Dependency::each_known(deps, groups, &mut |g, same| out.push((g, same)));
+        Dependency::each_known(deps, &mut |g, same| out.push((g, same)));
         out
     }
 }
@@ -326,7 +317,7 @@ impl VariableTable {
     /// `<ModelStructure>` dependency indices of element `index` of `group`.
     pub fn dependency_indices(&self, deps: &[Dependency], index: usize) -> Vec<usize> {
         let mut out = vec![];
-        Dependency::each_known(deps, self.groups, &mut |g, same| {
+        Dependency::each_known(deps, &mut |g, same| {
             let Some(name) = self.groups.get(g).map(|g| g.name) else { return };
             match same {
                 false => out.extend((0..self.groups[g].len()).filter_map(|i| self.model_index(name, i))),
