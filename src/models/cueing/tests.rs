@@ -100,3 +100,30 @@ fn the_limited_command_keeps_the_legs_inside_their_margins() {
         );
     }
 }
+
+/// The variables' descriptions quote facts the code holds elsewhere: the guess's clip, the
+/// thresholds of perception, the solver's tolerances, the grid and its blocks. The text must
+/// follow the constants (a description is a `&'static str`, so it cannot be formatted from
+/// them).
+#[test]
+fn the_descriptions_quote_the_constants_they_describe() {
+    use crate::control::predictive_cueing::{
+        BLOCKS, GRID_STEPS, GUESS_LIMIT_F, GUESS_LIMIT_OMEGA, QP_ACCEPTABLE_TOLERANCE, QP_TOLERANCE,
+    };
+    use crate::physics::cueing::perception::{THRESHOLD_F, THRESHOLD_OMEGA};
+    use variables::{GROUPS, group};
+    let quotes = |id: usize, fact: String| {
+        let text = GROUPS[id].description;
+        assert!(text.contains(&fact), "{}'s description does not say {fact:?}: {text}", GROUPS[id].name);
+    };
+    quotes(group::MPC_TREND, format!("within {GUESS_LIMIT_F} m/s2 and {GUESS_LIMIT_OMEGA} rad/s"));
+    let [f1, f2, f3] = THRESHOLD_F;
+    quotes(group::MPC_WEIGHT_F, format!("({f1}, {f2}, {f3} m/s2)"));
+    let [w1, w2, w3] = THRESHOLD_OMEGA.map(f64::to_degrees);
+    quotes(group::MPC_WEIGHT_OMEGA, format!("({w1:.1}, {w2:.1}, {w3:.1} deg/s)"));
+    quotes(group::MPC_MAX_ITERATIONS, format!("within {QP_ACCEPTABLE_TOLERANCE:e}"));
+    quotes(group::MPC_ACCEPTABLE, format!("acceptable level ({QP_ACCEPTABLE_TOLERANCE:e}"));
+    quotes(group::MPC_ACCEPTABLE, format!("tolerance ({QP_TOLERANCE:e})"));
+    let [b1, b2, b3, b4] = BLOCKS;
+    quotes(group::MPC_HORIZON, format!("({GRID_STEPS} grid steps; the jerks in 4 blocks of {b1}, {b2}, {b3} and {b4} steps)"));
+}
