@@ -1,6 +1,6 @@
 """The main job's figures that the docs quote, recorded in benches/results/validation.txt: the
-paper's experiments, the workspace, machine and hydraulic scenarios (docs/validation.md) and the
-motion system's braking (docs/control.md), from the summaries the main job wrote into the output
+paper's experiments, the workspace, machine and hydraulic scenarios (docs/validation.md), the
+motion system's braking (docs/control.md) and the cueing's manoeuvres (docs/cueing.md), from the summaries the main job wrote into the output
 folder, without the wall-clock times some lines carry. tests/python/test_readme.py checks that
 every figure those pages quote is in a file of benches/results/; a run that moves a figure shows
 in this file's diff.
@@ -21,11 +21,14 @@ SOURCES = [("summary.txt", "examples/paper_experiments.py", None),
            # Not its work-precision line: wall-clock times.
            ("hydraulic_summary.txt", "examples/hydraulic_scenarios.py", ("hydraulic legs", "1 ", "2 ", "3 ", "4 ", "5 ")),
            ("hydraulic_power_unit_summary.txt", "examples/power_unit_scenarios.py", None),
-           ("cueing_summary.txt", "examples/cueing_scenarios.py", ("braking through StewartMotionSystem.ssp",))]
+           ("cueing_summary.txt", "examples/cueing_scenarios.py", None)]
+
+# Summaries with wall-clock times in another form: the pattern that takes them out.
+WALL_CLOCK = {"cueing_summary.txt": r" \(\d+ s\)"}
 
 
 def main():
-    parts = ["# The main job's figures that docs/validation.md and docs/control.md quote (bash examples/main_job.sh "
+    parts = ["# The main job's figures that docs/validation.md, docs/control.md and docs/cueing.md quote (bash examples/main_job.sh "
              "writes this file\n# with examples/record_figures.py from the summaries in output/; wall-clock times "
              "left out).\n"]
     for name, script, start in SOURCES:
@@ -33,8 +36,10 @@ def main():
         if start:
             lines = [line for line in lines if line.startswith(start)]
             assert lines, f"{OUT / name} has no line starting with one of {start}"
-        # Wall-clock time (", 15 s in 3.2 s)"): the machine's, not the model's.
+        # Wall-clock time (", 15 s in 3.2 s)"; the cueing's " (110 s)"): the machine's, not the model's.
         lines = [re.sub(r" in \d+(?:\.\d+)? s\)", ")", line) for line in lines]
+        if name in WALL_CLOCK:
+            lines = [re.sub(WALL_CLOCK[name], "", line) for line in lines]
         parts.append(f"## {name} ({script})\n" + "\n".join(lines) + "\n")
     RESULTS.write_text("\n".join(parts))
     print(f"wrote {RESULTS}")

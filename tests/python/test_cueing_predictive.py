@@ -16,6 +16,7 @@ from fmpy import read_model_description
 
 from stewart_fmu import cueing, vehicle
 from stewart_fmu.core import CUEING_FMU, LEGS, Component, stand_parameters
+from references import check_figures
 from test_cueing import leg_lengths, start_values
 from test_sweep import start_cluster
 
@@ -173,6 +174,16 @@ def test_the_commands_keep_their_tilt_within_tilt_max_on_fuzzed_drives(fuzzed):
     by the shared slack where the bounds conflict, so a command may pass the bound by a hair
     (10.0055 deg at most against 10, measured 2026-12-03)."""
     assert fuzzed["tilt"] < fuzzed["tilt_max"] + math.radians(0.02), fuzzed
+
+
+def test_the_fuzzed_drives_figures_are_the_ones_the_docs_quote(fuzzed):
+    """docs/cueing.md's figures of the 300 fuzzed drives, in benches/results/cueing.txt (the
+    drives are seeded and the FMU's bits the same on every platform)."""
+    check_figures("cueing.txt", "predictive cueing, 300 fuzzed drives",
+                  f"{fuzzed['fallbacks']} failed solves of {fuzzed['solves']}, {fuzzed['at_budget']} at the iteration "
+                  f"budget, the net acted in {fuzzed['netted']} drives, closest approach to a margin "
+                  f"{fuzzed['closest'] * 1e3:.3f} mm, largest roll or pitch {math.degrees(fuzzed['tilt']):.4f} deg, "
+                  f"largest Hermite residual of r over a step {fuzzed['worst_v']:.1e} m/s")
 
 
 def test_the_solves_succeed_and_the_command_is_smooth_on_fuzzed_drives(fuzzed):
