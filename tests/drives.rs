@@ -174,10 +174,10 @@ fn drives_agree_with_the_independent_formulation() {
             moved = moved.max((sim.body_state().r - start.r).norm());
             peak_current = sim.currents().iter().fold(peak_current, |m, i| m.max(i.abs()));
         }
-        println!(
+        common::figures::print_figures(&format!(
             "drives, {name}, 3 s at 10 ms: largest difference from the oracle {worst:.2e} (m, m/s, rad/s, 100 A); \
              moved up to {moved:.3} m, currents up to {peak_current:.1} A (holding {i_hold:.2} A)"
-        );
+        ));
         assert!(worst < 1e-9, "{name}: {worst:e}");
         assert!(moved > 0.01, "{name}: the platform moved ({moved})");
     }
@@ -219,10 +219,10 @@ fn the_drives_energy_balance_holds() {
             assert_eq!(o.work_of_forces, 0.0);
             (electric, dissipated) = (o.electric_work, o.dissipated_energy);
         }
-        println!(
+        common::figures::print_figures(&format!(
             "drives, kt = {kt}: largest |E - E0 - (work.F + work.electric - work.dissipated)| = {worst:.2e} J over 4 s \
              ({contacts} contacts located; {electric:.0} J supplied, {dissipated:.0} J dissipated, E(0) = {e0:.0} J)"
-        );
+        ));
         assert!(contacts >= 2, "contacts with stops or joint limits ({contacts})");
         assert!(worst < 1e-6 * dissipated, "{worst:e} J");
     }
@@ -325,7 +325,7 @@ fn the_fixed_step_method_integrates_the_circuit_exponentially() {
         let (body, currents) = state_difference(&etd, &reference);
         let classical = heave_in_closed_loop(drives, rk4, true, 2.0);
         let classical_error = classical.map(|(y, _)| state_difference(&y, &reference));
-        println!(
+        common::figures::print_figures(&format!(
             "L/R = {:.1} ms, 2 s of feedback with a 20 % ripple (currents up to {peak:.1} A): RK4 at 1 ms with the \
              exponential circuit differs from the adaptive method at relTol 1e-12 by {body:.2e} (pose, velocities) and \
              {currents:.2e} A; classical RK4: {}",
@@ -334,7 +334,7 @@ fn the_fixed_step_method_integrates_the_circuit_exponentially() {
                 Some((b, c)) => format!("{b:.2e} and {c:.2e} A"),
                 None => "diverged".to_string(),
             }
-        );
+        ));
         assert!(body < 1e-6 && currents < 1e-3, "{body:e} {currents:e}");
         if inductance < 1e-4 {
             assert!(classical_error.is_none_or(|(b, _)| b > 1e3 * body), "classical RK4 should fail at L/R = 0.1 ms");
@@ -360,9 +360,9 @@ fn the_holding_voltage_holds_the_stand() {
     sim.advance(dyn_law(&HeldForces::constant([u_hold; 6])), 2.0).expect("holds");
     let drift = (sim.body_state().r - start.r).norm();
     let current = sim.currents().iter().map(|i| (i - i_hold).abs()).fold(0.0, f64::max);
-    println!(
+    common::figures::print_figures(&format!(
         "holding at {u_hold:.4} V and {i_hold:.4} A per leg for 2 s: drift {drift:.2e} m, currents within {current:.2e} A"
-    );
+    ));
     assert!(drift < 1e-9, "{drift:e}");
     // Round-off seeds the equilibrium's slow growth; the currents follow it by their back EMF.
     assert!(current < 1e-6, "{current:e}");

@@ -221,14 +221,14 @@ fn agree_with_the_oracle(h: HydraulicLegs, pump_fails_at: Option<f64>) {
         let [pa, pb] = sim.pressures();
         lowest = pa.iter().chain(&pb).fold(lowest, |m, &p| m.min(p));
     }
-    println!(
+    common::figures::print_figures(&format!(
         "hydraulics (air fraction {}, pump failing at {pump_fails_at:?} s), 3 s at 1 ms: largest difference from the \
          oracle {legs:.2e} m in the legs, {pressures:.2e} of the supply in the pressures; moved up to {moved:.3} m, \
          spools open up to {opening:.3}; lowest pressure {:.4e} Pa absolute (the oracle's {:.4e})",
         h.air_fraction,
         lowest + ATMOSPHERIC_PRESSURE,
         reference.lowest_pressure + ATMOSPHERIC_PRESSURE
-    );
+    ));
     assert!(legs < 1e-8, "legs: {legs:e} m");
     assert!(pressures < 1e-3, "pressures: {pressures:e}");
     assert!(moved > 0.01 && opening > 0.1, "the stand moved ({moved} m) and the valves opened ({opening})");
@@ -302,7 +302,7 @@ fn power_unit_agrees(unit: PowerUnit, ripple: f64, pump_stops_at: Option<f64>) {
         energy = energy.max(balance.abs());
     }
     let out = PlatformOutputs::compute(&sim.form, &sim.state, None);
-    println!(
+    common::figures::print_figures(&format!(
         "power unit (accumulator {:.0} L, ripple {ripple}, pump stopping at {pump_stops_at:?} s), 3 s at 1 ms: largest \
          difference from the oracle {legs:.2e} m in the legs, {pressures:.2e} of the supply in the chambers, {supply:.2e} \
          in the supply line; supply {:.4} MPa at the end (lowest {:.4} MPa), accumulator oil {:.3} L; energy balance \
@@ -312,7 +312,7 @@ fn power_unit_agrees(unit: PowerUnit, ripple: f64, pump_stops_at: Option<f64>) {
         lowest_supply / 1e6,
         out.power_unit[3] * 1e3,
         out.dissipated_energy
-    );
+    ));
     assert!(legs < 1e-8, "legs: {legs:e} m");
     assert!(pressures < 1e-3 && supply < 1e-3, "pressures: {pressures:e}, supply {supply:e}");
     assert!(energy < 1e-7 * out.dissipated_energy.max(1.0), "energy balance {energy:e} J");
@@ -351,12 +351,12 @@ fn energy_balance(h: HydraulicLegs) {
         assert_eq!(o.work_of_forces, 0.0);
         (supplied, dissipated) = (o.hydraulic_work, o.dissipated_energy);
     }
-    println!(
+    common::figures::print_figures(&format!(
         "hydraulics (air fraction {}): largest |E - E0 - (work.hydraulic - work.compression - work.dissipated)| = \
          {worst:.2e} J over 3 s ({contacts} contacts located; {supplied:.0} J supplied, {dissipated:.0} J dissipated; \
          lowest pressure {:.3e} Pa gauge)",
         h.air_fraction, sim.lowest_pressure
-    );
+    ));
     assert!(contacts >= 2, "contacts with the stops ({contacts})");
     assert!(worst < 1e-7 * dissipated, "{worst:e} J");
     if h.air().is_some() {
@@ -439,7 +439,7 @@ fn work_precision(h: HydraulicLegs) -> (f64, Vec<(&'static str, f64, f64)>) {
     );
     println!("| method | largest leg error (m) | largest pressure error (Pa) | evaluations per step |");
     println!("|---|---|---|---|");
-    let mut errors = vec![];
+    let (mut errors, mut rows) = (vec![], vec![]);
     let rk4 = SolverSettings { method: Method::RungeKutta4, ..Default::default() };
     for (name, settings, whole_steps) in [
         ("RK4, 1 ms steps taken whole (no sub-steps)", rk4, true),
@@ -457,7 +457,9 @@ fn work_precision(h: HydraulicLegs) -> (f64, Vec<(&'static str, f64, f64)>) {
                 pressure = pressure.max((pa[k] - par[k]).abs()).max((pb[k] - pbr[k]).abs());
             }
         }
-        println!("| {name} | {leg:.2e} | {pressure:.2e} | {:.1} |", evaluations as f64 / 2000.0);
+        let row = format!("| {name} | {leg:.2e} | {pressure:.2e} | {:.1} |", evaluations as f64 / 2000.0);
+        println!("{row}");
+        rows.push(row);
         if !whole_steps {
             assert!(lowest.is_finite());
             if h.air().is_some() {
@@ -466,6 +468,11 @@ fn work_precision(h: HydraulicLegs) -> (f64, Vec<(&'static str, f64, f64)>) {
         }
         errors.push((name, leg, pressure));
     }
+    common::figures::check_figures(
+        "model.txt",
+        &format!("pump failure at 0.5 s, valves fully open, 2 s at 1 ms (air fraction {})", h.air_fraction),
+        &rows.join(" "),
+    );
     let (_, _, whole) = errors.remove(0);
     let fell = reference.last().map_or(0.0, |(l, _, _)| L0 - l[0]);
     println!("the legs shortened by {fell:.3} m");

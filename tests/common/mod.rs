@@ -1,6 +1,7 @@
 //! Shared helpers of the Rust integration tests.
 #![allow(dead_code)]
 
+pub mod figures;
 pub mod fmi3_host;
 pub mod fmi_host;
 pub mod machine_oracle;
