@@ -55,7 +55,7 @@ fn energy_is_conserved_with_spring_legs() {
         worst = worst.max(((total_energy(&sim, &springs) - e0) / e0).abs());
     }
     let s = sim.body_state();
-    common::figures::print_figures(&format!(
+    let _figures = common::figures::print_figures(&format!(
         "spring legs, 100 time units, tight tolerance: max relative energy drift {worst:.2e} ({} steps, {} rhs), \
          final z = {:.4}",
         sim.integrator.stats.accepted_steps, sim.integrator.stats.rhs_evaluations, s.r.z
@@ -92,7 +92,7 @@ fn momenta_are_conserved_for_a_free_tumbling_body() {
         dh = dh.max((angular_momentum(&stand, &s) - h0).norm() / h0.norm());
         de = de.max(((mechanical_energy(&stand, &s) - e0) / e0).abs());
     }
-    common::figures::print_figures(&format!(
+    let _figures = common::figures::print_figures(&format!(
         "free tumbling body, 20 s: relative drift of momentum {dp:.2e}, angular momentum {dh:.2e}, energy {de:.2e}"
     ));
     assert!(dp <= 1e-12, "momentum drift {dp:e}");
@@ -125,7 +125,7 @@ fn euler_top_intermediate_axis_is_unstable() {
     let (min1, _) = spin(Vector3::new(2.0, eps, eps));
     let (min2, _) = spin(Vector3::new(eps, 2.0, eps));
     let (min3, _) = spin(Vector3::new(eps, eps, 2.0));
-    common::figures::print_figures(&format!(
+    let _figures = common::figures::print_figures(&format!(
         "spin about axis 1 (smallest J): min w1/w1(0) = {min1:.4}; axis 2 (intermediate): {min2:.4}; axis 3 (largest): {min3:.4}"
     ));
     assert!(min1 > 0.99 && min3 > 0.99, "rotation about the extreme axes must stay put");
@@ -151,7 +151,7 @@ fn constraint_residual_with_and_without_projection() {
             free_at.push(free.body_state().constraint_residual());
         }
     }
-    common::figures::print_figures(&format!(
+    let _figures = common::figures::print_figures(&format!(
         "constraint residual over 100 time units at default tolerance: with projection max {worst_projected:.2e}; \
          without projection at t = 25, 50, 75, 100: {:.2e} {:.2e} {:.2e} {:.2e}",
         free_at[0], free_at[1], free_at[2], free_at[3]

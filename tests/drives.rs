@@ -174,7 +174,7 @@ fn drives_agree_with_the_independent_formulation() {
             moved = moved.max((sim.body_state().r - start.r).norm());
             peak_current = sim.currents().iter().fold(peak_current, |m, i| m.max(i.abs()));
         }
-        common::figures::print_figures(&format!(
+        let _figures = common::figures::print_figures(&format!(
             "drives, {name}, 3 s at 10 ms: largest difference from the oracle {worst:.2e} (m, m/s, rad/s, 100 A); \
              moved up to {moved:.3} m, currents up to {peak_current:.1} A (holding {i_hold:.2} A)"
         ));
@@ -219,7 +219,7 @@ fn the_drives_energy_balance_holds() {
             assert_eq!(o.work_of_forces, 0.0);
             (electric, dissipated) = (o.electric_work, o.dissipated_energy);
         }
-        common::figures::print_figures(&format!(
+        let _figures = common::figures::print_figures(&format!(
             "drives, kt = {kt}: largest |E - E0 - (work.F + work.electric - work.dissipated)| = {worst:.2e} J over 4 s \
              ({contacts} contacts located; {electric:.0} J supplied, {dissipated:.0} J dissipated, E(0) = {e0:.0} J)"
         ));
@@ -325,8 +325,8 @@ fn the_fixed_step_method_integrates_the_circuit_exponentially() {
         let (body, currents) = state_difference(&etd, &reference);
         let classical = heave_in_closed_loop(drives, rk4, true, 2.0);
         let classical_error = classical.map(|(y, _)| state_difference(&y, &reference));
-        common::figures::print_figures(&format!(
-            "L/R = {:.1} ms, 2 s of feedback with a 20 % ripple (currents up to {peak:.1} A): RK4 at 1 ms with the \
+        let _figures = common::figures::print_figures(&format!(
+            "L/R = {:.1} ms, 2 s of feedback with a 20 % ripple: currents up to {peak:.1} A; RK4 at 1 ms with the \
              exponential circuit differs from the adaptive method at relTol 1e-12 by {body:.2e} (pose, velocities) and \
              {currents:.2e} A; classical RK4: {}",
             1e3 * inductance / drives.resistance,
@@ -360,8 +360,9 @@ fn the_holding_voltage_holds_the_stand() {
     sim.advance(dyn_law(&HeldForces::constant([u_hold; 6])), 2.0).expect("holds");
     let drift = (sim.body_state().r - start.r).norm();
     let current = sim.currents().iter().map(|i| (i - i_hold).abs()).fold(0.0, f64::max);
-    common::figures::print_figures(&format!(
-        "holding at {u_hold:.4} V and {i_hold:.4} A per leg for 2 s: drift {drift:.2e} m, currents within {current:.2e} A"
+    let _figures = common::figures::print_figures(&format!(
+        "holding the default stand for 2 s: {u_hold:.4} V and {i_hold:.4} A per leg, drift {drift:.2e} m, currents \
+         within {current:.2e} A"
     ));
     assert!(drift < 1e-9, "{drift:e}");
     // Round-off seeds the equilibrium's slow growth; the currents follow it by their back EMF.

@@ -221,7 +221,7 @@ fn agree_with_the_oracle(h: HydraulicLegs, pump_fails_at: Option<f64>) {
         let [pa, pb] = sim.pressures();
         lowest = pa.iter().chain(&pb).fold(lowest, |m, &p| m.min(p));
     }
-    common::figures::print_figures(&format!(
+    let _figures = common::figures::print_figures(&format!(
         "hydraulics (air fraction {}, pump failing at {pump_fails_at:?} s), 3 s at 1 ms: largest difference from the \
          oracle {legs:.2e} m in the legs, {pressures:.2e} of the supply in the pressures; moved up to {moved:.3} m, \
          spools open up to {opening:.3}; lowest pressure {:.4e} Pa absolute (the oracle's {:.4e})",
@@ -302,7 +302,7 @@ fn power_unit_agrees(unit: PowerUnit, ripple: f64, pump_stops_at: Option<f64>) {
         energy = energy.max(balance.abs());
     }
     let out = PlatformOutputs::compute(&sim.form, &sim.state, None);
-    common::figures::print_figures(&format!(
+    let _figures = common::figures::print_figures(&format!(
         "power unit (accumulator {:.0} L, ripple {ripple}, pump stopping at {pump_stops_at:?} s), 3 s at 1 ms: largest \
          difference from the oracle {legs:.2e} m in the legs, {pressures:.2e} of the supply in the chambers, {supply:.2e} \
          in the supply line; supply {:.4} MPa at the end (lowest {:.4} MPa), accumulator oil {:.3} L; energy balance \
@@ -351,7 +351,7 @@ fn energy_balance(h: HydraulicLegs) {
         assert_eq!(o.work_of_forces, 0.0);
         (supplied, dissipated) = (o.hydraulic_work, o.dissipated_energy);
     }
-    common::figures::print_figures(&format!(
+    let _figures = common::figures::print_figures(&format!(
         "hydraulics (air fraction {}): largest |E - E0 - (work.hydraulic - work.compression - work.dissipated)| = \
          {worst:.2e} J over 3 s ({contacts} contacts located; {supplied:.0} J supplied, {dissipated:.0} J dissipated; \
          lowest pressure {:.3e} Pa gauge)",

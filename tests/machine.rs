@@ -172,7 +172,7 @@ fn heavy_legs_agree_with_the_independent_formulation() {
         &Vector3::new(0.1, -0.05, 0.2),
     );
     let (worst, tilt) = compare(&start, legs, Friction::default(), None, &oracle, &law, 0.01, 300);
-    common::figures::print_figures(&format!(
+    let _figures = common::figures::print_figures(&format!(
         "heavy legs, 3 s: largest difference from the oracle {worst:.2e}, largest tilt {:.2} deg",
         tilt.to_degrees()
     ));
@@ -194,7 +194,7 @@ fn heavy_legs_with_friction_agree_with_the_independent_formulation() {
         &Vector3::zeros(),
     );
     let (worst, tilt) = compare(&start, legs, friction, None, &oracle, &law, 0.01, 300);
-    common::figures::print_figures(&format!(
+    let _figures = common::figures::print_figures(&format!(
         "heavy legs with friction, 3 s: largest difference {worst:.2e}, largest tilt {:.2} deg",
         tilt.to_degrees()
     ));
@@ -232,7 +232,7 @@ fn heavy_legs_on_their_joint_limits_agree_with_the_independent_formulation() {
     );
     let limits = joint_limits(DEFAULT_BASE_MAX_ANGLE, DEFAULT_PLATFORM_MAX_ANGLE, DEFAULT_STIFFNESS, DEFAULT_DAMPING);
     let (worst, tilt) = compare(&start, legs, Friction::default(), Some(limits), &oracle, &law, 0.01, 300);
-    common::figures::print_figures(&format!(
+    let _figures = common::figures::print_figures(&format!(
         "heavy legs on their joint limits, 3 s: largest difference {worst:.2e}, largest tilt {:.2} deg",
         tilt.to_degrees()
     ));
@@ -288,7 +288,7 @@ fn joint_forces_agree_with_the_independent_formulation() {
             }
         }
     }
-    common::figures::print_figures(&format!(
+    let _figures = common::figures::print_figures(&format!(
         "joint forces and angles against the oracle: largest difference {worst:.2e} (of 1e4 N, 1e-4 rad); {contacts} joints beyond their limits"
     ));
     assert!(contacts >= 4, "the joint limits were exercised ({contacts})");
@@ -371,7 +371,7 @@ fn the_machines_energy_balance_holds_through_contacts() {
             worst = worst.max(balance.abs() / e0);
             dissipated = o.dissipated_energy;
         }
-        common::figures::print_figures(&format!(
+        let _figures = common::figures::print_figures(&format!(
             "damped {damped}: largest |E - E0 - (work.F - work.dissipated)| / E0 = {worst:.2e} over 3 s, {contacts} \
              contacts located, {dissipated:.1} J dissipated"
         ));

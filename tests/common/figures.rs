@@ -1,8 +1,8 @@
 //! The figures docs/model.md quotes, held in benches/results/model.txt by the tests that compute
 //! them: tests/python/references.py's scheme for the Rust tests (one line `key: text` per
 //! figure set, `#` lines first, the rest sorted). A test whose figures moved fails and says
-//! how to write them again: `STEWART_UPDATE_REFERENCES=1 cargo test --release --test
-//! integration NAME` rewrites its line instead; then review the diff, bring the page up to
+//! how to write them again: `STEWART_UPDATE_REFERENCES=1 cargo test --release -p
+//! stewart-fmu-tests NAME` rewrites its line instead; then review the diff, bring the page up to
 //! date, and commit both (tests/python/test_readme.py checks that the page's measured figures
 //! are in benches/results/).
 
@@ -39,9 +39,9 @@ pub fn check_figures(name: &str, key: &str, text: &str) {
     let found = committed.lines().find(|l| l.starts_with(&prefix)).unwrap_or("(missing)");
     assert!(
         found == line,
-        "benches/results/{name} holds\n  {found}\nbut the code computes now\n  {line}\nIf the change is meant, write it \
-         again with STEWART_UPDATE_REFERENCES=1 cargo test --release --test integration <this test>, bring the page \
-         that quotes it up to date, and commit both"
+        "benches/results/{name} holds\n  {found}\nbut the code computes now\n  {line}\nIf the change is meant, write \
+         it again with STEWART_UPDATE_REFERENCES=1 cargo test --release -p stewart-fmu-tests <this test>, bring the \
+         page that quotes it up to date, and commit both"
     );
 }
 
@@ -51,8 +51,23 @@ pub fn check_line(name: &str, line: &str) {
     check_figures(name, key, text);
 }
 
-/// Prints a line `key: text` of figures and holds it in benches/results/model.txt.
-pub fn print_figures(line: &str) {
+/// Figures printed by a test, checked against benches/results/model.txt when they go out of
+/// scope: after the test's own assertions, so that a physical regression fails those first,
+/// with their message, not this file's "write it again".
+#[must_use = "bind it (`let _figures = ...`): the check runs when it is dropped"]
+pub struct PrintedFigures(String);
+
+impl Drop for PrintedFigures {
+    fn drop(&mut self) {
+        if !std::thread::panicking() {
+            check_line("model.txt", &self.0);
+        }
+    }
+}
+
+/// Prints a line `key: text` of figures, to be held in benches/results/model.txt (the check
+/// runs when the value returned is dropped).
+pub fn print_figures(line: &str) -> PrintedFigures {
     println!("{line}");
-    check_line("model.txt", line);
+    PrintedFigures(line.to_string())
 }

@@ -185,6 +185,8 @@ def test_the_links_between_the_pages_resolve():
     assert checked > 30 and not broken, broken
 
 
+# A measured figure: a number in exponent form, a count with thousands separators, a decimal.
+FIGURE = r"(?<![\w.,])(\d+\.\d+e[-+]?\d+|\d{1,3}(?:,\d{3})+|\d+\.\d+)(?![\d])(?! times)"
 # The pages of docs/ that quote measurements, and the parts of each that do (None: all of it).
 MEASURED_PAGES = {
     "performance.md": None,
@@ -199,7 +201,9 @@ MEASURED_PAGES = {
                  ("1. Holding under control: the pressures settle", "### Checks")],
     "validation.md": None,
     "control.md": None,
-    "cueing.md": [("**A failed solve**", "## Defaults: a truck cabin"),
+    "cueing.md": [("this is why a classical cycle costs", "An earlier form took each leg's first crossing"),
+                  ("Between the constrained points a plan may pass", "The remaining 10 % of each stroke"),
+                  ("**A failed solve**", "## Defaults: a truck cabin"),
                   ("The tuning was checked", "## Co-Simulation and Model Exchange"),
                   ("from §11 alone: every gain", "![OMCT of the defaults"),
                   ("## Checks", "- Predictive cueing runs in Co-Simulation only")],
@@ -212,20 +216,24 @@ MEASURED_PAGES = {
 @pytest.mark.quick
 @pytest.mark.parametrize("page", sorted(MEASURED_PAGES))
 def test_the_docs_quote_only_figures_the_benches_record(page):
-    """The measured figures of docs/performance.md, and of the measured parts of docs/studies.md
-    and docs/platforms.md (instruction counts with thousands separators, decimals, numbers in
-    exponent form), are each in a file of benches/results/ (its counts are written there without
-    the separators); a ratio ("7.3 times") is read from the figures beside it."""
+    """The measured figures of docs/performance.md, validation.md and control.md, and of the
+    measured parts of docs/studies.md, platforms.md, cueing.md and model.md (instruction counts
+    with thousands separators, decimals, numbers in exponent form), are each in a file of
+    benches/results/ (its counts are written there without the separators); a ratio ("7.3
+    times") is read from the figures beside it. Each measured part quotes at least one figure."""
     text = prose((ROOT / "docs" / page).read_text())
     if MEASURED_PAGES[page]:
+        parts = []
         for start, end in MEASURED_PAGES[page]:
-            assert start in text and end in text, f"docs/{page}: the bounds of a measured part moved"
-        # Each part from its start to the first end after it.
-        text = "\n".join(text[text.index(start):text.index(end, text.index(start))]
-                         for start, end in MEASURED_PAGES[page])
+            # Each part from its start to the first end after it.
+            at = text.find(start)
+            until = text.find(end, at + 1) if at >= 0 else -1
+            assert at >= 0 and until >= 0, f"docs/{page}: the bounds of a measured part moved: {start!r} .. {end!r}"
+            parts.append(text[at:until])
+            assert re.search(FIGURE, parts[-1]), f"docs/{page}: the measured part from {start!r} quotes no figure"
+        text = "\n".join(parts)
     recorded = "\n".join(p.read_text() for p in sorted((ROOT / "benches" / "results").glob("*.txt")))
-    figures = [m.group(1) for m in re.finditer(
-        r"(?<![\w.,])(\d+\.\d+e[-+]?\d+|\d{1,3}(?:,\d{3})+|\d+\.\d+)(?![\d])(?! times)", text)]
+    figures = [m.group(1) for m in re.finditer(FIGURE, text)]
 
     def recorded_as(figure):
         # Counts are written without separators, exponents with two digits (1.3e-08).

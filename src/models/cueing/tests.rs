@@ -125,5 +125,6 @@ fn the_descriptions_quote_the_constants_they_describe() {
     quotes(group::MPC_ACCEPTABLE, format!("acceptable level ({QP_ACCEPTABLE_TOLERANCE:e}"));
     quotes(group::MPC_ACCEPTABLE, format!("tolerance ({QP_TOLERANCE:e})"));
     let [b1, b2, b3, b4] = BLOCKS;
-    quotes(group::MPC_HORIZON, format!("({GRID_STEPS} grid steps; the jerks in 4 blocks of {b1}, {b2}, {b3} and {b4} steps)"));
+    let grid = format!("({GRID_STEPS} grid steps; the jerks in 4 blocks of {b1}, {b2}, {b3} and {b4} steps)");
+    quotes(group::MPC_HORIZON, grid);
 }
