@@ -1,7 +1,8 @@
 """The main job's figures that the docs quote, recorded in benches/results/validation.txt: the
-paper's experiments, the workspace, machine and hydraulic scenarios (docs/validation.md), the
-motion system's braking (docs/control.md) and the cueing's manoeuvres (docs/cueing.md), from the summaries the main job wrote into the output
-folder, without the wall-clock times some lines carry. tests/python/test_readme.py checks that
+paper's experiments, the workspace, machine, drive and hydraulic scenarios (docs/validation.md,
+docs/model.md), the motion system's braking (docs/control.md) and the cueing's manoeuvres
+(docs/cueing.md), from the summaries the main job wrote into the output folder, without the
+wall-clock times some lines carry. tests/python/test_readme.py checks that
 every figure those pages quote is in a file of benches/results/; a run that moves a figure shows
 in this file's diff.
 
@@ -18,6 +19,7 @@ RESULTS = Path(__file__).resolve().parents[1] / "benches" / "results" / "validat
 SOURCES = [("summary.txt", "examples/paper_experiments.py", None),
            ("workspace_summary.txt", "examples/workspace_scenarios.py", None),
            ("machine_summary.txt", "examples/machine_scenarios.py", None),
+           ("drive_summary.txt", "examples/drive_scenarios.py", None),
            # Not its work-precision line: wall-clock times.
            ("hydraulic_summary.txt", "examples/hydraulic_scenarios.py", ("hydraulic legs", "1 ", "2 ", "3 ", "4 ", "5 ")),
            ("hydraulic_power_unit_summary.txt", "examples/power_unit_scenarios.py", None),
@@ -28,9 +30,9 @@ WALL_CLOCK = {"cueing_summary.txt": r" \(\d+ s\)"}
 
 
 def main():
-    parts = ["# The main job's figures that docs/validation.md, docs/control.md and docs/cueing.md quote (bash examples/main_job.sh "
-             "writes this file\n# with examples/record_figures.py from the summaries in output/; wall-clock times "
-             "left out).\n"]
+    parts = ["# The main job's figures that docs/validation.md, control.md, cueing.md and model.md quote (bash "
+             "examples/main_job.sh writes this file\n# with examples/record_figures.py from the summaries in output/; "
+             "wall-clock times left out).\n"]
     for name, script, start in SOURCES:
         lines = (OUT / name).read_text().splitlines()
         if start:

@@ -19,6 +19,7 @@ from stewart_fmu.core import LEGS
 from stewart_fmu.ssp import SYSTEM_HYDRAULIC_SSP
 from oracles import hydraulics as oracle
 from oracles.stand import EQUILIBRIUM_FORCE, GRAVITY, MASS
+from references import check_figures
 from test_fmi3 import PLATFORM3, Fmu3
 from central_differences import largest_error
 
@@ -266,6 +267,8 @@ def test_directional_derivatives_with_hydraulics_match_central_differences():
         m.free()
     print(f"directional derivatives with hydraulics vs central differences: max relative error (per row) {worst:.1e}")
     assert worst <= 1e-6
+    check_figures("model.txt", "directional derivatives with hydraulic legs, near vacuum and with the power unit, "
+                  "against central differences", f"largest relative error (per row) {worst:.1e}")
 
 
 def test_an_fmu_state_with_hydraulics_continues_bit_for_bit():

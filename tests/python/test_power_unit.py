@@ -19,6 +19,7 @@ from stewart_fmu.core import LEGS, Component
 from stewart_fmu.ssp import SYSTEM_POWER_UNIT_SSP
 from test_fmi3 import PLATFORM3, Fmu3
 from oracles.stand import EQUILIBRIUM_FORCE, GRAVITY, MASS
+from references import check_figures
 
 pytestmark = pytest.mark.quick
 
@@ -118,6 +119,8 @@ def test_model_exchange_through_the_accumulators_switch_matches_co_simulation():
           "MPa at 1.5 s")
     assert cs["accumulator.oilVolume"][-1] == 0.0 and cs["supply.pressure"][-1] < 0.5 * U["pS"]
     assert events >= 1 and dz < 1e-6 and dp < 1e-3 * U["pS"]
+    check_figures("model.txt", "power unit, Model Exchange (CVODE) against Co-Simulation through a 1 L accumulator's "
+                  "emptying", f"heave within {dz:.1e} m, line within {dp:.1e} Pa")
 
 
 def test_co_simulation_lands_on_the_accumulators_switch():
