@@ -193,7 +193,7 @@ MEASURED_PAGES = {
     "model.md": [("an independent formulation written from this page alone", "## 8. The machine I"),
                  ("the residual stays below", "### Cost"),
                  ("20 % voltage ripple, 2 s at 1 ms communication steps", "In Model Exchange the host's"),
-                 ("the rotor a particle of mass", "model's voltage, dynamic braking"),
+                 ("the rotor a particle of mass", "(through the FMUs: holding on the static"),
                  ("written from the specification alone, RK4 at 10 us): 3 s with valve commands", "### Cost"),
                  ("| method | largest leg error (m)", "Without the sub-steps RK4 rings"),
                  ("| RK4, 1 ms steps taken whole (no sub-steps) | 2.00e-6", "120 fuzzed runs on a Dask"),
