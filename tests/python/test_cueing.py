@@ -161,15 +161,14 @@ def test_the_limiter_keeps_every_leg_inside_its_margins_on_fuzzed_manoeuvres(clu
     # SPEC 11's ideal tilt limiter jumps the tilt rate where a slewing angle catches its target
     # (by up to tilt.rateLimit plus the target's rate), so the centre's velocity jumps by that
     # times the head's lever: in both halves the rule's error over such a step is about half
-    # the jump, up to 0.11 m/s on these drives (benches/results/cueing.txt). A jump of the workspace limiter (the
-    # first-crossing limiter of an earlier version jumped by up to 1 m/s, an error of 0.5 m/s)
-    # would stand above it.
+    # the jump, up to 0.11 m/s on these drives (benches/results/cueing.txt). A jump of the
+    # workspace limiter (the first-crossing limiter of an earlier version jumped by up to 1 m/s,
+    # an error of 0.5 m/s) would stand above it.
     assert worst_v < 0.25, worst_v
-    print(f"300 fuzzed manoeuvres on Dask: closest approach to a margin {closest * 1e3:.3f} mm, the limiter acted "
-          f"in {limited} of 150 aggressive runs, 99.9th percentile of the Hermite residual of r over a step at most {worst_v:.2e} m/s")
-    check_figures("cueing.txt", "the classical limiter, 300 fuzzed manoeuvres",
-                  f"closest approach to a margin {closest * 1e3:.3f} mm, the limiter acted in {limited} of 150 aggressive "
-                  f"runs, 99.9th percentile of the Hermite residual of r over a step at most {worst_v:.2f} m/s")
+    figures = (f"closest approach to a margin {closest * 1e3:.3f} mm, the limiter acted in {limited} of 150 "
+               f"aggressive runs, 99.9th percentile of the Hermite residual of r over a step at most {worst_v:.2f} m/s")
+    print(f"300 fuzzed manoeuvres on Dask: {figures}")
+    check_figures("cueing.txt", "the classical limiter, 300 fuzzed manoeuvres", figures)
 
 
 def test_fmi3_equals_fmi2_bit_for_bit():

@@ -156,8 +156,8 @@ def fuzzed(tmp_path_factory):
         m["at_budget"] += int(np.sum(np.asarray(r["mpc.iterations"])[1:] >= budget))
     print(f"300 fuzzed drives, predictive cueing on Dask: closest approach to a margin {m['closest'] * 1e3:.3f} mm "
           f"(seed {m['closest_seed']}), the net acted in {m['netted']} drives, largest roll or pitch "
-          f"{math.degrees(m['tilt']):.4f} deg (tilt.max {math.degrees(m['tilt_max']):.1f}), largest Hermite residual of r over a "
-          f"step {m['worst_v']:.2e} m/s, {m['fallbacks']} failed solves of {m['solves']} in "
+          f"{math.degrees(m['tilt']):.4f} deg (tilt.max {math.degrees(m['tilt_max']):.1f}), largest Hermite "
+          f"residual of r over a step {m['worst_v']:.2e} m/s, {m['fallbacks']} failed solves of {m['solves']} in "
           f"{m['drives_falling_back']} drives, {m['at_budget']} solves at the iteration budget ({budget})")
     return m
 
@@ -170,9 +170,9 @@ def test_the_commands_keep_every_leg_inside_its_margins_on_fuzzed_drives(fuzzed)
 
 def test_the_commands_keep_their_tilt_within_tilt_max_on_fuzzed_drives(fuzzed):
     """No command's roll or pitch on the 300 fuzzed drives passes tilt.max by more than 0.02
-    deg. The plans hold the tilt at grid points 1, 3, 7 and 20 only (the first 35 ms ahead), and a row may give
-    by the shared slack where the bounds conflict, so a command may pass the bound by a hair
-    (10.0055 deg at most against 10, measured 2026-12-03)."""
+    deg. The plans hold the tilt at grid points 1, 3, 7 and 20 only (the first 35 ms ahead),
+    and a row may give by the shared slack where the bounds conflict, so a command may pass the
+    bound by a hair (10.0055 deg at most against 10, measured 2026-12-03)."""
     assert fuzzed["tilt"] < fuzzed["tilt_max"] + math.radians(0.02), fuzzed
 
 
