@@ -36,6 +36,11 @@ def events_text(events, limit=8):
     return text + (f" ... ({len(events)} events)" if len(events) > limit else "")
 
 
+def joints_text(data, during=slice(None)):
+    base, platform = ws.largest_joint_angles(data, during)
+    return f"joint angles up to {base:.1f} deg (base), {platform:.1f} deg (platform)"
+
+
 def main():
     OUT.mkdir(parents=True, exist_ok=True)
     summary = []
@@ -51,7 +56,7 @@ def main():
                                              "work.dissipated": loss["work.dissipated"], **stop_columns(loss)})
     summary.append(f"1 power loss at 0.5 s: {events_text(loss['events'], 6)}; peak deceleration "
                    f"{np.max(loss['der(v[3])']):.1f} m/s2; rest z = {loss['r[3]'][-1]:.9f} m (static solution "
-                   f"{z_static:.9f} m); energy balance residual {np.max(np.abs(balance)):.1e} J")
+                   f"{z_static:.9f} m); energy balance residual {np.max(np.abs(balance)):.1e} J; {joints_text(loss)}")
 
     print("2 elastic stops ...")
     elastic = ws.elastic_bounces(6.0, 1e-12)
@@ -66,7 +71,10 @@ def main():
     write_csv("workspace3_start_up.csv", {"t": start["time"], "z": start["r[3]"], "leg_error": start["error"],
                                            **stop_columns(start)})
     summary.append(f"3 start-up from rest on the lower stops (z = {start['z_rest']:.6f} m): {events_text(start['events'])};"
-                   f" max leg error during the heave programme {np.max(start['error'][start['time'] > 4]) * 1e3:.4f} mm")
+                   f" max leg error during the heave programme {np.max(start['error'][start['time'] > 4]) * 1e3:.4f} mm;"
+                   " "
+                   f"the lift (to 3 s) {joints_text(start, start['time'] <= 3.0)}, the heave programme after it "
+                   f"{joints_text(start, start['time'] > 3.0)}")
 
     print("4 actuator failure ...")
     failure = ws.actuator_failure()
@@ -75,7 +83,8 @@ def main():
                                                    **{f"l[{k}]": failure[f"l[{k}]"] for k in LEGS},
                                                    **stop_columns(failure)})
     summary.append(f"4 actuator failure (leg 1 at t = 1 s, under feedback): {events_text(failure['events'])}; "
-                   f"final roll {failure['angles[1]'][-1]:.3f} rad, pitch {failure['angles[2]'][-1]:.3f} rad")
+                   f"final roll {failure['angles[1]'][-1]:.3f} rad, pitch {failure['angles[2]'][-1]:.3f} rad; "
+                   f"{joints_text(failure)}")
 
     print("5 tumble ...")
     tumble = ws.tumble()

@@ -79,8 +79,17 @@ def singular_passages(messages):
             if (m := re.match(r"t = ([-+0-9.eE]+): the legs passed through a singular arrangement", text))]
 
 
+# The joints' angles from their reference directions (docs/model.md §8: their limits'
+# margins in the defaults table come from these runs).
+JOINT_ANGLES = [f"thetaB[{k}]" for k in LEGS] + [f"thetaA[{k}]" for k in LEGS]
 RECORD = (["r[1]", "r[2]", "r[3]", "v[3]", "der(v[3])", "angles[1]", "angles[2]", "E", "work.F", "work.dissipated",
-           "kappa"] + [f"l[{k}]" for k in LEGS] + [f"Fstop[{k}]" for k in LEGS])
+           "kappa"] + [f"l[{k}]" for k in LEGS] + [f"Fstop[{k}]" for k in LEGS] + JOINT_ANGLES)
+
+
+def largest_joint_angles(data, during=slice(None)):
+    """(the largest base joint angle, the largest platform joint angle) of a run's records, in
+    degrees, over the rows `during` selects."""
+    return tuple(float(np.degrees(max(np.max(data[f"theta{side}[{k}]"][during]) for k in LEGS))) for side in "BA")
 
 
 def _platform_run(force_of_t, t_end, h, parameters=None, record=RECORD, events=None):
@@ -118,7 +127,8 @@ def start_up(t_end=12.0, h=1e-3, duration=3.0):
     lmin, _, stiffness, _ = stop_defaults()
     z_rest, _ = static_rest_height(stiffness, lmin)
     events = []
-    record = ["r[3]", "angles[1]", "angles[2]"] + [f"l[{k}]" for k in LEGS] + [f"Fstop[{k}]" for k in LEGS]
+    record = ["r[3]", "angles[1]", "angles[2]"] + [f"l[{k}]" for k in LEGS] + [f"Fstop[{k}]" for k in LEGS] \
+        + JOINT_ANGLES
     t, rows, errors, status = closed_loop(
         t_end, h, platform_reals={"r0[3]": z_rest}, controller_integers={"programme": 4},
         controller_reals={"startup.position[3]": z_rest, "startup.duration": duration}, record=record, events=events)
@@ -131,7 +141,8 @@ def actuator_failure(t_fail=1.0, t_end=5.0, h=1e-3, leg=1):
     """Scenario 4: the closed loop on the default heave programme; leg `leg`'s force drops to
     zero at `t_fail` (the controller does not know)."""
     events = []
-    record = ["r[3]", "angles[1]", "angles[2]", "der(v[3])"] + [f"l[{k}]" for k in LEGS] + [f"Fstop[{k}]" for k in LEGS]
+    record = ["r[3]", "angles[1]", "angles[2]", "der(v[3])"] + [f"l[{k}]" for k in LEGS] \
+        + [f"Fstop[{k}]" for k in LEGS] + JOINT_ANGLES
 
     def fail(time, forces):
         if time >= t_fail - 1e-12:

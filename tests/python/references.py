@@ -11,6 +11,7 @@ page quotes is in benches/results/)."""
 
 import fcntl
 import os
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from stewart_fmu import ROOT
@@ -63,3 +64,22 @@ def check_figures(name: str, key: str, text: str):
         if path.exists() else "(missing)"
     if committed != line:
         raise _mismatch(path, committed, line)
+
+
+def short(x: float, digits: int = 2) -> str:
+    """A figure in the exponent form the pages write: 2.2e3, 1.4e-1 (`digits` significant)."""
+    mantissa, exponent = f"{x:.{digits - 1}e}".split("e")
+    return f"{mantissa}e{int(exponent)}"
+
+
+def start_values(model: str) -> dict:
+    """{name: start value} of a committed FMI 2 model description (modelDescription/MODEL.xml:
+    its Real, Integer and Boolean variables; a Boolean as 1.0 or 0.0)."""
+    root = ET.parse(ROOT / "modelDescription" / f"{model}.xml").getroot()
+    values = {}
+    for variable in root.iter("ScalarVariable"):
+        for kind in variable:
+            if kind.tag in ("Real", "Integer", "Boolean") and "start" in kind.attrib:
+                text = kind.attrib["start"]
+                values[variable.attrib["name"]] = float(text == "true") if kind.tag == "Boolean" else float(text)
+    return values

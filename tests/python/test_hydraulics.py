@@ -19,7 +19,7 @@ from stewart_fmu.core import LEGS
 from stewart_fmu.ssp import SYSTEM_HYDRAULIC_SSP
 from oracles import hydraulics as oracle
 from oracles.stand import EQUILIBRIUM_FORCE, GRAVITY, MASS
-from references import check_figures
+from references import check_figures, short
 from test_fmi3 import PLATFORM3, Fmu3
 from central_differences import largest_error
 
@@ -325,3 +325,23 @@ def test_a_loop_on_the_leg_length_alone_does_not_hold_the_stand():
     assert status == "ok"
     assert late > 1e-3 and pmin < 0.0
     assert errors[-1000:].max() < 1e-4
+
+
+def test_the_length_gain_takes_out_the_feed_forward_error_until_the_oil_rings():
+    """How docs/model.md §10 chose `hydraulic.positionGain` Kl: on the heave programme (10 s at
+    1 ms) the largest leg error falls as Kl grows to 100 1/s; at 200 1/s the loop rings on the
+    oil columns (the cap pressure's second difference between samples a hundred times the
+    default's) and the error grows again."""
+    errors, rings = {}, {}
+    for gain in (0.0, 20.0, 50.0, 100.0, 200.0):
+        c, e, status = hy.closed_loop(10.0, controller={"hydraulic.positionGain": gain}, record=("pA[1]",))
+        assert status == "ok"
+        late = c["time"][2:] >= 5.0
+        errors[gain] = e.max()
+        rings[gain] = np.max(np.abs(np.diff(c["pA[1]"], 2))[late])
+    check_figures("model.txt", "hydraulic.positionGain on the heave programme, 10 s at 1 ms (test_hydraulics.py)",
+                  "largest leg error " + ", ".join(f"{g:g} 1/s {errors[g] * 1e3:.2f} mm" for g in errors)
+                  + f"; pA[1]'s second difference after 5 s {short(rings[100.0])} Pa at 100 1/s, "
+                  f"{short(rings[200.0])} Pa at 200 1/s")
+    assert errors[0.0] > errors[20.0] > errors[50.0] > errors[100.0]
+    assert errors[200.0] > 2 * errors[50.0] and rings[200.0] > 30 * rings[50.0]
