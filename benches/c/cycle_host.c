@@ -31,6 +31,9 @@
  * force loop on the measured pA, pB and the leg error through the flow; the host gets the 12
  * leg values and the 12 pressures),
  * powerunit (hydraulics with the power unit feeding the valves: hydraulic.supply = 1),
+ * pumpfailure (hydraulic legs with every valve fully open and pS = 0 from the start: the stiff
+ * regime of docs/model.md §10, where RK4 cuts each step into sub-steps within its stability
+ * bound; the platform settles onto its lower stops within the first 1000 cycles),
  * logevents (FMI 2: hover with a logger that drops messages and logEvents on, so that the FMU
  * tracks passages through singular arrangements, which it skips when nobody can be told),
  * pose (hover; the host also gets the pose: r, R and angles, 15 values besides the 12 leg values).
@@ -103,7 +106,8 @@ static const unsigned *inputs2 = FORCES2, *inputs3 = FORCES3;
 /* Hydraulic servo legs: valve, and pA, pB read with the legs; the controller's default force
  * loop gain (1/N), its leg-error gain through the flow (1/s) and the flow per unit opening at
  * pS / 2: A_A / (K sqrt(8 MPa)). */
-static int hydraulic_on = 0;
+static int hydraulic_on = 0, pump_failure_on = 0;
+static const unsigned SUPPLY_PRESSURE_VR = 466;
 static const unsigned VALVES2[6] = {460, 461, 462, 463, 464, 465};
 static const unsigned VALVES3[1] = {460};
 static const unsigned LEGS_PRESSURES2[24] = {121, 122, 123, 124, 125, 126, 127, 128, 129, 130, 131, 132,
@@ -140,6 +144,10 @@ static Instance make(void) {
             if (drives_on == 1) fmi3SetFloat64(c, I0_VRS, 1, i0, 6);
             if (power_unit_on) fmi3SetInt32(c, &SUPPLY_MODE_VR, 1, &power_unit_on, 1);
         }
+        if (pump_failure_on) {
+            double none = 0.0;
+            fmi3SetFloat64(c, &SUPPLY_PRESSURE_VR, 1, &none, 1);
+        }
         if (fmi3ExitInitializationMode(c)) exit(3);
     } else {
         static const Callbacks2 quiet = {0};
@@ -161,6 +169,10 @@ static Instance make(void) {
             if (drives_on == 1) fmi2SetReal(c, I0_VRS, 6, i0);
             if (power_unit_on) fmi2SetInteger(c, &SUPPLY_MODE_VR, 1, &power_unit_on);
         }
+        if (pump_failure_on) {
+            double none = 0.0;
+            fmi2SetReal(c, &SUPPLY_PRESSURE_VR, 1, &none);
+        }
         if (fmi2ExitInitializationMode(c)) exit(3);
     }
     return c;
@@ -177,6 +189,8 @@ __attribute__((noinline)) static void set_forces(Instance c, const double *legs)
         for (int k = 0; k < 6; k++)
             f[k] = FORCE_GAIN * (f[k] - (legs[12 + k] * AREA_A - legs[18 + k] * AREA_B))
                    + OPENING_PER_RATE * LENGTH_GAIN * (L0 - legs[k]);
+    if (pump_failure_on)
+        for (int k = 0; k < 6; k++) f[k] = 1.0;
     int s = fmi3 ? fmi3SetFloat64(c, inputs3, 1, f, 6) : fmi2SetReal(c, inputs2, 6, f);
     if (s) exit(4);
 }
@@ -292,10 +306,12 @@ int main(int argc, char **argv) {
         U0 = HOLDING_CURRENT * 0.4;
         G *= VOLTS_PER_NEWTON;
         D *= VOLTS_PER_NEWTON;
-    } else if (scenario && (strcmp(scenario, "hydraulics") == 0 || strcmp(scenario, "powerunit") == 0)) {
+    } else if (scenario && (strcmp(scenario, "hydraulics") == 0 || strcmp(scenario, "powerunit") == 0 ||
+                            strcmp(scenario, "pumpfailure") == 0)) {
         drives_on = 2;
         hydraulic_on = 1;
         power_unit_on = strcmp(scenario, "powerunit") == 0;
+        pump_failure_on = strcmp(scenario, "pumpfailure") == 0;
         inputs2 = VALVES2;
         inputs3 = VALVES3;
     } else if (scenario && strcmp(scenario, "pose") == 0) {
@@ -305,7 +321,7 @@ int main(int argc, char **argv) {
         log_events = 1;
     } else if (scenario && strcmp(scenario, "hover") != 0) {
         fprintf(stderr, "CYCLE_SCENARIO must be hover, contact, nostops, nojoints, heavylegs, drives, hydraulics, "
-                        "powerunit, pose or logevents\n");
+                        "powerunit, pumpfailure, pose or logevents\n");
         return 2;
     }
     if (fmi3) {
