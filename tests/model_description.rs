@@ -2,6 +2,7 @@
 //! files are exactly what the binary's variable tables generate, every dependency in the
 //! tables names a variable that exists, and each token selects its own model.
 
+use std::path::Path;
 use stewart_fmu::fmi::FmiVersion;
 use stewart_fmu::fmi::description::{
     documentation_html, instantiation_token, interface_markdown, model_description_xml, model_of_token,
@@ -10,26 +11,27 @@ use stewart_fmu::fmi::description::{
 use stewart_fmu::models::ModelKind;
 use stewart_fmu::models::variables::Dependency;
 
-/// The repository's root: the tests' package is its `tests/` folder.
-const REPOSITORY: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
+use crate::common::repository;
 
-fn committed(path: &str) -> String {
-    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{path}: {e}"))
+fn committed(path: &Path) -> String {
+    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
 #[test]
 fn committed_model_descriptions_match_the_code() {
     for kind in ModelKind::ALL {
         let id = kind.info().model_identifier;
-        let mut versions = vec![(FmiVersion::Fmi2, format!("{REPOSITORY}/modelDescription/{id}.xml"))];
+        let folder = repository().join("modelDescription");
+        let mut versions = vec![(FmiVersion::Fmi2, folder.join(format!("{id}.xml")))];
         if !kind.is_benchmark_floor() {
-            versions.push((FmiVersion::Fmi3, format!("{REPOSITORY}/modelDescription/fmi3/{id}.xml")));
+            versions.push((FmiVersion::Fmi3, folder.join("fmi3").join(format!("{id}.xml"))));
         }
         for (version, path) in versions {
             let text = committed(&path);
             assert!(
                 text == model_description_xml(kind, version),
-                "{path} is out of date: run `cargo run --release --bin build-fmu -- --update-model-description`"
+                "{} is out of date: run `cargo run --release --bin build-fmu -- --update-model-description`",
+                path.display()
             );
             let token = instantiation_token(kind, version);
             assert!(text.contains(token));
@@ -45,14 +47,15 @@ fn committed_model_descriptions_match_the_code() {
 /// `docs/model.md`'s interface tables are what the declarations generate.
 #[test]
 fn the_interface_tables_of_the_documentation_match_the_code() {
-    let path = format!("{REPOSITORY}/docs/model.md");
+    let path = repository().join("docs").join("model.md");
     let text = committed(&path);
     for kind in ModelKind::ALL.into_iter().filter(|k| !k.is_benchmark_floor()) {
         let generated = with_interface_table(&text, kind).expect("the table's markers");
         assert!(
             generated == text,
-            "{path}: the {} table is out of date: run `cargo run --release --bin build-fmu -- \
+            "{}: the {} table is out of date: run `cargo run --release --bin build-fmu -- \
              --update-model-description`",
+            path.display(),
             kind.info().model_name
         );
         assert!(text.contains(&interface_markdown(kind)));

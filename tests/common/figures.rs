@@ -13,7 +13,7 @@ use std::sync::Mutex;
 static WRITING: Mutex<()> = Mutex::new(());
 
 fn results(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..").join("benches").join("results").join(name)
+    super::repository().join("benches").join("results").join(name)
 }
 
 /// The line `key: text` of benches/results/NAME (with STEWART_UPDATE_REFERENCES=1: written,

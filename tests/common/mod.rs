@@ -9,12 +9,18 @@ pub mod newton_euler;
 pub mod rng;
 
 use nalgebra::{Matrix3, Vector3};
+use std::path::PathBuf;
 use stewart_fmu::integration::SolverSettings;
 use stewart_fmu::physics::actuators::LegForceLaw;
 use stewart_fmu::physics::body::kinematics::rotation_from_angles;
 use stewart_fmu::physics::body::state::BodyState;
 use stewart_fmu::physics::stand::Stand;
 use stewart_fmu::simulation::{PlatformSimulation, Stabilisation};
+
+/// The repository's root (the tests' package is its `tests/` folder).
+pub fn repository() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
+}
 
 /// The default stand's neutral pose at rest.
 pub fn neutral_state() -> BodyState {
