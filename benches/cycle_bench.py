@@ -161,7 +161,8 @@ def instruction_table(host, fmus, folder):
              "stops = false; nojoints: hover with joints = false; heavylegs: hover with 40 kg cylinders and 15 kg "
              "rods; drives: hover with the default electric drives, voltages in; hydraulics: hover with the default hydraulic "
              "legs, valve commands in, 12 pressures out besides the legs; powerunit: hydraulics fed by the power unit "
-             "(hydraulic.supply = 1); pose: hover reading the pose (r, R, angles: 15 "
+             "(hydraulic.supply = 1); pumpfailure: hydraulic legs, every valve open and pS = 0 from the start (RK4's "
+             "sub-steps); pose: hover reading the pose (r, R, angles: 15 "
              "values) besides the legs; logevents: hover with logEvents delivered, singular passages tracked)",
              "(set, step, get: the host's functions, each around one call; in the FMU: that exported call alone, "
              "per call)",
@@ -171,7 +172,7 @@ def instruction_table(host, fmus, folder):
     for version, (binary, token) in fmus.items():
         for method in ("rk4", "dopri5"):
             scenarios = (("hover", "contact", "nostops", "nojoints", "heavylegs", "drives", "hydraulics", "powerunit",
-                          "pose", "logevents") if version == "fmi2"
+                          "pumpfailure", "pose", "logevents") if version == "fmi2"
                          else ("hover", "contact", "drives", "hydraulics", "powerunit", "pose"))
             for scenario in scenarios:
                 c = instructions(host, version, binary, token, method, folder, scenario)

@@ -144,10 +144,8 @@ static Instance make(void) {
             if (drives_on == 1) fmi3SetFloat64(c, I0_VRS, 1, i0, 6);
             if (power_unit_on) fmi3SetInt32(c, &SUPPLY_MODE_VR, 1, &power_unit_on, 1);
         }
-        if (pump_failure_on) {
-            double none = 0.0;
-            fmi3SetFloat64(c, &SUPPLY_PRESSURE_VR, 1, &none, 1);
-        }
+        const double no_supply = 0.0;
+        if (pump_failure_on && fmi3SetFloat64(c, &SUPPLY_PRESSURE_VR, 1, &no_supply, 1)) exit(3);
         if (fmi3ExitInitializationMode(c)) exit(3);
     } else {
         static const Callbacks2 quiet = {0};
@@ -169,10 +167,8 @@ static Instance make(void) {
             if (drives_on == 1) fmi2SetReal(c, I0_VRS, 6, i0);
             if (power_unit_on) fmi2SetInteger(c, &SUPPLY_MODE_VR, 1, &power_unit_on);
         }
-        if (pump_failure_on) {
-            double none = 0.0;
-            fmi2SetReal(c, &SUPPLY_PRESSURE_VR, 1, &none);
-        }
+        const double no_supply = 0.0;
+        if (pump_failure_on && fmi2SetReal(c, &SUPPLY_PRESSURE_VR, 1, &no_supply)) exit(3);
         if (fmi2ExitInitializationMode(c)) exit(3);
     }
     return c;
@@ -184,13 +180,14 @@ static void release(Instance c) {
 
 __attribute__((noinline)) static void set_forces(Instance c, const double *legs) {
     double f[6];
-    for (int k = 0; k < 6; k++) f[k] = U0 + G * (L0 - legs[k]) - D * legs[6 + k];
-    if (hydraulic_on)
+    if (pump_failure_on)
+        for (int k = 0; k < 6; k++) f[k] = 1.0;
+    else
+        for (int k = 0; k < 6; k++) f[k] = U0 + G * (L0 - legs[k]) - D * legs[6 + k];
+    if (hydraulic_on && !pump_failure_on)
         for (int k = 0; k < 6; k++)
             f[k] = FORCE_GAIN * (f[k] - (legs[12 + k] * AREA_A - legs[18 + k] * AREA_B))
                    + OPENING_PER_RATE * LENGTH_GAIN * (L0 - legs[k]);
-    if (pump_failure_on)
-        for (int k = 0; k < 6; k++) f[k] = 1.0;
     int s = fmi3 ? fmi3SetFloat64(c, inputs3, 1, f, 6) : fmi2SetReal(c, inputs2, 6, f);
     if (s) exit(4);
 }

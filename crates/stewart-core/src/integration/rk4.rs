@@ -174,7 +174,7 @@ pub(super) fn integrate<S: OdeSystem<N>, const N: usize>(
 /// each followed by [`OdeSystem::after_step`] but the last (the caller's); returns how many.
 /// Inlined like the rest of the integrator: a function of its own would be compiled without
 /// the caller's target features (`simulation/vector.rs`' AVX2), and each of the right-hand
-/// side's register operations in it would be a call (about 15 times the cost per evaluation).
+/// side's register operations in it would be a call (benches/results/hydraulics.txt §8).
 #[inline(always)]
 fn sub_steps<S: OdeSystem<N>, const N: usize>(
     system: &S,
