@@ -67,14 +67,15 @@ def main():
     summary.append(f"2 elastic stops: {bounces} bounces in 6 s, max relative energy drift {np.max(np.abs(drift)):.1e}")
 
     print("3 start-up ...")
-    start = ws.start_up()
+    lift = 3.0  # s: the start-up programme's lift, then the heave programme
+    start = ws.start_up(duration=lift)
     write_csv("workspace3_start_up.csv", {"t": start["time"], "z": start["r[3]"], "leg_error": start["error"],
                                            **stop_columns(start)})
+    heave_error = np.max(start["error"][start["time"] > 4]) * 1e3
     summary.append(f"3 start-up from rest on the lower stops (z = {start['z_rest']:.6f} m): {events_text(start['events'])};"
-                   f" max leg error during the heave programme {np.max(start['error'][start['time'] > 4]) * 1e3:.4f} mm;"
-                   " "
-                   f"the lift (to 3 s) {joints_text(start, start['time'] <= 3.0)}, the heave programme after it "
-                   f"{joints_text(start, start['time'] > 3.0)}")
+                   f" max leg error during the heave programme {heave_error:.4f} mm; "
+                   f"the lift (to {lift:g} s) {joints_text(start, start['time'] <= lift)}, the heave programme after "
+                   f"it {joints_text(start, start['time'] > lift)}")
 
     print("4 actuator failure ...")
     failure = ws.actuator_failure()

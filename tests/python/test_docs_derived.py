@@ -11,12 +11,12 @@ import math
 import numpy as np
 import pytest
 
+from oracles import hydraulics as oracle
 from references import check_figures, short, start_values
 
 pytestmark = pytest.mark.quick
 
 PLATFORM, CONTROLLER = start_values("StewartPlatform"), start_values("StewartController")
-ATMOSPHERE = 101325.0  # Pa: absolute = gauge + this (docs/model.md §10b)
 STEEL = 7850.0  # kg/m3
 
 
@@ -75,7 +75,8 @@ def test_the_stand_and_its_heave_programme():
     lmin, lmax = PLATFORM["lmin[1]"], PLATFORM["lmax[1]"]
     assert lmin < lengths.min() < lengths.max() < lmax, "the heave programme stays clear of the stops"
     # At rest on the lower stops: the legs at lmin, pressed in by the holding force over k_s.
-    low = next(z for z in np.linspace(1.0, 2.0, 1_000_001) if legs(z)[1][0] >= lmin)
+    offset = A[0] - B[0]
+    low = math.sqrt(lmin**2 - offset[0] ** 2 - offset[1] ** 2) - offset[2]
     rest = holding_forces(low)[0]
     depth = rest / PLATFORM["stops.stiffness"]
     assert 0 < depth < 1e-3
@@ -107,8 +108,8 @@ def test_the_drives_along_a_leg():
 
 
 def test_the_cylinder_and_the_accumulator():
-    bore, rod = PLATFORM["hydraulic.bore"], PLATFORM["hydraulic.rod"]
-    cap, annulus = math.pi * bore**2 / 4, math.pi * (bore**2 - rod**2) / 4
+    # The areas, the valve's coefficient and the chambers as the §10 oracle writes them.
+    cap, annulus = oracle.areas(PLATFORM)
     supply = PLATFORM["pS"]
     # The landing from the top of the heave to the controller's landing.floor fills the rod sides.
     top = CONTROLLER["heave.centre[3]"] + CONTROLLER["heave.amplitude"]
@@ -117,26 +118,24 @@ def test_the_cylinder_and_the_accumulator():
     landing = 6 * annulus * (l_top - l_floor)
     # The accumulator's gas between absolute pressures: V0 ((P0/P2)^(1/n) - (P0/P1)^(1/n)).
     v0, p0, n = (PLATFORM[f"accumulator.{x}"] for x in ("volume", "precharge", "polytropic"))
-    trigger = 12e6 + ATMOSPHERE  # the scenarios' landing.pressure, absolute
+    trigger = 12e6 + oracle.ATMOSPHERE  # examples/power_unit_scenarios.py's landing.pressure, absolute
     lowest = p0 / 0.9  # the precharge is 90 % of the lowest pressure the landing works down to
-    charged = PLATFORM["pump.setPressure"] + PLATFORM["pump.compensatorBand"] + ATMOSPHERE
+    charged = PLATFORM["pump.setPressure"] + PLATFORM["pump.compensatorBand"] + oracle.ATMOSPHERE
 
     def delivered(high, low):
         return v0 * ((p0 / low) ** (1 / n) - (p0 / high) ** (1 / n))
 
     below, above = delivered(trigger, lowest), delivered(charged, trigger)
     assert below > landing, "the accumulator holds the landing below the trigger"
-    # The valve's coefficient K = Q_N / sqrt(dp_N / 2) (a land at half the rated drop); the
-    # chambers V_A = V_A0 + A_A x, V_B = V_B0 + A_B (L_s - x) at mid-stroke and with the leg at lmin.
-    beta, k = PLATFORM["hydraulic.bulkModulus"], PLATFORM["valve.ratedFlow"] / math.sqrt(
-        PLATFORM["valve.ratedPressureDrop"] / 2)
-    stroke = PLATFORM["lmax[1]"] - PLATFORM["lmin[1]"]
-    v_a = [PLATFORM["hydraulic.deadVolumeA"] + cap * x for x in (stroke / 2, 0.0)]
-    v_b = PLATFORM["hydraulic.deadVolumeB"] + annulus * stroke / 2
-    # An open land near p_cr: the real pole beta K / (V sqrt(p_cr)); the force's answer to the
-    # valve, beta K sqrt(p_S/2) (A_A/V_A + A_B/V_B), and the force loop's crossover kF times it.
-    poles = [beta * k / (v * math.sqrt(PLATFORM["valve.pcr"])) for v in v_a]
-    gain = beta * k * math.sqrt(supply / 2) * (cap / v_a[0] + annulus / v_b)
+    # The chambers at mid-stroke and with the leg at lmin.
+    beta, k = PLATFORM["hydraulic.bulkModulus"], oracle.flow_coefficient(PLATFORM)
+    lmin, lmax = PLATFORM["lmin[1]"], PLATFORM["lmax[1]"]
+    (v_a, v_b), at_lmin = oracle.volumes((lmin + lmax) / 2, PLATFORM), oracle.volumes(lmin, PLATFORM)
+    # An open land near p_cr: the real pole beta K / (V sqrt(p_cr)), fastest in the smaller
+    # chamber; the force's answer to the valve, beta K sqrt(p_S/2) (A_A/V_A + A_B/V_B), and the
+    # force loop's crossover kF times it.
+    poles = [beta * k / (min(v) * math.sqrt(PLATFORM["valve.pcr"])) for v in ((v_a, v_b), at_lmin)]
+    gain = beta * k * math.sqrt(supply / 2) * (cap / v_a + annulus / v_b)
     crossover = CONTROLLER["hydraulic.forceGain"] * gain
     assert poles[1] > poles[0] and 0 < crossover < PLATFORM["valve.omega"]
     check_figures("model.txt", "the cylinder and the accumulator from their parameters (test_docs_derived.py)",
@@ -146,5 +145,6 @@ def test_the_cylinder_and_the_accumulator():
                   f"{landing * 1e3:.1f} L; {v0 * 1e3:.0f} L precharged to {p0 / 1e6:.0f} MPa hold {below * 1e3:.1f} L "
                   f"between {trigger / 1e6:.1f} and {lowest / 1e6:.1f} MPa absolute and {above * 1e3:.1f} L from "
                   f"{charged / 1e6:.1f} MPa down to the trigger; an open land's pole {short(poles[0])} /s at "
-                  f"mid-stroke, {short(poles[1])} /s at lmin; the force's answer to the valve {short(gain)} N/s per "
-                  f"unit opening at mid-stroke, the force loop's crossover {crossover:.0f} rad/s")
+                  f"mid-stroke (the rod side), {short(poles[1])} /s at lmin (the cap side); the force's answer to "
+                  f"the valve {short(gain)} N/s per unit opening at mid-stroke, the force loop's crossover "
+                  f"{crossover:.0f} rad/s")

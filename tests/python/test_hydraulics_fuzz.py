@@ -15,9 +15,9 @@ from fmpy.fmi1 import FMICallException
 
 from stewart_fmu import Platform
 from stewart_fmu.core import LEGS
+from oracles.hydraulics import ATMOSPHERE
 from test_sweep import start_cluster
 
-ATMOSPHERE = 101325.0  # Pa: zero absolute is this far below zero gauge
 SUPPLY = 16e6  # Pa, the default supply
 RUNS, DURATION, STEP = 120, 2.0, 1e-3
 

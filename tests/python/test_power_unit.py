@@ -18,12 +18,12 @@ from stewart_fmu import hydraulics as hy
 from stewart_fmu.core import LEGS, Component
 from stewart_fmu.ssp import SYSTEM_POWER_UNIT_SSP
 from test_fmi3 import PLATFORM3, Fmu3
+from oracles.hydraulics import ATMOSPHERE
 from oracles.stand import EQUILIBRIUM_FORCE, GRAVITY, MASS
 from references import check_figures
 
 pytestmark = pytest.mark.quick
 
-ATMOSPHERE = 101325.0
 POWERED = {"drive": 2, "hydraulic.supply": 1}
 PERIOD = 2 * math.pi / 2.5573423705088842  # the default heave programme's
 

@@ -187,6 +187,9 @@ def test_the_links_between_the_pages_resolve():
 
 # A measured figure: a number in exponent form, a count with thousands separators, a decimal.
 FIGURE = r"(?<![\w.,])(\d+\.\d+e[-+]?\d+|\d{1,3}(?:,\d{3})+|\d+\.\d+)(?![\d])(?! times)"
+# A part marked WHOLE: every number it quotes, whole numbers too ("176 rad/s", "197 kg").
+WHOLE = "every number"
+NUMBER = r"(?<![\w.,])(\d+(?:\.\d+)?e[-+]?\d+|\d{1,3}(?:,\d{3})+|\d+(?:\.\d+)?)(?![\d.])(?! times)"
 # The pages of docs/ that quote measurements, and the parts of each that do (None: all of it).
 MEASURED_PAGES = {
     "performance.md": None,
@@ -201,16 +204,20 @@ MEASURED_PAGES = {
                  ("1. Holding under control: the pressures settle", "### Checks"),
                  ("which holds the\ndefault stand at", "| parameter | default |"),
                  ("the shipped motions stay clear:", "|"), ("the actuator failure's tilt onto the stops", "|"),
-                 # Worked out from the defaults: tests/python/test_docs_derived.py.
-                 ("forces are then in units of", "equilibrium)"),
-                 ("keeps the default heave programme (legs", "|"),
+                 # Worked out from the defaults (tests/python/test_docs_derived.py) or measured by
+                 # a test: every number of these parts, whole numbers too (WHOLE).
+                 ("forces are then in units of", "equilibrium)", WHOLE),
+                 ("keeps the default heave programme (legs", "|", WHOLE),
+                 ("an elastomer cushion of", "|", WHOLE),
                  ("The direct problem gives the leg forces", "4. **Perturbed**"),
-                 ("rotor 1.2e-3 and a", "|"), ("105 V per 1000 rpm", "|"), ("20 mm per turn:", "|"),
-                 ("start without current;", "|"), ("an ISO 63/36 mm cylinder:", "so large because"),
-                 ("adds a real pole", "it appears when"), ("the leg's force answers the valve at", "above the oil"),
-                 ("= 0 leaves", "The controller also has"),
-                 ("there the adaptive method at its default", "the wall times are"),
-                 ("A landing from the top of the", "A higher precharge")],
+                 ("rotor 1.2e-3 and a", "|", WHOLE), ("105 V per 1000 rpm", "|", WHOLE),
+                 ("20 mm per turn:", "|", WHOLE),
+                 ("start without current;", "|", WHOLE), ("an ISO 63/36 mm cylinder:", "so large because", WHOLE),
+                 ("adds a real pole", "it appears when", WHOLE),
+                 ("the leg's force answers the valve at", "above the oil", WHOLE),
+                 ("= 0 leaves", "The controller also has", WHOLE),
+                 ("is both more accurate", "because once the platform"),
+                 ("A landing from the top of the", "A higher precharge", WHOLE)],
     "validation.md": None,
     "control.md": None,
     "cueing.md": [("this is why a classical cycle costs", "An earlier form took each leg's first crossing"),
@@ -234,18 +241,22 @@ def test_the_docs_quote_only_figures_the_benches_record(page):
     benches/results/ (its counts are written there without the separators); a ratio ("7.3
     times") is read from the figures beside it. Each measured part quotes at least one figure."""
     text = prose((ROOT / "docs" / page).read_text())
+    whole = []
     if MEASURED_PAGES[page]:
         parts = []
-        for start, end in MEASURED_PAGES[page]:
+        for start, end, *every in MEASURED_PAGES[page]:
             # Each part from its start to the first end after it.
             at = text.find(start)
             until = text.find(end, at + 1) if at >= 0 else -1
             assert at >= 0 and until >= 0, f"docs/{page}: the bounds of a measured part moved: {start!r} .. {end!r}"
             parts.append(text[at:until])
-            assert re.search(FIGURE, parts[-1]), f"docs/{page}: the measured part from {start!r} quotes no figure"
+            assert re.search(FIGURE if not every else NUMBER, parts[-1]), \
+                f"docs/{page}: the measured part from {start!r} quotes no figure"
+            if every:
+                whole += [m.group(1) for m in re.finditer(NUMBER, parts[-1]) if not re.fullmatch(FIGURE, m.group(1))]
         text = "\n".join(parts)
     recorded = "\n".join(p.read_text() for p in sorted((ROOT / "benches" / "results").glob("*.txt")))
-    figures = [m.group(1) for m in re.finditer(FIGURE, text)]
+    figures = [m.group(1) for m in re.finditer(FIGURE, text)] + whole
 
     def recorded_as(figure):
         # Counts are written without separators, exponents with two digits (1.3e-08).
@@ -256,3 +267,17 @@ def test_the_docs_quote_only_figures_the_benches_record(page):
     print(f"docs/{page} quotes {len(figures)} measured figures, each in benches/results/: {figures}")
     assert len(figures) >= 3
     assert not missing, f"figures of docs/{page} that no file of benches/results/ records: {missing}"
+
+
+@pytest.mark.quick
+def test_the_tables_the_rust_tests_print_stand_in_the_docs_as_printed():
+    """docs/model.md's work-precision tables (tests/hydraulics.rs prints them into
+    benches/results/model.txt): every row, whole numbers too, as the test printed it."""
+    recorded = (ROOT / "benches" / "results" / "model.txt").read_text()
+    page = (ROOT / "docs" / "model.md").read_text()
+    tables = re.findall(r"^\| method \| largest leg error \(m\).*?\n((?:\|.*\n)+)", page, re.M)
+    rows = [line.replace("`", "") for table in tables for line in table.splitlines() if not line.startswith("|---")]
+    print(f"docs/model.md: {len(rows)} rows of the work-precision tables, each in benches/results/model.txt")
+    assert len(rows) == 10
+    missing = [row for row in rows if row not in recorded]
+    assert not missing, f"rows of docs/model.md that tests/hydraulics.rs did not print: {missing}"

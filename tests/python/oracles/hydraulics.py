@@ -8,6 +8,8 @@ import math
 
 from .stand import EQUILIBRIUM_FORCE, GRAVITY, MASS, neutral_leg_geometry
 
+ATMOSPHERE = 101325.0  # Pa: absolute = gauge + this; zero absolute is this far below zero gauge (§10b)
+
 
 def areas(p):
     """`(A_A, A_B)`, m²."""

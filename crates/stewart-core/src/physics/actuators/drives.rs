@@ -36,16 +36,16 @@ pub const DEFAULT_INDUCTANCE: f64 = 0.4e-3;
 pub const DEFAULT_KE: f64 = 1.0;
 /// Default torque constant, N m/A: equal to `k_e` in SI units (an ideal machine).
 pub const DEFAULT_KT: f64 = 1.0;
-/// Default rotor and screw inertia at the motor shaft, kg m²: a rotor of 1.2e-3 and a ball
-/// screw of 40 mm by 1 m (0.8e-3); reflected along the leg, 197 kg.
+/// Default rotor and screw inertia at the motor shaft, kg m²: a rotor of 1.2e-3 and a steel
+/// ball screw of 32 mm by 1 m (0.8e-3); reflected along the leg, `J N²` (docs/model.md §9).
 pub const DEFAULT_ROTOR_INERTIA: f64 = 2.0e-3;
-/// Default viscous friction at the motor shaft, N m s/rad (bearings and screw): 197 N s/m
-/// along the leg.
+/// Default viscous friction at the motor shaft, N m s/rad (bearings and screw): `D N²` along
+/// the leg.
 pub const DEFAULT_DAMPING: f64 = 2.0e-3;
 /// Default reducer ratio `i`, motor turns per screw turn: a direct drive (or a 1:1 belt).
 pub const DEFAULT_GEAR_RATIO: f64 = 1.0;
-/// Default screw lead `p`, m: 20 mm per turn. With `i = 1`, `N = 314.16 rad/m`: the default
-/// heave programme's fastest leg (0.64 m/s) turns the motor at 1,920 rpm.
+/// Default screw lead `p`, m: 20 mm per turn. With `i = 1`, `N = 2 pi / p`: the motor turns
+/// well within its rated speed on the default heave programme (docs/model.md §9).
 pub const DEFAULT_SCREW_LEAD: f64 = 0.02;
 
 /// The drives' parameters (`motor.*`, `gear.ratio`, `screw.lead`), the same for all six legs.

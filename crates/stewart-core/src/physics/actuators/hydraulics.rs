@@ -81,7 +81,8 @@ pub const DEFAULT_VALVE_OMEGA: f64 = 2.0 * std::f64::consts::PI * 100.0;
 pub const DEFAULT_VALVE_DAMPING: f64 = 0.7;
 /// Default regularisation pressure `p_cr` of the square-root law, Pa: 1 bar. Above a few bar
 /// the flow is within 1 % of the square root; below, the law is linear with a finite slope
-/// (the pole it adds, `beta K / (V sqrt(p_cr))`, is 2.2e3 /s at mid-stroke).
+/// (the pole it adds, `beta K / (V sqrt(p_cr))`, docs/model.md §10 gives at mid-stroke and
+/// near `lmin`).
 pub const DEFAULT_PCR: f64 = 1.0e5;
 /// Default null leakage `C_v` of each land, m³/(s.Pa): 0.5 L/min of supply flow at null with
 /// the chambers at `p_S / 2`, the leakage of a new servo valve of this size.

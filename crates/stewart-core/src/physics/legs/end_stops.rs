@@ -27,8 +27,8 @@ use crate::physics::error::ParameterError;
 use crate::physics::number::Real;
 use crate::physics::stand::{LEG_COUNT, Stand};
 
-/// Lower end of the default stand's stroke, m. The neutral leg is 1.755 m; the heave
-/// programme of amplitude `0.2 R_b` keeps every leg within 1.61 .. 1.93 m.
+/// Lower end of the default stand's stroke, m. The neutral leg is 1.755 m; the default heave
+/// programme keeps every leg clear of both ends (docs/model.md §4 gives its legs' range).
 pub const DEFAULT_LOWER: f64 = 1.45;
 /// Upper end of the default stand's stroke, m.
 pub const DEFAULT_UPPER: f64 = 2.15;
