@@ -214,10 +214,10 @@ impl PySystem {
                 d.set_item("component", py.None())?;
             }
             Some(f) => {
-                let status = if f.error.status == stewart_master::fmi2::DISCARD { "discard" } else { "error" };
+                let status = if f.cause.is_discard() { "discard" } else { "error" };
                 d.set_item("status", status)?;
                 d.set_item("message", f.problems.get(f.component).cloned().unwrap_or_default())?;
-                d.set_item("call", f.error.to_string())?;
+                d.set_item("call", f.cause.to_string())?;
                 d.set_item("component", self.names[f.component].clone())?;
             }
         }

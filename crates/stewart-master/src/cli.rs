@@ -270,7 +270,7 @@ fn command(args: &[String]) -> Result<i32, String> {
                 "stewart-master: {} steps of {step} s in {seconds:.3} s; ended at t = {} by {name}: {}{}",
                 outcome.steps,
                 outcome.time,
-                f.error,
+                f.cause,
                 if problem.is_empty() { String::new() } else { format!(" {problem}") }
             );
             Ok(1)

@@ -176,12 +176,43 @@ impl Readings {
     }
 }
 
-/// How a run ended early: the call that failed, in which component, and each component's
-/// last problem message and whether it says it has terminated.
+/// Why a run ended early.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Cause {
+    /// An FMI call returned Discard, Error or Fatal.
+    Call(CallError),
+    /// `fmi2Instantiate` gave no instance (the component's problem says why).
+    Instantiate,
+    /// The run's tables or overrides close an algebraic loop, which a Gauss-Seidel step cannot
+    /// order (the first component's problem names the components).
+    AlgebraicLoop,
+}
+
+impl Cause {
+    /// The FMU asked for a shorter step (fmi2Discard): a discard, not an error.
+    pub fn is_discard(&self) -> bool {
+        matches!(self, Cause::Call(CallError { status: crate::fmi2::DISCARD, .. }))
+    }
+}
+
+/// As FMPy's `FMICallException` for a failed call, so that a row's message is the same
+/// whichever master ran it.
+impl std::fmt::Display for Cause {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Cause::Call(error) => error.fmt(f),
+            Cause::Instantiate => f.write_str("fmi2Instantiate returned no instance."),
+            Cause::AlgebraicLoop => f.write_str("the Gauss-Seidel order of the components: an algebraic loop."),
+        }
+    }
+}
+
+/// How a run ended early: why, in which component, and each component's last problem message
+/// and whether it says it has terminated.
 #[derive(Clone, Debug)]
 pub struct Failure {
     pub component: usize,
-    pub error: CallError,
+    pub cause: Cause,
     /// Per component, the last discard/error message of this run ("" if none).
     pub problems: Vec<String>,
     /// Per component, `fmi2GetBooleanStatus(fmi2Terminated)` (None: not available).

@@ -252,16 +252,16 @@ pub fn run(system: &mut System, controller: Option<usize>, spec: &RunSpec) -> Re
         steps: outcome.steps,
     };
     match outcome.failure {
-        Some(Failure { error, problems, initialising: true, .. }) => {
+        Some(Failure { cause, problems, initialising: true, .. }) => {
             // As the FMPy master: the last component's problem that has one, else the call.
             row.status = "error";
-            row.message = problems.iter().rev().find(|p| !p.is_empty()).cloned().unwrap_or_else(|| error.to_string());
+            row.message = problems.iter().rev().find(|p| !p.is_empty()).cloned().unwrap_or_else(|| cause.to_string());
             return Ok(row);
         }
-        Some(Failure { error, problems, terminated, .. }) => {
-            let problem = problems.iter().find(|p| !p.is_empty()).cloned().unwrap_or_else(|| error.to_string());
+        Some(Failure { cause, problems, terminated, .. }) => {
+            let problem = problems.iter().find(|p| !p.is_empty()).cloned().unwrap_or_else(|| cause.to_string());
             let terminated = terminated[0].unwrap_or(true);
-            row.status = if error.status == crate::fmi2::DISCARD { "discard" } else { "error" };
+            row.status = if cause.is_discard() { "discard" } else { "error" };
             row.discard_time = outcome.time;
             row.message = problem + if terminated { "" } else { " (recoverable with shorter steps)" };
         }

@@ -22,9 +22,11 @@ use std::sync::Arc;
 use crate::description::Type;
 use crate::fmi2::{CallError, Instance, Value};
 use crate::fmu::Fmu;
-pub use crate::run::{Failure, Given, InputTable, Observer, Outcome, Override, Readings, RunSpec, Scheme, convert};
+pub use crate::run::{
+    Cause, Failure, Given, InputTable, Observer, Outcome, Override, Readings, RunSpec, Scheme, convert,
+};
 use crate::ssd::SystemDescription;
-use order::gauss_seidel_order;
+use order::{Reader, gauss_seidel_order};
 
 struct Component {
     name: String,
@@ -148,7 +150,7 @@ impl System {
         }
         // The connections' loops are refused here; each run orders again with its own inputs.
         let connected: Vec<bool> = components.iter().map(|c| c.connected_feedthrough).collect();
-        let order = gauss_seidel_order(&components, &connected)?;
+        let order = gauss_seidel_order(&components.iter().map(Reader::of).collect::<Vec<_>>(), &connected)?;
         let name = description.map(|d| d.name.clone()).unwrap_or_else(|| names.join("+"));
         Ok(System { components, order, name })
     }
@@ -238,7 +240,7 @@ impl System {
         self.components[component].instance.as_ref().map(|i| i.messages()).unwrap_or_default()
     }
 
-    fn failure(&mut self, component: usize, error: CallError, initialising: bool) -> Failure {
+    fn failure(&mut self, component: usize, cause: Cause, initialising: bool) -> Failure {
         let problems = self
             .components
             .iter()
@@ -248,12 +250,12 @@ impl System {
             })
             .collect();
         let terminated = self.components.iter_mut().map(|c| c.instance.as_mut().and_then(|i| i.terminated())).collect();
-        Failure { component, error, problems, terminated, initialising }
+        Failure { component, cause, problems, terminated, initialising }
     }
 
     /// Instantiates (or resets) and initialises every component in element order: setup, the
     /// bindings and the run's values set in initialisation mode, exit.
-    fn initialise(&mut self, spec: &RunSpec) -> Result<(), (usize, CallError)> {
+    fn initialise(&mut self, spec: &RunSpec) -> Result<(), (usize, Cause)> {
         for c in &mut self.components {
             c.instantiate_error.clear();
             if let Some(i) = &c.instance {
@@ -273,18 +275,18 @@ impl System {
                     Ok(instance) => c.instance = Some(instance),
                     Err(message) => {
                         c.instantiate_error = message;
-                        return Err((k, CallError { function: "fmi2Instantiate", status: crate::fmi2::ERROR }));
+                        return Err((k, Cause::Instantiate));
                     }
                 }
             }
             c.fresh = false;
             let instance = c.instance.as_mut().expect("instantiated above");
-            instance.setup_experiment(spec.start_time).map_err(|e| (k, e))?;
-            instance.enter_initialization_mode().map_err(|e| (k, e))?;
+            instance.setup_experiment(spec.start_time).map_err(|e| (k, Cause::Call(e)))?;
+            instance.enter_initialization_mode().map_err(|e| (k, Cause::Call(e)))?;
             let mut values = c.bindings.clone();
             values.extend(spec.values.get(k).cloned().unwrap_or_default());
-            instance.set_values(&values).map_err(|e| (k, e))?;
-            instance.exit_initialization_mode().map_err(|e| (k, e))?;
+            instance.set_values(&values).map_err(|e| (k, Cause::Call(e)))?;
+            instance.exit_initialization_mode().map_err(|e| (k, Cause::Call(e)))?;
         }
         Ok(())
     }
@@ -313,16 +315,12 @@ impl System {
         for (c, &f) in self.components.iter_mut().zip(&feedthrough) {
             c.feedthrough = f;
         }
-        match gauss_seidel_order(&self.components, &feedthrough) {
+        match gauss_seidel_order(&self.components.iter().map(Reader::of).collect::<Vec<_>>(), &feedthrough) {
             Ok(order) => self.order = order,
             Err(message) => {
                 // A loop this run's tables or overrides close: named as the first component's
                 // problem, before any step.
-                let mut failure = self.failure(
-                    0,
-                    CallError { function: "the Gauss-Seidel order of the components", status: 3 },
-                    true,
-                );
+                let mut failure = self.failure(0, Cause::AlgebraicLoop, true);
                 if let Some(problem) = failure.problems.first_mut() {
                     *problem = message;
                 }
@@ -362,14 +360,18 @@ impl System {
 
         // The tables' inputs at the start, so that the first readings see them.
         if let Err((k, e)) = self.set_tables(spec, spec.start_time, &mut cursors, &mut table_values) {
-            return Outcome { steps: 0, time: spec.start_time, failure: Some(self.failure(k, e, true)) };
+            return Outcome { steps: 0, time: spec.start_time, failure: Some(self.failure(k, Cause::Call(e), true)) };
         }
         // After initialisation: the sources (Gauss-Seidel reads them at each point) and the
         // observer's values.
         for k in 0..n {
             let instance = self.components[k].instance.as_mut().expect("initialised");
             if let Err(e) = instance.get_real(&post[k], &mut readings.buffers[k]) {
-                return Outcome { steps: 0, time: spec.start_time, failure: Some(self.failure(k, e, true)) };
+                return Outcome {
+                    steps: 0,
+                    time: spec.start_time,
+                    failure: Some(self.failure(k, Cause::Call(e), true)),
+                };
             }
             if !jacobi {
                 let m = readings.offsets[k];
@@ -383,7 +385,7 @@ impl System {
             // Inputs from tables first: no connection drives them, and a component with direct
             // feed-through is read after its inputs are set.
             if let Err((k, error)) = self.set_tables(spec, time, &mut cursors, &mut table_values) {
-                return Outcome { steps: i, time, failure: Some(self.failure(k, error, false)) };
+                return Outcome { steps: i, time, failure: Some(self.failure(k, Cause::Call(error), false)) };
             }
             let result = if jacobi {
                 self.jacobi_step(
@@ -414,7 +416,7 @@ impl System {
                 )
             };
             if let Err((k, error)) = result {
-                return Outcome { steps: i, time, failure: Some(self.failure(k, error, false)) };
+                return Outcome { steps: i, time, failure: Some(self.failure(k, Cause::Call(error), false)) };
             }
             // The communication points add the step each time (`t += h`), as FMPy's SSP master and
             // the package's Python masters count them: the FMUs see the time, so the masters give
