@@ -11,6 +11,7 @@ import math
 import numpy as np
 import pytest
 
+from oracles import heave as oracle_heave
 from oracles import hydraulics as oracle
 from references import check_figures, short, start_values
 
@@ -43,15 +44,12 @@ def holding_forces(z):
 
 
 def heave_programme(t):
-    """z, z', z'' of the controller's default heave programme (q0 + a sin(Omega t) (1 -
-    exp(-t/T))^2, docs/model.md §6)."""
-    z0, a = CONTROLLER["heave.centre[3]"], CONTROLLER["heave.amplitude"]
-    w, T = CONTROLLER["heave.frequency"], CONTROLLER["heave.timeConstant"]
-    e = np.exp(-t / T)
-    s, s1, s2 = 1 - e, e / T, -e / T**2
-    f, f1, f2 = s * s, 2 * s * s1, 2 * (s1 * s1 + s * s2)
-    sin, cos = np.sin(w * t), np.cos(w * t)
-    return z0 + a * sin * f, a * (w * cos * f + sin * f1), a * (-w * w * sin * f + 2 * w * cos * f1 + sin * f2)
+    """z, z', z'' of the controller's default heave programme over the times `t`: the §6 law of
+    the oracle (`oracles.heave`) with the controller's start values."""
+    law = np.vectorize(lambda time: oracle_heave.heave_programme(
+        time, CONTROLLER["heave.centre[3]"], CONTROLLER["heave.amplitude"], CONTROLLER["heave.frequency"],
+        CONTROLLER["heave.timeConstant"]))
+    return law(t)
 
 
 def heave_legs():
